@@ -1,0 +1,16 @@
+/* meso bakes: the bake file container and the baked representations of mesostructure.
+ *
+ * Every baked map is saved in one container (docs/bake-format.md): magic, format version, kind,
+ * the parameters it was baked with (JSON text), the hash of its source, named arrays with shape
+ * and type, and a checksum. Readers validate every size against the file's length before
+ * allocating. Bakes are cached by the hash of source + parameters.
+ *
+ * The representations have a header each, included here:
+ *   bake_file.h      the container and the cache
+ */
+#ifndef MESO_BAKE_H
+#define MESO_BAKE_H
+
+#include "meso/bake_file.h"
+
+#endif

@@ -1,0 +1,178 @@
+/* meso core: results and errors, the context, parallel loops, progress, hashing, atomic files.
+ *
+ * Overview
+ *   Every libmeso call that can fail takes a meso_context and returns a meso_result. The
+ *   context carries the number of worker threads, a logger and the progress mode. A failing
+ *   call logs one message that names the file, object or field and the reason, e.g.
+ *   "bricks.png: width 70000 exceeds the limit 16384", and returns the code; the message is
+ *   also kept as the context's last error for callers that want it as a string.
+ *
+ * Usage
+ *   meso_context *ctx = NULL;
+ *   if (meso_context_create(&(meso_context_desc){0}, &ctx) != MESO_OK) return 1;
+ *   ...
+ *   if (meso_scene_load(ctx, "scene.json", &scene) != MESO_OK)
+ *       fprintf(stderr, "meso: %s\n", meso_context_last_error(ctx));
+ *   meso_context_destroy(ctx);
+ *
+ * Threads
+ *   A context may be used from several threads at once: logging is serialised, and worker
+ *   loops started from different threads run independently. Library calls never exit or print
+ *   (but for the progress bar, which writes to stderr only when enabled).
+ */
+#ifndef MESO_CORE_H
+#define MESO_CORE_H
+
+#include <stdarg.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- Results ------------------------------------------------------------------------------ */
+
+/* The one list of results; it also generates meso_result_string(). */
+#define MESO_RESULT_LIST(X)                                                                      \
+    X(MESO_OK, "ok")                                                                             \
+    X(MESO_ERROR_INVALID_ARGUMENT, "invalid argument")                                           \
+    X(MESO_ERROR_IO, "input/output error")                                                       \
+    X(MESO_ERROR_FORMAT, "malformed input")                                                      \
+    X(MESO_ERROR_LIMIT, "input exceeds a documented limit")                                      \
+    X(MESO_ERROR_OUT_OF_MEMORY, "out of memory")                                                 \
+    X(MESO_ERROR_UNSUPPORTED, "unsupported")                                                     \
+    X(MESO_ERROR_CANCELLED, "cancelled")                                                         \
+    X(MESO_ERROR_INTERNAL, "internal error")
+
+typedef enum meso_result {
+#define MESO_RESULT_ENUM(name, text) name,
+    MESO_RESULT_LIST(MESO_RESULT_ENUM)
+#undef MESO_RESULT_ENUM
+} meso_result;
+
+/* A short English phrase for a result; never NULL. Thread-safe. */
+const char *meso_result_string(meso_result result);
+
+/* Whether a result is the fault of the input (usage or data), which the CLI reports with exit
+ * status 2, rather than of the machine (I/O, memory, internal), reported with status 1. */
+bool meso_result_is_bad_input(meso_result result);
+
+/* ---- Context ------------------------------------------------------------------------------ */
+
+typedef enum meso_log_level {
+    MESO_LOG_ERROR = 0,
+    MESO_LOG_WARNING,
+    MESO_LOG_INFO,
+} meso_log_level;
+
+/* Called for every message; may be called from worker threads, one call at a time. */
+typedef void (*meso_log_fn)(void *user, meso_log_level level, const char *message);
+
+/* Called by long operations with the fraction done in [0,1]; return true to cancel the
+ * operation, which then returns MESO_ERROR_CANCELLED. Called from one thread at a time. */
+typedef bool (*meso_progress_fn)(void *user, const char *label, double fraction);
+
+typedef enum meso_progress_mode {
+    MESO_PROGRESS_DEFAULT = 0, /* a bar on stderr for work over ~1 s, when stderr is a terminal */
+    MESO_PROGRESS_ALWAYS,      /* the bar even when stderr is not a terminal (--progress) */
+    MESO_PROGRESS_NEVER,
+} meso_progress_mode;
+
+typedef struct meso_context_desc {
+    int num_threads;            /* 0: every core (OpenMP's default) */
+    meso_log_fn log;            /* NULL: warnings and errors are only kept, not printed */
+    void *log_user;
+    meso_progress_mode progress;
+    meso_progress_fn on_progress; /* NULL: none; called in addition to the bar */
+    void *progress_user;
+} meso_context_desc;
+
+typedef struct meso_context meso_context;
+
+/* Create a context. desc is read during the call only; NULL means all defaults.
+ * Returns MESO_OK or MESO_ERROR_OUT_OF_MEMORY; *out_ctx is NULL on failure. */
+meso_result meso_context_create(const meso_context_desc *desc, meso_context **out_ctx);
+/* Destroy a context; NULL does nothing. No call on ctx may be running. */
+void meso_context_destroy(meso_context *ctx);
+
+/* The number of worker threads loops on this context use (>= 1). Thread-safe. */
+int meso_context_num_threads(const meso_context *ctx);
+/* Change the number of worker threads (0: every core). Not thread-safe against running loops. */
+void meso_context_set_num_threads(meso_context *ctx, int num_threads);
+/* The message of the last error logged on ctx ("" if none). Valid until the next error. */
+const char *meso_context_last_error(const meso_context *ctx);
+
+/* Log an error and return `code`, so that a failing path reads
+ *     return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: truncated PNG", path);
+ * The message names the file/object/field first, then the reason, without a trailing period. */
+meso_result meso_log_error(meso_context *ctx, meso_result code, const char *format, ...)
+    __attribute__((format(printf, 3, 4)));
+void meso_log_warning(meso_context *ctx, const char *format, ...)
+    __attribute__((format(printf, 2, 3)));
+void meso_log_info(meso_context *ctx, const char *format, ...)
+    __attribute__((format(printf, 2, 3)));
+
+/* ---- Parallel loops ----------------------------------------------------------------------- */
+
+/* One job of a parallel loop. `thread_index` is in [0, meso_context_num_threads(ctx)) and lets
+ * a job use per-thread scratch allocated once by the caller. */
+typedef void (*meso_job_fn)(void *user, size_t job, int thread_index);
+
+/* Run fn for every job in [0, num_jobs) on the context's threads (OpenMP, dynamic schedule).
+ * For byte-identical output whatever the thread count, split work into jobs that do not depend
+ * on the thread count and write disjoint memory. Returns when every job has run. */
+void meso_parallel_for(meso_context *ctx, size_t num_jobs, meso_job_fn fn, void *user);
+
+/* ---- Progress ----------------------------------------------------------------------------- */
+
+typedef struct meso_progress meso_progress;
+
+/* Start reporting progress of `total` units of work. Never fails: returns NULL when nothing is
+ * to be reported, and every progress function accepts NULL. */
+meso_progress *meso_progress_begin(meso_context *ctx, const char *label, uint64_t total);
+/* Add `units` done. Thread-safe. Returns true when the user cancelled (see meso_progress_fn). */
+bool meso_progress_advance(meso_progress *progress, uint64_t units);
+/* Finish: the bar, if shown, is completed and ended with a newline. */
+void meso_progress_end(meso_progress *progress);
+
+/* ---- Time, hashing, files ----------------------------------------------------------------- */
+
+/* Seconds on a monotonic clock. Thread-safe. */
+double meso_time_seconds(void);
+
+/* 64-bit FNV-1a of `size` bytes, continuing from `seed` (use MESO_HASH_SEED to start).
+ * Stable across machines and versions: bake caches are keyed by it. */
+#define MESO_HASH_SEED UINT64_C(0xcbf29ce484222325)
+uint64_t meso_hash64(const void *data, size_t size, uint64_t seed);
+
+/* A file being written under a temporary name in the destination's folder; commit renames it
+ * into place, abort removes it, so an interrupted run never leaves a half-written file. */
+typedef struct meso_atomic_file {
+    FILE *file;      /* write here */
+    char *path;      /* the destination */
+    char *temp_path; /* the temporary file */
+} meso_atomic_file;
+
+/* Open a temporary file beside `path`. Returns MESO_OK or MESO_ERROR_IO (logged). */
+meso_result meso_atomic_file_open(meso_context *ctx, const char *path, meso_atomic_file *out_file);
+/* Flush, close and rename into place. Returns MESO_OK or MESO_ERROR_IO (logged); on error the
+ * temporary file is removed. Frees the struct's strings in every case. */
+meso_result meso_atomic_file_commit(meso_context *ctx, meso_atomic_file *file);
+/* Close and remove the temporary file. */
+void meso_atomic_file_abort(meso_atomic_file *file);
+/* Write `size` bytes to `path` atomically. */
+meso_result meso_file_write_atomic(meso_context *ctx, const char *path, const void *data,
+                                   size_t size);
+
+/* Read a whole file into a new NUL-terminated buffer (caller frees). Refuses files larger than
+ * max_size bytes with MESO_ERROR_LIMIT before allocating. Missing file: MESO_ERROR_IO naming it. */
+meso_result meso_file_read(meso_context *ctx, const char *path, size_t max_size, char **out_data,
+                           size_t *out_size);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

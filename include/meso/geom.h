@@ -1,0 +1,129 @@
+/* meso geometry: triangle meshes, built-in shapes, import, validation, tangent frames,
+ * curvature and quadric fits.
+ *
+ * Meshes are plain data (meso_mesh) owned by one meso_mesh_create_* / meso_mesh_load call and
+ * released by meso_mesh_destroy. Every array has num_vertices entries (indices: 3 per
+ * triangle); optional arrays are NULL until computed.
+ *
+ * Conventions (DESIGN.md)
+ *   Texture space is OpenGL's. tangents[i] = dP/du and bitangents[i] = dP/dv at vertex i, with
+ *   their magnitudes (world units per unit of u or v), made orthogonal to the vertex normal;
+ *   T x B points along N for unmirrored UVs. Normals are unit and outward.
+ *   Curvature is positive where the surface is convex (a sphere of radius R: k = 1/R).
+ *   The quadric of a vertex describes the surface near it in its tangent frame, with x along
+ *   normalize(T), y along normalize(B) (world units) and depth measured inward along -N:
+ *   depth(x, y) = a x^2 + b y^2, so a sphere of radius R has a = b = 1/(2R) and a plane 0.
+ *
+ * Threads: functions on different meshes may run at once; none is safe on one mesh from two
+ * threads if either writes.
+ */
+#ifndef MESO_GEOM_H
+#define MESO_GEOM_H
+
+#include "meso/core.h"
+#include "meso/math.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Limits, checked before allocating (imports and tessellations alike). */
+#define MESO_MESH_MAX_VERTICES (1u << 26)
+#define MESO_MESH_MAX_TRIANGLES (1u << 26)
+
+typedef struct meso_mesh {
+    size_t num_vertices;
+    size_t num_triangles;
+    meso_vec3 *positions;
+    meso_vec3 *normals;    /* unit, outward */
+    meso_vec2 *uvs;        /* NULL when the mesh has no texture coordinates */
+    meso_vec3 *tangents;   /* dP/du (see above); NULL until meso_mesh_compute_tangents */
+    meso_vec3 *bitangents; /* dP/dv; NULL until meso_mesh_compute_tangents */
+    uint32_t *indices;     /* 3 * num_triangles, counter-clockwise seen from outside */
+
+    /* meso_mesh_compute_curvature: principal curvatures (k_max >= k_min) and their unit
+     * directions in the tangent plane, world space. */
+    float *curvature_max;
+    float *curvature_min;
+    meso_vec3 *curvature_dir_max;
+    meso_vec3 *curvature_dir_min;
+
+    /* meso_mesh_compute_quadrics: (a, b) per vertex, see the conventions above. */
+    meso_vec2 *quadrics;
+} meso_mesh;
+
+typedef enum meso_shape_kind {
+    MESO_SHAPE_DEFAULT = 0, /* plane */
+    MESO_SHAPE_PLANE,
+    MESO_SHAPE_SPHERE,
+    MESO_SHAPE_TORUS,
+    MESO_SHAPE_CYLINDER,
+    MESO_SHAPE_VASE,
+    MESO_SHAPE_TEAPOT,
+} meso_shape_kind;
+
+/* Zero fields take the defaults of meso_shape_desc_defaults(). */
+typedef struct meso_shape_desc {
+    meso_shape_kind kind;
+    float size;         /* plane: side (2); sphere: radius (1); torus: major radius (1);
+                           cylinder: radius (0.6); vase: height (2); teapot: height (1.5) */
+    float minor_radius; /* torus tube radius (0.4 x size) */
+    float height;       /* cylinder height (2 x size) */
+    int segments;       /* tessellation: plane 1 quad per side cell (1); round shapes: segments
+                           around (96); teapot: per patch side (16) */
+} meso_shape_desc;
+
+/* The desc with every zero field replaced by its default for desc->kind. Pure. */
+meso_shape_desc meso_shape_desc_defaults(const meso_shape_desc *desc);
+/* The kind named `name` ("plane", "sphere", ...); false when unknown. */
+bool meso_shape_kind_from_name(const char *name, meso_shape_kind *out_kind);
+const char *meso_shape_kind_name(meso_shape_kind kind);
+
+/* A built-in shape with normals, UVs suited to tiling and tangents, centred at the origin.
+ * plane: y = 0, normal +y, P(u,v) = (-s/2 + u s, 0, s/2 - v s). */
+meso_result meso_mesh_create_shape(meso_context *ctx, const meso_shape_desc *desc,
+                                   meso_mesh **out_mesh);
+
+/* Import OBJ / PLY / glTF (assimp), all meshes of the file joined, triangulated, normals
+ * generated when missing. The first UV channel is kept (NULL when the file has none).
+ * Errors name the file: MESO_ERROR_IO, MESO_ERROR_FORMAT, MESO_ERROR_LIMIT. */
+meso_result meso_mesh_load(meso_context *ctx, const char *path, meso_mesh **out_mesh);
+
+/* An empty mesh with the given counts; positions, normals, indices allocated (zeroed), uvs too
+ * when with_uvs. For generators and importers. */
+meso_result meso_mesh_create(meso_context *ctx, size_t num_vertices, size_t num_triangles,
+                             bool with_uvs, meso_mesh **out_mesh);
+meso_result meso_mesh_clone(meso_context *ctx, const meso_mesh *mesh, meso_mesh **out_mesh);
+void meso_mesh_destroy(meso_mesh *mesh);
+
+/* Check a mesh for use: NaN/Inf positions, normals or UVs and out-of-range indices are errors
+ * (MESO_ERROR_FORMAT, naming `name` and the vertex); degenerate (zero-area) triangles are
+ * dropped with a warning; require_uvs and no UVs is an error that says the mesostructure
+ * needs texture coordinates. */
+meso_result meso_mesh_validate(meso_context *ctx, meso_mesh *mesh, const char *name,
+                               bool require_uvs);
+
+/* Apply an affine transform to positions (and normals by its normal matrix, renormalised);
+ * derived arrays (tangents, curvature, quadrics) are freed: recompute them afterwards. */
+void meso_mesh_transform(meso_mesh *mesh, meso_mat4 transform);
+/* Multiply the UVs by (su, sv); derived arrays are freed. */
+void meso_mesh_scale_uvs(meso_mesh *mesh, meso_vec2 scale);
+
+/* Per-vertex dP/du, dP/dv from the triangles' UV gradients, averaged and orthogonalised
+ * against the normal (Gram-Schmidt), keeping magnitudes. Needs UVs (MESO_ERROR_INVALID_ARGUMENT
+ * otherwise). */
+meso_result meso_mesh_compute_tangents(meso_context *ctx, meso_mesh *mesh);
+/* Per-vertex principal curvatures and directions (least-squares fit of the shape operator from
+ * the one-ring's normals, Rusinkiewicz 2004). */
+meso_result meso_mesh_compute_curvature(meso_context *ctx, meso_mesh *mesh);
+/* Per-vertex quadric (a, b) by least squares over the one-ring's positions in the tangent
+ * frame (Oliveira & Policarpo 2005). Needs tangents. */
+meso_result meso_mesh_compute_quadrics(meso_context *ctx, meso_mesh *mesh);
+
+/* Axis-aligned bounds of the positions. */
+void meso_mesh_bounds(const meso_mesh *mesh, meso_vec3 *out_min, meso_vec3 *out_max);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,107 @@
+/* meso images: float pixel buffers, PNG files (libpng), textures with mip pyramids.
+ *
+ * Images are plain data (meso_image): width, height, channels (1-4) and interleaved float
+ * pixels, row 0 at the top. Per-pixel code reads them in its inner loops, so they are not
+ * hidden behind accessors (docs/design.md). Values are whatever the producer put there: PNG
+ * loading maps 0..max to 0..1 without colour conversion; renderers write linear RGB.
+ *
+ * Texture space follows OpenGL (DESIGN.md): texel column i <-> u = (i+0.5)/W, row j (0 = top)
+ * <-> v = 1 - (j+0.5)/H.
+ *
+ * Limits: MESO_IMAGE_MAX_SIDE pixels a side and MESO_IMAGE_MAX_PIXELS pixels in all, checked
+ * before allocating, for created and loaded images alike.
+ */
+#ifndef MESO_IMAGE_H
+#define MESO_IMAGE_H
+
+#include "meso/core.h"
+#include "meso/math.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define MESO_IMAGE_MAX_SIDE 16384
+#define MESO_IMAGE_MAX_PIXELS (1u << 26) /* 64 Mpixels: 1 GiB as float RGBA */
+
+typedef struct meso_image {
+    int width, height;
+    int channels;  /* 1 grey, 2 grey+alpha, 3 RGB, 4 RGBA */
+    float *pixels; /* width * height * channels floats, row-major, row 0 at the top; owned */
+} meso_image;
+
+/* A new image of zeros. Returns MESO_OK, MESO_ERROR_INVALID_ARGUMENT (size <= 0, channels not
+ * 1-4), MESO_ERROR_LIMIT (above the limits), MESO_ERROR_OUT_OF_MEMORY. Thread-safe. */
+meso_result meso_image_create(meso_context *ctx, int width, int height, int channels,
+                              meso_image **out_image);
+/* A deep copy. */
+meso_result meso_image_clone(meso_context *ctx, const meso_image *image, meso_image **out_image);
+/* Free; NULL does nothing. */
+void meso_image_destroy(meso_image *image);
+
+/* The pixel at (x, y), channel c; no bounds check. */
+static inline float *meso_image_at(const meso_image *image, int x, int y) {
+    return image->pixels + ((size_t)y * (size_t)image->width + (size_t)x) * (size_t)image->channels;
+}
+
+/* Load an 8- or 16-bit grey, grey+alpha, RGB, RGBA or palette PNG; values scaled to [0,1],
+ * channels as stored (palette becomes RGB or RGBA). Errors name the file: MESO_ERROR_IO
+ * (missing, unreadable), MESO_ERROR_FORMAT (not a PNG, truncated, corrupt), MESO_ERROR_LIMIT
+ * (declared size above the limits; refused before any pixel memory is allocated). */
+meso_result meso_image_load_png(meso_context *ctx, const char *path, meso_image **out_image);
+
+typedef enum meso_encoding {
+    MESO_ENCODING_DEFAULT = 0, /* sRGB */
+    MESO_ENCODING_SRGB,        /* colour channels pass through the sRGB curve; alpha does not */
+    MESO_ENCODING_LINEAR,      /* values written as they are */
+} meso_encoding;
+
+typedef struct meso_png_desc {
+    int bit_depth;          /* 0 or 8: 8-bit; 16: 16-bit */
+    meso_encoding encoding; /* default sRGB */
+} meso_png_desc;
+
+/* Save as PNG with as many channels as the image (1-4), values clamped to [0,1] and rounded to
+ * nearest. Written to a temporary file and renamed into place. desc may be NULL (defaults).
+ * Returns MESO_OK or MESO_ERROR_IO (logged). */
+meso_result meso_image_save_png(meso_context *ctx, const meso_image *image, const char *path,
+                                const meso_png_desc *desc);
+
+/* ---- Textures ----------------------------------------------------------------------------- */
+
+typedef enum meso_filter {
+    MESO_FILTER_DEFAULT = 0, /* bilinear */
+    MESO_FILTER_NEAREST,
+    MESO_FILTER_BILINEAR,
+    MESO_FILTER_TRILINEAR, /* bilinear in the two mip levels around lod, blended */
+} meso_filter;
+
+typedef enum meso_wrap {
+    MESO_WRAP_DEFAULT = 0, /* repeat */
+    MESO_WRAP_REPEAT,
+    MESO_WRAP_CLAMP, /* clamp to edge */
+} meso_wrap;
+
+#define MESO_TEXTURE_MAX_LEVELS 16
+
+typedef struct meso_texture {
+    int num_levels;                          /* 1 + floor(log2(max side)) with mips, else 1 */
+    meso_image *levels[MESO_TEXTURE_MAX_LEVELS]; /* level 0 is the full image; all RGBA */
+    meso_wrap wrap;
+} meso_texture;
+
+/* A texture of `image` converted to RGBA (grey spreads to RGB, missing alpha is 1), with a box
+ * filtered mip pyramid when build_mips. `image` is copied. */
+meso_result meso_texture_create(meso_context *ctx, const meso_image *image, meso_wrap wrap,
+                                bool build_mips, meso_texture **out_texture);
+void meso_texture_destroy(meso_texture *texture);
+
+/* Sample at (u, v) in texture space. lod (mip level, fractional) is used by TRILINEAR only and
+ * clamped to the pyramid. Pure and thread-safe. */
+meso_vec4 meso_texture_sample(const meso_texture *texture, meso_vec2 uv, float lod,
+                              meso_filter filter);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

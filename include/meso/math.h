@@ -1,0 +1,136 @@
+/* meso math: small vectors and 4x4 matrices, all static inline.
+ *
+ * Conventions: right-handed, y up. meso_mat4 is column-major (m[col*4 + row]) and multiplies
+ * column vectors, as OpenGL. Names follow cglm's grammar: meso_<type>_<verb>, outputs returned
+ * by value. Every function is pure and thread-safe.
+ */
+#ifndef MESO_MATH_H
+#define MESO_MATH_H
+
+#include <math.h>
+
+typedef struct meso_vec2 { float x, y; } meso_vec2;
+typedef struct meso_vec3 { float x, y, z; } meso_vec3;
+typedef struct meso_vec4 { float x, y, z, w; } meso_vec4;
+typedef struct meso_mat4 { float m[16]; } meso_mat4;
+
+#define MESO_PI 3.14159265358979323846f
+
+static inline meso_vec2 meso_vec2_make(float x, float y) { return (meso_vec2){x, y}; }
+static inline meso_vec3 meso_vec3_make(float x, float y, float z) { return (meso_vec3){x, y, z}; }
+static inline meso_vec3 meso_vec3_add(meso_vec3 a, meso_vec3 b) { return (meso_vec3){a.x + b.x, a.y + b.y, a.z + b.z}; }
+static inline meso_vec3 meso_vec3_sub(meso_vec3 a, meso_vec3 b) { return (meso_vec3){a.x - b.x, a.y - b.y, a.z - b.z}; }
+static inline meso_vec3 meso_vec3_mul(meso_vec3 a, meso_vec3 b) { return (meso_vec3){a.x * b.x, a.y * b.y, a.z * b.z}; }
+static inline meso_vec3 meso_vec3_scale(meso_vec3 a, float s) { return (meso_vec3){a.x * s, a.y * s, a.z * s}; }
+/* a + b * s */
+static inline meso_vec3 meso_vec3_madd(meso_vec3 a, meso_vec3 b, float s) { return (meso_vec3){a.x + b.x * s, a.y + b.y * s, a.z + b.z * s}; }
+static inline meso_vec3 meso_vec3_negate(meso_vec3 a) { return (meso_vec3){-a.x, -a.y, -a.z}; }
+static inline float meso_vec3_dot(meso_vec3 a, meso_vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static inline meso_vec3 meso_vec3_cross(meso_vec3 a, meso_vec3 b) {
+    return (meso_vec3){a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+static inline float meso_vec3_length(meso_vec3 a) { return sqrtf(meso_vec3_dot(a, a)); }
+/* a / |a|; the zero vector stays zero. */
+static inline meso_vec3 meso_vec3_normalize(meso_vec3 a) {
+    float len2 = meso_vec3_dot(a, a);
+    return len2 > 0.0f ? meso_vec3_scale(a, 1.0f / sqrtf(len2)) : a;
+}
+static inline meso_vec3 meso_vec3_lerp(meso_vec3 a, meso_vec3 b, float t) { return meso_vec3_madd(a, meso_vec3_sub(b, a), t); }
+/* b0*a + b1*b + b2*c: barycentric interpolation. */
+static inline meso_vec3 meso_vec3_barycentric(meso_vec3 a, meso_vec3 b, meso_vec3 c, float b0, float b1, float b2) {
+    return (meso_vec3){a.x * b0 + b.x * b1 + c.x * b2, a.y * b0 + b.y * b1 + c.y * b2, a.z * b0 + b.z * b1 + c.z * b2};
+}
+static inline meso_vec2 meso_vec2_barycentric(meso_vec2 a, meso_vec2 b, meso_vec2 c, float b0, float b1, float b2) {
+    return (meso_vec2){a.x * b0 + b.x * b1 + c.x * b2, a.y * b0 + b.y * b1 + c.y * b2};
+}
+static inline int meso_vec3_is_finite(meso_vec3 a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.z); }
+static inline float meso_clampf(float x, float lo, float hi) { return x < lo ? lo : (x > hi ? hi : x); }
+
+static inline meso_mat4 meso_mat4_identity(void) {
+    return (meso_mat4){{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}};
+}
+static inline meso_mat4 meso_mat4_mul(meso_mat4 a, meso_mat4 b) {
+    meso_mat4 r;
+    for (int c = 0; c < 4; c++)
+        for (int row = 0; row < 4; row++) {
+            float s = 0.0f;
+            for (int k = 0; k < 4; k++) s += a.m[k * 4 + row] * b.m[c * 4 + k];
+            r.m[c * 4 + row] = s;
+        }
+    return r;
+}
+static inline meso_vec4 meso_mat4_mul_vec4(meso_mat4 a, meso_vec4 v) {
+    return (meso_vec4){a.m[0] * v.x + a.m[4] * v.y + a.m[8] * v.z + a.m[12] * v.w,
+                       a.m[1] * v.x + a.m[5] * v.y + a.m[9] * v.z + a.m[13] * v.w,
+                       a.m[2] * v.x + a.m[6] * v.y + a.m[10] * v.z + a.m[14] * v.w,
+                       a.m[3] * v.x + a.m[7] * v.y + a.m[11] * v.z + a.m[15] * v.w};
+}
+static inline meso_vec3 meso_mat4_transform_point(meso_mat4 a, meso_vec3 p) {
+    meso_vec4 r = meso_mat4_mul_vec4(a, (meso_vec4){p.x, p.y, p.z, 1.0f});
+    return (meso_vec3){r.x, r.y, r.z};
+}
+static inline meso_vec3 meso_mat4_transform_direction(meso_mat4 a, meso_vec3 d) {
+    meso_vec4 r = meso_mat4_mul_vec4(a, (meso_vec4){d.x, d.y, d.z, 0.0f});
+    return (meso_vec3){r.x, r.y, r.z};
+}
+static inline meso_mat4 meso_mat4_translate(meso_vec3 t) {
+    meso_mat4 r = meso_mat4_identity();
+    r.m[12] = t.x; r.m[13] = t.y; r.m[14] = t.z;
+    return r;
+}
+static inline meso_mat4 meso_mat4_scale(float s) {
+    meso_mat4 r = meso_mat4_identity();
+    r.m[0] = r.m[5] = r.m[10] = s;
+    return r;
+}
+/* Rotation by `radians` about the unit axis (x, y, z), right-handed. */
+static inline meso_mat4 meso_mat4_rotate(meso_vec3 axis, float radians) {
+    float c = cosf(radians), s = sinf(radians), t = 1.0f - c;
+    float x = axis.x, y = axis.y, z = axis.z;
+    return (meso_mat4){{t * x * x + c, t * x * y + s * z, t * x * z - s * y, 0,
+                        t * x * y - s * z, t * y * y + c, t * y * z + s * x, 0,
+                        t * x * z + s * y, t * y * z - s * x, t * z * z + c, 0, 0, 0, 0, 1}};
+}
+/* World-to-camera transform: the camera at eye looks down -z toward target. */
+static inline meso_mat4 meso_mat4_look_at(meso_vec3 eye, meso_vec3 target, meso_vec3 up) {
+    meso_vec3 f = meso_vec3_normalize(meso_vec3_sub(target, eye));
+    meso_vec3 s = meso_vec3_normalize(meso_vec3_cross(f, up));
+    meso_vec3 u = meso_vec3_cross(s, f);
+    return (meso_mat4){{s.x, u.x, -f.x, 0, s.y, u.y, -f.y, 0, s.z, u.z, -f.z, 0,
+                        -meso_vec3_dot(s, eye), -meso_vec3_dot(u, eye), meso_vec3_dot(f, eye), 1}};
+}
+/* OpenGL perspective projection: clip w = view-space distance in front of the camera. */
+static inline meso_mat4 meso_mat4_perspective(float fov_y_radians, float aspect, float z_near, float z_far) {
+    float f = 1.0f / tanf(0.5f * fov_y_radians);
+    meso_mat4 r = {{0}};
+    r.m[0] = f / aspect;
+    r.m[5] = f;
+    r.m[10] = (z_far + z_near) / (z_near - z_far);
+    r.m[11] = -1.0f;
+    r.m[14] = 2.0f * z_far * z_near / (z_near - z_far);
+    return r;
+}
+/* The inverse transpose of the upper 3x3, for normals (returned as a 4x4 with no translation). */
+static inline meso_mat4 meso_mat4_normal_matrix(meso_mat4 a) {
+    float a00 = a.m[0], a01 = a.m[4], a02 = a.m[8];
+    float a10 = a.m[1], a11 = a.m[5], a12 = a.m[9];
+    float a20 = a.m[2], a21 = a.m[6], a22 = a.m[10];
+    float c00 = a11 * a22 - a12 * a21, c01 = a12 * a20 - a10 * a22, c02 = a10 * a21 - a11 * a20;
+    float c10 = a02 * a21 - a01 * a22, c11 = a00 * a22 - a02 * a20, c12 = a01 * a20 - a00 * a21;
+    float c20 = a01 * a12 - a02 * a11, c21 = a02 * a10 - a00 * a12, c22 = a00 * a11 - a01 * a10;
+    float det = a00 * c00 + a01 * c01 + a02 * c02;
+    float inv = det != 0.0f ? 1.0f / det : 0.0f;
+    /* inverse = cofactor^T / det; its transpose = cofactor / det */
+    return (meso_mat4){{c00 * inv, c10 * inv, c20 * inv, 0, c01 * inv, c11 * inv, c21 * inv, 0,
+                        c02 * inv, c12 * inv, c22 * inv, 0, 0, 0, 0, 1}};
+}
+
+/* sRGB transfer functions (IEC 61966-2-1). */
+static inline float meso_srgb_to_linear(float c) {
+    return c <= 0.04045f ? c / 12.92f : powf((c + 0.055f) / 1.055f, 2.4f);
+}
+static inline float meso_linear_to_srgb(float c) {
+    return c <= 0.0031308f ? c * 12.92f : 1.055f * powf(c, 1.0f / 2.4f) - 0.055f;
+}
+
+#endif

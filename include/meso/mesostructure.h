@@ -1,0 +1,160 @@
+/* meso mesostructure sources: height fields and solids.
+ *
+ * Height field (DESIGN.md): h(u, v) in [0, 1]; 1 lies on the mesh, 0 at -depth. Stored as a
+ * grid of width x height texels, row 0 at the top of the image (v = 1 - (j+0.5)/H), sampled
+ * bilinearly between texel centres with repeat or clamp-to-edge wrapping.
+ *
+ * Solid (non-height-field): a signed distance over texture space (u, v, w), u and v tiled with
+ * period 1, w = 0 at the mesh (top) and w = 1 at -depth (bottom). Negative inside the
+ * material. Distances are in texture-space units (one tile = 1 in u and v, the shell's depth
+ * = 1 in w), exact or a lower bound, so sphere tracing is safe. Outside the slab 0 <= w <= 1
+ * the solid is empty.
+ *
+ * Procedural sources are deterministic (same parameters, same values on every machine) and
+ * tileable. Height fields from procedures are rasterised at `resolution` texels a side; the
+ * solids are evaluated analytically.
+ *
+ * Threads: sampling and evaluation are pure and thread-safe; create/destroy are not shared.
+ */
+#ifndef MESO_MESOSTRUCTURE_H
+#define MESO_MESOSTRUCTURE_H
+
+#include "meso/core.h"
+#include "meso/image.h"
+#include "meso/math.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- Height fields ------------------------------------------------------------------------ */
+
+typedef struct meso_heightfield {
+    int width, height;
+    float *heights; /* width * height, row 0 at the top; owned */
+    meso_wrap wrap;
+    uint64_t hash;  /* of the texels and wrap: bake caches are keyed by it */
+} meso_heightfield;
+
+typedef enum meso_heightfield_kind {
+    MESO_HEIGHTFIELD_DEFAULT = 0, /* bricks */
+    MESO_HEIGHTFIELD_BRICKS,      /* running-bond bricks with mortar grooves and bevelled edges */
+    MESO_HEIGHTFIELD_BUMPS,       /* a grid of smooth round bumps */
+    MESO_HEIGHTFIELD_WEAVE,       /* over-under woven strips */
+    MESO_HEIGHTFIELD_TILES,       /* square tiles with grout, slightly uneven tops */
+} meso_heightfield_kind;
+
+/* Zero fields take the defaults of meso_heightfield_desc_defaults(). */
+typedef struct meso_heightfield_desc {
+    meso_heightfield_kind kind;
+    int resolution;     /* texels a side (512) */
+    int rows, columns;  /* repeats per tile: bricks 4 x 2, bumps 4 x 4, weave 4 x 4, tiles 4 x 4 */
+    float gap;          /* mortar / groove / grout width as a fraction of a cell (0.08) */
+    float bevel;        /* rounded edge width, fraction of a cell (0.04) */
+    float roughness;    /* amplitude of deterministic noise on tops, in height units (0.0) */
+    uint32_t seed;      /* noise seed (1) */
+    meso_wrap wrap;     /* default repeat */
+} meso_heightfield_desc;
+
+meso_heightfield_desc meso_heightfield_desc_defaults(const meso_heightfield_desc *desc);
+bool meso_heightfield_kind_from_name(const char *name, meso_heightfield_kind *out_kind);
+const char *meso_heightfield_kind_name(meso_heightfield_kind kind);
+
+/* A procedural height field; optionally a matching colour map (RGB, linear) in *out_color,
+ * e.g. red bricks and grey mortar (out_color may be NULL). */
+meso_result meso_heightfield_create_procedural(meso_context *ctx, const meso_heightfield_desc *desc,
+                                               meso_heightfield **out_heightfield,
+                                               meso_image **out_color);
+/* A height field from an image's first channel (PNG values as loaded, in [0,1]). */
+meso_result meso_heightfield_create_from_image(meso_context *ctx, const meso_image *image,
+                                               meso_wrap wrap, meso_heightfield **out_heightfield);
+/* A constant height field (tests and degenerate cases). */
+meso_result meso_heightfield_create_constant(meso_context *ctx, int width, int height, float value,
+                                             meso_heightfield **out_heightfield);
+/* Loads a PNG and takes its first channel. Errors name the file. */
+meso_result meso_heightfield_load_png(meso_context *ctx, const char *path, meso_wrap wrap,
+                                      meso_heightfield **out_heightfield);
+void meso_heightfield_destroy(meso_heightfield *heightfield);
+/* Recompute the hash after writing texels by hand. */
+void meso_heightfield_update_hash(meso_heightfield *heightfield);
+
+/* The texel (i, j) with wrapping applied to out-of-range indices. */
+static inline float meso_heightfield_texel(const meso_heightfield *hf, int i, int j) {
+    if (hf->wrap == MESO_WRAP_CLAMP) {
+        i = i < 0 ? 0 : (i >= hf->width ? hf->width - 1 : i);
+        j = j < 0 ? 0 : (j >= hf->height ? hf->height - 1 : j);
+    } else {
+        i %= hf->width;
+        j %= hf->height;
+        i += i < 0 ? hf->width : 0;
+        j += j < 0 ? hf->height : 0;
+    }
+    return hf->heights[(size_t)j * (size_t)hf->width + (size_t)i];
+}
+
+/* h(u, v): bilinear between texel centres (DESIGN.md). */
+static inline float meso_heightfield_sample(const meso_heightfield *hf, float u, float v) {
+    float x = u * (float)hf->width - 0.5f;
+    float y = (1.0f - v) * (float)hf->height - 0.5f;
+    float fx = floorf(x), fy = floorf(y);
+    int i = (int)fx, j = (int)fy;
+    float tx = x - fx, ty = y - fy;
+    float h00 = meso_heightfield_texel(hf, i, j), h10 = meso_heightfield_texel(hf, i + 1, j);
+    float h01 = meso_heightfield_texel(hf, i, j + 1), h11 = meso_heightfield_texel(hf, i + 1, j + 1);
+    float top = h00 + (h10 - h00) * tx, bottom = h01 + (h11 - h01) * tx;
+    return top + (bottom - top) * ty;
+}
+
+/* The gradient (dh/du, dh/dv) every technique and the reference shade with: central
+ * differences of the bilinear surface one texel apart. */
+static inline meso_vec2 meso_heightfield_gradient(const meso_heightfield *hf, float u, float v) {
+    float du = 1.0f / (float)hf->width, dv = 1.0f / (float)hf->height;
+    float hu = (meso_heightfield_sample(hf, u + du, v) - meso_heightfield_sample(hf, u - du, v)) /
+               (2.0f * du);
+    float hv = (meso_heightfield_sample(hf, u, v + dv) - meso_heightfield_sample(hf, u, v - dv)) /
+               (2.0f * dv);
+    return (meso_vec2){hu, hv};
+}
+
+/* ---- Solids ------------------------------------------------------------------------------- */
+
+typedef enum meso_solid_kind {
+    MESO_SOLID_DEFAULT = 0, /* weave */
+    MESO_SOLID_WEAVE,       /* interlaced threads with gaps between them */
+    MESO_SOLID_CHAIN,       /* interlocking torus links */
+    MESO_SOLID_GRID,        /* a lattice of bars with holes */
+    MESO_SOLID_SQUAMA,      /* overlapping scales */
+    MESO_SOLID_HELIX,       /* a double helix of threads */
+} meso_solid_kind;
+
+typedef struct meso_solid_desc {
+    meso_solid_kind kind;
+    int count;       /* repeats per tile along u (and v where it applies): weave 2, chain 2,
+                        grid 4, squama 4, helix 2 */
+    float thickness; /* thread / bar / link radius as a fraction of a cell (kind's default) */
+} meso_solid_desc;
+
+typedef struct meso_solid meso_solid;
+
+meso_solid_desc meso_solid_desc_defaults(const meso_solid_desc *desc);
+bool meso_solid_kind_from_name(const char *name, meso_solid_kind *out_kind);
+const char *meso_solid_kind_name(meso_solid_kind kind);
+
+meso_result meso_solid_create_procedural(meso_context *ctx, const meso_solid_desc *desc,
+                                         meso_solid **out_solid);
+void meso_solid_destroy(meso_solid *solid);
+/* The parameters the solid was made with (defaults filled in). */
+meso_solid_desc meso_solid_get_desc(const meso_solid *solid);
+/* A hash of the parameters, for bake caches. */
+uint64_t meso_solid_hash(const meso_solid *solid);
+
+/* Signed distance at (u, v, w); u, v taken modulo 1. Pure, thread-safe. */
+float meso_solid_distance(const meso_solid *solid, meso_vec3 uvw);
+/* The gradient of the distance (not normalised), by central differences of step 1e-3 unless
+ * the kind has an analytic one. Points outward. */
+meso_vec3 meso_solid_gradient(const meso_solid *solid, meso_vec3 uvw);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

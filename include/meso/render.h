@@ -1,0 +1,119 @@
+/* meso rendering: framebuffers, the technique registry, renderers.
+ *
+ * Usage
+ *   meso_renderer *r = NULL; meso_framebuffer *fb = NULL;
+ *   meso_renderer_create(ctx, scene, &(meso_render_desc){.technique = "relief"}, &r);
+ *   meso_framebuffer_create(ctx, scene->width, scene->height, &fb);
+ *   meso_renderer_render(r, fb);             // as often as you like: prepared once
+ *   meso_framebuffer_save_png(ctx, fb, scene, "out.png", NULL);
+ *
+ * A renderer prepares every object once (bakes maps, per-vertex data) and then draws frames:
+ * per-pixel techniques run in meso's tiled multithreaded rasterizer; `reference` ray traces
+ * the true micro-geometry with Embree. Output is byte-identical for any thread count.
+ *
+ * The framebuffer holds linear RGB colour, coverage (fraction of the pixel's samples covered
+ * by any object: the silhouette mask) and depth (view-space distance along the camera's axis of
+ * the visible surface; +inf where nothing is).
+ */
+#ifndef MESO_RENDER_H
+#define MESO_RENDER_H
+
+#include "meso/core.h"
+#include "meso/image.h"
+#include "meso/scene.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- Framebuffers ------------------------------------------------------------------------- */
+
+typedef struct meso_framebuffer {
+    int width, height;
+    float *color;    /* RGB linear, 3 floats a pixel, row 0 at the top; background where empty */
+    float *coverage; /* [0,1] a pixel */
+    float *depth;    /* view depth of the nearest surface, +inf where empty */
+} meso_framebuffer;
+
+meso_result meso_framebuffer_create(meso_context *ctx, int width, int height,
+                                    meso_framebuffer **out_framebuffer);
+void meso_framebuffer_destroy(meso_framebuffer *framebuffer);
+
+/* The colour as an RGB image (linear values), and the coverage as a grey image. */
+meso_result meso_framebuffer_color_image(meso_context *ctx, const meso_framebuffer *fb,
+                                         meso_image **out_image);
+meso_result meso_framebuffer_coverage_image(meso_context *ctx, const meso_framebuffer *fb,
+                                            meso_image **out_image);
+/* Save the colour with the scene's encoding (sRGB unless the scene says linear). When
+ * coverage_path is not NULL the coverage mask is written there as a grey PNG too. */
+meso_result meso_framebuffer_save_png(meso_context *ctx, const meso_framebuffer *fb,
+                                      meso_encoding encoding, const char *path,
+                                      const char *coverage_path);
+
+/* ---- Techniques --------------------------------------------------------------------------- */
+
+typedef enum meso_technique_kind {
+    MESO_TECHNIQUE_PER_PIXEL = 0, /* a fragment function on the base mesh */
+    MESO_TECHNIQUE_GEOMETRY,      /* makes displaced triangles for the rasterizer */
+    MESO_TECHNIQUE_REFERENCE,     /* ray traces the true micro-geometry */
+} meso_technique_kind;
+
+/* What a technique needs of an object's mesostructure. */
+enum {
+    MESO_TECHNIQUE_ACCEPTS_NONE = 1u << 0,         /* objects without mesostructure */
+    MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD = 1u << 1,
+    MESO_TECHNIQUE_ACCEPTS_SOLID = 1u << 2,
+};
+
+typedef struct meso_technique_info {
+    const char *name;    /* "relief" */
+    const char *summary; /* one line */
+    const char *paper;   /* "Policarpo & Oliveira 2006, §2.1" */
+    meso_technique_kind kind;
+    unsigned accepts;    /* MESO_TECHNIQUE_ACCEPTS_* */
+} meso_technique_info;
+
+/* The registered techniques, in a fixed order (flat, bump, ...). Thread-safe. */
+size_t meso_technique_count(void);
+const meso_technique_info *meso_technique_get(size_t index);
+/* NULL when no technique has that name. */
+const meso_technique_info *meso_technique_find(const char *name);
+
+/* ---- Renderers ---------------------------------------------------------------------------- */
+
+typedef struct meso_render_desc {
+    const char *technique; /* NULL: each object's own; else overrides every object's */
+    int samples;           /* 0 or 1: one sample at each pixel centre; S: an n x n ordered grid
+                              with n = ceil(sqrt(S)) */
+    bool wireframe;        /* overlay the rasterized triangles' edges */
+} meso_render_desc;
+
+typedef struct meso_render_stats {
+    double prepare_seconds;     /* meso_renderer_create */
+    double last_frame_seconds;  /* the last meso_renderer_render */
+    uint64_t triangles;         /* rasterized or traced in the last frame */
+    uint64_t fragments;         /* shaded in the last frame */
+    size_t memory_bytes;        /* baked data, acceleration structures */
+} meso_render_stats;
+
+typedef struct meso_renderer meso_renderer;
+
+/* Prepare `scene` for rendering: checks each object's technique against its mesostructure
+ * (MESO_ERROR_INVALID_ARGUMENT naming the object and technique), bakes what techniques need.
+ * The scene must outlive the renderer. */
+meso_result meso_renderer_create(meso_context *ctx, const meso_scene *scene,
+                                 const meso_render_desc *desc, meso_renderer **out_renderer);
+/* Draw one frame into fb (any size; the camera's aspect follows fb). Not thread-safe on one
+ * renderer; uses every worker of the context. */
+meso_result meso_renderer_render(meso_renderer *renderer, meso_framebuffer *fb);
+meso_render_stats meso_renderer_get_stats(const meso_renderer *renderer);
+void meso_renderer_destroy(meso_renderer *renderer);
+
+/* Create a renderer, draw one frame of the scene's size, destroy: the one-call form. */
+meso_result meso_render_scene(meso_context *ctx, const meso_scene *scene,
+                              const meso_render_desc *desc, meso_framebuffer **out_framebuffer);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

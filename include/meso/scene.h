@@ -1,0 +1,114 @@
+/* meso scenes: the JSON scene file (DESIGN.md, docs/scene-format.md) as an immutable struct.
+ *
+ * Loading resolves everything a renderer needs: meshes are built or imported, transformed to
+ * world space, validated, given UVs scaled by uv_scale, tangents, curvature and quadrics;
+ * height fields and solids are made; colour maps are loaded and converted from sRGB to linear.
+ * After loading the scene is read-only and may be shared by any number of renderers/threads.
+ *
+ * Errors name the file, the key path and the reason: "scene.json: objects[0].mesostructure.depth:
+ * must be a finite number >= 0". Unknown keys are errors (they are usually typos).
+ */
+#ifndef MESO_SCENE_H
+#define MESO_SCENE_H
+
+#include "meso/core.h"
+#include "meso/geom.h"
+#include "meso/image.h"
+#include "meso/math.h"
+#include "meso/mesostructure.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define MESO_SCENE_MAX_FILE_BYTES (16u << 20)
+#define MESO_SCENE_MAX_OBJECTS 256
+#define MESO_SCENE_MAX_LIGHTS 16
+#define MESO_OPTIONS_MAX 32
+#define MESO_NAME_MAX 64
+
+typedef enum meso_light_type {
+    MESO_LIGHT_DIRECTIONAL = 0,
+    MESO_LIGHT_POINT,
+} meso_light_type;
+
+typedef struct meso_light {
+    meso_light_type type;
+    meso_vec3 direction; /* directional: unit vector toward the light */
+    meso_vec3 position;  /* point */
+    meso_vec3 color;     /* linear RGB intensity; point lights are not attenuated */
+} meso_light;
+
+typedef struct meso_camera {
+    meso_vec3 eye, target, up;
+    float fov_y_deg;
+} meso_camera;
+
+typedef struct meso_material {
+    meso_vec3 albedo;
+    meso_texture *color_map; /* linear RGB, NULL when none; owned by the scene */
+    meso_vec3 specular;      /* Blinn-Phong, 0 = none */
+    float shininess;
+} meso_material;
+
+typedef enum meso_mesostructure_kind {
+    MESO_MESOSTRUCTURE_NONE = 0,
+    MESO_MESOSTRUCTURE_HEIGHT_FIELD,
+    MESO_MESOSTRUCTURE_SOLID,
+} meso_mesostructure_kind;
+
+typedef struct meso_mesostructure {
+    meso_mesostructure_kind kind;
+    meso_heightfield *height_field; /* HEIGHT_FIELD: owned by the scene */
+    meso_solid *solid;              /* SOLID: owned by the scene */
+    float depth;                    /* shell thickness, world units */
+    meso_wrap wrap;
+    char source[MESO_NAME_MAX];     /* "bricks" or the file name, for labels and logs */
+} meso_mesostructure;
+
+/* A technique parameter from the scene ("technique_options": {"linear_steps": 16}); numbers
+ * and booleans (true = 1). Each technique validates the names it reads. */
+typedef struct meso_option {
+    char name[MESO_NAME_MAX];
+    double value;
+} meso_option;
+
+typedef struct meso_object {
+    char name[MESO_NAME_MAX];  /* "objects[0]" unless the scene names it */
+    meso_mesh *mesh;           /* world space, uv_scale applied, tangents/curvature/quadrics */
+    meso_material material;
+    meso_mesostructure mesostructure;
+    char technique[MESO_NAME_MAX]; /* as written in the scene ("flat" when absent) */
+    meso_option options[MESO_OPTIONS_MAX];
+    int num_options;
+} meso_object;
+
+typedef struct meso_scene {
+    char path[1024];       /* the file it came from, or the name given to meso_scene_parse */
+    int width, height;     /* 512 x 512 when absent */
+    meso_vec3 background;  /* linear RGB */
+    meso_encoding encoding;
+    meso_camera camera;
+    meso_vec3 ambient;
+    meso_light lights[MESO_SCENE_MAX_LIGHTS];
+    int num_lights;
+    meso_object *objects;
+    int num_objects;
+} meso_scene;
+
+/* Load a scene file. Relative paths inside resolve against the file's folder. Returns MESO_OK,
+ * MESO_ERROR_IO (missing/unreadable, naming the file), MESO_ERROR_FORMAT (malformed JSON, wrong
+ * type, unknown key, bad value: naming file and key path), MESO_ERROR_LIMIT. */
+meso_result meso_scene_load(meso_context *ctx, const char *path, meso_scene **out_scene);
+/* Parse scene text; `name` is used in messages, `base_dir` resolves relative paths (NULL: "."). */
+meso_result meso_scene_parse(meso_context *ctx, const char *json, const char *name,
+                             const char *base_dir, meso_scene **out_scene);
+void meso_scene_destroy(meso_scene *scene);
+
+/* The option's value, or `fallback` when the object does not set it. */
+double meso_object_option(const meso_object *object, const char *name, double fallback);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

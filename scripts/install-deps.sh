@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Install the Debian packages meso needs to build, test and benchmark.
+# Idempotent: packages already installed are skipped, so `make test` can call it every time.
+set -euo pipefail
+
+packages=(
+    build-essential cmake pkg-config
+    libpng-dev            # images
+    libcjson-dev          # scene files
+    libassimp-dev         # mesh import
+    libembree-dev         # reference ray tracer (Embree 3)
+    liblapacke-dev libopenblas-dev   # SVD (VDM / GDM compression)
+    libcmocka-dev         # tests
+)
+
+missing=()
+for p in "${packages[@]}"; do
+    if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+        missing+=("$p")
+    fi
+done
+[ ${#missing[@]} -eq 0 ] && exit 0
+
+echo "install-deps: installing ${missing[*]}" >&2
+sudo=""
+if [ "$(id -u)" -ne 0 ]; then
+    command -v sudo >/dev/null || { echo "install-deps: not root and no sudo; install: ${missing[*]}" >&2; exit 1; }
+    sudo="sudo"
+fi
+export DEBIAN_FRONTEND=noninteractive
+$sudo apt-get update -qq
+$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null

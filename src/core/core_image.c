@@ -1,0 +1,156 @@
+/* Float images and textures with mip pyramids. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "core_internal.h"
+#include "meso/image.h"
+
+meso_result meso_image_create(meso_context *ctx, int width, int height, int channels,
+                              meso_image **out_image) {
+    *out_image = NULL;
+    if (width <= 0 || height <= 0 || channels < 1 || channels > 4)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "image: invalid size %dx%d with %d channels", width, height, channels);
+    if (width > MESO_IMAGE_MAX_SIDE || height > MESO_IMAGE_MAX_SIDE ||
+        (uint64_t)width * (uint64_t)height > MESO_IMAGE_MAX_PIXELS)
+        return meso_log_error(ctx, MESO_ERROR_LIMIT,
+                              "image: %dx%d exceeds the limit of %d a side and %u pixels", width,
+                              height, MESO_IMAGE_MAX_SIDE, MESO_IMAGE_MAX_PIXELS);
+    meso_image *image = calloc(1, sizeof(*image));
+    float *pixels = calloc((size_t)width * (size_t)height * (size_t)channels, sizeof(float));
+    if (!image || !pixels) {
+        free(image);
+        free(pixels);
+        return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "image: out of memory for %dx%d",
+                              width, height);
+    }
+    *image = (meso_image){width, height, channels, pixels};
+    *out_image = image;
+    return MESO_OK;
+}
+
+meso_result meso_image_clone(meso_context *ctx, const meso_image *image, meso_image **out_image) {
+    meso_result r = meso_image_create(ctx, image->width, image->height, image->channels, out_image);
+    if (r == MESO_OK)
+        memcpy((*out_image)->pixels, image->pixels,
+               (size_t)image->width * (size_t)image->height * (size_t)image->channels * sizeof(float));
+    return r;
+}
+
+void meso_image_destroy(meso_image *image) {
+    if (!image) return;
+    free(image->pixels);
+    free(image);
+}
+
+/* ---- Textures ----------------------------------------------------------------------------- */
+
+static void to_rgba(const meso_image *src, meso_image *dst) {
+    size_t count = (size_t)src->width * (size_t)src->height;
+    for (size_t i = 0; i < count; i++) {
+        const float *s = src->pixels + i * (size_t)src->channels;
+        float *d = dst->pixels + i * 4;
+        switch (src->channels) {
+        case 1: d[0] = d[1] = d[2] = s[0]; d[3] = 1.0f; break;
+        case 2: d[0] = d[1] = d[2] = s[0]; d[3] = s[1]; break;
+        case 3: d[0] = s[0]; d[1] = s[1]; d[2] = s[2]; d[3] = 1.0f; break;
+        default: memcpy(d, s, 4 * sizeof(float)); break;
+        }
+    }
+}
+
+/* Next mip level by a box filter over 2x2 texels (odd sizes repeat the last row/column). */
+static void downsample(const meso_image *src, meso_image *dst) {
+    for (int y = 0; y < dst->height; y++)
+        for (int x = 0; x < dst->width; x++) {
+            int x0 = 2 * x < src->width ? 2 * x : src->width - 1;
+            int y0 = 2 * y < src->height ? 2 * y : src->height - 1;
+            int x1 = x0 + 1 < src->width ? x0 + 1 : x0;
+            int y1 = y0 + 1 < src->height ? y0 + 1 : y0;
+            float *d = meso_image_at(dst, x, y);
+            for (int c = 0; c < 4; c++)
+                d[c] = 0.25f * (meso_image_at(src, x0, y0)[c] + meso_image_at(src, x1, y0)[c] +
+                                meso_image_at(src, x0, y1)[c] + meso_image_at(src, x1, y1)[c]);
+        }
+}
+
+meso_result meso_texture_create(meso_context *ctx, const meso_image *image, meso_wrap wrap,
+                                bool build_mips, meso_texture **out_texture) {
+    *out_texture = NULL;
+    meso_texture *t = calloc(1, sizeof(*t));
+    if (!t) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "texture: out of memory");
+    t->wrap = wrap == MESO_WRAP_DEFAULT ? MESO_WRAP_REPEAT : wrap;
+    meso_result r = meso_image_create(ctx, image->width, image->height, 4, &t->levels[0]);
+    if (r != MESO_OK) goto fail;
+    to_rgba(image, t->levels[0]);
+    t->num_levels = 1;
+    while (build_mips && t->num_levels < MESO_TEXTURE_MAX_LEVELS) {
+        const meso_image *prev = t->levels[t->num_levels - 1];
+        if (prev->width == 1 && prev->height == 1) break;
+        int w = prev->width > 1 ? prev->width / 2 : 1, h = prev->height > 1 ? prev->height / 2 : 1;
+        r = meso_image_create(ctx, w, h, 4, &t->levels[t->num_levels]);
+        if (r != MESO_OK) goto fail;
+        downsample(prev, t->levels[t->num_levels]);
+        t->num_levels++;
+    }
+    *out_texture = t;
+    return MESO_OK;
+fail:
+    meso_texture_destroy(t);
+    return r;
+}
+
+void meso_texture_destroy(meso_texture *t) {
+    if (!t) return;
+    for (int i = 0; i < MESO_TEXTURE_MAX_LEVELS; i++) meso_image_destroy(t->levels[i]);
+    free(t);
+}
+
+static inline int wrap_index(int i, int n, meso_wrap wrap) {
+    if (wrap == MESO_WRAP_CLAMP) return i < 0 ? 0 : (i >= n ? n - 1 : i);
+    i %= n;
+    return i < 0 ? i + n : i;
+}
+
+static meso_vec4 fetch(const meso_image *level, int i, int j, meso_wrap wrap) {
+    const float *p = meso_image_at(level, wrap_index(i, level->width, wrap),
+                                   wrap_index(j, level->height, wrap));
+    return (meso_vec4){p[0], p[1], p[2], p[3]};
+}
+
+static meso_vec4 lerp4(meso_vec4 a, meso_vec4 b, float t) {
+    return (meso_vec4){a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t, a.z + (b.z - a.z) * t,
+                       a.w + (b.w - a.w) * t};
+}
+
+static meso_vec4 sample_level(const meso_image *level, meso_vec2 uv, meso_wrap wrap, bool nearest) {
+    /* Texel centres: u = (i + 0.5) / W, v = 1 - (j + 0.5) / H (DESIGN.md). */
+    float x = uv.x * (float)level->width - 0.5f;
+    float y = (1.0f - uv.y) * (float)level->height - 0.5f;
+    if (nearest) return fetch(level, (int)floorf(x + 0.5f), (int)floorf(y + 0.5f), wrap);
+    float fx = floorf(x), fy = floorf(y);
+    int i = (int)fx, j = (int)fy;
+    float tx = x - fx, ty = y - fy;
+    meso_vec4 top = lerp4(fetch(level, i, j, wrap), fetch(level, i + 1, j, wrap), tx);
+    meso_vec4 bottom = lerp4(fetch(level, i, j + 1, wrap), fetch(level, i + 1, j + 1, wrap), tx);
+    return lerp4(top, bottom, ty);
+}
+
+meso_vec4 meso_texture_sample(const meso_texture *t, meso_vec2 uv, float lod, meso_filter filter) {
+    if (!isfinite(uv.x) || !isfinite(uv.y)) return (meso_vec4){0, 0, 0, 0};
+    /* Keep coordinates small so float texel arithmetic stays exact for tiled lookups. */
+    if (t->wrap != MESO_WRAP_CLAMP) {
+        uv.x -= floorf(uv.x);
+        uv.y -= floorf(uv.y);
+    }
+    if (filter == MESO_FILTER_NEAREST) return sample_level(t->levels[0], uv, t->wrap, true);
+    if (filter != MESO_FILTER_TRILINEAR || t->num_levels == 1)
+        return sample_level(t->levels[0], uv, t->wrap, false);
+    float max_lod = (float)(t->num_levels - 1);
+    lod = lod < 0.0f ? 0.0f : (lod > max_lod ? max_lod : lod);
+    int level = (int)floorf(lod);
+    float blend = lod - (float)level;
+    meso_vec4 a = sample_level(t->levels[level], uv, t->wrap, false);
+    if (blend == 0.0f || level + 1 >= t->num_levels) return a;
+    return lerp4(a, sample_level(t->levels[level + 1], uv, t->wrap, false), blend);
+}

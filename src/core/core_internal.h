@@ -1,0 +1,22 @@
+/* Private to the core module. */
+#ifndef MESO_CORE_INTERNAL_H
+#define MESO_CORE_INTERNAL_H
+
+#include <pthread.h>
+
+#include "meso/core.h"
+
+#define MESO_MESSAGE_MAX 1024
+
+struct meso_context {
+    int num_threads;
+    meso_log_fn log;
+    void *log_user;
+    meso_progress_mode progress_mode;
+    meso_progress_fn on_progress;
+    void *progress_user;
+    pthread_mutex_t lock; /* serialises logging and last_error */
+    char last_error[MESO_MESSAGE_MAX];
+};
+
+#endif

@@ -1,0 +1,187 @@
+/* PNG files through libpng: 8/16-bit grey, grey+alpha, RGB, RGBA and palette. */
+#include <png.h>
+#include <setjmp.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core_internal.h"
+#include "meso/image.h"
+
+typedef struct png_error_state {
+    meso_context *ctx;
+    const char *path;
+    char message[256];
+} png_error_state;
+
+static void on_png_error(png_structp png, png_const_charp message) {
+    png_error_state *state = png_get_error_ptr(png);
+    snprintf(state->message, sizeof(state->message), "%s", message);
+    png_longjmp(png, 1);
+}
+
+static void on_png_warning(png_structp png, png_const_charp message) { (void)png; (void)message; }
+
+meso_result meso_image_load_png(meso_context *ctx, const char *path, meso_image **out_image) {
+    *out_image = NULL;
+    FILE *file = fopen(path, "rb");
+    if (!file) return meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot open", path);
+    unsigned char signature[8];
+    if (fread(signature, 1, 8, file) != 8 || png_sig_cmp(signature, 0, 8) != 0) {
+        fclose(file);
+        return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: not a PNG file", path);
+    }
+    png_error_state state = {ctx, path, ""};
+    png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &state, on_png_error,
+                                             on_png_warning);
+    png_infop info = png ? png_create_info_struct(png) : NULL;
+    /* volatile: assigned between setjmp and a possible longjmp */
+    meso_image *volatile image = NULL;
+    unsigned char *volatile row = NULL;
+    png_bytep *volatile rows = NULL;
+    meso_result r = MESO_OK;
+    if (!png || !info) {
+        r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", path);
+        goto done;
+    }
+    if (setjmp(png_jmpbuf(png))) {
+        r = meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: corrupt or truncated PNG (%s)", path,
+                           state.message);
+        goto done;
+    }
+    png_init_io(png, file);
+    png_set_sig_bytes(png, 8);
+    png_read_info(png, info);
+    png_uint_32 width = png_get_image_width(png, info), height = png_get_image_height(png, info);
+    /* The declared size is checked before any pixel memory exists. */
+    if (width > MESO_IMAGE_MAX_SIDE || height > MESO_IMAGE_MAX_SIDE ||
+        (uint64_t)width * height > MESO_IMAGE_MAX_PIXELS) {
+        r = meso_log_error(ctx, MESO_ERROR_LIMIT,
+                           "%s: %ux%u exceeds the limit of %d a side and %u pixels", path,
+                           (unsigned)width, (unsigned)height, MESO_IMAGE_MAX_SIDE,
+                           MESO_IMAGE_MAX_PIXELS);
+        goto done;
+    }
+    int color_type = png_get_color_type(png, info);
+    int bit_depth = png_get_bit_depth(png, info);
+    if (color_type == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);
+    if (color_type == PNG_COLOR_TYPE_GRAY && bit_depth < 8) png_set_expand_gray_1_2_4_to_8(png);
+    if (png_get_valid(png, info, PNG_INFO_tRNS)) png_set_tRNS_to_alpha(png);
+    png_set_interlace_handling(png);
+    png_read_update_info(png, info);
+    int channels = png_get_channels(png, info);
+    bit_depth = png_get_bit_depth(png, info);
+    size_t row_bytes = png_get_rowbytes(png, info);
+    if (channels < 1 || channels > 4 || (bit_depth != 8 && bit_depth != 16)) {
+        r = meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: unsupported PNG layout", path);
+        goto done;
+    }
+    meso_image *created = NULL;
+    r = meso_image_create(ctx, (int)width, (int)height, channels, &created);
+    if (r != MESO_OK) goto done;
+    image = created;
+    /* Interlaced images need every row in memory at once; others are read row by row. */
+    bool interlaced = png_get_interlace_type(png, info) != PNG_INTERLACE_NONE;
+    row = malloc(row_bytes * (interlaced ? height : 1));
+    if (!row) {
+        r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", path);
+        goto done;
+    }
+    if (interlaced) {
+        rows = malloc(sizeof(png_bytep) * height);
+        if (!rows) {
+            r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", path);
+            goto done;
+        }
+        for (png_uint_32 y = 0; y < height; y++) rows[y] = row + row_bytes * y;
+        png_read_image(png, rows);
+    }
+    size_t values = (size_t)width * (size_t)channels;
+    for (png_uint_32 y = 0; y < height; y++) {
+        const unsigned char *src = interlaced ? row + row_bytes * y : row;
+        if (!interlaced) png_read_row(png, row, NULL);
+        float *dst = image->pixels + (size_t)y * values;
+        if (bit_depth == 16)
+            for (size_t i = 0; i < values; i++)
+                dst[i] = (float)((src[2 * i] << 8) | src[2 * i + 1]) * (1.0f / 65535.0f);
+        else
+            for (size_t i = 0; i < values; i++) dst[i] = (float)src[i] * (1.0f / 255.0f);
+    }
+    png_read_end(png, NULL);
+done:
+    png_destroy_read_struct(png ? &png : NULL, info ? &info : NULL, NULL);
+    fclose(file);
+    free(row);
+    free(rows);
+    if (r != MESO_OK) {
+        meso_image_destroy(image);
+        return r;
+    }
+    *out_image = image;
+    return MESO_OK;
+}
+
+static unsigned quantise(float value, bool srgb, unsigned max) {
+    if (!(value > 0.0f)) return 0; /* also NaN */
+    if (srgb) value = meso_linear_to_srgb(value);
+    if (value >= 1.0f) return max;
+    return (unsigned)(value * (float)max + 0.5f);
+}
+
+meso_result meso_image_save_png(meso_context *ctx, const meso_image *image, const char *path,
+                                const meso_png_desc *desc) {
+    meso_png_desc d = desc ? *desc : (meso_png_desc){0};
+    int bit_depth = d.bit_depth == 16 ? 16 : 8;
+    bool srgb = d.encoding != MESO_ENCODING_LINEAR;
+    int channels = image->channels;
+    int color_channels = channels == 2 || channels == 4 ? channels - 1 : channels;
+    static const int color_types[] = {0, PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA,
+                                      PNG_COLOR_TYPE_RGB, PNG_COLOR_TYPE_RGB_ALPHA};
+    meso_atomic_file out;
+    meso_result r = meso_atomic_file_open(ctx, path, &out);
+    if (r != MESO_OK) return r;
+    png_error_state state = {ctx, path, ""};
+    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &state, on_png_error,
+                                              on_png_warning);
+    png_infop info = png ? png_create_info_struct(png) : NULL;
+    size_t row_bytes = (size_t)image->width * (size_t)channels * (size_t)(bit_depth / 8);
+    unsigned char *volatile row = malloc(row_bytes);
+    if (!png || !info || !row) {
+        r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", path);
+        goto fail;
+    }
+    if (setjmp(png_jmpbuf(png))) {
+        r = meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot write PNG (%s)", path, state.message);
+        goto fail;
+    }
+    png_init_io(png, out.file);
+    png_set_IHDR(png, info, (png_uint_32)image->width, (png_uint_32)image->height, bit_depth,
+                 color_types[channels], PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+                 PNG_FILTER_TYPE_DEFAULT);
+    if (srgb) png_set_sRGB(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+    png_write_info(png, info);
+    unsigned max = bit_depth == 16 ? 65535u : 255u;
+    for (int y = 0; y < image->height; y++) {
+        const float *src = meso_image_at(image, 0, y);
+        for (int x = 0; x < image->width; x++)
+            for (int c = 0; c < channels; c++) {
+                size_t i = (size_t)x * (size_t)channels + (size_t)c;
+                unsigned q = quantise(src[i], srgb && c < color_channels, max);
+                if (bit_depth == 16) {
+                    row[2 * i] = (unsigned char)(q >> 8);
+                    row[2 * i + 1] = (unsigned char)(q & 0xff);
+                } else {
+                    row[i] = (unsigned char)q;
+                }
+            }
+        png_write_row(png, row);
+    }
+    png_write_end(png, NULL);
+    png_destroy_write_struct(&png, &info);
+    free(row);
+    return meso_atomic_file_commit(ctx, &out);
+fail:
+    png_destroy_write_struct(png ? &png : NULL, info ? &info : NULL);
+    free(row);
+    meso_atomic_file_abort(&out);
+    return r;
+}

@@ -1,0 +1,137 @@
+/* Private interface of the render module: the frame description, fragments, the technique
+ * vtable every file in techniques/ implements, the shared shading model, and the hooks of the
+ * rasterizer and the reference tracer.
+ *
+ * Front end / back end (as Quake III's renderer): meso_renderer_render builds an immutable
+ * meso_frame (camera, matrices, lights), then the back end (rasterizer or reference tracer)
+ * executes it. Techniques read the frame and their own prepared state; they never write shared
+ * memory while shading, so tiles shade in parallel.
+ */
+#ifndef MESO_RENDER_INTERNAL_H
+#define MESO_RENDER_INTERNAL_H
+
+#include "meso/render.h"
+
+/* ---- The frame ---------------------------------------------------------------------------- */
+
+typedef struct meso_frame {
+    const meso_scene *scene;
+    int width, height;       /* the target's size in samples (pixels x supersampling factor) */
+    meso_vec3 eye;
+    meso_vec3 forward;       /* unit camera axis: view depth of P = dot(P - eye, forward) */
+    meso_vec3 pixel_right;   /* world step of one sample to the right on the plane depth = 1 */
+    meso_vec3 pixel_down;    /* world step of one sample down on the plane depth = 1 */
+    meso_vec3 corner;        /* eye-relative direction to the top-left corner (0,0) at depth 1 */
+    meso_mat4 view, projection, view_projection;
+    float z_near, z_far;
+} meso_frame;
+
+/* Fill a frame for the scene's camera and a target of width x height samples. */
+void meso_frame_init(meso_frame *frame, const meso_scene *scene, int width, int height);
+
+/* The (unnormalised) direction of the camera ray through the point (x, y) of the target in
+ * sample units; the centre of sample (i, j) is (i + 0.5, j + 0.5). Its depth component
+ * dot(dir, forward) is 1. The rasterizer's fragments and the reference's rays agree exactly. */
+static inline meso_vec3 meso_frame_ray_direction(const meso_frame *frame, float x, float y) {
+    return meso_vec3_add(frame->corner, meso_vec3_add(meso_vec3_scale(frame->pixel_right, x),
+                                                      meso_vec3_scale(frame->pixel_down, y)));
+}
+
+/* ---- Fragments ---------------------------------------------------------------------------- */
+
+typedef struct meso_fragment {
+    /* inputs, set by the rasterizer */
+    float x, y;                   /* sample centre in the target (i + 0.5, j + 0.5) */
+    uint32_t triangle;            /* triangle index in the drawn mesh */
+    float b0, b1, b2;             /* perspective-correct barycentrics of its vertices */
+    meso_vec3 position;           /* point on the drawn (base) mesh, world space */
+    meso_vec3 normal;             /* interpolated vertex normal, unit */
+    meso_vec3 tangent, bitangent; /* interpolated dP/du, dP/dv (zero without UVs) */
+    meso_vec2 uv;                 /* interpolated, uv_scale applied */
+    float depth;                  /* view depth of `position` */
+    /* outputs, preset by the rasterizer */
+    meso_vec3 color;              /* linear RGB (preset 0) */
+    float out_depth;              /* preset to depth; a technique may replace it (depth
+                                     correction); it must not be smaller than `depth` */
+    bool discard;                 /* preset false; true: nothing is drawn (silhouettes) */
+} meso_fragment;
+
+/* ---- Techniques --------------------------------------------------------------------------- */
+
+typedef struct meso_technique {
+    meso_technique_info info;
+    /* Per-object preparation: bake maps, per-vertex data. *out_state may be left NULL.
+     * Reads the object's technique_options through meso_object_option and rejects unknown
+     * names (MESO_ERROR_INVALID_ARGUMENT naming the object and the option). */
+    meso_result (*prepare)(meso_context *ctx, const meso_scene *scene, const meso_object *object,
+                           void **out_state);
+    /* Free the state; called with NULL too. */
+    void (*release)(void *state);
+    /* Geometry techniques only (NULL otherwise): the triangles to rasterize for this frame,
+     * owned by the state and valid until the next call. Called once a frame, single-threaded,
+     * before rasterization. Per-pixel techniques draw object->mesh. */
+    meso_result (*geometry)(meso_context *ctx, void *state, const meso_frame *frame,
+                            const meso_mesh **out_mesh);
+    /* Shade `count` fragments of one triangle of one object. Called from many threads at once
+     * with different fragments; reads the state only. */
+    void (*shade)(const void *state, const meso_frame *frame, const meso_object *object,
+                  meso_fragment *fragments, size_t count);
+    /* Bytes of baked data held by the state (NULL: 0). */
+    size_t (*memory)(const void *state);
+} meso_technique;
+
+/* The registry (technique_registry.c, list in techniques/technique_list.h). NULL if unknown. */
+const meso_technique *meso_technique_lookup(const char *name);
+
+/* Reject options the technique does not know: `known` is a NULL-terminated list of names.
+ * Returns MESO_ERROR_INVALID_ARGUMENT naming the object, the option and the known ones. */
+meso_result meso_technique_check_options(meso_context *ctx, const meso_object *object,
+                                         const char *technique, const char *const *known);
+
+/* ---- Shading (shared by every technique and the reference) -------------------------------- */
+
+/* Unit direction from `position` toward the light. */
+static inline meso_vec3 meso_light_direction(const meso_light *light, meso_vec3 position) {
+    return light->type == MESO_LIGHT_DIRECTIONAL
+               ? light->direction
+               : meso_vec3_normalize(meso_vec3_sub(light->position, position));
+}
+
+/* The shading model of DESIGN.md: albedo * colour map(uv) * (ambient + sum over lights of
+ * colour * max(0, N.L) * visibility[i]) + Blinn-Phong specular * visibility[i].
+ * normal is unit; visibility may be NULL (every light visible). Pure, thread-safe. */
+meso_vec3 meso_shade_point(const meso_frame *frame, const meso_object *object, meso_vec3 position,
+                           meso_vec3 normal, meso_vec2 uv, const float *visibility);
+
+/* The normal of the height-field surface P' = P - (1 - h) depth N over a base point with frame
+ * (normal, tangent = dP/du, bitangent = dP/dv) and height gradient (dh/du, dh/dv):
+ * normalize(cross(T + depth h_u N, B + depth h_v N)), turned to the side of `normal`. */
+meso_vec3 meso_displaced_normal(meso_vec3 normal, meso_vec3 tangent, meso_vec3 bitangent,
+                                float depth, meso_vec2 gradient);
+
+/* ---- Rasterizer hooks for techniques ------------------------------------------------------ */
+
+/* Rasterize `mesh` (all triangles, both faces) with `view_projection` into a depth-only target
+ * of width x height samples, for shadow maps: depth[j * width + i] receives the smallest
+ * z_ndc * 0.5 + 0.5 of the triangles covering sample centre (i + 0.5, j + 0.5) (row 0 at the
+ * top, +y up in NDC), and +INFINITY where none does. Same fill rule and clipping as the colour
+ * rasterizer; parallel over tiles; byte-identical for any thread count. */
+meso_result meso_raster_depth_map(meso_context *ctx, const meso_mesh *mesh,
+                                  meso_mat4 view_projection, int width, int height, float *depth);
+
+/* ---- Back ends ---------------------------------------------------------------------------- */
+
+/* The reference tracer (reference.c): true micro-geometry with Embree. */
+typedef struct meso_reference meso_reference;
+meso_result meso_reference_create(meso_context *ctx, const meso_scene *scene,
+                                  meso_reference **out_reference);
+/* Trace one sample per target sample of `frame` into the target arrays (width x height of the
+ * frame): colour RGB, coverage 0/1, depth. */
+meso_result meso_reference_render(meso_context *ctx, const meso_reference *reference,
+                                  const meso_frame *frame, float *color, float *coverage,
+                                  float *depth);
+size_t meso_reference_memory(const meso_reference *reference);
+uint64_t meso_reference_triangle_count(const meso_reference *reference);
+void meso_reference_destroy(meso_reference *reference);
+
+#endif

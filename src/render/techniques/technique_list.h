@@ -1,0 +1,5 @@
+/* Every technique, in the order `meso render --techniques all` and the demo show them.
+ * Each line names a `const meso_technique meso_technique_<name>` defined in <name>.c here.
+ * Add a technique: write techniques/<name>.c and add its line. */
+MESO_TECHNIQUE(flat)
+MESO_TECHNIQUE(bump)

@@ -1,0 +1,71 @@
+#include "test_util.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+static char last_warning[1024];
+
+static void capture_log(void *user, meso_log_level level, const char *message) {
+    (void)user;
+    if (level == MESO_LOG_WARNING) snprintf(last_warning, sizeof(last_warning), "%s", message);
+}
+
+meso_context *test_context(int num_threads) {
+    meso_context *ctx = NULL;
+    meso_context_desc desc = {.num_threads = num_threads, .log = capture_log,
+                              .progress = MESO_PROGRESS_NEVER};
+    assert_int_equal(meso_context_create(&desc, &ctx), MESO_OK);
+    last_warning[0] = 0;
+    return ctx;
+}
+
+const char *test_last_warning(void) { return last_warning; }
+
+const char *test_temp_dir(void) {
+    static char dir[1024];
+    if (!dir[0]) {
+        snprintf(dir, sizeof(dir), "%s/test-tmp/XXXXXX", MESO_BINARY_DIR);
+        char parent[1024];
+        snprintf(parent, sizeof(parent), "%s/test-tmp", MESO_BINARY_DIR);
+        mkdir(parent, 0755);
+        if (!mkdtemp(dir)) fail_msg("cannot create %s", dir);
+    }
+    return dir;
+}
+
+const char *test_path(const char *dir, const char *name) {
+    static char buffers[8][1024];
+    static int next;
+    char *b = buffers[next++ % 8];
+    snprintf(b, 1024, "%s/%s", dir, name);
+    return b;
+}
+
+void test_write_file(const char *path, const void *data, size_t size) {
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(data, 1, size, f), size);
+    fclose(f);
+}
+
+int test_run_meso(const char *arguments, const char **out_stderr) {
+    static char err[8192];
+    char err_path[1024], command[4096];
+    snprintf(err_path, sizeof(err_path), "%s/stderr.txt", test_temp_dir());
+    snprintf(command, sizeof(command), "%s %s >/dev/null 2>%s </dev/null", MESO_PROGRAM, arguments,
+             err_path);
+    int status = system(command);
+    err[0] = 0;
+    FILE *f = fopen(err_path, "rb");
+    if (f) {
+        size_t n = fread(err, 1, sizeof(err) - 1, f);
+        err[n] = 0;
+        fclose(f);
+    }
+    if (out_stderr) *out_stderr = err;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}

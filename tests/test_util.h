@@ -1,0 +1,27 @@
+/* Helpers shared by the cmocka tests. */
+#ifndef MESO_TEST_UTIL_H
+#define MESO_TEST_UTIL_H
+
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include "meso/meso.h"
+
+/* A context whose log is captured (last warning/error text) rather than printed. */
+meso_context *test_context(int num_threads);
+/* The text of the last warning logged on a test_context ("" if none). */
+const char *test_last_warning(void);
+/* A fresh temporary folder for the test's files (removed by nothing: under the build tree). */
+const char *test_temp_dir(void);
+/* Path join into a static buffer rotating among 8 slots. */
+const char *test_path(const char *dir, const char *name);
+/* Write `text` to a file. */
+void test_write_file(const char *path, const void *data, size_t size);
+/* Run the meso program with arguments (a shell command line after "meso"), capturing stderr to
+ * *out_stderr (static buffer); returns the exit status. */
+int test_run_meso(const char *arguments, const char **out_stderr);
+
+#endif
