@@ -54,7 +54,7 @@ void test_write_file(const char *path, const void *data, size_t size) {
 
 int test_run_meso(const char *arguments, const char **out_stderr) {
     static char err[8192];
-    char err_path[1024], command[4096];
+    char err_path[1100], command[4096];
     snprintf(err_path, sizeof(err_path), "%s/stderr.txt", test_temp_dir());
     snprintf(command, sizeof(command), "%s %s >/dev/null 2>%s </dev/null", MESO_PROGRAM, arguments,
              err_path);
@@ -68,4 +68,33 @@ int test_run_meso(const char *arguments, const char **out_stderr) {
     }
     if (out_stderr) *out_stderr = err;
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+static uint32_t crc32_of(const unsigned char *data, size_t size) {
+    uint32_t crc = 0xffffffffu;
+    for (size_t i = 0; i < size; i++) {
+        crc ^= data[i];
+        for (int k = 0; k < 8; k++) crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
+    }
+    return ~crc;
+}
+
+static void put_u32(unsigned char *p, uint32_t v) {
+    p[0] = (unsigned char)(v >> 24);
+    p[1] = (unsigned char)(v >> 16);
+    p[2] = (unsigned char)(v >> 8);
+    p[3] = (unsigned char)v;
+}
+
+void test_write_png_header(const char *path, uint32_t width, uint32_t height) {
+    unsigned char bytes[8 + 25] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    unsigned char *chunk = bytes + 8;
+    put_u32(chunk, 13);
+    memcpy(chunk + 4, "IHDR", 4);
+    put_u32(chunk + 8, width);
+    put_u32(chunk + 12, height);
+    chunk[16] = 8; /* bit depth */
+    chunk[17] = 2; /* RGB */
+    put_u32(chunk + 21, crc32_of(chunk + 4, 17));
+    test_write_file(path, bytes, sizeof(bytes));
 }

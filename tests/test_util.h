@@ -20,6 +20,9 @@ const char *test_temp_dir(void);
 const char *test_path(const char *dir, const char *name);
 /* Write `text` to a file. */
 void test_write_file(const char *path, const void *data, size_t size);
+/* Write a PNG that is only a signature and an IHDR (valid CRC) declaring width x height RGB:
+ * for testing that declared sizes are checked before allocating. */
+void test_write_png_header(const char *path, uint32_t width, uint32_t height);
 /* Run the meso program with arguments (a shell command line after "meso"), capturing stderr to
  * *out_stderr (static buffer); returns the exit status. */
 int test_run_meso(const char *arguments, const char **out_stderr);

@@ -21,6 +21,10 @@ static void on_png_error(png_structp png, png_const_charp message) {
 
 static void on_png_warning(png_structp png, png_const_charp message) { (void)png; (void)message; }
 
+static uint32_t read_u32(const unsigned char *p) {
+    return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3];
+}
+
 meso_result meso_image_load_png(meso_context *ctx, const char *path, meso_image **out_image) {
     *out_image = NULL;
     FILE *file = fopen(path, "rb");
@@ -30,6 +34,23 @@ meso_result meso_image_load_png(meso_context *ctx, const char *path, meso_image 
         fclose(file);
         return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: not a PNG file", path);
     }
+    /* The IHDR must come first; its declared size is checked here, before libpng reads on to
+     * the first IDAT, so a huge declaration is refused even in a file cut after its header. */
+    unsigned char ihdr[16];
+    if (fread(ihdr, 1, 16, file) != 16 || memcmp(ihdr + 4, "IHDR", 4) != 0) {
+        fclose(file);
+        return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: truncated PNG (no IHDR chunk)", path);
+    }
+    uint32_t declared_width = read_u32(ihdr + 8), declared_height = read_u32(ihdr + 12);
+    if (declared_width > MESO_IMAGE_MAX_SIDE || declared_height > MESO_IMAGE_MAX_SIDE ||
+        (uint64_t)declared_width * declared_height > MESO_IMAGE_MAX_PIXELS) {
+        fclose(file);
+        return meso_log_error(ctx, MESO_ERROR_LIMIT,
+                              "%s: %ux%u exceeds the limit of %d a side and %u pixels", path,
+                              (unsigned)declared_width, (unsigned)declared_height,
+                              MESO_IMAGE_MAX_SIDE, MESO_IMAGE_MAX_PIXELS);
+    }
+    fseek(file, 8, SEEK_SET);
     png_error_state state = {ctx, path, ""};
     png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &state, on_png_error,
                                              on_png_warning);
