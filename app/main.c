@@ -1,3 +1,84 @@
-/* Placeholder: the meso program (app helper replaces this). */
-#include <stdio.h>
-int main(void) { fputs("meso: not built yet\n", stderr); return 1; }
+/* The meso program: dispatches `meso CMD ...` to app/cmd_<CMD>.c. */
+#include "app.h"
+
+#include <string.h>
+
+typedef struct command {
+    const char *name;
+    int (*run)(int argc, char **argv);
+    const char *summary;
+} command;
+
+static const command commands[] = {
+    {"render", meso_cmd_render, "render a scene to PNG, or every technique side by side"},
+    {"compare", meso_cmd_compare, "compare images: metrics, difference image, sheet"},
+    {"info", meso_cmd_info, "describe a PNG, scene, mesh or bake file"},
+    {"demo", meso_cmd_demo, "render the built-in examples with every technique"},
+    {"bench", meso_cmd_bench, "time techniques per frame, and their thread scaling"},
+};
+#define NUM_COMMANDS (sizeof(commands) / sizeof(commands[0]))
+
+/* Until app/cmd_compare.c is linked in, `meso compare` says it is missing. */
+__attribute__((weak)) int meso_cmd_compare(int argc, char **argv) {
+    (void)argc;
+    (void)argv;
+    fprintf(stderr, "meso: compare: not available in this build\n");
+    return APP_EXIT_FAILURE;
+}
+
+static void print_help(void) {
+    printf("meso %s: surface mesostructure rendering on the CPU\n\n"
+           "Usage: meso COMMAND [options]\n\nCommands:\n",
+           MESO_VERSION_STRING);
+    for (size_t i = 0; i < NUM_COMMANDS; i++)
+        printf("  %-10s %s\n", commands[i].name, commands[i].summary);
+    printf("  %-10s %s\n", "help", "the help of a command (meso help render)");
+    printf("\nGlobal options (every command): --threads N, --progress, --quiet, --help\n"
+           "Options: meso --help, meso --version\n\n"
+           "Examples:\n"
+           "  meso demo -o demo\n"
+           "  meso render examples/bricks-plane.json -o bricks.png --technique relief\n"
+           "  meso render examples/bricks-plane.json --techniques all -o out/bricks\n"
+           "  meso info examples/bricks-plane.json\n"
+           "  meso bench --frames 10\n\n"
+           "Exit status: 0 success, 2 bad input or usage, 1 other failures.\n"
+           "Documentation: README.md and docs/cli.md.\n");
+}
+
+static const command *find_command(const char *name) {
+    for (size_t i = 0; i < NUM_COMMANDS; i++)
+        if (!strcmp(commands[i].name, name)) return &commands[i];
+    return NULL;
+}
+
+int main(int argc, char **argv) {
+    if (argc < 2) {
+        print_help();
+        return APP_EXIT_BAD_INPUT;
+    }
+    const char *name = argv[1];
+    if (!strcmp(name, "--help") || !strcmp(name, "-h")) {
+        print_help();
+        return APP_EXIT_OK;
+    }
+    if (!strcmp(name, "--version")) {
+        printf("meso %s\n", MESO_VERSION_STRING);
+        return APP_EXIT_OK;
+    }
+    if (!strcmp(name, "help")) {
+        if (argc < 3) {
+            print_help();
+            return APP_EXIT_OK;
+        }
+        const command *c = find_command(argv[2]);
+        if (!c) return app_usage_error(NULL, "help: unknown command '%s'", argv[2]);
+        char *help_argv[] = {argv[2], "--help", NULL};
+        return c->run(2, help_argv);
+    }
+    const command *c = find_command(name);
+    if (!c) {
+        if (name[0] == '-') return app_usage_error(NULL, "unknown option '%s'", name);
+        return app_usage_error(NULL, "unknown command '%s'", name);
+    }
+    return c->run(argc - 1, argv + 1);
+}

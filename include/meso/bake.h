@@ -6,11 +6,21 @@
  * allocating. Bakes are cached by the hash of source + parameters.
  *
  * The representations have a header each, included here:
- *   bake_file.h      the container and the cache
+ *   bake_file.h        the container (docs/bake-format.md) and the bake cache
+ *   bake_vdm.h         view-dependent displacement maps + MVM, SVD-compressed (VDM §3)
+ *   bake_horizon.h     horizon maps (bump/horizon baselines)
+ *   bake_minmax.h      min-max height pyramids
+ *   bake_sat.h         summed-area tables
+ *   bake_isosurface.h  isosurfaces of solids
  */
 #ifndef MESO_BAKE_H
 #define MESO_BAKE_H
 
 #include "meso/bake_file.h"
+#include "meso/bake_vdm.h"
+#include "meso/bake_isosurface.h"
+#include "meso/bake_horizon.h"
+#include "meso/bake_minmax.h"
+#include "meso/bake_sat.h"
 
 #endif

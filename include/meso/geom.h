@@ -86,7 +86,8 @@ meso_result meso_mesh_create_shape(meso_context *ctx, const meso_shape_desc *des
 
 /* Import OBJ / PLY / glTF (assimp), all meshes of the file joined, triangulated, normals
  * generated when missing. The first UV channel is kept (NULL when the file has none).
- * Errors name the file: MESO_ERROR_IO, MESO_ERROR_FORMAT, MESO_ERROR_LIMIT. */
+ * Errors name the file: MESO_ERROR_IO, MESO_ERROR_FORMAT, MESO_ERROR_LIMIT. The result has
+ * passed meso_mesh_validate(require_uvs = false) under the file's name. */
 meso_result meso_mesh_load(meso_context *ctx, const char *path, meso_mesh **out_mesh);
 
 /* An empty mesh with the given counts; positions, normals, indices allocated (zeroed), uvs too
@@ -99,12 +100,15 @@ void meso_mesh_destroy(meso_mesh *mesh);
 /* Check a mesh for use: NaN/Inf positions, normals or UVs and out-of-range indices are errors
  * (MESO_ERROR_FORMAT, naming `name` and the vertex); degenerate (zero-area) triangles are
  * dropped with a warning; require_uvs and no UVs is an error that says the mesostructure
- * needs texture coordinates. */
+ * needs texture coordinates. Zero-length normals are rebuilt from the triangles around their
+ * position; other normals are made unit. */
 meso_result meso_mesh_validate(meso_context *ctx, meso_mesh *mesh, const char *name,
                                bool require_uvs);
 
 /* Apply an affine transform to positions (and normals by its normal matrix, renormalised);
- * derived arrays (tangents, curvature, quadrics) are freed: recompute them afterwards. */
+ * derived arrays (tangents, curvature, quadrics) are freed: recompute them afterwards. A
+ * mirroring transform (negative determinant) also reverses every triangle's corner order, so
+ * triangles stay counter-clockwise seen from outside. */
 void meso_mesh_transform(meso_mesh *mesh, meso_mat4 transform);
 /* Multiply the UVs by (su, sv); derived arrays are freed. */
 void meso_mesh_scale_uvs(meso_mesh *mesh, meso_vec2 scale);

@@ -103,6 +103,13 @@ static inline meso_vec3 meso_light_direction(const meso_light *light, meso_vec3 
 meso_vec3 meso_shade_point(const meso_frame *frame, const meso_object *object, meso_vec3 position,
                            meso_vec3 normal, meso_vec2 uv, const float *visibility);
 
+/* meso_shade_point for every fragment of a batch, 8 at a time, with the same bits:
+ * fragments[i].color = meso_shade_point(frame, object, fragments[i].position,
+ * fragments[i].normal, fragments[i].uv, visibility ? visibility + i * num_lights : NULL).
+ * A technique that changes the normal or uv writes them into the fragment first. Pure. */
+void meso_shade_fragments(const meso_frame *frame, const meso_object *object,
+                          meso_fragment *fragments, size_t count, const float *visibility);
+
 /* The normal of the height-field surface P' = P - (1 - h) depth N over a base point with frame
  * (normal, tangent = dP/du, bitangent = dP/dv) and height gradient (dh/du, dh/dv):
  * normalize(cross(T + depth h_u N, B + depth h_v N)), turned to the side of `normal`. */

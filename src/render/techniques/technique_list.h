@@ -3,3 +3,10 @@
  * Add a technique: write techniques/<name>.c and add its line. */
 MESO_TECHNIQUE(flat)
 MESO_TECHNIQUE(bump)
+MESO_TECHNIQUE(horizon)
+MESO_TECHNIQUE(parallax)
+MESO_TECHNIQUE(relief)
+MESO_TECHNIQUE(relief_exact)
+MESO_TECHNIQUE(vdm)
+MESO_TECHNIQUE(tessellation)
+MESO_TECHNIQUE(displacement)

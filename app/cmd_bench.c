@@ -1,0 +1,271 @@
+/* meso bench: median time per frame of techniques on scenes, and their thread scaling. */
+#include "app.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "examples_embedded.h"
+
+#define MAX_SCENES 64
+#define MAX_TECHNIQUES 64
+#define DEFAULT_FRAMES 30
+#define DEFAULT_SECONDS 10.0 /* without --frames or --seconds: 30 frames or 10 s, first reached */
+#define WARMUP_FRAMES 2
+#define WARMUP_SECONDS 1.0 /* the second warm-up frame is skipped after a slow first one */
+#define MAX_FRAMES 10000
+
+static const app_command_help bench_help = {
+    .name = "bench",
+    .usage = "[SCENES...] [options]",
+    .summary =
+        "Time techniques on scenes: for each scene and each technique that can draw it, prepare\n"
+        "once, draw 2 warm-up frames (1 when the first takes over 1 s), then time --frames\n"
+        "frames or for --seconds (by default 30 frames or 10 s, whichever ends first) and report\n"
+        "the MEDIAN time per frame and frames per second, with every worker thread (--threads)\n"
+        "and with one thread; scaling = time at 1 thread / time at N threads. Without SCENES\n"
+        "the examples built into the program are used. Prints the machine and an aligned\n"
+        "table; --json writes the same numbers.",
+    .examples = "  meso bench\n"
+                "  meso bench examples/bricks-plane.json --techniques relief,parallax --frames 10\n"
+                "  meso bench --size 256x256 --seconds 1 --json bench.json\n",
+};
+
+typedef struct bench_options {
+    const char *techniques;
+    int frames;     /* 0: not given */
+    double seconds; /* 0: not given */
+    app_size size;
+    const char *json;
+} bench_options;
+
+typedef struct bench_row {
+    char scene[MESO_NAME_MAX];
+    char technique[MESO_NAME_MAX];
+    double prepare_ms;
+    double ms;        /* median at the full thread count */
+    double ms_single; /* median at one thread, NAN when not measured */
+    int frames;
+} bench_row;
+
+typedef struct bench_scene {
+    char name[MESO_NAME_MAX];
+    meso_scene *scene;
+} bench_scene;
+
+/* Time frames of a prepared renderer: the median in ms, frames counted in *out_frames. */
+static meso_result time_frames(meso_renderer *renderer, meso_framebuffer *fb,
+                               const bench_options *o, double *times, double *out_ms,
+                               int *out_frames) {
+    double warmup_start = meso_time_seconds();
+    for (int i = 0; i < WARMUP_FRAMES && meso_time_seconds() - warmup_start < WARMUP_SECONDS; i++) {
+        meso_result result = meso_renderer_render(renderer, fb);
+        if (result != MESO_OK) return result;
+    }
+    int limit = o->frames > 0 ? o->frames : o->seconds > 0.0 ? MAX_FRAMES : DEFAULT_FRAMES;
+    double seconds = o->seconds > 0.0 ? o->seconds : o->frames > 0 ? 0.0 : DEFAULT_SECONDS;
+    double start = meso_time_seconds();
+    int count = 0;
+    while (count < limit &&
+           (count == 0 || seconds <= 0.0 || meso_time_seconds() - start < seconds)) {
+        double t = meso_time_seconds();
+        meso_result result = meso_renderer_render(renderer, fb);
+        if (result != MESO_OK) return result;
+        times[count++] = 1000.0 * (meso_time_seconds() - t);
+    }
+    *out_ms = app_median(times, (size_t)count);
+    *out_frames = count;
+    return MESO_OK;
+}
+
+/* One scene x technique. The renderer is made at the full thread count, so per-thread scratch
+ * it sizes then stays valid when the count is lowered to one. */
+static meso_result bench_one(meso_context *ctx, const bench_scene *s, const char *technique,
+                             const bench_options *o, double *times, bench_row *row) {
+    *row = (bench_row){.ms_single = NAN};
+    snprintf(row->scene, sizeof(row->scene), "%.*s", MESO_NAME_MAX - 1, s->name);
+    snprintf(row->technique, sizeof(row->technique), "%s", technique);
+    int threads = meso_context_num_threads(ctx);
+    meso_renderer *renderer = NULL;
+    meso_framebuffer *fb = NULL;
+    meso_render_desc desc = {.technique = technique};
+    meso_result result = meso_renderer_create(ctx, s->scene, &desc, &renderer);
+    if (result == MESO_OK)
+        result = meso_framebuffer_create(ctx, o->size.width, o->size.height, &fb);
+    if (result == MESO_OK) {
+        row->prepare_ms = 1000.0 * meso_renderer_get_stats(renderer).prepare_seconds;
+        result = time_frames(renderer, fb, o, times, &row->ms, &row->frames);
+    }
+    if (result == MESO_OK && threads > 1) {
+        int frames = 0;
+        meso_context_set_num_threads(ctx, 1);
+        result = time_frames(renderer, fb, o, times, &row->ms_single, &frames);
+        meso_context_set_num_threads(ctx, threads);
+    }
+    meso_framebuffer_destroy(fb);
+    meso_renderer_destroy(renderer);
+    return result;
+}
+
+static void print_table(const bench_row *rows, size_t count, int threads) {
+    char ms_n[32], ms_1[32];
+    snprintf(ms_n, sizeof(ms_n), "ms (%d thr)", threads);
+    snprintf(ms_1, sizeof(ms_1), "ms (1 thr)");
+    printf("%-20s %-14s %11s %12s %9s %12s %8s\n", "scene", "technique", "prepare ms", ms_n, "fps",
+           ms_1, "scaling");
+    for (size_t i = 0; i < count; i++) {
+        const bench_row *r = &rows[i];
+        printf("%-20s %-14s %11.1f %12.2f %9.1f", r->scene, r->technique, r->prepare_ms, r->ms,
+               1000.0 / r->ms);
+        if (isnan(r->ms_single))
+            printf(" %12s %8s\n", "-", "-");
+        else
+            printf(" %12.2f %7.2fx\n", r->ms_single, r->ms_single / r->ms);
+    }
+}
+
+static meso_result write_json(meso_context *ctx, const char *path, const bench_row *rows,
+                              size_t count, const char *machine, const char *date, int threads,
+                              double load, const bench_options *o) {
+    app_text json = {0};
+    app_text_printf(&json, "{\n  \"date\": ");
+    app_text_json_string(&json, date);
+    app_text_printf(&json, ",\n  \"machine\": ");
+    app_text_json_string(&json, machine);
+    app_text_printf(&json, ",\n  \"load_average\": ");
+    app_text_json_number(&json, load);
+    app_text_printf(&json,
+                    ",\n  \"threads\": %d,\n  \"width\": %d,\n  \"height\": %d,\n"
+                    "  \"warmup_frames\": %d,\n  \"runs\": [",
+                    threads, o->size.width, o->size.height, WARMUP_FRAMES);
+    for (size_t i = 0; i < count; i++) {
+        const bench_row *r = &rows[i];
+        app_text_printf(&json, "%s\n    {\"scene\": ", i ? "," : "");
+        app_text_json_string(&json, r->scene);
+        app_text_printf(&json, ", \"technique\": ");
+        app_text_json_string(&json, r->technique);
+        app_text_printf(&json, ", \"frames\": %d, \"prepare_ms\": ", r->frames);
+        app_text_json_number(&json, r->prepare_ms);
+        app_text_printf(&json, ", \"median_ms\": ");
+        app_text_json_number(&json, r->ms);
+        app_text_printf(&json, ", \"fps\": ");
+        app_text_json_number(&json, 1000.0 / r->ms);
+        app_text_printf(&json, ", \"median_ms_1_thread\": ");
+        app_text_json_number(&json, r->ms_single);
+        app_text_printf(&json, ", \"scaling\": ");
+        app_text_json_number(&json, r->ms_single / r->ms);
+        app_text_printf(&json, "}");
+    }
+    app_text_printf(&json, "\n  ]\n}\n");
+    meso_result result = app_text_write(ctx, &json, path);
+    app_text_free(&json);
+    return result;
+}
+
+/* The scenes: files named on the command line, or the embedded examples. */
+static meso_result load_scenes(meso_context *ctx, const char *const *paths, int num_paths,
+                               bench_scene *scenes, size_t *out_count) {
+    *out_count = 0;
+    size_t n = num_paths > 0 ? (size_t)num_paths : meso_embedded_example_count;
+    for (size_t i = 0; i < n && i < MAX_SCENES; i++) {
+        bench_scene *s = &scenes[*out_count];
+        meso_result result;
+        if (num_paths > 0) {
+            const char *slash = strrchr(paths[i], '/');
+            snprintf(s->name, sizeof(s->name), "%s", slash ? slash + 1 : paths[i]);
+            s->name[strcspn(s->name, ".")] = 0;
+            result = meso_scene_load(ctx, paths[i], &s->scene);
+        } else {
+            const meso_embedded_example *ex = &meso_embedded_examples[i];
+            snprintf(s->name, sizeof(s->name), "%s", ex->name);
+            result = meso_scene_parse(ctx, ex->json, ex->name, ".", &s->scene);
+        }
+        if (result != MESO_OK) return result;
+        (*out_count)++;
+    }
+    return MESO_OK;
+}
+
+int meso_cmd_bench(int argc, char **argv) {
+    bench_options o = {.techniques = "all", .size = {512, 512}};
+    const app_option options[] = {
+        {"--techniques", NULL, APP_OPTION_STRING, &o.techniques, "LIST",
+         "'all' (every per-pixel and geometry technique) or comma-separated names", "all", 0, 0},
+        {"--frames", NULL, APP_OPTION_INT, &o.frames, "N", "frames timed per run",
+         "30, within 10 s", 1, MAX_FRAMES},
+        {"--seconds", NULL, APP_OPTION_DOUBLE, &o.seconds, "S",
+         "time each run for S seconds instead (with --frames: whichever ends first)", NULL, 0.001,
+         3600},
+        {"--size", NULL, APP_OPTION_SIZE, &o.size, "WxH", "frame size", "512x512", 0, 0},
+        {"--json", NULL, APP_OPTION_STRING, &o.json, "OUT.json", "also write the numbers as JSON",
+         NULL, 0, 0},
+    };
+    app_globals globals;
+    const char *paths[MAX_SCENES];
+    int num_paths = 0;
+    int status = app_parse_options(&bench_help, options, sizeof(options) / sizeof(options[0]), argc,
+                                   argv, &globals, paths, MAX_SCENES, &num_paths);
+    if (status >= 0) return status;
+    const char *names[MAX_TECHNIQUES];
+    char names_storage[1024];
+    int num_names = app_parse_technique_list("bench", o.techniques, names_storage,
+                                             sizeof(names_storage), names, MAX_TECHNIQUES);
+    if (num_names < 0) return APP_EXIT_BAD_INPUT;
+
+    meso_context *ctx = app_context_create(&globals);
+    if (!ctx) return APP_EXIT_FAILURE;
+    bench_scene scenes[MAX_SCENES] = {0};
+    size_t num_scenes = 0;
+    bench_row *rows = calloc((size_t)MAX_SCENES * MAX_TECHNIQUES, sizeof(*rows));
+    double *times = calloc(MAX_FRAMES, sizeof(*times));
+    size_t num_rows = 0;
+    meso_result result = rows && times ? load_scenes(ctx, paths, num_paths, scenes, &num_scenes)
+                                       : MESO_ERROR_OUT_OF_MEMORY;
+
+    char machine[320], date[32];
+    app_machine_description(machine, sizeof(machine));
+    time_t now = time(NULL);
+    strftime(date, sizeof(date), "%Y-%m-%d %H:%M UTC", gmtime(&now));
+    int threads = meso_context_num_threads(ctx);
+    double load = app_load_average();
+    if (result == MESO_OK)
+        printf("machine: %s; %d worker thread(s); load average %.2f at the start\n"
+               "%dx%d, %d warm-up frames, median of %s per run\n\n",
+               machine, threads, load, o.size.width, o.size.height, WARMUP_FRAMES,
+               o.frames          ? "--frames frames"
+               : o.seconds > 0.0 ? "--seconds of frames"
+                                 : "30 frames (at most 10 s)");
+
+    meso_progress *progress = NULL;
+    if (result == MESO_OK)
+        progress = meso_progress_begin(ctx, "bench", (uint64_t)num_scenes * (uint64_t)num_names);
+    for (size_t s = 0; s < num_scenes && result == MESO_OK; s++) {
+        for (int t = 0; t < num_names && result == MESO_OK; t++) {
+            const meso_technique_info *info = meso_technique_find(names[t]);
+            meso_progress_advance(progress, 1);
+            if (info && !app_technique_applies(info, scenes[s].scene)) continue;
+            meso_result r = bench_one(ctx, &scenes[s], names[t], &o, times, &rows[num_rows]);
+            if (r == MESO_OK)
+                num_rows++;
+            else if (r == MESO_ERROR_OUT_OF_MEMORY)
+                result = r;
+            else if (!globals.quiet)
+                fprintf(stderr, "meso: warning: %s: %s: %s\n", scenes[s].name, names[t],
+                        meso_context_last_error(ctx));
+        }
+    }
+    meso_progress_end(progress);
+    if (result == MESO_OK && num_rows == 0)
+        result = meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                                "bench: no technique could draw the scenes");
+    if (result == MESO_OK) print_table(rows, num_rows, threads);
+    if (result == MESO_OK && o.json)
+        result = write_json(ctx, o.json, rows, num_rows, machine, date, threads, load, &o);
+    status = result == MESO_OK ? APP_EXIT_OK : app_fail(ctx, result);
+    for (size_t s = 0; s < num_scenes; s++) meso_scene_destroy(scenes[s].scene);
+    free(times);
+    free(rows);
+    meso_context_destroy(ctx);
+    return status;
+}

@@ -1,0 +1,241 @@
+/* meso render: one scene to a PNG, or every technique side by side against the reference. */
+#include "app.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define SHEET_COLUMNS 4
+
+typedef struct render_options {
+    const char *output;
+    const char *technique;
+    const char *techniques;
+    app_size size;
+    int samples;
+    int reference_samples;
+    int frames;
+    bool wireframe;
+    const char *coverage;
+    bool linear;
+} render_options;
+
+static const app_command_help render_help = {
+    .name = "render",
+    .usage = "SCENE -o OUT.png [options]\n       meso render SCENE --techniques all -o DIR "
+             "[options]",
+    .summary =
+        "Render a scene file (docs/scene-format.md) to a PNG, with each object's technique or\n"
+        "the one given by --technique. A one-line summary (technique, size, prepare and frame\n"
+        "times, triangles) goes to stderr.\n\n"
+        "With --techniques all (or a comma-separated list) the scene is rendered with every\n"
+        "technique that can draw its objects and with the ray-traced reference; OUT is then a\n"
+        "folder receiving <technique>.png (sRGB), <technique>.coverage.png, sheet.png (the\n"
+        "images side by side, labelled with the median frame time of a few frames, PSNR over\n"
+        "the whole image and over the covered pixels, SSIM and coverage IoU against the\n"
+        "reference, measured on linear colour), results.csv and results.json.",
+    .examples = "  meso render examples/bricks-plane.json -o bricks.png\n"
+                "  meso render examples/bricks-plane.json -o relief.png --technique relief "
+                "--size 256x256\n"
+                "  meso render examples/bricks-plane.json --techniques all -o out/bricks\n",
+};
+
+/* "relief", or "mixed" when the objects use different techniques. */
+static const char *scene_technique(const meso_scene *scene, const char *override) {
+    if (override) return override;
+    if (scene->num_objects == 0) return "none";
+    for (int i = 1; i < scene->num_objects; i++)
+        if (strcmp(scene->objects[i].technique, scene->objects[0].technique) != 0) return "mixed";
+    return scene->objects[0].technique;
+}
+
+static int render_one(meso_context *ctx, const meso_scene *scene, const render_options *o,
+                      bool quiet) {
+    meso_renderer *renderer = NULL;
+    meso_framebuffer *fb = NULL;
+    meso_render_desc desc = {
+        .technique = o->technique, .samples = o->samples, .wireframe = o->wireframe};
+    int width = o->size.width ? o->size.width : scene->width;
+    int height = o->size.height ? o->size.height : scene->height;
+    meso_encoding encoding = o->linear ? MESO_ENCODING_LINEAR : scene->encoding;
+
+    meso_result result = meso_renderer_create(ctx, scene, &desc, &renderer);
+    if (result == MESO_OK) result = meso_framebuffer_create(ctx, width, height, &fb);
+    if (result == MESO_OK) result = meso_renderer_render(renderer, fb);
+    if (result == MESO_OK)
+        result = meso_framebuffer_save_png(ctx, fb, encoding, o->output, o->coverage);
+    if (result == MESO_OK && !quiet) {
+        meso_render_stats stats = meso_renderer_get_stats(renderer);
+        fprintf(stderr,
+                "meso: render: %s, %dx%d, prepare %.1f ms, frame %.1f ms, %llu triangles -> %s\n",
+                scene_technique(scene, o->technique), width, height, 1000.0 * stats.prepare_seconds,
+                1000.0 * stats.last_frame_seconds, (unsigned long long)stats.triangles, o->output);
+    }
+    int status = result == MESO_OK ? APP_EXIT_OK : app_fail(ctx, result);
+    meso_framebuffer_destroy(fb);
+    meso_renderer_destroy(renderer);
+    return status;
+}
+
+static void print_results(const app_compare_all *all) {
+    printf("%-14s %10s %10s %10s %12s %7s %7s\n", "technique", "prepare ms", "frame ms", "PSNR dB",
+           "covered dB", "SSIM", "IoU");
+    for (size_t i = 0; i < all->num_runs; i++) {
+        const app_run *r = &all->runs[i];
+        if (!r->rendered) {
+            printf("%-14s %s\n", r->technique, r->skipped ? "(not applicable)" : "(failed)");
+            continue;
+        }
+        printf("%-14s %10.1f %10.2f", r->technique, r->prepare_ms, r->frame_ms);
+        if (r->has_metrics)
+            printf(" %10.2f %12.2f %7.3f %7.3f\n", r->metrics.psnr, r->metrics.psnr_covered,
+                   r->metrics.ssim, r->metrics.coverage_iou);
+        else
+            printf(" %10s %12s %7s %7s\n", "-", "-", "-", "-");
+    }
+}
+
+/* Write sheet.png, results.csv and results.json of `all` into dir. */
+static meso_result write_reports(meso_context *ctx, const app_compare_all *all,
+                                 const meso_scene *scene, const char *dir) {
+    const meso_image *images[256];
+    const char *labels[256];
+    char label_text[256][256];
+    size_t count = 0;
+    for (size_t i = 0; i < all->num_runs && count < 256; i++) {
+        if (!all->runs[i].rendered) continue;
+        app_run_label(&all->runs[i], NULL, all->runs[i].color->width, label_text[count],
+                      sizeof(label_text[count]));
+        images[count] = all->runs[i].color;
+        labels[count] = label_text[count];
+        count++;
+    }
+    char path[4096];
+    meso_result result = MESO_OK;
+    if (count > 0 && app_path_join(path, sizeof(path), dir, "sheet.png"))
+        result = app_sheet_save(ctx, images, labels, count,
+                                count < SHEET_COLUMNS ? (int)count : SHEET_COLUMNS, path);
+    app_text csv = {0}, json = {0};
+    bool first = true;
+    app_compare_all_csv(all, scene->path, &csv);
+    app_text_printf(&json, "{\n  \"scene\": ");
+    app_text_json_string(&json, scene->path);
+    app_text_printf(&json, ",\n  \"reference_rendered\": %s,\n  \"runs\": [",
+                    all->reference_ok ? "true" : "false");
+    app_compare_all_json(all, scene->path, &json, &first);
+    app_text_printf(&json, "\n  ]\n}\n");
+    if (result == MESO_OK && app_path_join(path, sizeof(path), dir, "results.csv"))
+        result = app_text_write(ctx, &csv, path);
+    if (result == MESO_OK && app_path_join(path, sizeof(path), dir, "results.json"))
+        result = app_text_write(ctx, &json, path);
+    app_text_free(&csv);
+    app_text_free(&json);
+    return result;
+}
+
+static int render_all(meso_context *ctx, const meso_scene *scene, const render_options *o,
+                      const char *const *names, int num_names, bool quiet) {
+    meso_result result = app_make_dir(ctx, o->output);
+    if (result != MESO_OK) return app_fail(ctx, result);
+    app_compare_all_desc desc = {
+        .scene = scene,
+        .width = o->size.width ? o->size.width : scene->width,
+        .height = o->size.height ? o->size.height : scene->height,
+        .techniques = names,
+        .num_techniques = num_names,
+        .with_reference = true,
+        .samples = o->samples,
+        .reference_samples = o->reference_samples,
+        .timing_frames = o->frames,
+    };
+    desc.progress = meso_progress_begin(ctx, "render techniques", app_compare_all_count(&desc));
+    app_compare_all all;
+    result = app_compare_all_render(ctx, &desc, &all);
+    meso_progress_end(desc.progress);
+    if (result != MESO_OK) return app_fail(ctx, result);
+
+    size_t rendered = 0;
+    for (size_t i = 0; i < all.num_runs; i++) rendered += all.runs[i].rendered;
+    if (rendered == 0) { /* one line: the last failure */
+        app_compare_all_free(&all);
+        return app_fail(ctx, MESO_ERROR_UNSUPPORTED);
+    }
+    if (!quiet) app_compare_all_print_notes(&all, NULL, true);
+    result = app_compare_all_write_images(ctx, &all, o->output, NULL, true);
+    if (result == MESO_OK) result = write_reports(ctx, &all, scene, o->output);
+    if (result == MESO_OK) print_results(&all);
+    if (result == MESO_OK && !quiet)
+        fprintf(stderr, "meso: render: %zu images, sheet.png, results.csv and results.json in %s\n",
+                rendered, o->output);
+    int status = result == MESO_OK ? APP_EXIT_OK : app_fail(ctx, result);
+    app_compare_all_free(&all);
+    return status;
+}
+
+int meso_cmd_render(int argc, char **argv) {
+    render_options o = {.samples = 1, .frames = 5};
+    const app_option options[] = {
+        {"--output", "-o", APP_OPTION_STRING, &o.output, "OUT",
+         "the PNG to write (a folder with --techniques)", "required", 0, 0},
+        {"--technique", NULL, APP_OPTION_STRING, &o.technique, "T",
+         "draw every object with technique T", "each object's own", 0, 0},
+        {"--techniques", NULL, APP_OPTION_STRING, &o.techniques, "LIST",
+         "'all' or comma-separated names: render each plus the reference into folder OUT", NULL, 0,
+         0},
+        {"--size", NULL, APP_OPTION_SIZE, &o.size, "WxH", "image size", "the scene's", 0, 0},
+        {"--samples", NULL, APP_OPTION_INT, &o.samples, "S",
+         "samples a pixel (an n x n grid, n = ceil(sqrt(S)))", "1", 1, 256},
+        {"--wireframe", NULL, APP_OPTION_FLAG, &o.wireframe, NULL,
+         "overlay the rasterized triangles' edges", NULL, 0, 0},
+        {"--coverage", NULL, APP_OPTION_STRING, &o.coverage, "MASK.png",
+         "also write the coverage mask (grey PNG)", NULL, 0, 0},
+        {"--linear", NULL, APP_OPTION_FLAG, &o.linear, NULL, "write linear values instead of sRGB",
+         "the scene's encoding", 0, 0},
+        {"--reference-samples", NULL, APP_OPTION_INT, &o.reference_samples, "S",
+         "samples a pixel of the reference (with --techniques)", "--samples", 1, 256},
+        {"--frames", NULL, APP_OPTION_INT, &o.frames, "N",
+         "frames timed per technique after the first, median reported (with --techniques; "
+         "at most 2 s each)",
+         "5", 1, 1000},
+    };
+    app_globals globals;
+    const char *positionals[1];
+    int num_positionals = 0;
+    int status = app_parse_options(&render_help, options, sizeof(options) / sizeof(options[0]),
+                                   argc, argv, &globals, positionals, 1, &num_positionals);
+    if (status >= 0) return status;
+    if (num_positionals < 1) return app_usage_error("render", "missing the SCENE file");
+    if (!o.output) return app_usage_error("render", "missing -o OUT");
+    if (o.technique && o.techniques)
+        return app_usage_error("render", "--technique and --techniques exclude each other");
+    const char *scene_path = positionals[0];
+    if (o.technique && !app_technique_known(o.technique)) {
+        char known[1024];
+        app_known_techniques(known, sizeof(known));
+        fprintf(stderr, "meso: %s: --technique: unknown technique '%s' (known: %s)\n", scene_path,
+                o.technique, known);
+        return APP_EXIT_BAD_INPUT;
+    }
+    const char *names[64];
+    char names_storage[1024];
+    int num_names = 0;
+    if (o.techniques) {
+        num_names = app_parse_technique_list("render", o.techniques, names_storage,
+                                             sizeof(names_storage), names, 64);
+        if (num_names < 0) return APP_EXIT_BAD_INPUT;
+    }
+
+    meso_context *ctx = app_context_create(&globals);
+    if (!ctx) return APP_EXIT_FAILURE;
+    meso_scene *scene = NULL;
+    meso_result result = meso_scene_load(ctx, scene_path, &scene);
+    if (result != MESO_OK)
+        status = app_fail(ctx, result);
+    else if (o.techniques)
+        status = render_all(ctx, scene, &o, names, num_names, globals.quiet);
+    else
+        status = render_one(ctx, scene, &o, globals.quiet);
+    meso_scene_destroy(scene);
+    meso_context_destroy(ctx);
+    return status;
+}

@@ -1,0 +1,106 @@
+/* The bake cache (docs/bake-format.md, "The bake cache"): one file per (kind, key) in a folder
+ * from $MESO_CACHE_DIR, $XDG_CACHE_HOME/meso or $HOME/.cache/meso. */
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "meso/bake_file.h"
+
+/* mkdir -p for the cache folder; existing folders are fine. */
+static bool make_dirs(char *path) {
+    for (char *p = path + 1; *p; p++) {
+        if (*p != '/') continue;
+        *p = 0;
+        bool ok = mkdir(path, 0755) == 0 || errno == EEXIST;
+        *p = '/';
+        if (!ok) return false;
+    }
+    return mkdir(path, 0755) == 0 || errno == EEXIST;
+}
+
+meso_result meso_bake_cache_dir(meso_context *ctx, char *out_dir, size_t size) {
+    if (!out_dir || size == 0) return MESO_ERROR_INVALID_ARGUMENT;
+    out_dir[0] = 0;
+    const char *env = getenv("MESO_CACHE_DIR");
+    int n;
+    if (env && env[0]) {
+        if (strcmp(env, "off") == 0) return MESO_ERROR_UNSUPPORTED;
+        n = snprintf(out_dir, size, "%s", env);
+    } else if ((env = getenv("XDG_CACHE_HOME")) && env[0]) {
+        n = snprintf(out_dir, size, "%s/meso", env);
+    } else if ((env = getenv("HOME")) && env[0]) {
+        n = snprintf(out_dir, size, "%s/.cache/meso", env);
+    } else {
+        return MESO_ERROR_UNSUPPORTED;
+    }
+    if (n < 0 || (size_t)n >= size) {
+        out_dir[0] = 0;
+        return MESO_ERROR_UNSUPPORTED;
+    }
+    struct stat st;
+    if (stat(out_dir, &st) == 0 && S_ISDIR(st.st_mode)) return MESO_OK;
+    if (!make_dirs(out_dir)) {
+        meso_result r =
+            meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot create the bake cache folder: %s",
+                           out_dir, strerror(errno));
+        out_dir[0] = 0;
+        return r;
+    }
+    return MESO_OK;
+}
+
+meso_result meso_bake_cache_path(meso_context *ctx, const char *kind, uint64_t key, char *out_path,
+                                 size_t size) {
+    if (!kind || !out_path || size == 0) return MESO_ERROR_INVALID_ARGUMENT;
+    char dir[1024];
+    meso_result result = meso_bake_cache_dir(ctx, dir, sizeof(dir));
+    if (result != MESO_OK) {
+        out_path[0] = 0;
+        return result;
+    }
+    int n = snprintf(out_path, size, "%s/%s-%016llx.mesobake", dir, kind, (unsigned long long)key);
+    if (n < 0 || (size_t)n >= size) {
+        out_path[0] = 0;
+        return MESO_ERROR_UNSUPPORTED;
+    }
+    return MESO_OK;
+}
+
+/* Log the load failure as a warning instead of an error: a bad cache entry is re-baked. */
+meso_result meso_bake_cache_load(meso_context *ctx, const char *kind, uint32_t kind_version,
+                                 uint64_t key, meso_bake_file **out_bake) {
+    if (out_bake) *out_bake = NULL;
+    if (!kind || !out_bake) return MESO_ERROR_INVALID_ARGUMENT;
+    char path[1200];
+    if (meso_bake_cache_path(ctx, kind, key, path, sizeof(path)) != MESO_OK) return MESO_OK;
+    if (access(path, F_OK) != 0) return MESO_OK; /* not cached yet */
+    meso_bake_file *bake = NULL;
+    meso_result result = meso_bake_file_load(ctx, path, &bake);
+    if (result == MESO_ERROR_OUT_OF_MEMORY) return result;
+    if (result != MESO_OK) {
+        meso_log_warning(ctx, "%s: unusable cache entry, baking again: %s", path,
+                         meso_context_last_error(ctx));
+        return MESO_OK;
+    }
+    if (strcmp(bake->kind, kind) != 0 || bake->kind_version != kind_version) {
+        meso_log_warning(ctx,
+                         "%s: cache entry of kind %s version %u, expected %s version %u; "
+                         "baking again",
+                         path, bake->kind, bake->kind_version, kind, kind_version);
+        meso_bake_file_destroy(bake);
+        return MESO_OK;
+    }
+    *out_bake = bake;
+    return MESO_OK;
+}
+
+meso_result meso_bake_cache_save(meso_context *ctx, const meso_bake_file *bake, uint64_t key) {
+    if (!bake) return MESO_ERROR_INVALID_ARGUMENT;
+    char path[1200];
+    meso_result result = meso_bake_cache_path(ctx, bake->kind, key, path, sizeof(path));
+    if (result == MESO_ERROR_UNSUPPORTED) return MESO_OK; /* cache disabled */
+    if (result != MESO_OK) return result;
+    return meso_bake_file_save(ctx, bake, path);
+}

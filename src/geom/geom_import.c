@@ -1,0 +1,312 @@
+/* Mesh import through assimp's C API: OBJ, PLY, glTF and whatever else assimp reads.
+ *
+ * Every triangle mesh of the file is placed by its node's accumulated transform and joined
+ * into one meso_mesh. UV channel 0 is kept as assimp gives it (OpenGL convention, DESIGN.md:
+ * nothing is flipped). The result goes through meso_mesh_validate, so errors and the
+ * degenerate-triangle warning name the file.
+ */
+#include <errno.h>
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include <assimp/cimport.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include "geom_internal.h"
+
+/* assimp's C API keeps its last error in one global string (and its loggers are global), so
+ * imports are serialised to keep meso_mesh_load thread-safe. */
+static pthread_mutex_t import_lock = PTHREAD_MUTEX_INITIALIZER;
+
+/* Nodes visited per file at most: a scene graph is a tree, this only stops a corrupt one. */
+#define MAX_NODES (1u << 22)
+
+typedef struct mesh_instance {
+    const struct aiMesh *mesh;
+    meso_mat4 transform;
+} mesh_instance;
+
+typedef struct import_state {
+    meso_context *ctx;
+    const char *path;
+    mesh_instance *instances;
+    size_t num_instances, capacity;
+} import_state;
+
+static meso_mat4 from_assimp(const struct aiMatrix4x4 *m) {
+    /* aiMatrix4x4 is row-major (a1 a2 a3 a4 is the first row) for column vectors; meso_mat4 is
+     * column-major. */
+    return (meso_mat4){{m->a1, m->b1, m->c1, m->d1, m->a2, m->b2, m->c2, m->d2, m->a3, m->b3, m->c3,
+                        m->d3, m->a4, m->b4, m->c4, m->d4}};
+}
+
+static bool is_triangle_mesh(const struct aiMesh *mesh) {
+    return mesh && (mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE) && mesh->mVertices;
+}
+
+static meso_result add_instance(import_state *s, const struct aiMesh *mesh, meso_mat4 transform) {
+    if (s->num_instances == s->capacity) {
+        size_t capacity = s->capacity ? 2 * s->capacity : 16;
+        mesh_instance *grown = realloc(s->instances, capacity * sizeof(*grown));
+        if (!grown)
+            return meso_log_error(s->ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", s->path);
+        s->instances = grown;
+        s->capacity = capacity;
+    }
+    s->instances[s->num_instances++] = (mesh_instance){mesh, transform};
+    return MESO_OK;
+}
+
+/* Every (mesh, accumulated transform) of the node tree, depth first, with an explicit stack. */
+static meso_result collect_instances(import_state *s, const struct aiScene *scene) {
+    typedef struct frame {
+        const struct aiNode *node;
+        meso_mat4 parent;
+    } frame;
+    size_t capacity = 64, depth = 0, visited = 0;
+    frame *stack = malloc(capacity * sizeof(frame));
+    if (!stack)
+        return meso_log_error(s->ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", s->path);
+    meso_result r = MESO_OK;
+    stack[depth++] = (frame){scene->mRootNode, meso_mat4_identity()};
+    while (depth > 0 && r == MESO_OK) {
+        frame f = stack[--depth];
+        if (!f.node) continue;
+        if (++visited > MAX_NODES) {
+            r = meso_log_error(s->ctx, MESO_ERROR_LIMIT, "%s: more than %u scene nodes", s->path,
+                               MAX_NODES);
+            break;
+        }
+        meso_mat4 world = meso_mat4_mul(f.parent, from_assimp(&f.node->mTransformation));
+        for (unsigned k = 0; k < f.node->mNumMeshes && r == MESO_OK; k++) {
+            unsigned index = f.node->mMeshes[k];
+            if (index >= scene->mNumMeshes) {
+                r = meso_log_error(s->ctx, MESO_ERROR_FORMAT, "%s: node refers to mesh %u of %u",
+                                   s->path, index, scene->mNumMeshes);
+                break;
+            }
+            if (is_triangle_mesh(scene->mMeshes[index]))
+                r = add_instance(s, scene->mMeshes[index], world);
+        }
+        /* Children pushed in reverse so they are visited in file order. */
+        for (unsigned c = f.node->mNumChildren; c-- > 0 && r == MESO_OK;) {
+            if (depth == capacity) {
+                frame *grown = realloc(stack, 2 * capacity * sizeof(frame));
+                if (!grown) {
+                    r = meso_log_error(s->ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory",
+                                       s->path);
+                    break;
+                }
+                stack = grown;
+                capacity *= 2;
+            }
+            stack[depth++] = (frame){f.node->mChildren[c], world};
+        }
+    }
+    free(stack);
+    return r;
+}
+
+static size_t count_triangles(const struct aiMesh *mesh) {
+    size_t count = 0;
+    for (unsigned f = 0; f < mesh->mNumFaces; f++) count += mesh->mFaces[f].mNumIndices == 3;
+    return count;
+}
+
+/* Copy the instances into one mesh (counts already checked against the limits). */
+static meso_result join_instances(import_state *s, size_t num_vertices, size_t num_triangles,
+                                  bool with_uvs, meso_mesh **out_mesh) {
+    meso_mesh *mesh = NULL;
+    meso_result r = meso_mesh_create(s->ctx, num_vertices, num_triangles, with_uvs, &mesh);
+    if (r != MESO_OK) return r;
+    size_t vertex = 0, triangle = 0;
+    for (size_t i = 0; i < s->num_instances; i++) {
+        const struct aiMesh *m = s->instances[i].mesh;
+        meso_mat4 transform = s->instances[i].transform;
+        meso_mat4 normal_matrix = meso_mat4_normal_matrix(transform);
+        const float *a = transform.m;
+        float det = a[0] * (a[5] * a[10] - a[9] * a[6]) - a[4] * (a[1] * a[10] - a[9] * a[2]) +
+                    a[8] * (a[1] * a[6] - a[5] * a[2]);
+        for (unsigned v = 0; v < m->mNumVertices; v++) {
+            const struct aiVector3D *p = &m->mVertices[v];
+            mesh->positions[vertex + v] =
+                meso_mat4_transform_point(transform, meso_vec3_make(p->x, p->y, p->z));
+            if (m->mNormals) {
+                const struct aiVector3D *n = &m->mNormals[v];
+                mesh->normals[vertex + v] = meso_vec3_normalize(
+                    meso_mat4_transform_direction(normal_matrix, meso_vec3_make(n->x, n->y, n->z)));
+            } /* else zero: meso_mesh_validate rebuilds it from the triangles */
+            if (with_uvs && m->mTextureCoords[0])
+                mesh->uvs[vertex + v] =
+                    meso_vec2_make(m->mTextureCoords[0][v].x, m->mTextureCoords[0][v].y);
+        }
+        for (unsigned f = 0; f < m->mNumFaces; f++) {
+            const struct aiFace *face = &m->mFaces[f];
+            if (face->mNumIndices != 3) continue;
+            for (int k = 0; k < 3; k++) {
+                unsigned index = face->mIndices[k];
+                if (index >= m->mNumVertices) {
+                    meso_mesh_destroy(mesh);
+                    return meso_log_error(s->ctx, MESO_ERROR_FORMAT,
+                                          "%s: face %u: vertex index %u is out of range "
+                                          "(%u vertices)",
+                                          s->path, f, index, m->mNumVertices);
+                }
+                /* A mirroring node transform reverses the winding; swap to keep it
+                 * counter-clockwise from outside. */
+                int corner = det < 0.0f && k > 0 ? 3 - k : k;
+                mesh->indices[3 * triangle + corner] = (uint32_t)(vertex + index);
+            }
+            triangle++;
+        }
+        vertex += m->mNumVertices;
+    }
+    *out_mesh = mesh;
+    return MESO_OK;
+}
+
+/* assimp 5.2's PLY reader loops forever on a header whose "end_header" line it cannot find
+ * (found by mutating test files), so PLY files (recognised by content, as assimp does) must
+ * show an "end_header" line in their first PLY_HEADER_MAX bytes before assimp sees them. */
+#define PLY_HEADER_MAX 65536
+
+static meso_result check_ply_header(meso_context *ctx, const char *path, FILE *file) {
+    char *buffer = malloc(PLY_HEADER_MAX + 1);
+    if (!buffer) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", path);
+    size_t size = fread(buffer, 1, PLY_HEADER_MAX, file);
+    buffer[size] = 0;
+    meso_result r = MESO_OK;
+    bool is_ply = size >= 3 && (buffer[0] == 'p' || buffer[0] == 'P') &&
+                  (buffer[1] == 'l' || buffer[1] == 'L') && (buffer[2] == 'y' || buffer[2] == 'Y');
+    if (is_ply) {
+        /* The header is text: search it as a string up to the first NUL, for a line that is
+         * "end_header" (a token assimp can see), not merely containing it. */
+        bool found = false;
+        for (const char *at = strstr(buffer, "end_header"); at && !found;
+             at = strstr(at + 1, "end_header")) {
+            const char *line = at;
+            while (line > buffer && (line[-1] == ' ' || line[-1] == '\t')) line--;
+            char after = at[10];
+            found = line > buffer && (line[-1] == '\n' || line[-1] == '\r') &&
+                    (after == '\n' || after == '\r' || after == ' ' || after == '\t' || after == 0);
+        }
+        if (!found)
+            r = meso_log_error(ctx, MESO_ERROR_FORMAT,
+                               "%s: PLY header has no end_header in its first %d bytes", path,
+                               PLY_HEADER_MAX);
+        /* Declared counts over the limits are refused before assimp allocates for them. */
+        const char *names[2] = {"\nelement vertex ", "\nelement face "};
+        const unsigned limits[2] = {MESO_MESH_MAX_VERTICES, MESO_MESH_MAX_TRIANGLES};
+        for (int k = 0; k < 2 && r == MESO_OK; k++) {
+            const char *at = strstr(buffer, names[k]);
+            if (!at) continue;
+            unsigned long long count = strtoull(at + strlen(names[k]), NULL, 10);
+            if (count > limits[k])
+                r = meso_log_error(ctx, MESO_ERROR_LIMIT, "%s: %llu %s exceed the limit %u", path,
+                                   count, k == 0 ? "vertices" : "faces", limits[k]);
+        }
+    }
+    free(buffer);
+    return r;
+}
+
+/* What the post-processing steps need and assimp does not check: every face has corners,
+ * and the counts (which post-processing can only shrink: a polygon of n corners becomes n - 2
+ * triangles) are within the limits before assimp allocates for them. */
+static meso_result check_raw_scene(meso_context *ctx, const char *path,
+                                   const struct aiScene *scene) {
+    uint64_t num_vertices = 0, num_corners = 0;
+    for (unsigned m = 0; m < scene->mNumMeshes; m++) {
+        const struct aiMesh *mesh = scene->mMeshes[m];
+        if (!mesh) return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: mesh %u is missing", path, m);
+        num_vertices += mesh->mNumVertices;
+        for (unsigned f = 0; f < mesh->mNumFaces; f++) {
+            if (mesh->mFaces[f].mNumIndices == 0)
+                return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: mesh %u: face %u has no corners",
+                                      path, m, f);
+            num_corners += mesh->mFaces[f].mNumIndices;
+        }
+    }
+    return geom_check_counts(ctx, path, num_vertices, num_corners / 3);
+}
+
+meso_result meso_mesh_load(meso_context *ctx, const char *path, meso_mesh **out_mesh) {
+    *out_mesh = NULL;
+    struct stat info;
+    if (stat(path, &info) == 0 && S_ISDIR(info.st_mode))
+        return meso_log_error(ctx, MESO_ERROR_IO, "%s: is a folder, not a mesh file", path);
+    FILE *probe = fopen(path, "rb");
+    if (!probe)
+        return meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot open: %s", path, strerror(errno));
+    meso_result r = check_ply_header(ctx, path, probe);
+    fclose(probe);
+    if (r != MESO_OK) return r;
+
+    import_state s = {ctx, path, NULL, 0, 0};
+    meso_mesh *mesh = NULL;
+    pthread_mutex_lock(&import_lock);
+    /* Two phases. The file is read and validated alone, checked here, and only then
+     * post-processed: assimp 5.2 aborts (ai_assert) in Triangulate on a face with no indices,
+     * which ValidateDataStructure lets through, and without ValidateDataStructure a face index
+     * past the vertex count crashes JoinIdenticalVertices (both found by mutating test
+     * files). */
+    const struct aiScene *scene = aiImportFile(path, aiProcess_ValidateDataStructure);
+    if (scene) {
+        r = check_raw_scene(ctx, path, scene);
+        if (r != MESO_OK) {
+            aiReleaseImport(scene);
+            pthread_mutex_unlock(&import_lock);
+            return r;
+        }
+        /* On failure this releases the scene itself. */
+        scene =
+            aiApplyPostProcessing(scene, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                             aiProcess_GenSmoothNormals | aiProcess_SortByPType);
+    }
+    if (!scene) {
+        const char *reason = aiGetErrorString();
+        r = meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: cannot read: %s", path,
+                           reason && reason[0] ? reason : "unknown format");
+        pthread_mutex_unlock(&import_lock);
+        return r;
+    }
+    pthread_mutex_unlock(&import_lock);
+
+    if ((scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || !scene->mRootNode) {
+        r = meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: incomplete scene", path);
+        goto fail;
+    }
+    r = collect_instances(&s, scene);
+    if (r != MESO_OK) goto fail;
+
+    uint64_t num_vertices = 0, num_triangles = 0;
+    size_t with_uvs = 0;
+    for (size_t i = 0; i < s.num_instances; i++) {
+        num_vertices += s.instances[i].mesh->mNumVertices;
+        num_triangles += count_triangles(s.instances[i].mesh);
+        with_uvs += s.instances[i].mesh->mTextureCoords[0] != NULL;
+    }
+    if (num_triangles == 0) {
+        r = meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: has no triangles", path);
+        goto fail;
+    }
+    r = geom_check_counts(ctx, path, num_vertices, num_triangles);
+    if (r != MESO_OK) goto fail;
+    if (with_uvs && with_uvs < s.num_instances)
+        meso_log_warning(ctx, "%s: %zu of %zu meshes have no texture coordinates; they get (0, 0)",
+                         path, s.num_instances - with_uvs, s.num_instances);
+    r = join_instances(&s, (size_t)num_vertices, (size_t)num_triangles, with_uvs > 0, &mesh);
+    if (r != MESO_OK) goto fail;
+    r = meso_mesh_validate(ctx, mesh, path, false);
+    if (r != MESO_OK) goto fail;
+    *out_mesh = mesh;
+    mesh = NULL;
+fail:
+    meso_mesh_destroy(mesh);
+    free(s.instances);
+    aiReleaseImport(scene);
+    return r;
+}

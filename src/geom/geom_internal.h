@@ -1,0 +1,51 @@
+/* Private helpers of the geom module: limits, derived-array bookkeeping, adjacency. */
+#ifndef MESO_GEOM_INTERNAL_H
+#define MESO_GEOM_INTERNAL_H
+
+#include "meso/geom.h"
+
+/* Refuse counts over MESO_MESH_MAX_* with MESO_ERROR_LIMIT naming `name`; call before
+ * allocating anything sized by them. Counts are 64-bit so that sums cannot wrap first. */
+meso_result geom_check_counts(meso_context *ctx, const char *name, uint64_t num_vertices,
+                              uint64_t num_triangles);
+
+/* Free (and NULL) tangents, bitangents, curvature and quadrics: the arrays that depend on the
+ * positions, normals or UVs. */
+void geom_mesh_free_derived(meso_mesh *mesh);
+
+/* Twice the area of triangle t (|(p1 - p0) x (p2 - p0)|), in double. */
+double geom_triangle_double_area(const meso_mesh *mesh, size_t t);
+
+/* Vertex -> incident triangles as compressed rows: the triangles of vertex v are
+ * faces[offsets[v] .. offsets[v + 1]), ascending (so gathers run in a fixed order). */
+typedef struct geom_vertex_faces {
+    size_t *offsets; /* num_vertices + 1 */
+    uint32_t *faces; /* 3 * num_triangles */
+} geom_vertex_faces;
+
+meso_result geom_vertex_faces_build(meso_context *ctx, const meso_mesh *mesh,
+                                    geom_vertex_faces *out);
+void geom_vertex_faces_free(geom_vertex_faces *vf);
+
+/* Vertices at bit-identical positions (texture seams, patch borders, duplicated poles) form
+ * one group, so neighbourhood queries see across seams. Members of a group are
+ * members[offsets[g] .. offsets[g + 1]), ascending. */
+typedef struct geom_weld {
+    uint32_t *group;   /* num_vertices: the group of each vertex */
+    size_t *offsets;   /* num_groups + 1 */
+    uint32_t *members; /* num_vertices */
+    size_t num_groups;
+} geom_weld;
+
+meso_result geom_weld_build(meso_context *ctx, const meso_mesh *mesh, geom_weld *out);
+void geom_weld_free(geom_weld *weld);
+
+/* Any unit vector orthogonal to the unit vector n (deterministic; Frisvad-style branchless
+ * basis, Duff et al. 2017). */
+meso_vec3 geom_any_perpendicular(meso_vec3 n);
+
+/* The teapot (geom_teapot.c): desc already defaulted and checked. */
+meso_result geom_create_teapot(meso_context *ctx, const meso_shape_desc *desc,
+                               meso_mesh **out_mesh);
+
+#endif

@@ -1,0 +1,85 @@
+/* Depth-only rasterization for shadow maps (meso_raster_depth_map, render_internal.h): the same
+ * setup, fill rule, clipping and tiles as the colour pass, both faces, z_ndc * 0.5 + 0.5. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "raster_internal.h"
+
+typedef struct depth_job {
+    const raster_bins *bins;
+    float *depth;
+} depth_job;
+
+static void depth_tile(void *user, size_t job, int thread_index) {
+    (void)thread_index;
+    const depth_job *dj = user;
+    const raster_bins *bins = dj->bins;
+    int width = bins->desc.width, height = bins->desc.height;
+    int tile = (int)job;
+    int tx0 = (tile % bins->tiles_x) * RASTER_TILE_SIZE;
+    int ty0 = (tile / bins->tiles_x) * RASTER_TILE_SIZE;
+    int tx1 = tx0 + RASTER_TILE_SIZE - 1, ty1 = ty0 + RASTER_TILE_SIZE - 1;
+    tx1 = tx1 > width - 1 ? width - 1 : tx1;
+    ty1 = ty1 > height - 1 ? height - 1 : ty1;
+    for (int y = ty0; y <= ty1; y++)
+        for (int x = tx0; x <= tx1; x++)
+            dj->depth[(size_t)y * (size_t)width + (size_t)x] = INFINITY;
+    for (size_t c = 0; c < bins->num_chunks; c++) {
+        const raster_chunk *chunk = &bins->chunks[c];
+        size_t count;
+        const uint32_t *list = raster_chunk_tile(chunk, tile, &count);
+        for (size_t e = 0; e < count; e++) {
+            const raster_triangle *tri = &chunk->triangles[list[e]];
+            int x0 = tri->min_x > tx0 ? tri->min_x : tx0, x1 = tri->max_x < tx1 ? tri->max_x : tx1;
+            int y0 = tri->min_y > ty0 ? tri->min_y : ty0, y1 = tri->max_y < ty1 ? tri->max_y : ty1;
+            if (x0 > x1 || y0 > y1) continue;
+            const int64_t half = RASTER_SUBPIXEL_ONE / 2;
+            int64_t px = ((int64_t)x0 << RASTER_SUBPIXEL_BITS) + half;
+            int64_t py = ((int64_t)y0 << RASTER_SUBPIXEL_BITS) + half;
+            int64_t row[3], sx[3], sy[3];
+            for (int k = 0; k < 3; k++) {
+                int a = (k + 1) % 3;
+                row[k] = (int64_t)tri->edge_a[k] * (px - tri->x[a]) +
+                         (int64_t)tri->edge_b[k] * (py - tri->y[a]) + tri->bias[k];
+                sx[k] = (int64_t)tri->edge_a[k] * RASTER_SUBPIXEL_ONE;
+                sy[k] = (int64_t)tri->edge_b[k] * RASTER_SUBPIXEL_ONE;
+            }
+            for (int y = y0; y <= y1; y++) {
+                int64_t e0 = row[0], e1 = row[1], e2 = row[2];
+                float fy = (float)y + 0.5f - tri->ref_y;
+                float *out = dj->depth + (size_t)y * (size_t)width;
+                for (int x = x0; x <= x1; x++, e0 += sx[0], e1 += sx[1], e2 += sx[2]) {
+                    if ((e0 | e1 | e2) < 0) continue;
+                    float z = tri->zc + tri->za * ((float)x + 0.5f - tri->ref_x) + tri->zb * fy;
+                    if (z < out[x]) out[x] = z;
+                }
+                row[0] += sy[0], row[1] += sy[1], row[2] += sy[2];
+            }
+        }
+    }
+}
+
+meso_result meso_raster_depth_map(meso_context *ctx, const meso_mesh *mesh,
+                                  meso_mat4 view_projection, int width, int height, float *depth) {
+    if (!mesh || !depth || width <= 0 || height <= 0) {
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "depth map: invalid arguments (%d x %d)", width, height);
+    }
+    raster_bins bins;
+    memset(&bins, 0, sizeof(bins));
+    raster_setup_desc desc = {.view_projection = view_projection,
+                              .width = width,
+                              .height = height,
+                              .clip_z = true,
+                              .cull_back = false,
+                              .depth_plane = true};
+    const meso_mesh *meshes[1] = {mesh};
+    meso_result r = raster_bins_build(ctx, &bins, meshes, 1, &desc);
+    if (r == MESO_OK) {
+        depth_job dj = {&bins, depth};
+        meso_parallel_for(ctx, (size_t)bins.tiles_x * (size_t)bins.tiles_y, depth_tile, &dj);
+    }
+    raster_bins_release(&bins);
+    return r;
+}

@@ -1,0 +1,380 @@
+/* Rasterizer front half: vertex transform, clipping, triangle setup and binning into tiles.
+ *
+ * Exactness: vertices snap to 1/256 sample and edge functions are evaluated in 64-bit integers,
+ * so two triangles sharing an edge compute the same edge with opposite signs and the top-left
+ * rule gives every sample centre on it to exactly one of them. Clipping keeps that property:
+ * the point where a shared edge crosses a clip plane is computed from the edge's inside vertex
+ * toward its outside vertex in both triangles, so it is bit-identical.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "raster_internal.h"
+
+#define MAX_POLYGON 9 /* 3 vertices + one per clip plane (5) + 1 */
+
+typedef struct clip_vertex {
+    double x, y, z, w;
+    double bary[3]; /* weights of the source triangle's vertices */
+} clip_vertex;
+
+/* ---- Clipping ----------------------------------------------------------------------------- */
+
+/* Signed distance of v to clip plane `plane` (>= 0 inside): 0 near, 1-4 the guard band. */
+static double plane_distance(const clip_vertex *v, int plane, double z_near, double guard) {
+    switch (plane) {
+    case 0:
+        return z_near < 0.0 ? v->z + v->w : v->w - z_near; /* z_near < 0: z_ndc >= -1 */
+    case 1:
+        return guard * v->w - v->x;
+    case 2:
+        return guard * v->w + v->x;
+    case 3:
+        return guard * v->w - v->y;
+    default:
+        return guard * v->w + v->y;
+    }
+}
+
+/* The point where edge (in, out) crosses the plane, always computed from the inside vertex so
+ * that both triangles sharing the edge get the same bits. */
+static clip_vertex intersect(const clip_vertex *in, double d_in, const clip_vertex *out,
+                             double d_out) {
+    double t = d_in / (d_in - d_out);
+    clip_vertex r;
+    r.x = in->x + t * (out->x - in->x);
+    r.y = in->y + t * (out->y - in->y);
+    r.z = in->z + t * (out->z - in->z);
+    r.w = in->w + t * (out->w - in->w);
+    for (int i = 0; i < 3; i++) r.bary[i] = in->bary[i] + t * (out->bary[i] - in->bary[i]);
+    return r;
+}
+
+/* Sutherland-Hodgman against one plane; returns the new vertex count. */
+static int clip_polygon(const clip_vertex *in, int n, clip_vertex *out, int plane, double z_near,
+                        double guard) {
+    int m = 0;
+    for (int i = 0; i < n; i++) {
+        const clip_vertex *a = &in[i], *b = &in[(i + 1) % n];
+        double da = plane_distance(a, plane, z_near, guard);
+        double db = plane_distance(b, plane, z_near, guard);
+        if (da >= 0.0) out[m++] = *a;
+        if ((da >= 0.0) != (db >= 0.0)) {
+            out[m++] = da >= 0.0 ? intersect(a, da, b, db) : intersect(b, db, a, da);
+        }
+    }
+    return m;
+}
+
+/* ---- Setup -------------------------------------------------------------------------------- */
+
+static inline int32_t ceil_div_subpixel(int64_t n) {
+    return (int32_t)(-((-n) >> RASTER_SUBPIXEL_BITS));
+}
+static inline int32_t floor_div_subpixel(int64_t n) { return (int32_t)(n >> RASTER_SUBPIXEL_BITS); }
+
+/* Set up one (possibly clipped) triangle; returns false when it covers nothing. */
+static bool setup_triangle(const raster_setup_desc *desc, const clip_vertex *vin[3],
+                           uint32_t triangle, raster_triangle *out) {
+    const clip_vertex *v[3] = {vin[0], vin[1], vin[2]};
+    int64_t X[3], Y[3];
+    double W = (double)desc->width, H = (double)desc->height;
+    for (int k = 0; k < 3; k++) {
+        if (!(v[k]->w > 0.0)) return false; /* only for projections with w <= 0 in front */
+        double inv_w = 1.0 / v[k]->w;
+        double sx = (v[k]->x * inv_w * 0.5 + 0.5) * W;
+        double sy = (0.5 - 0.5 * v[k]->y * inv_w) * H;
+        X[k] = llrint(sx * RASTER_SUBPIXEL_ONE);
+        Y[k] = llrint(sy * RASTER_SUBPIXEL_ONE);
+    }
+    int64_t area = (X[1] - X[0]) * (Y[2] - Y[0]) - (Y[1] - Y[0]) * (X[2] - X[0]);
+    if (area == 0) return false;
+    /* Counter-clockwise from outside in the world is clockwise on screen (y down): area < 0. */
+    if (area > 0 && desc->cull_back) return false;
+    if (area < 0) { /* make the edge functions positive inside */
+        const clip_vertex *tv = v[1];
+        v[1] = v[2];
+        v[2] = tv;
+        int64_t t = X[1];
+        X[1] = X[2];
+        X[2] = t;
+        t = Y[1];
+        Y[1] = Y[2];
+        Y[2] = t;
+        area = -area;
+    }
+    int64_t min_x = X[0], max_x = X[0], min_y = Y[0], max_y = Y[0];
+    for (int k = 1; k < 3; k++) {
+        min_x = X[k] < min_x ? X[k] : min_x;
+        max_x = X[k] > max_x ? X[k] : max_x;
+        min_y = Y[k] < min_y ? Y[k] : min_y;
+        max_y = Y[k] > max_y ? Y[k] : max_y;
+    }
+    /* sample i has its centre at 256 i + 128 */
+    int32_t bx0 = ceil_div_subpixel(min_x - RASTER_SUBPIXEL_ONE / 2);
+    int32_t bx1 = floor_div_subpixel(max_x - RASTER_SUBPIXEL_ONE / 2);
+    int32_t by0 = ceil_div_subpixel(min_y - RASTER_SUBPIXEL_ONE / 2);
+    int32_t by1 = floor_div_subpixel(max_y - RASTER_SUBPIXEL_ONE / 2);
+    bx0 = bx0 < 0 ? 0 : bx0;
+    by0 = by0 < 0 ? 0 : by0;
+    bx1 = bx1 > desc->width - 1 ? desc->width - 1 : bx1;
+    by1 = by1 > desc->height - 1 ? desc->height - 1 : by1;
+    if (bx0 > bx1 || by0 > by1) return false;
+
+    out->min_x = bx0, out->max_x = bx1, out->min_y = by0, out->max_y = by1;
+    out->triangle = triangle;
+    for (int k = 0; k < 3; k++) {
+        out->x[k] = (int32_t)X[k];
+        out->y[k] = (int32_t)Y[k];
+        int a = (k + 1) % 3, b = (k + 2) % 3;
+        /* E_k(p) = (b - a) x (p - a): a = dE/dx, b = dE/dy */
+        int32_t ea = (int32_t)(-(Y[b] - Y[a]));
+        int32_t eb = (int32_t)(X[b] - X[a]);
+        out->edge_a[k] = ea;
+        out->edge_b[k] = eb;
+        /* Top-left rule (y down): a left edge has the inside to its right (dE/dx > 0), a top
+         * edge is horizontal with the inside below it (dE/dy > 0). */
+        out->bias[k] = (ea > 0 || (ea == 0 && eb > 0)) ? 0 : -1;
+    }
+
+    /* Planes of lambda_k / w_k in sample units around the bounding box centre, in double. */
+    double rx = 0.5 * (double)(bx0 + bx1 + 1), ry = 0.5 * (double)(by0 + by1 + 1);
+    double px[3], py[3];
+    for (int k = 0; k < 3; k++) {
+        px[k] = (double)X[k] / RASTER_SUBPIXEL_ONE;
+        py[k] = (double)Y[k] / RASTER_SUBPIXEL_ONE;
+    }
+    double area_d = (px[1] - px[0]) * (py[2] - py[0]) - (py[1] - py[0]) * (px[2] - px[0]);
+    double la[3], lb[3], lc[3];
+    for (int k = 0; k < 3; k++) {
+        int a = (k + 1) % 3, b = (k + 2) % 3;
+        double inv = 1.0 / (area_d * v[k]->w);
+        la[k] = -(py[b] - py[a]) * inv;
+        lb[k] = (px[b] - px[a]) * inv;
+        lc[k] = ((px[b] - px[a]) * (ry - py[a]) - (py[b] - py[a]) * (rx - px[a])) * inv;
+    }
+    for (int i = 0; i < 3; i++) {
+        double ga = 0.0, gb = 0.0, gc = 0.0;
+        for (int k = 0; k < 3; k++) {
+            ga += v[k]->bary[i] * la[k];
+            gb += v[k]->bary[i] * lb[k];
+            gc += v[k]->bary[i] * lc[k];
+        }
+        out->ga[i] = (float)ga;
+        out->gb[i] = (float)gb;
+        out->gc[i] = (float)gc;
+    }
+    out->ref_x = (float)rx;
+    out->ref_y = (float)ry;
+    if (desc->depth_plane) {
+        double za = 0.0, zb = 0.0, zc = 0.0;
+        for (int k = 0; k < 3; k++) {
+            double z = v[k]->z / v[k]->w * 0.5 + 0.5;
+            /* la, lb, lc above are divided by w_k; undo that for the screen-linear z */
+            za += la[k] * v[k]->w * z;
+            zb += lb[k] * v[k]->w * z;
+            zc += lc[k] * v[k]->w * z;
+        }
+        out->za = (float)za, out->zb = (float)zb, out->zc = (float)zc;
+    } else {
+        out->za = out->zb = out->zc = 0.0f;
+    }
+    return true;
+}
+
+static bool reserve(void **data, size_t *capacity, size_t needed, size_t item) {
+    if (needed <= *capacity) return true;
+    size_t cap = *capacity ? *capacity : 64;
+    while (cap < needed) cap *= 2;
+    void *p = realloc(*data, cap * item);
+    if (!p) return false;
+    *data = p;
+    *capacity = cap;
+    return true;
+}
+
+/* Clip and set up source triangle t; appends 0..6 triangles to the chunk. */
+static void setup_source_triangle(const raster_bins *bins, const raster_mesh *rm, uint32_t t,
+                                  raster_chunk *chunk) {
+    const raster_setup_desc *desc = &bins->desc;
+    const uint32_t *idx = rm->mesh->indices + 3 * (size_t)t;
+    /* Vertices are transformed here, per triangle: a vertex shared by several triangles is
+     * transformed several times (always to the same bits), which costs less than a separate
+     * parallel pass and its barrier. */
+    meso_vec4 c[3];
+    for (int k = 0; k < 3; k++) {
+        meso_vec3 p = rm->mesh->positions[idx[k]];
+        c[k] = meso_mat4_mul_vec4(desc->view_projection, (meso_vec4){p.x, p.y, p.z, 1.0f});
+    }
+    for (int k = 0; k < 3; k++) {
+        if (!isfinite(c[k].x) || !isfinite(c[k].y) || !isfinite(c[k].z) || !isfinite(c[k].w))
+            return;
+    }
+    /* Trivial reject: all three outside one plane of the view frustum (no sample centre lies
+     * on or beyond x = +-w or y = +-w). */
+    if (c[0].x > c[0].w && c[1].x > c[1].w && c[2].x > c[2].w) return;
+    if (c[0].x < -c[0].w && c[1].x < -c[1].w && c[2].x < -c[2].w) return;
+    if (c[0].y > c[0].w && c[1].y > c[1].w && c[2].y > c[2].w) return;
+    if (c[0].y < -c[0].w && c[1].y < -c[1].w && c[2].y < -c[2].w) return;
+    /* The near plane: clip w >= z_near, or z_ndc >= -1 for depth maps (any projection). */
+    float zn = desc->clip_z ? -1.0f : desc->z_near;
+    float nd[3];
+    for (int k = 0; k < 3; k++) nd[k] = desc->clip_z ? c[k].z + c[k].w : c[k].w - zn;
+    if (nd[0] < 0.0f && nd[1] < 0.0f && nd[2] < 0.0f) return;
+
+    clip_vertex poly[2][MAX_POLYGON];
+    for (int k = 0; k < 3; k++) {
+        poly[0][k] = (clip_vertex){c[k].x, c[k].y, c[k].z, c[k].w, {k == 0, k == 1, k == 2}};
+    }
+    int n = 3, cur = 0;
+    float g = bins->guard;
+    bool inside = true;
+    for (int k = 0; k < 3 && inside; k++) {
+        inside = nd[k] >= 0.0f && c[k].w > 0.0f && fabsf(c[k].x) <= g * c[k].w &&
+                 fabsf(c[k].y) <= g * c[k].w;
+    }
+    if (!inside) {
+        for (int plane = 0; plane < 5 && n >= 3; plane++) {
+            n = clip_polygon(poly[cur], n, poly[cur ^ 1], plane, zn, g);
+            cur ^= 1;
+        }
+        if (n < 3) return;
+    }
+    if (!reserve((void **)&chunk->triangles, &chunk->capacity, chunk->num_triangles + (size_t)n,
+                 sizeof(raster_triangle))) {
+        chunk->failed = true;
+        return;
+    }
+    for (int k = 1; k + 1 < n; k++) {
+        const clip_vertex *tri[3] = {&poly[cur][0], &poly[cur][k], &poly[cur][k + 1]};
+        if (setup_triangle(desc, tri, t, &chunk->triangles[chunk->num_triangles]))
+            chunk->num_triangles++;
+    }
+}
+
+static void setup_chunk(void *user, size_t job, int thread_index) {
+    (void)thread_index;
+    raster_bins *bins = user;
+    raster_chunk *chunk = &bins->chunks[job];
+    const raster_mesh *rm = &bins->meshes[chunk->mesh];
+    chunk->num_triangles = 0;
+    chunk->num_entries = 0;
+    chunk->failed = false;
+    for (uint32_t t = chunk->first; t < chunk->first + chunk->count; t++) {
+        setup_source_triangle(bins, rm, t, chunk);
+        if (chunk->failed) return;
+    }
+    /* Bin: count per tile, prefix sums, fill in triangle order. */
+    size_t num_tiles = (size_t)bins->tiles_x * (size_t)bins->tiles_y;
+    if (!reserve((void **)&chunk->tile_start, &chunk->tile_start_capacity, num_tiles + 1,
+                 sizeof(uint32_t))) {
+        chunk->failed = true;
+        return;
+    }
+    uint32_t *start = chunk->tile_start;
+    memset(start, 0, (num_tiles + 1) * sizeof(uint32_t));
+    size_t total = 0;
+    for (size_t i = 0; i < chunk->num_triangles; i++) {
+        const raster_triangle *tri = &chunk->triangles[i];
+        int tx0 = tri->min_x / RASTER_TILE_SIZE, tx1 = tri->max_x / RASTER_TILE_SIZE;
+        int ty0 = tri->min_y / RASTER_TILE_SIZE, ty1 = tri->max_y / RASTER_TILE_SIZE;
+        for (int ty = ty0; ty <= ty1; ty++)
+            for (int tx = tx0; tx <= tx1; tx++) start[ty * bins->tiles_x + tx + 1]++;
+        total += (size_t)(tx1 - tx0 + 1) * (size_t)(ty1 - ty0 + 1);
+    }
+    if (total > UINT32_MAX ||
+        !reserve((void **)&chunk->entries, &chunk->entries_capacity, total, sizeof(uint32_t))) {
+        chunk->failed = true;
+        return;
+    }
+    for (size_t i = 0; i < num_tiles; i++) start[i + 1] += start[i];
+    /* start[tile] is now the first slot of `tile`; fill using start[tile] as a cursor and
+     * shift back afterwards. */
+    for (size_t i = 0; i < chunk->num_triangles; i++) {
+        const raster_triangle *tri = &chunk->triangles[i];
+        int tx0 = tri->min_x / RASTER_TILE_SIZE, tx1 = tri->max_x / RASTER_TILE_SIZE;
+        int ty0 = tri->min_y / RASTER_TILE_SIZE, ty1 = tri->max_y / RASTER_TILE_SIZE;
+        for (int ty = ty0; ty <= ty1; ty++)
+            for (int tx = tx0; tx <= tx1; tx++)
+                chunk->entries[start[ty * bins->tiles_x + tx]++] = (uint32_t)i;
+    }
+    for (size_t i = num_tiles; i > 0; i--) start[i] = start[i - 1];
+    start[0] = 0;
+    chunk->num_entries = total;
+}
+
+meso_result raster_bins_build(meso_context *ctx, raster_bins *bins, const meso_mesh *const *meshes,
+                              int num_meshes, const raster_setup_desc *desc) {
+    if (desc->width <= 0 || desc->height <= 0 || desc->width > RASTER_MAX_TARGET_SIDE ||
+        desc->height > RASTER_MAX_TARGET_SIDE) {
+        return meso_log_error(ctx, MESO_ERROR_LIMIT,
+                              "render: target of %d x %d samples exceeds the limit %d a side",
+                              desc->width, desc->height, RASTER_MAX_TARGET_SIDE);
+    }
+    bins->desc = *desc;
+    bins->tiles_x = (desc->width + RASTER_TILE_SIZE - 1) / RASTER_TILE_SIZE;
+    bins->tiles_y = (desc->height + RASTER_TILE_SIZE - 1) / RASTER_TILE_SIZE;
+    int side = desc->width > desc->height ? desc->width : desc->height;
+    bins->guard = (float)(2.0 * RASTER_GUARD_SAMPLES / (double)side);
+
+    /* Meshes. */
+    if (num_meshes > bins->meshes_capacity) {
+        raster_mesh *m = realloc(bins->meshes, (size_t)num_meshes * sizeof(*m));
+        if (!m) goto oom;
+        bins->meshes = m;
+        bins->meshes_capacity = num_meshes;
+    }
+    bins->num_meshes = num_meshes;
+    /* Chunks of a fixed size for a given target (never the thread count). Large targets get
+     * larger chunks so that the per-chunk tile tables (4 bytes a tile) stay within about
+     * 32 bytes a triangle. */
+    size_t num_tiles = (size_t)bins->tiles_x * (size_t)bins->tiles_y;
+    size_t chunk_size = RASTER_CHUNK_TRIANGLES * (num_tiles > 4096 ? num_tiles / 4096 : 1);
+    size_t chunks = 0;
+    for (int m = 0; m < num_meshes; m++) {
+        bins->meshes[m].mesh = meshes[m];
+        size_t nt = meshes[m] ? meshes[m]->num_triangles : 0;
+        chunks += (nt + chunk_size - 1) / chunk_size;
+    }
+
+    /* Chunks of source triangles, in object order. */
+    if (chunks > bins->chunks_capacity) {
+        raster_chunk *c = realloc(bins->chunks, chunks * sizeof(*c));
+        if (!c) goto oom;
+        memset(c + bins->chunks_capacity, 0, (chunks - bins->chunks_capacity) * sizeof(*c));
+        bins->chunks = c;
+        bins->chunks_capacity = chunks;
+    }
+    bins->num_chunks = chunks;
+    size_t next = 0;
+    for (int m = 0; m < num_meshes; m++) {
+        size_t nt = meshes[m] ? meshes[m]->num_triangles : 0;
+        for (size_t first = 0; first < nt; first += chunk_size) {
+            raster_chunk *c = &bins->chunks[next++];
+            c->mesh = m;
+            c->first = (uint32_t)first;
+            c->count = (uint32_t)(nt - first < chunk_size ? nt - first : chunk_size);
+        }
+    }
+    meso_parallel_for(ctx, chunks, setup_chunk, bins);
+    for (size_t i = 0; i < chunks; i++) {
+        if (bins->chunks[i].failed) goto oom;
+    }
+    return MESO_OK;
+oom:
+    bins->num_chunks = 0;
+    return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY,
+                          "render: out of memory setting up triangles");
+}
+
+void raster_bins_release(raster_bins *bins) {
+    free(bins->meshes);
+    for (size_t i = 0; i < bins->chunks_capacity; i++) {
+        free(bins->chunks[i].triangles);
+        free(bins->chunks[i].tile_start);
+        free(bins->chunks[i].entries);
+    }
+    free(bins->chunks);
+    memset(bins, 0, sizeof(*bins));
+}

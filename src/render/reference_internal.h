@@ -1,0 +1,111 @@
+/* The reference tracer's options beyond render_internal.h (tests and tools).
+ *
+ * meso_reference_create(ctx, scene, out) is meso_reference_create_with(ctx, scene, NULL, out).
+ */
+#ifndef MESO_REFERENCE_INTERNAL_H
+#define MESO_REFERENCE_INTERNAL_H
+
+#include "meso/bake_isosurface.h"
+#include "render_internal.h"
+
+/* The most triangles the reference builds for one scene (all objects together), checked
+ * before any geometry is allocated: 64 M triangles take about 6 GB with the BVH. */
+#define MESO_REFERENCE_MAX_TRIANGLES (UINT64_C(1) << 26)
+
+/* Zero fields take the defaults. */
+typedef struct meso_reference_desc {
+    /* Height fields: micro-triangle edges per texel of the tiled map (1: an edge spans at most
+     * one texel; 2: half a texel). Objects may set the technique option "subdivision". */
+    int subdivision;
+    /* Height fields: also cap the micro-triangles at `view_adaptive` edges per pixel of the
+     * scene's image seen from the scene's camera (0: 2, the default; negative: off, texel
+     * rule only). See reference_heightfield.c. Objects may set the option "view_adaptive". */
+    float view_adaptive;
+    /* Solids: the texture-space extraction grid per tile (128 x 128 x 32). Objects may set
+     * the option "resolution" (u and v; w is a quarter of it). */
+    meso_isosurface_desc isosurface;
+    /* Tests: replaces the distance field of every solid object (NULL: meso_solid_distance of
+     * the object's solid); shading then uses central differences of this field. */
+    meso_scalar_field_fn solid_field;
+    void *solid_field_user;
+} meso_reference_desc;
+
+meso_result meso_reference_create_with(meso_context *ctx, const meso_scene *scene,
+                                       const meso_reference_desc *desc,
+                                       meso_reference **out_reference);
+
+/* ---- Private to reference*.c ------------------------------------------------------------- */
+
+#include <embree3/rtcore.h>
+
+typedef enum reference_kind {
+    REFERENCE_PLAIN = 0,   /* the mesh itself */
+    REFERENCE_HEIGHT_FIELD, /* displaced micro-triangles */
+    REFERENCE_SOLID,       /* the isosurface mapped into the shell's prisms */
+} reference_kind;
+
+/* A height field's Embree grid: one base triangle, or two sharing an edge (reference_heightfield.c). */
+typedef struct reference_grid {
+    uint32_t first, second; /* base triangles; second = UINT32_MAX: a single one */
+    uint8_t first_edge;     /* the edge of `first` on the grid's diagonal (shared with second) */
+    uint8_t second_edge;    /* the same edge in `second` */
+} reference_grid;
+
+/* The base triangle and its barycentric weights (in its own vertex order) at grid (u, v). */
+static inline uint32_t reference_grid_weights(const reference_grid *grid, float u, float v,
+                                              float out_weights[3]) {
+    if (grid->second == UINT32_MAX || u + v <= 1.0f) {
+        int e = grid->first_edge;
+        out_weights[(e + 2) % 3] = 1.0f - u - v;
+        out_weights[e] = u;
+        out_weights[(e + 1) % 3] = v;
+        return grid->first;
+    }
+    int f = grid->second_edge;
+    out_weights[f] = 1.0f - u;
+    out_weights[(f + 1) % 3] = 1.0f - v;
+    out_weights[(f + 2) % 3] = u + v - 1.0f;
+    return grid->second;
+}
+
+/* One object's traced geometry and what shading needs at a hit. */
+typedef struct reference_object {
+    const meso_object *object;
+    reference_kind kind;
+    uint64_t num_triangles;
+    size_t num_vertices;
+    const uint32_t *indices; /* the Embree index buffer: plain 3 a triangle, solid 4 a quad */
+    meso_vec3 *uvws;         /* solid: per vertex (u, v, w), uv_scale applied */
+    reference_grid *grids;   /* height field: one per Embree grid primitive */
+    uint64_t *base_offsets;  /* solid: first quad of each base triangle, num_base + 1 */
+    size_t num_base;
+    meso_scalar_field_fn field; /* solid */
+    void *field_user;
+    size_t side_bytes;       /* uvws, base_offsets, grids */
+} reference_object;
+
+/* Build the geometry of one object into `geometry` (a new RTC_GEOMETRY_TYPE_GRID for height
+ * fields, RTC_GEOMETRY_TYPE_QUAD for solids):
+ * counts first, adds the count to *total and checks MESO_REFERENCE_MAX_TRIANGLES before
+ * allocating the buffers. */
+meso_result reference_build_heightfield(meso_context *ctx, const meso_scene *scene,
+                                        const meso_reference_desc *desc, RTCGeometry geometry,
+                                        reference_object *ref, uint64_t *total);
+meso_result reference_build_solid(meso_context *ctx, const meso_reference_desc *desc,
+                                  RTCGeometry geometry, reference_object *ref, uint64_t *total);
+
+/* The object's technique option `name`, or `fallback` (plain data of scene.h; render does not
+ * link the scene module). */
+double reference_option(const meso_object *object, const char *name, double fallback);
+
+/* The base triangle of a traced solid quad (binary search in base_offsets). */
+size_t reference_base_triangle(const reference_object *ref, uint64_t triangle);
+
+/* dP/du and dP/dv of a triangle from its positions and UVs (zero when the UVs are degenerate). */
+void reference_triangle_gradients(const meso_vec3 p[3], const meso_vec2 uv[3], meso_vec3 *out_t,
+                                  meso_vec3 *out_b);
+
+/* Barycentric weights of `uv` in the UV triangle; false when it is degenerate (weights 1/3). */
+bool reference_uv_barycentrics(const meso_vec2 uv[3], meso_vec2 point, float out_weights[3]);
+
+#endif

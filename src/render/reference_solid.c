@@ -1,0 +1,496 @@
+/* The reference tracer's solids: the solid's texture-space isosurface (bake_isosurface.c)
+ * mapped into the shell prism of every base triangle.
+ *
+ * Mapping (issue 3, GDM §3.1's shell): a point (u, v, w) inside base triangle t's prism goes
+ * to sum_i b_i(u, v) (P_i - w depth N_i), b the barycentric weights of (u, v) in the
+ * triangle's UV triangle (uv_scale applied, tiles repeat with period 1).
+ *
+ * Clipping: the isosurface is bucketed by grid column; a column whose (grown) cell is fully
+ * inside the UV triangle is copied, one fully outside an edge is skipped, the others have each
+ * iso-triangle clipped
+ * to the triangle (Sutherland-Hodgman, in the uv plane, w carried along). So that neighbouring
+ * prisms meet without a gap, every point on a base edge is computed the same way from both
+ * sides: edges are oriented canonically (lower mesh vertex first), the side test is the same
+ * cross product, a cut through a part of an original iso-edge is computed from that edge's
+ * end points in a canonical order, and points on an edge are mapped with the edge's two
+ * vertices only (the third weight exactly 0).
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "reference_internal.h"
+
+/* The tiles are added to the iso-mesh's local coordinates: every copy of a vertex is
+ * tile + local, exact for the small integers of a tile index. */
+
+typedef struct solid_edge {
+    uint32_t lo, hi;  /* mesh vertices, lo < hi */
+    meso_vec2 uv_lo, uv_hi;
+    float sign;       /* +1 or -1: inside of the triangle is sign * side(x) >= 0 */
+} solid_edge;
+
+typedef struct solid_triangle {
+    solid_edge edges[3];
+    meso_vec2 uv[3];
+    uint32_t v[3];
+    float inverse[4]; /* UV -> (b1, b2): [i0 i1; i2 i3] (uv - uv[0]) */
+    bool valid;
+} solid_triangle;
+
+typedef struct solid_build {
+    const meso_mesh *mesh;
+    const meso_isosurface *iso;
+    float depth;
+    /* per base triangle: output counts (pass 1) and offsets (pass 2) */
+    /* per base triangle, counted by primitives (Embree quads; a triangle is a quad with its
+     * last vertex repeated) and by the triangles they hold */
+    uint64_t *triangle_counts, *vertex_counts, *real_counts;
+    const uint64_t *triangle_offsets, *vertex_offsets;
+    float *vertices;
+    uint32_t *indices;
+    meso_vec3 *uvws;
+    /* per thread: iso-vertex remap with stamps */
+    uint32_t *remap, *stamp, *stamp_counter;
+} solid_build;
+
+typedef struct emitter {
+    const solid_build *b;
+    const solid_triangle *st;
+    bool write;
+    uint64_t num_triangles, num_vertices; /* primitives and vertices in the base triangle's block */
+    uint64_t real_triangles;
+    uint64_t triangle_base, vertex_base;
+    uint32_t *remap, *stamp, current;
+} emitter;
+
+static float side(const solid_edge *e, meso_vec2 x) {
+    float ax = e->uv_hi.x - e->uv_lo.x, ay = e->uv_hi.y - e->uv_lo.y;
+    return ax * (x.y - e->uv_lo.y) - ay * (x.x - e->uv_lo.x);
+}
+
+static bool setup_triangle(const meso_mesh *mesh, size_t t, solid_triangle *st) {
+    memset(st, 0, sizeof *st);
+    for (int i = 0; i < 3; i++) {
+        st->v[i] = mesh->indices[3 * t + (size_t)i];
+        st->uv[i] = mesh->uvs[st->v[i]];
+    }
+    float e1x = st->uv[1].x - st->uv[0].x, e1y = st->uv[1].y - st->uv[0].y;
+    float e2x = st->uv[2].x - st->uv[0].x, e2y = st->uv[2].y - st->uv[0].y;
+    float det = e1x * e2y - e1y * e2x;
+    if (!(fabsf(det) > 1e-12f)) return false;
+    st->inverse[0] = e2y / det;
+    st->inverse[1] = -e2x / det;
+    st->inverse[2] = -e1y / det;
+    st->inverse[3] = e1x / det;
+    for (int e = 0; e < 3; e++) {
+        uint32_t a = st->v[e], c = st->v[(e + 1) % 3];
+        solid_edge *edge = &st->edges[e];
+        edge->lo = a < c ? a : c;
+        edge->hi = a < c ? c : a;
+        edge->uv_lo = mesh->uvs[edge->lo];
+        edge->uv_hi = mesh->uvs[edge->hi];
+        float s = side(edge, st->uv[(e + 2) % 3]);
+        if (s == 0.0f) return false;
+        edge->sign = s > 0.0f ? 1.0f : -1.0f;
+    }
+    st->valid = true;
+    return true;
+}
+
+/* ---- Mapping into the prism --------------------------------------------------------------- */
+
+static meso_vec3 shell_point(const meso_mesh *mesh, uint32_t v, float w, float depth) {
+    return meso_vec3_madd(mesh->positions[v], mesh->normals[v], -w * depth);
+}
+
+/* World position of a texture-space point; on_edge >= 0 forces the edge formula. */
+static meso_vec3 map_point(const emitter *em, meso_vec3 x, int on_edge) {
+    const solid_triangle *st = em->st;
+    const meso_mesh *mesh = em->b->mesh;
+    meso_vec2 uv = {x.x, x.y};
+    if (on_edge < 0)
+        for (int e = 0; e < 3 && on_edge < 0; e++)
+            if (side(&st->edges[e], uv) == 0.0f) on_edge = e;
+    if (on_edge >= 0) {
+        const solid_edge *e = &st->edges[on_edge];
+        float ax = e->uv_hi.x - e->uv_lo.x, ay = e->uv_hi.y - e->uv_lo.y;
+        float t = (ax * (uv.x - e->uv_lo.x) + ay * (uv.y - e->uv_lo.y)) / (ax * ax + ay * ay);
+        return meso_vec3_lerp(shell_point(mesh, e->lo, x.z, em->b->depth),
+                              shell_point(mesh, e->hi, x.z, em->b->depth), t);
+    }
+    float dx = uv.x - st->uv[0].x, dy = uv.y - st->uv[0].y;
+    float b1 = st->inverse[0] * dx + st->inverse[1] * dy;
+    float b2 = st->inverse[2] * dx + st->inverse[3] * dy;
+    return meso_vec3_barycentric(shell_point(mesh, st->v[0], x.z, em->b->depth),
+                                 shell_point(mesh, st->v[1], x.z, em->b->depth),
+                                 shell_point(mesh, st->v[2], x.z, em->b->depth), 1.0f - b1 - b2,
+                                 b1, b2);
+}
+
+static uint32_t new_vertex(emitter *em, meso_vec3 x, int on_edge) {
+    uint64_t index = em->vertex_base + em->num_vertices++;
+    if (em->write) {
+        meso_vec3 p = map_point(em, x, on_edge);
+        float *out = em->b->vertices + 3 * index;
+        out[0] = p.x;
+        out[1] = p.y;
+        out[2] = p.z;
+        em->b->uvws[index] = x;
+    }
+    return (uint32_t)index;
+}
+
+/* An original iso-vertex of the current tile, shared by the triangles that use it. */
+static uint32_t iso_vertex(emitter *em, uint32_t iso_index, meso_vec3 tile) {
+    if (em->stamp[iso_index] == em->current) return em->remap[iso_index];
+    em->stamp[iso_index] = em->current;
+    meso_vec3 x = meso_vec3_add(em->b->iso->positions[iso_index], tile);
+    return em->remap[iso_index] = new_vertex(em, x, -1);
+}
+
+/* One Embree quad (a, b, c, d), split by Embree into (a, b, d) and (c, d, b); a triangle is
+ * the quad (a, b, c, c). */
+static void emit_quad(emitter *em, uint32_t a, uint32_t b, uint32_t c, uint32_t d) {
+    uint64_t index = em->triangle_base + em->num_triangles++;
+    em->real_triangles += c == d ? 1 : 2;
+    if (em->write) {
+        uint32_t *out = em->b->indices + 4 * index;
+        out[0] = a;
+        out[1] = b;
+        out[2] = c;
+        out[3] = d;
+    }
+}
+
+/* ---- Clipping ----------------------------------------------------------------------------- */
+
+typedef struct poly_vertex {
+    meso_vec3 x;
+    int original; /* 0..2: the iso-triangle's vertex; -1: a cut */
+    int iso_edge; /* a cut on the iso-triangle's edge k (from vertex k to k+1); -1: elsewhere */
+    int on_edge;  /* a cut on base edge e; -1 */
+} poly_vertex;
+
+static bool lex_less(meso_vec3 a, meso_vec3 b) {
+    if (a.x != b.x) return a.x < b.x;
+    if (a.y != b.y) return a.y < b.y;
+    return a.z < b.z;
+}
+
+/* The point where segment (p, q) crosses base edge e, computed the same way from both sides of
+ * the edge: end points in lexicographic order, the canonical side function. */
+static meso_vec3 cut(const solid_edge *e, meso_vec3 p, meso_vec3 q) {
+    if (lex_less(q, p)) {
+        meso_vec3 s = p;
+        p = q;
+        q = s;
+    }
+    float dp = side(e, (meso_vec2){p.x, p.y}), dq = side(e, (meso_vec2){q.x, q.y});
+    float t = dp / (dp - dq);
+    return meso_vec3_lerp(p, q, t);
+}
+
+/* The original iso-edge both poly vertices lie on, or -1. */
+static int shared_iso_edge(const poly_vertex *a, const poly_vertex *b) {
+    int ea[2] = {-1, -1}, eb[2] = {-1, -1};
+    if (a->original >= 0) ea[0] = a->original, ea[1] = (a->original + 2) % 3;
+    else ea[0] = a->iso_edge;
+    if (b->original >= 0) eb[0] = b->original, eb[1] = (b->original + 2) % 3;
+    else eb[0] = b->iso_edge;
+    for (int i = 0; i < 2; i++)
+        for (int j = 0; j < 2; j++)
+            if (ea[i] >= 0 && ea[i] == eb[j]) return ea[i];
+    return -1;
+}
+
+static void clip_triangle(emitter *em, const uint32_t iso_tri[3], meso_vec3 tile,
+                          const bool clip_edge[3]) {
+    const meso_isosurface *iso = em->b->iso;
+    meso_vec3 original[3];
+    poly_vertex poly[2][9];
+    int count = 3, which = 0;
+    for (int k = 0; k < 3; k++) {
+        original[k] = meso_vec3_add(iso->positions[iso_tri[k]], tile);
+        poly[0][k] = (poly_vertex){original[k], k, -1, -1};
+    }
+    for (int e = 0; e < 3; e++) {
+        if (!clip_edge[e]) continue;
+        const solid_edge *edge = &em->st->edges[e];
+        const poly_vertex *in = poly[which];
+        poly_vertex *out = poly[1 - which];
+        int n_out = 0;
+        for (int i = 0; i < count; i++) {
+            const poly_vertex *a = &in[i], *c = &in[(i + 1) % count];
+            float da = edge->sign * side(edge, (meso_vec2){a->x.x, a->x.y});
+            float dc = edge->sign * side(edge, (meso_vec2){c->x.x, c->x.y});
+            if (da >= 0.0f) out[n_out++] = *a;
+            if ((da >= 0.0f) != (dc >= 0.0f) && da != 0.0f && dc != 0.0f) {
+                int k = shared_iso_edge(a, c);
+                meso_vec3 x = k >= 0 ? cut(edge, original[k], original[(k + 1) % 3])
+                                     : cut(edge, a->x, c->x);
+                out[n_out++] = (poly_vertex){x, -1, k, e};
+            }
+        }
+        count = n_out;
+        which = 1 - which;
+        if (count < 3) return;
+    }
+    /* a fan of the clipped polygon; original vertices keep their shared index */
+    uint32_t index[9];
+    const poly_vertex *p = poly[which];
+    for (int i = 0; i < count; i++)
+        index[i] = p[i].original >= 0 ? iso_vertex(em, iso_tri[p[i].original], tile)
+                                       : new_vertex(em, p[i].x, p[i].on_edge);
+    /* the clipped piece is convex and planar: any split along its inner diagonals keeps its
+     * outline, so the fan goes out as quads (p0, pi, pi+1, pi+2) and a last triangle */
+    int i = 1;
+    for (; i + 2 < count; i += 2)
+        emit_quad(em, index[0], index[i], index[i + 1], index[i + 2]);
+    if (i + 1 < count) emit_quad(em, index[0], index[i], index[i + 1], index[i + 1]);
+}
+
+/* ---- Per base triangle -------------------------------------------------------------------- */
+
+static long floor_div(long a, long b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+static void process_triangle(emitter *em) {
+    const solid_triangle *st = em->st;
+    const meso_isosurface *iso = em->b->iso;
+    int ru = iso->resolution_u, rv = iso->resolution_v;
+    float umin = st->uv[0].x, umax = umin, vmin = st->uv[0].y, vmax = vmin;
+    for (int i = 1; i < 3; i++) {
+        umin = fminf(umin, st->uv[i].x), umax = fmaxf(umax, st->uv[i].x);
+        vmin = fminf(vmin, st->uv[i].y), vmax = fmaxf(vmax, st->uv[i].y);
+    }
+    if (!(umax - umin < 1e6f && vmax - vmin < 1e6f)) return; /* guarded by the caller */
+    /* a column's triangles lie within its cell grown by one cell (bake_isosurface.h): visit
+     * every column whose grown cell meets the triangle's UV box, in the tiles they belong to */
+    long gi0 = (long)floorf(umin * (float)ru) - 1, gi1 = (long)ceilf(umax * (float)ru);
+    long gj0 = (long)floorf(vmin * (float)rv) - 1, gj1 = (long)ceilf(vmax * (float)rv);
+    long tu0 = floor_div(gi0, ru), tu1 = floor_div(gi1, ru);
+    long tv0 = floor_div(gj0, rv), tv1 = floor_div(gj1, rv);
+    for (long tv = tv0; tv <= tv1; tv++)
+        for (long tu = tu0; tu <= tu1; tu++) {
+            meso_vec3 tile = {(float)tu, (float)tv, 0.0f};
+            em->current++; /* a new stamp: iso-vertices are shared within one tile copy */
+            long i0 = gi0 - tu * ru, i1 = gi1 - tu * ru;
+            long j0 = gj0 - tv * rv, j1 = gj1 - tv * rv;
+            i0 = i0 < 0 ? 0 : i0, j0 = j0 < 0 ? 0 : j0;
+            i1 = i1 >= ru ? ru - 1 : i1, j1 = j1 >= rv ? rv - 1 : j1;
+            for (long j = j0; j <= j1; j++)
+                for (long i = i0; i <= i1; i++) {
+                    size_t column = (size_t)j * (size_t)ru + (size_t)i;
+                    uint32_t first = iso->column_offsets[column];
+                    uint32_t last = iso->column_offsets[column + 1];
+                    if (first == last) continue;
+                    bool clip_edge[3], skip = false, any_clip = false;
+                    for (int e = 0; e < 3 && !skip; e++) {
+                        int n_in = 0;
+                        for (int c = 0; c < 4; c++) {
+                            meso_vec2 corner = {
+                                (float)tu + (float)(i - 1 + 2 * (c & 1)) / (float)ru,
+                                (float)tv + (float)(j - 1 + 2 * (c >> 1)) / (float)rv};
+                            if (st->edges[e].sign * side(&st->edges[e], corner) >= 0.0f) n_in++;
+                        }
+                        skip = n_in == 0;
+                        clip_edge[e] = n_in < 4;
+                        any_clip |= clip_edge[e];
+                    }
+                    if (skip) continue;
+                    if (any_clip) {
+                        for (uint32_t t = first; t < last; t++)
+                            clip_triangle(em, iso->indices + 3 * (size_t)t, tile, clip_edge);
+                        continue;
+                    }
+                    /* whole quads of the surface net: triangles 2k and 2k + 1 are
+                     * (v0, v1, v2) and (v0, v2, v3) (bake_isosurface.h); Embree splits the
+                     * quad along v1-v3 instead, which changes no outer edge */
+                    for (uint32_t t = first; t + 1 < last; t += 2) {
+                        const uint32_t *q0 = iso->indices + 3 * (size_t)t, *q1 = q0 + 3;
+                        uint32_t a = iso_vertex(em, q0[0], tile);
+                        uint32_t b = iso_vertex(em, q0[1], tile);
+                        uint32_t c = iso_vertex(em, q0[2], tile);
+                        uint32_t d = iso_vertex(em, q1[2], tile);
+                        emit_quad(em, a, b, c, d);
+                    }
+                }
+        }
+}
+
+typedef struct solid_pass {
+    solid_build *b;
+    bool write;
+    size_t num_threads;
+} solid_pass;
+
+static void triangle_job(void *user, size_t job, int thread_index) {
+    solid_pass *pass = user;
+    solid_build *b = pass->b;
+    size_t nv_iso = b->iso->num_vertices ? b->iso->num_vertices : 1;
+    emitter em = {.b = b, .write = pass->write,
+                  .remap = b->remap + (size_t)thread_index * nv_iso,
+                  .stamp = b->stamp + (size_t)thread_index * nv_iso,
+                  .current = b->stamp_counter[thread_index]};
+    size_t end = (job + 1) * 8;
+    if (end > b->mesh->num_triangles) end = b->mesh->num_triangles;
+    for (size_t t = job * 8; t < end; t++) {
+        solid_triangle st;
+        if (!setup_triangle(b->mesh, t, &st)) {
+            if (!pass->write) b->triangle_counts[t] = b->vertex_counts[t] = b->real_counts[t] = 0;
+            continue;
+        }
+        em.st = &st;
+        em.num_triangles = em.num_vertices = em.real_triangles = 0;
+        em.triangle_base = pass->write ? b->triangle_offsets[t] : 0;
+        em.vertex_base = pass->write ? b->vertex_offsets[t] : 0;
+        process_triangle(&em);
+        if (!pass->write) {
+            b->triangle_counts[t] = em.num_triangles;
+            b->real_counts[t] = em.real_triangles;
+            b->vertex_counts[t] = em.num_vertices;
+        }
+    }
+    b->stamp_counter[thread_index] = em.current;
+}
+
+static float solid_distance_field(void *user, meso_vec3 uvw) {
+    return meso_solid_distance((const meso_solid *)user, uvw);
+}
+
+meso_result reference_build_solid(meso_context *ctx, const meso_reference_desc *desc,
+                                  RTCGeometry geometry, reference_object *ref, uint64_t *total) {
+    const meso_object *object = ref->object;
+    const meso_mesh *mesh = object->mesh;
+    meso_result result = MESO_OK;
+    meso_isosurface_desc idesc = desc->isosurface;
+    double resolution = reference_option(object, "resolution", 0.0);
+    if (resolution != 0.0) {
+        if (!(resolution >= 2.0 && resolution <= MESO_ISOSURFACE_MAX_RESOLUTION))
+            return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                                  "%s: technique_options.resolution: %g is outside [2, %d]",
+                                  object->name, resolution, MESO_ISOSURFACE_MAX_RESOLUTION);
+        idesc.resolution_u = idesc.resolution_v = (int)resolution;
+        idesc.resolution_w = (int)resolution / 4 > 2 ? (int)resolution / 4 : 2;
+    }
+    ref->field = desc->solid_field ? desc->solid_field : solid_distance_field;
+    ref->field_user = desc->solid_field ? desc->solid_field_user
+                                        : (void *)object->mesostructure.solid;
+    if (!desc->solid_field && !object->mesostructure.solid)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: mesostructure: no solid",
+                              object->name);
+
+    /* a guard against absurd UV ranges before anything is counted: the tiles the triangles
+     * span, each at least one iso-triangle */
+    double tiles = 0.0;
+    for (size_t t = 0; t < mesh->num_triangles; t++) {
+        float umin = INFINITY, umax = -INFINITY, vmin = INFINITY, vmax = -INFINITY;
+        for (int i = 0; i < 3; i++) {
+            meso_vec2 uv = mesh->uvs[mesh->indices[3 * t + (size_t)i]];
+            umin = fminf(umin, uv.x), umax = fmaxf(umax, uv.x);
+            vmin = fminf(vmin, uv.y), vmax = fmaxf(vmax, uv.y);
+        }
+        tiles += (floor(umax) - floor(umin) + 1.0) * (floor(vmax) - floor(vmin) + 1.0);
+    }
+    if (tiles > (double)MESO_REFERENCE_MAX_TRIANGLES)
+        return meso_log_error(ctx, MESO_ERROR_LIMIT,
+                              "%s: reference: the solid spans %.0f tiles, above the limit %llu",
+                              object->name, tiles,
+                              (unsigned long long)MESO_REFERENCE_MAX_TRIANGLES);
+
+    meso_isosurface *iso = NULL;
+    result = meso_bake_isosurface_function(ctx, ref->field, ref->field_user, &idesc, &iso);
+    if (result != MESO_OK) return result;
+    meso_log_info(ctx, "%s: reference: isosurface %d x %d x %d: %zu triangles a tile",
+                  object->name, iso->resolution_u, iso->resolution_v, iso->resolution_w,
+                  iso->num_triangles);
+
+    size_t nt = mesh->num_triangles;
+    size_t threads = (size_t)meso_context_num_threads(ctx);
+    size_t nv_iso = iso->num_vertices ? iso->num_vertices : 1;
+    solid_build b = {.mesh = mesh, .iso = iso, .depth = object->mesostructure.depth};
+    b.triangle_counts = calloc(nt + 1, sizeof *b.triangle_counts);
+    b.vertex_counts = calloc(nt + 1, sizeof *b.vertex_counts);
+    b.real_counts = calloc(nt + 1, sizeof *b.real_counts);
+    uint64_t *triangle_offsets = calloc(nt + 1, sizeof *triangle_offsets);
+    uint64_t *vertex_offsets = calloc(nt + 1, sizeof *vertex_offsets);
+    b.remap = calloc(threads * nv_iso, sizeof *b.remap);
+    b.stamp = calloc(threads * nv_iso, sizeof *b.stamp);
+    b.stamp_counter = calloc(threads, sizeof *b.stamp_counter);
+    if (!b.triangle_counts || !b.vertex_counts || !b.real_counts || !triangle_offsets ||
+        !vertex_offsets ||
+        !b.remap || !b.stamp || !b.stamp_counter) {
+        result = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: reference: solid",
+                                object->name);
+        goto fail;
+    }
+
+    solid_pass pass = {.b = &b, .write = false, .num_threads = threads};
+    meso_parallel_for(ctx, (nt + 7) / 8, triangle_job, &pass);
+    uint64_t primitives = 0, vertices = 0, triangles = 0;
+    for (size_t t = 0; t < nt; t++) {
+        triangle_offsets[t] = primitives;
+        vertex_offsets[t] = vertices;
+        primitives += b.triangle_counts[t];
+        vertices += b.vertex_counts[t];
+        triangles += b.real_counts[t];
+    }
+    triangle_offsets[nt] = primitives;
+    vertex_offsets[nt] = vertices;
+    if (*total + triangles > MESO_REFERENCE_MAX_TRIANGLES || vertices >= UINT32_MAX) {
+        result = meso_log_error(ctx, MESO_ERROR_LIMIT,
+                                "%s: reference: the solid makes %llu triangles, above the limit "
+                                "%llu (a smaller uv_scale or technique_options.resolution)",
+                                object->name, (unsigned long long)(*total + triangles),
+                                (unsigned long long)MESO_REFERENCE_MAX_TRIANGLES);
+        goto fail;
+    }
+    size_t alloc_v = vertices ? (size_t)vertices : 1;
+    size_t alloc_t = primitives ? (size_t)primitives : 1;
+    b.uvws = malloc(alloc_v * sizeof *b.uvws);
+    b.vertices = rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                         3 * sizeof(float), alloc_v);
+    b.indices = rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4,
+                                        4 * sizeof(uint32_t), alloc_t);
+    if (!b.uvws || !b.vertices || !b.indices) {
+        free(b.uvws);
+        result = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: reference: %llu triangles",
+                                object->name, (unsigned long long)triangles);
+        goto fail;
+    }
+    if (!primitives) {
+        /* nothing to trace: one degenerate triangle keeps the geometry valid */
+        memset(b.vertices, 0, 3 * sizeof(float));
+        memset(b.indices, 0, 4 * sizeof(uint32_t));
+        memset(b.uvws, 0, sizeof *b.uvws);
+    }
+    b.triangle_offsets = triangle_offsets;
+    b.vertex_offsets = vertex_offsets;
+    pass.write = true;
+    memset(b.stamp, 0, threads * nv_iso * sizeof *b.stamp);
+    memset(b.stamp_counter, 0, threads * sizeof *b.stamp_counter);
+    meso_parallel_for(ctx, (nt + 7) / 8, triangle_job, &pass);
+
+    ref->num_triangles = triangles;
+    ref->num_vertices = alloc_v;
+    ref->indices = b.indices;
+    ref->uvws = b.uvws;
+    ref->base_offsets = triangle_offsets;
+    ref->num_base = nt;
+    ref->side_bytes = alloc_v * sizeof *b.uvws + (nt + 1) * sizeof *triangle_offsets;
+    *total += triangles;
+    meso_log_info(ctx, "%s: reference: %llu triangles in %llu Embree quads", object->name,
+                  (unsigned long long)triangles, (unsigned long long)primitives);
+    triangle_offsets = NULL;
+
+fail:
+    free(b.triangle_counts);
+    free(b.vertex_counts);
+    free(b.real_counts);
+    free(triangle_offsets);
+    free(vertex_offsets);
+    free(b.remap);
+    free(b.stamp);
+    free(b.stamp_counter);
+    meso_isosurface_destroy(iso);
+    return result;
+}

@@ -1,0 +1,100 @@
+/* Framebuffers: linear colour, coverage and view depth, and their images and PNG files. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "raster_internal.h"
+
+float *meso_render_alloc_floats(size_t count) {
+    size_t bytes = (count * sizeof(float) + 63u) & ~(size_t)63u;
+    return aligned_alloc(64, bytes ? bytes : 64);
+}
+
+meso_result meso_framebuffer_create(meso_context *ctx, int width, int height,
+                                    meso_framebuffer **out_framebuffer) {
+    *out_framebuffer = NULL;
+    if (width <= 0 || height <= 0) {
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "framebuffer: size %d x %d must be positive", width, height);
+    }
+    if (width > MESO_IMAGE_MAX_SIDE || height > MESO_IMAGE_MAX_SIDE ||
+        (uint64_t)width * (uint64_t)height > MESO_IMAGE_MAX_PIXELS) {
+        return meso_log_error(ctx, MESO_ERROR_LIMIT,
+                              "framebuffer: size %d x %d exceeds the limit %d a side, %u pixels",
+                              width, height, MESO_IMAGE_MAX_SIDE, (unsigned)MESO_IMAGE_MAX_PIXELS);
+    }
+    size_t n = (size_t)width * (size_t)height;
+    meso_framebuffer *fb = calloc(1, sizeof(*fb));
+    if (!fb) goto oom;
+    fb->width = width;
+    fb->height = height;
+    /* 64-byte aligned: the rasterizer streams whole rows into them */
+    fb->color = meso_render_alloc_floats(3 * n);
+    fb->coverage = meso_render_alloc_floats(n);
+    fb->depth = meso_render_alloc_floats(n);
+    if (!fb->color || !fb->coverage || !fb->depth) goto oom;
+    for (size_t i = 0; i < n; i++) {
+        fb->color[3 * i] = fb->color[3 * i + 1] = fb->color[3 * i + 2] = 0.0f;
+        fb->coverage[i] = 0.0f;
+        fb->depth[i] = INFINITY;
+    }
+    *out_framebuffer = fb;
+    return MESO_OK;
+oom:
+    meso_framebuffer_destroy(fb);
+    return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "framebuffer: out of memory for %d x %d",
+                          width, height);
+}
+
+void meso_framebuffer_destroy(meso_framebuffer *framebuffer) {
+    if (!framebuffer) return;
+    free(framebuffer->color);
+    free(framebuffer->coverage);
+    free(framebuffer->depth);
+    free(framebuffer);
+}
+
+meso_result meso_framebuffer_color_image(meso_context *ctx, const meso_framebuffer *fb,
+                                         meso_image **out_image) {
+    *out_image = NULL;
+    if (!fb) return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "framebuffer: NULL");
+    meso_image *image = NULL;
+    meso_result r = meso_image_create(ctx, fb->width, fb->height, 3, &image);
+    if (r != MESO_OK) return r;
+    memcpy(image->pixels, fb->color, 3 * (size_t)fb->width * (size_t)fb->height * sizeof(float));
+    *out_image = image;
+    return MESO_OK;
+}
+
+meso_result meso_framebuffer_coverage_image(meso_context *ctx, const meso_framebuffer *fb,
+                                            meso_image **out_image) {
+    *out_image = NULL;
+    if (!fb) return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "framebuffer: NULL");
+    meso_image *image = NULL;
+    meso_result r = meso_image_create(ctx, fb->width, fb->height, 1, &image);
+    if (r != MESO_OK) return r;
+    memcpy(image->pixels, fb->coverage, (size_t)fb->width * (size_t)fb->height * sizeof(float));
+    *out_image = image;
+    return MESO_OK;
+}
+
+meso_result meso_framebuffer_save_png(meso_context *ctx, const meso_framebuffer *fb,
+                                      meso_encoding encoding, const char *path,
+                                      const char *coverage_path) {
+    if (!fb || !path) {
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "framebuffer: NULL %s",
+                              fb ? "path" : "framebuffer");
+    }
+    meso_image *image = NULL;
+    meso_result r = meso_framebuffer_color_image(ctx, fb, &image);
+    if (r != MESO_OK) return r;
+    r = meso_image_save_png(ctx, image, path, &(meso_png_desc){.encoding = encoding});
+    meso_image_destroy(image);
+    if (r != MESO_OK || !coverage_path) return r;
+    if ((r = meso_framebuffer_coverage_image(ctx, fb, &image)) != MESO_OK) return r;
+    /* the mask is a fraction, not a colour: written linearly */
+    r = meso_image_save_png(ctx, image, coverage_path,
+                            &(meso_png_desc){.encoding = MESO_ENCODING_LINEAR});
+    meso_image_destroy(image);
+    return r;
+}

@@ -1,0 +1,217 @@
+/* The shading model every technique and the reference share (DESIGN.md, "Shading"). */
+#include <math.h>
+
+#include "render_internal.h"
+#include "render_simd.h"
+
+/* The colour map at eight uvs: bilinear between texel centres at level 0 with the texture's
+ * wrap (the arithmetic of meso_texture_sample(t, uv, 0, MESO_FILTER_BILINEAR): uv reduced to
+ * [0, 1) for repeat, x = u W - 0.5, y = (1 - v) H - 0.5), 0 for a non-finite uv. The index
+ * arithmetic runs in vectors; only the texel loads are per lane. */
+static inline v8i sel_i(v8i mask, v8i a, v8i b) { return (a & mask) | (b & ~mask); }
+
+static void sample_color_map(const meso_texture *t, v8f u, v8f v, int lanes, v8f *out_r,
+                             v8f *out_g, v8f *out_b) {
+    const meso_image *level = t->levels[0];
+    int w = level->width, h = level->height;
+    v8i finite = ((u - u) == v8_splat(0.0f)) & ((v - v) == v8_splat(0.0f));
+    u = v8_select(finite, u, v8_splat(0.0f));
+    v = v8_select(finite, v, v8_splat(0.0f));
+    bool clamp = t->wrap == MESO_WRAP_CLAMP;
+    if (!clamp) {
+        u -= v8_floor(u);
+        v -= v8_floor(v);
+    }
+    v8f x = u * v8_splat((float)w) - v8_splat(0.5f);
+    v8f y = (v8_splat(1.0f) - v) * v8_splat((float)h) - v8_splat(0.5f);
+    v8f fx = v8_floor(x), fy = v8_floor(y);
+    v8f tx = x - fx, ty = y - fy;
+    /* clamp mode: far-out coordinates are clamped before the conversion to int */
+    fx = v8_select(fx < v8_splat(-1.0f), v8_splat(-1.0f), fx);
+    fy = v8_select(fy < v8_splat(-1.0f), v8_splat(-1.0f), fy);
+    fx = v8_select(fx > v8_splat((float)w), v8_splat((float)w), fx);
+    fy = v8_select(fy > v8_splat((float)h), v8_splat((float)h), fy);
+    v8i i0 = __builtin_convertvector(fx, v8i), j0 = __builtin_convertvector(fy, v8i);
+    v8i i1 = i0 + 1, j1 = j0 + 1;
+    v8i wv = {w, w, w, w, w, w, w, w}, hv = {h, h, h, h, h, h, h, h};
+    v8i zero = {0, 0, 0, 0, 0, 0, 0, 0};
+    if (clamp) {
+        i0 = sel_i(i0 < zero, zero, i0), j0 = sel_i(j0 < zero, zero, j0);
+        i1 = sel_i(i1 >= wv, wv - 1, i1), j1 = sel_i(j1 >= hv, hv - 1, j1);
+        i0 = sel_i(i0 >= wv, wv - 1, i0), j0 = sel_i(j0 >= hv, hv - 1, j0);
+    } else { /* after the reduction i0 >= -1 and i1 <= w */
+        i0 = sel_i(i0 < zero, i0 + wv, i0), j0 = sel_i(j0 < zero, j0 + hv, j0);
+        i1 = sel_i(i1 >= wv, i1 - wv, i1), j1 = sel_i(j1 >= hv, j1 - hv, j1);
+    }
+    v8i row0 = j0 * wv, row1 = j1 * wv;
+    v8i a = (row0 + i0) * 4, b = (row0 + i1) * 4, c = (row1 + i0) * 4, d = (row1 + i1) * 4;
+    const float *p = level->pixels;
+    v8f ar = v8_splat(0.0f), ag = ar, ab = ar, br = ar, bg = ar, bb = ar, cr = ar, cg = ar,
+        cb = ar, dr = ar, dg = ar, db = ar;
+    for (int k = 0; k < lanes; k++) { /* lanes past `lanes` are not used */
+        ar[k] = p[a[k]], ag[k] = p[a[k] + 1], ab[k] = p[a[k] + 2];
+        br[k] = p[b[k]], bg[k] = p[b[k] + 1], bb[k] = p[b[k] + 2];
+        cr[k] = p[c[k]], cg[k] = p[c[k] + 1], cb[k] = p[c[k] + 2];
+        dr[k] = p[d[k]], dg[k] = p[d[k] + 1], db[k] = p[d[k] + 2];
+    }
+    v8f top, bottom;
+    top = ar + (br - ar) * tx, bottom = cr + (dr - cr) * tx;
+    *out_r = v8_select(finite, top + (bottom - top) * ty, v8_splat(0.0f));
+    top = ag + (bg - ag) * tx, bottom = cg + (dg - cg) * tx;
+    *out_g = v8_select(finite, top + (bottom - top) * ty, v8_splat(0.0f));
+    top = ab + (bb - ab) * tx, bottom = cb + (db - cb) * tx;
+    *out_b = v8_select(finite, top + (bottom - top) * ty, v8_splat(0.0f));
+}
+
+/* ---- Eight points at a time ----------------------------------------------------------------
+ * meso_shade_point and meso_shade_fragments both run this one function (one lane or eight), so
+ * a technique that shades a batch and the reference that shades single points get the same
+ * bits. GCC vector extensions: 8 floats a vector. */
+#define LANES V8_LANES
+
+typedef struct shade_lanes {
+    v8f px, py, pz, nx, ny, nz;
+    meso_vec2 uv[LANES];
+    const float *visibility[LANES]; /* per lane: NULL or one value a light */
+} shade_lanes;
+
+#define splat v8_splat
+#define select_v v8_select
+static inline v8f rsqrt_safe(v8f len2, v8i *nonzero) {
+    *nonzero = len2 > splat(0.0f);
+    return splat(1.0f) / v8_sqrt(len2);
+}
+
+/* colour = albedo * map(uv) * (ambient + sum_i c_i max(0, N.L_i) v_i) + sum_i spec c_i (N.H)^s v_i
+ */
+__attribute__((noinline)) static void shade_eight(const meso_frame *frame,
+                                                  const meso_object *object, const shade_lanes *in,
+                                                  int lanes, v8f *out_r, v8f *out_g, v8f *out_b) {
+    const meso_scene *scene = frame->scene;
+    const meso_material *m = &object->material;
+    v8f br = splat(m->albedo.x), bg = splat(m->albedo.y), bb = splat(m->albedo.z);
+    if (m->color_map) {
+        /* Level 0, bilinear, in every technique and the reference, so images compare pixel by
+         * pixel (no mip selection that would depend on screen derivatives). */
+        v8f u, v, tr, tg, tb;
+        for (int i = 0; i < LANES; i++) u[i] = in->uv[i].x, v[i] = in->uv[i].y;
+        sample_color_map(m->color_map, u, v, lanes, &tr, &tg, &tb);
+        br *= tr, bg *= tg, bb *= tb;
+    }
+    bool has_specular = m->specular.x > 0.0f || m->specular.y > 0.0f || m->specular.z > 0.0f;
+    v8f vx = splat(0.0f), vy = splat(0.0f), vz = splat(0.0f);
+    v8i nonzero;
+    if (has_specular) {
+        vx = splat(frame->eye.x) - in->px, vy = splat(frame->eye.y) - in->py;
+        vz = splat(frame->eye.z) - in->pz;
+        v8f inv = rsqrt_safe(vx * vx + vy * vy + vz * vz, &nonzero);
+        vx = select_v(nonzero, vx * inv, vx), vy = select_v(nonzero, vy * inv, vy);
+        vz = select_v(nonzero, vz * inv, vz);
+    }
+    v8f dr = splat(scene->ambient.x), dg = splat(scene->ambient.y), db = splat(scene->ambient.z);
+    v8f sr = splat(0.0f), sg = splat(0.0f), sb = splat(0.0f);
+    bool integer_power =
+        m->shininess >= 0.0f && m->shininess <= 4096.0f && m->shininess == floorf(m->shininess);
+    for (int li = 0; li < scene->num_lights; li++) {
+        const meso_light *light = &scene->lights[li];
+        v8f lx, ly, lz;
+        if (light->type == MESO_LIGHT_DIRECTIONAL) {
+            lx = splat(light->direction.x), ly = splat(light->direction.y);
+            lz = splat(light->direction.z);
+        } else {
+            lx = splat(light->position.x) - in->px, ly = splat(light->position.y) - in->py;
+            lz = splat(light->position.z) - in->pz;
+            v8f inv = rsqrt_safe(lx * lx + ly * ly + lz * lz, &nonzero);
+            lx = select_v(nonzero, lx * inv, lx), ly = select_v(nonzero, ly * inv, ly);
+            lz = select_v(nonzero, lz * inv, lz);
+        }
+        v8f ndl = in->nx * lx + in->ny * ly + in->nz * lz;
+        v8f vis = splat(1.0f);
+        for (int i = 0; i < lanes; i++) vis[i] = in->visibility[i] ? in->visibility[i][li] : 1.0f;
+        v8i lit = (ndl > splat(0.0f)) & (vis > splat(0.0f));
+        if (!v8_any(lit)) continue;
+        v8f w = ndl * vis;
+        dr += select_v(lit, splat(light->color.x) * w, splat(0.0f));
+        dg += select_v(lit, splat(light->color.y) * w, splat(0.0f));
+        db += select_v(lit, splat(light->color.z) * w, splat(0.0f));
+        if (!has_specular) continue;
+        /* Blinn-Phong, only where the light reaches the front of the surface */
+        v8f hx = lx + vx, hy = ly + vy, hz = lz + vz;
+        v8f inv = rsqrt_safe(hx * hx + hy * hy + hz * hz, &nonzero);
+        hx = select_v(nonzero, hx * inv, hx), hy = select_v(nonzero, hy * inv, hy);
+        hz = select_v(nonzero, hz * inv, hz);
+        v8f ndh = in->nx * hx + in->ny * hy + in->nz * hz;
+        v8i on = lit & (ndh > splat(0.0f));
+        v8f p;
+        if (integer_power) { /* exact repeated squaring: the usual 8, 32, 64... */
+            unsigned e = (unsigned)m->shininess;
+            v8f x = ndh;
+            p = splat(1.0f);
+            while (e) {
+                if (e & 1u) p *= x;
+                x *= x;
+                e >>= 1;
+            }
+        } else {
+            for (int i = 0; i < LANES; i++) p[i] = i < lanes ? powf(ndh[i], m->shininess) : 0.0f;
+        }
+        v8f sv = select_v(on, p * vis, splat(0.0f));
+        sr += splat(light->color.x * m->specular.x) * sv;
+        sg += splat(light->color.y * m->specular.y) * sv;
+        sb += splat(light->color.z * m->specular.z) * sv;
+    }
+    *out_r = br * dr + sr;
+    *out_g = bg * dg + sg;
+    *out_b = bb * db + sb;
+}
+
+meso_vec3 meso_shade_point(const meso_frame *frame, const meso_object *object, meso_vec3 position,
+                           meso_vec3 normal, meso_vec2 uv, const float *visibility) {
+    shade_lanes in;
+    in.px = splat(position.x), in.py = splat(position.y), in.pz = splat(position.z);
+    in.nx = splat(normal.x), in.ny = splat(normal.y), in.nz = splat(normal.z);
+    for (int i = 0; i < LANES; i++) {
+        in.uv[i] = uv;
+        in.visibility[i] = visibility;
+    }
+    v8f r, g, b;
+    shade_eight(frame, object, &in, 1, &r, &g, &b);
+    return (meso_vec3){r[0], g[0], b[0]};
+}
+
+void meso_shade_fragments(const meso_frame *frame, const meso_object *object,
+                          meso_fragment *fragments, size_t count, const float *visibility) {
+    int num_lights = frame->scene->num_lights;
+    for (size_t first = 0; first < count; first += LANES) {
+        int lanes = count - first < LANES ? (int)(count - first) : LANES;
+        shade_lanes in;
+        for (int i = 0; i < LANES; i++) {
+            /* unused lanes repeat the last fragment: finite inputs, results ignored */
+            const meso_fragment *f = &fragments[first + (size_t)(i < lanes ? i : lanes - 1)];
+            in.px[i] = f->position.x, in.py[i] = f->position.y, in.pz[i] = f->position.z;
+            in.nx[i] = f->normal.x, in.ny[i] = f->normal.y, in.nz[i] = f->normal.z;
+            in.uv[i] = f->uv;
+            in.visibility[i] = visibility
+                                   ? visibility + (first + (size_t)(i < lanes ? i : lanes - 1)) *
+                                                      (size_t)num_lights
+                                   : NULL;
+        }
+        v8f r, g, b;
+        shade_eight(frame, object, &in, lanes, &r, &g, &b);
+        for (int i = 0; i < lanes; i++)
+            fragments[first + (size_t)i].color = (meso_vec3){r[i], g[i], b[i]};
+    }
+}
+
+meso_vec3 meso_displaced_normal(meso_vec3 normal, meso_vec3 tangent, meso_vec3 bitangent,
+                                float depth, meso_vec2 gradient) {
+    /* P' = P - (1 - h) depth N: dP'/du = T + depth h_u N, dP'/dv = B + depth h_v N
+     * (Blinn 1978, with the variation of N over the surface neglected). */
+    meso_vec3 du = meso_vec3_madd(tangent, normal, depth * gradient.x);
+    meso_vec3 dv = meso_vec3_madd(bitangent, normal, depth * gradient.y);
+    meso_vec3 n = meso_vec3_cross(du, dv);
+    float len2 = meso_vec3_dot(n, n);
+    if (!(len2 > 0.0f) || !isfinite(len2)) return normal;
+    n = meso_vec3_scale(n, 1.0f / sqrtf(len2));
+    return meso_vec3_dot(n, normal) < 0.0f ? meso_vec3_negate(n) : n;
+}

@@ -1,0 +1,50 @@
+/* Eight-lane float vectors (GCC vector extensions) for the rasterizer's fragment fill and the
+ * shading: the same source compiles to AVX on x86-64 and to pairs of SSE/NEON ops elsewhere. */
+#ifndef MESO_RENDER_SIMD_H
+#define MESO_RENDER_SIMD_H
+
+#include <math.h>
+#include <stdint.h>
+#if defined(__AVX__)
+#include <immintrin.h>
+#endif
+
+typedef float v8f __attribute__((vector_size(32)));
+typedef int32_t v8i __attribute__((vector_size(32)));
+#define V8_LANES 8
+
+static inline v8f v8_splat(float x) { return (v8f){x, x, x, x, x, x, x, x}; }
+
+/* mask ? a : b per lane (mask lanes all ones or all zeros, as vector comparisons give). */
+static inline v8f v8_select(v8i mask, v8f a, v8f b) {
+    return (v8f)(((v8i)a & mask) | ((v8i)b & ~mask));
+}
+
+/* Correctly rounded square root per lane (IEEE, like sqrtf), without errno handling. */
+static inline v8f v8_sqrt(v8f x) {
+#if defined(__AVX__)
+    return (v8f)_mm256_sqrt_ps((__m256)x);
+#else
+    v8f r;
+    for (int i = 0; i < V8_LANES; i++) r[i] = __builtin_sqrtf(x[i] < 0.0f ? NAN : x[i]);
+    return r;
+#endif
+}
+
+/* floor per lane. */
+static inline v8f v8_floor(v8f x) {
+#if defined(__AVX__)
+    return (v8f)_mm256_floor_ps((__m256)x);
+#else
+    v8f r;
+    for (int i = 0; i < V8_LANES; i++) r[i] = floorf(x[i]);
+    return r;
+#endif
+}
+
+static inline int v8_any(v8i mask) {
+    return ((mask[0] | mask[1]) | (mask[2] | mask[3])) |
+           ((mask[4] | mask[5]) | (mask[6] | mask[7]));
+}
+
+#endif

@@ -1,0 +1,851 @@
+/* Shared code of `displacement` and `tessellation`: vertex displacement, the recursive midpoint
+ * tessellator of Doggett & Hirche 2000, shading with the height field's normal, shadow maps.
+ * See displace_common.h for the contracts and the crack-freeness argument. */
+#include "displace_common.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---- Options ------------------------------------------------------------------------------ */
+
+meso_result displace_option_int(meso_context *ctx, const meso_object *object,
+                                const char *technique, const char *name, int lo, int hi,
+                                int fallback, int *out_value) {
+    double value = meso_object_option(object, name, (double)fallback);
+    if (!isfinite(value) || value != floor(value) || value < (double)lo || value > (double)hi) {
+        *out_value = fallback;
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "%s: technique_options.%s: %g is not an integer in [%d, %d] (%s)",
+                              object->name, name, value, lo, hi, technique);
+    }
+    *out_value = (int)value;
+    return MESO_OK;
+}
+
+meso_result displace_option_float(meso_context *ctx, const meso_object *object,
+                                  const char *technique, const char *name, double lo, double hi,
+                                  double fallback, float *out_value) {
+    double value = meso_object_option(object, name, fallback);
+    if (!isfinite(value) || value < lo || value > hi) {
+        *out_value = (float)fallback;
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "%s: technique_options.%s: %g is not a number in [%g, %g] (%s)",
+                              object->name, name, value, lo, hi, technique);
+    }
+    *out_value = (float)value;
+    return MESO_OK;
+}
+
+meso_result displace_shadow_options_read(meso_context *ctx, const meso_object *object,
+                                         const char *technique,
+                                         displace_shadow_options *out_options) {
+    int enabled = 1, pcf = 1, size = 2048;
+    float bias = 1.5f;
+    meso_result r;
+    memset(out_options, 0, sizeof(*out_options));
+    if ((r = displace_option_int(ctx, object, technique, "shadows", 0, 1, 1, &enabled)) ||
+        (r = displace_option_int(ctx, object, technique, "shadow_map_size", 16, 8192, 2048,
+                                 &size)) ||
+        (r = displace_option_float(ctx, object, technique, "shadow_bias", 0.0, 64.0, 1.5,
+                                   &bias)) ||
+        (r = displace_option_int(ctx, object, technique, "shadow_pcf", 0, 1, 1, &pcf)))
+        return r;
+    out_options->enabled = enabled != 0;
+    out_options->size = size;
+    out_options->bias = bias;
+    out_options->pcf = pcf != 0;
+    return MESO_OK;
+}
+
+/* ---- The displaced surface ---------------------------------------------------------------- */
+
+meso_result displace_surface_init(meso_context *ctx, const meso_object *object,
+                                  displace_surface *out_surface) {
+    memset(out_surface, 0, sizeof(*out_surface));
+    if (!object->mesh || object->mesh->num_triangles == 0)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: mesh: has no triangles",
+                              object->name);
+    out_surface->object = object;
+    out_surface->base = object->mesh;
+    if (object->mesostructure.kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD &&
+        object->mesostructure.height_field) {
+        const meso_heightfield *hf = object->mesostructure.height_field;
+        if (!object->mesh->uvs)
+            return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                                  "%s: mesh: the height field needs texture coordinates",
+                                  object->name);
+        if (!isfinite(object->mesostructure.depth) || object->mesostructure.depth < 0.0f)
+            return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                                  "%s: mesostructure.depth: must be a finite number >= 0",
+                                  object->name);
+        out_surface->heightfield = hf;
+        out_surface->depth = object->mesostructure.depth;
+        out_surface->repeat = hf->wrap != MESO_WRAP_CLAMP;
+    }
+    return MESO_OK;
+}
+
+float displace_height(const displace_surface *surface, meso_vec2 uv) {
+    if (!surface->heightfield) return 1.0f;
+    meso_vec2 t = displace_texture_uv(surface, uv);
+    return meso_heightfield_sample(surface->heightfield, t.x, t.y);
+}
+
+meso_vec2 displace_gradient(const displace_surface *surface, meso_vec2 uv) {
+    if (!surface->heightfield) return (meso_vec2){0.0f, 0.0f};
+    meso_vec2 t = displace_texture_uv(surface, uv);
+    return meso_heightfield_gradient(surface->heightfield, t.x, t.y);
+}
+
+void displace_vertex_finish(const displace_surface *surface, displace_vertex *vertex) {
+    vertex->texture_uv = displace_texture_uv(surface, vertex->uv);
+    vertex->unit_normal = meso_vec3_normalize(vertex->normal);
+    vertex->height = surface->heightfield
+                         ? meso_heightfield_sample(surface->heightfield, vertex->texture_uv.x,
+                                                   vertex->texture_uv.y)
+                         : 1.0f;
+    /* DESIGN.md: P' = P - (1 - h) depth N, N the normalised interpolated vertex normal */
+    vertex->position =
+        meso_vec3_madd(vertex->base, vertex->unit_normal, -(1.0f - vertex->height) * surface->depth);
+}
+
+int displace_texel_level(const displace_surface *surface, int max_level) {
+    const meso_mesh *mesh = surface->base;
+    const meso_heightfield *hf = surface->heightfield;
+    if (!hf || !mesh->uvs) return 0;
+    float longest = 0.0f;
+    for (size_t t = 0; t < mesh->num_triangles; t++)
+        for (int k = 0; k < 3; k++) {
+            meso_vec2 a = mesh->uvs[mesh->indices[t * 3 + (size_t)k]];
+            meso_vec2 b = mesh->uvs[mesh->indices[t * 3 + (size_t)(k + 1) % 3]];
+            float len = fmaxf(fabsf(b.x - a.x) * (float)hf->width,
+                              fabsf(b.y - a.y) * (float)hf->height);
+            if (len > longest) longest = len;
+        }
+    int level = 0;
+    while (level < max_level && longest > 1.0f) {
+        longest *= 0.5f;
+        level++;
+    }
+    return level;
+}
+
+/* (a + b) * 0.5 per component: commutative, so both triangles of an edge get the same bits. */
+static meso_vec3 mid3(meso_vec3 a, meso_vec3 b) {
+    return (meso_vec3){(a.x + b.x) * 0.5f, (a.y + b.y) * 0.5f, (a.z + b.z) * 0.5f};
+}
+
+static void vertex_midpoint(const displace_vertex *a, const displace_vertex *b,
+                            displace_vertex *out) {
+    out->base = mid3(a->base, b->base);
+    out->normal = mid3(a->normal, b->normal);
+    out->tangent = mid3(a->tangent, b->tangent);
+    out->bitangent = mid3(a->bitangent, b->bitangent);
+    out->uv = (meso_vec2){(a->uv.x + b->uv.x) * 0.5f, (a->uv.y + b->uv.y) * 0.5f};
+}
+
+/* A total order on vertices that both triangles of an edge agree on: by base position, then
+ * uv (never needed for a valid mesh: an edge's end points differ in position). */
+static bool vertex_before(const displace_vertex *a, const displace_vertex *b) {
+    const float ka[5] = {a->base.x, a->base.y, a->base.z, a->uv.x, a->uv.y};
+    const float kb[5] = {b->base.x, b->base.y, b->base.z, b->uv.x, b->uv.y};
+    for (int i = 0; i < 5; i++)
+        if (ka[i] != kb[i]) return ka[i] < kb[i];
+    return false;
+}
+
+/* ---- The tessellator ---------------------------------------------------------------------- */
+
+typedef struct tess_entry {
+    int32_t v[3];
+    int32_t depth;
+} tess_entry;
+
+typedef struct tess_scratch {
+    displace_vertex *nodes;
+    size_t num_nodes, cap_nodes;
+    int32_t *grid;   /* (n+1)^2 node index per grid point ... */
+    uint32_t *stamp; /* ... valid when stamp == current (no clearing per triangle) */
+    uint32_t current;
+    tess_entry *stack;
+    size_t cap_stack;
+} tess_scratch;
+
+typedef struct tess_job {
+    size_t first, count; /* base triangles */
+    size_t num_vertices, cap_vertices, num_triangles, cap_triangles;
+    meso_vec3 *positions, *normals, *tangents, *bitangents;
+    meso_vec2 *uvs;
+    uint32_t *indices;
+    size_t vertex_offset, triangle_offset; /* in the joined mesh */
+    displace_tess_stats stats;
+    meso_result result;
+} tess_job;
+
+struct displace_tessellator {
+    const displace_surface *surface;
+    int max_level;
+    int32_t n; /* 2^max_level segments per base edge */
+    int num_threads;
+    tess_scratch *scratch;
+    size_t num_jobs;
+    tess_job *jobs;
+    displace_vertex *corners; /* the base mesh's vertices, displaced, vertex_static applied */
+    bool corners_ready;
+    meso_mesh mesh; /* arrays owned here (not by meso_mesh_create) */
+    size_t cap_vertices, cap_triangles;
+    const displace_edge_tests *tests; /* during a run */
+};
+
+#define TESS_MAX_JOBS 256
+
+/* Scratch for `count` workers (the context may gain threads after creation, as `meso bench`
+ * does when it measures scaling). */
+static bool ensure_scratch(displace_tessellator *t, int count) {
+    if (count <= t->num_threads) return true;
+    tess_scratch *grown = realloc(t->scratch, (size_t)count * sizeof(*grown));
+    if (!grown) return false;
+    t->scratch = grown;
+    memset(grown + t->num_threads, 0, (size_t)(count - t->num_threads) * sizeof(*grown));
+    int first = t->num_threads;
+    t->num_threads = count; /* destroy frees every entry, zeroed ones included */
+    size_t side = (size_t)t->n + 1;
+    for (int i = first; i < count; i++) {
+        tess_scratch *s = &t->scratch[i];
+        /* grown on demand up to one node per grid point of a base triangle (the exceptional
+         * re-evaluation of an edge whose midpoint exists under another edge stores none) */
+        s->cap_nodes = side * (side + 1) / 2 < 4096 ? side * (side + 1) / 2 : 4096;
+        s->nodes = malloc(s->cap_nodes * sizeof(*s->nodes));
+        s->grid = malloc(side * side * sizeof(*s->grid));
+        s->stamp = calloc(side * side, sizeof(*s->stamp));
+        s->cap_stack = 256;
+        s->stack = malloc(s->cap_stack * sizeof(*s->stack));
+        if (!s->nodes || !s->grid || !s->stamp || !s->stack) return false;
+    }
+    return true;
+}
+
+meso_result displace_tessellator_create(meso_context *ctx, const displace_surface *surface,
+                                        int max_level, displace_tessellator **out_tessellator) {
+    *out_tessellator = NULL;
+    if (max_level < 0 || max_level > DISPLACE_MAX_LEVEL)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "%s: tessellation level %d is outside [0, %d]",
+                              surface->object->name, max_level, DISPLACE_MAX_LEVEL);
+    displace_tessellator *t = calloc(1, sizeof(*t));
+    if (!t) goto fail;
+    t->surface = surface;
+    t->max_level = max_level;
+    t->n = (int32_t)1 << max_level;
+    size_t num_base = surface->base->num_triangles;
+    t->num_jobs = num_base < TESS_MAX_JOBS ? num_base : TESS_MAX_JOBS;
+    t->jobs = calloc(t->num_jobs, sizeof(*t->jobs));
+    t->corners = calloc(surface->base->num_vertices ? surface->base->num_vertices : 1,
+                        sizeof(*t->corners));
+    if (!t->jobs || !t->corners || !ensure_scratch(t, meso_context_num_threads(ctx))) goto fail;
+    for (size_t j = 0; j < t->num_jobs; j++) {
+        /* fixed split independent of the thread count (determinism) */
+        t->jobs[j].first = num_base * j / t->num_jobs;
+        t->jobs[j].count = num_base * (j + 1) / t->num_jobs - t->jobs[j].first;
+    }
+    *out_tessellator = t;
+    return MESO_OK;
+fail:
+    displace_tessellator_destroy(t);
+    return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: tessellation scratch (level %d)",
+                          surface->object->name, max_level);
+}
+
+static void job_free(tess_job *job) {
+    free(job->positions);
+    free(job->normals);
+    free(job->tangents);
+    free(job->bitangents);
+    free(job->uvs);
+    free(job->indices);
+}
+
+void displace_tessellator_destroy(displace_tessellator *t) {
+    if (!t) return;
+    if (t->scratch)
+        for (int i = 0; i < t->num_threads; i++) {
+            free(t->scratch[i].nodes);
+            free(t->scratch[i].grid);
+            free(t->scratch[i].stamp);
+            free(t->scratch[i].stack);
+        }
+    if (t->jobs)
+        for (size_t j = 0; j < t->num_jobs; j++) job_free(&t->jobs[j]);
+    free(t->scratch);
+    free(t->jobs);
+    free(t->corners);
+    free(t->mesh.positions);
+    free(t->mesh.normals);
+    free(t->mesh.tangents);
+    free(t->mesh.bitangents);
+    free(t->mesh.uvs);
+    free(t->mesh.indices);
+    free(t);
+}
+
+size_t displace_tessellator_memory(const displace_tessellator *t) {
+    if (!t) return 0;
+    size_t bytes = sizeof(*t) + t->surface->base->num_vertices * sizeof(displace_vertex) +
+                   t->cap_vertices * (4 * sizeof(meso_vec3) + sizeof(meso_vec2)) +
+                   t->cap_triangles * 3 * sizeof(uint32_t);
+    for (size_t j = 0; j < t->num_jobs; j++)
+        bytes += t->jobs[j].cap_vertices * (4 * sizeof(meso_vec3) + sizeof(meso_vec2)) +
+                 t->jobs[j].cap_triangles * 3 * sizeof(uint32_t);
+    size_t side = (size_t)t->n + 1;
+    for (int i = 0; i < t->num_threads; i++)
+        bytes += t->scratch[i].cap_nodes * sizeof(displace_vertex) + side * side * 8;
+    return bytes;
+}
+
+#define GROW(ptr, cap, type)                                                                   \
+    do {                                                                                       \
+        type *grown_ = realloc((ptr), (cap) * sizeof(type));                                   \
+        if (!grown_) return false;                                                             \
+        (ptr) = grown_;                                                                        \
+    } while (0)
+
+static bool job_reserve_vertices(tess_job *job, size_t extra) {
+    if (job->num_vertices + extra <= job->cap_vertices) return true;
+    size_t cap = job->cap_vertices ? job->cap_vertices * 2 : 1024;
+    while (cap < job->num_vertices + extra) cap *= 2;
+    GROW(job->positions, cap, meso_vec3);
+    GROW(job->normals, cap, meso_vec3);
+    GROW(job->tangents, cap, meso_vec3);
+    GROW(job->bitangents, cap, meso_vec3);
+    GROW(job->uvs, cap, meso_vec2);
+    job->cap_vertices = cap;
+    return true;
+}
+
+static bool job_reserve_triangles(tess_job *job, size_t extra) {
+    if (job->num_triangles + extra <= job->cap_triangles) return true;
+    size_t cap = job->cap_triangles ? job->cap_triangles * 2 : 1024;
+    while (cap < job->num_triangles + extra) cap *= 2;
+    GROW(job->indices, cap * 3, uint32_t);
+    job->cap_triangles = cap;
+    return true;
+}
+
+static bool emit_triangle(tess_scratch *s, tess_job *job, const tess_entry *e) {
+    if (job->num_triangles >= MESO_MESH_MAX_TRIANGLES) {
+        job->result = MESO_ERROR_LIMIT;
+        return false;
+    }
+    if (!job_reserve_vertices(job, 3) || !job_reserve_triangles(job, 1)) {
+        job->result = MESO_ERROR_OUT_OF_MEMORY;
+        return false;
+    }
+    for (int k = 0; k < 3; k++) {
+        displace_vertex *v = &s->nodes[e->v[k]];
+        if (v->out_index == UINT32_MAX) {
+            size_t i = job->num_vertices++;
+            v->out_index = (uint32_t)i;
+            job->positions[i] = v->position;
+            /* the BASE frame: shade() rebuilds the height field's normal from it */
+            job->normals[i] = v->unit_normal;
+            job->tangents[i] = v->tangent;
+            job->bitangents[i] = v->bitangent;
+            job->uvs[i] = v->uv;
+        }
+        job->indices[job->num_triangles * 3 + (size_t)k] = v->out_index;
+    }
+    job->num_triangles++;
+    job->stats.per_depth[e->depth < DISPLACE_MAX_DEPTH ? e->depth : DISPLACE_MAX_DEPTH - 1]++;
+    return true;
+}
+
+static int32_t node_at(tess_scratch *s, int32_t n, int32_t kb, int32_t kc) {
+    size_t cell = (size_t)kb * ((size_t)n + 1) + (size_t)kc;
+    return s->stamp[cell] == s->current ? s->grid[cell] : -1;
+}
+
+static void node_store(tess_scratch *s, int32_t n, int32_t index) {
+    const displace_vertex *v = &s->nodes[index];
+    size_t cell = (size_t)v->key_b * ((size_t)n + 1) + (size_t)v->key_c;
+    s->stamp[cell] = s->current;
+    s->grid[cell] = index;
+}
+
+/* The edge's decision: veto first (before displacing m when `displaced` is false), then the
+ * insertion test. a and b are put in a canonical order: the neighbouring triangle walks the edge
+ * the other way round. */
+static bool order_edge(const displace_vertex **a, const displace_vertex **b) {
+    if (vertex_before(*b, *a)) {
+        const displace_vertex *swap = *a;
+        *a = *b;
+        *b = swap;
+    }
+    return true;
+}
+
+static bool vetoed(const displace_tessellator *t, const displace_vertex *a,
+                   const displace_vertex *b, const displace_vertex *m, tess_job *job) {
+    if (!t->tests || !t->tests->veto) return false;
+    order_edge(&a, &b);
+    return t->tests->veto(t->tests->user, a, b, m, job->stats.counters);
+}
+
+static bool decide(const displace_tessellator *t, const displace_vertex *a,
+                   const displace_vertex *b, const displace_vertex *m, tess_job *job) {
+    if (!t->tests || !t->tests->insert) return true;
+    order_edge(&a, &b);
+    return t->tests->insert(t->tests->user, a, b, m, job->stats.counters);
+}
+
+/* The midpoint of edge (p, q) if it is to be inserted, else -1. Computed and decided once per
+ * edge of a base triangle; the grid makes the recursion limit an edge property. */
+static bool reserve_node(const displace_tessellator *t, tess_scratch *s, tess_job *job) {
+    if (s->num_nodes < s->cap_nodes) return true;
+    size_t side = (size_t)t->n + 1, full = side * (side + 1) / 2;
+    if (s->cap_nodes >= full) return true; /* every grid point has its node: none is made */
+    size_t cap = s->cap_nodes * 2 < full ? s->cap_nodes * 2 : full;
+    displace_vertex *grown = realloc(s->nodes, cap * sizeof(*grown));
+    if (!grown) {
+        job->result = MESO_ERROR_OUT_OF_MEMORY;
+        return false;
+    }
+    s->nodes = grown;
+    s->cap_nodes = cap;
+    return true;
+}
+
+static int32_t edge_midpoint(const displace_tessellator *t, tess_scratch *s, tess_job *job,
+                             int32_t p, int32_t q) {
+    /* before taking pointers into the node array: growing it moves it */
+    if (!reserve_node(t, s, job)) return -1;
+    const displace_vertex *a = &s->nodes[p], *b = &s->nodes[q];
+    int32_t sb = a->key_b + b->key_b, sc = a->key_c + b->key_c;
+    if ((sb | sc) & 1) {
+        job->stats.grid_limited++;
+        return -1;
+    }
+    int32_t lo = p < q ? p : q, hi = p < q ? q : p;
+    int32_t existing = node_at(s, t->n, sb / 2, sc / 2);
+    if (existing >= 0) {
+        const displace_vertex *m = &s->nodes[existing];
+        if (m->parent_a == lo && m->parent_b == hi) return m->inserted ? existing : -1;
+        /* Another edge of this base triangle has the same midpoint (two crossing diagonals of
+         * different refinement branches). Decide for this edge with the stored vertex: it is
+         * interior to the base triangle, so no neighbour depends on it; the answer is a
+         * function of the records only (a vetoed vertex was never displaced: no). */
+        return m->inserted && !vetoed(t, a, b, m, job) && decide(t, a, b, m, job) ? existing : -1;
+    }
+    if (s->num_nodes >= s->cap_nodes) return -1; /* cannot happen: one node per grid point */
+    int32_t index = (int32_t)s->num_nodes++;
+    displace_vertex *m = &s->nodes[index];
+    vertex_midpoint(a, b, m);
+    m->texture_uv = displace_texture_uv(t->surface, m->uv);
+    m->key_b = sb / 2;
+    m->key_c = sc / 2;
+    m->parent_a = lo;
+    m->parent_b = hi;
+    m->out_index = UINT32_MAX;
+    m->inserted = 0;
+    if (!vetoed(t, a, b, m, job)) {
+        /* "Displace midpoint", "Transform midpoint", "Calculate surface normal" */
+        displace_vertex_finish(t->surface, m);
+        m->surface_normal = m->unit_normal;
+        m->clip = (meso_vec4){0, 0, 0, 1};
+        if (t->tests && t->tests->vertex_static) t->tests->vertex_static(t->tests->user, m);
+        if (t->tests && t->tests->vertex_hook) t->tests->vertex_hook(t->tests->user, m);
+        m->inserted = decide(t, a, b, m, job) ? 1 : 0;
+    }
+    node_store(s, t->n, index);
+    return m->inserted ? index : -1;
+}
+
+static bool push(tess_scratch *s, size_t *top, int32_t a, int32_t b, int32_t c, int32_t depth,
+                 tess_job *job) {
+    if (*top >= s->cap_stack) {
+        size_t cap = s->cap_stack * 2;
+        tess_entry *grown = realloc(s->stack, cap * sizeof(*grown));
+        if (!grown) {
+            job->result = MESO_ERROR_OUT_OF_MEMORY;
+            return false;
+        }
+        s->stack = grown;
+        s->cap_stack = cap;
+    }
+    s->stack[(*top)++] = (tess_entry){{a, b, c}, depth};
+    return true;
+}
+
+static float base_distance2(const tess_scratch *s, int32_t p, int32_t q) {
+    meso_vec3 d = meso_vec3_sub(s->nodes[p].base, s->nodes[q].base);
+    return meso_vec3_dot(d, d);
+}
+
+static bool tessellate_triangle(const displace_tessellator *t, tess_scratch *s, tess_job *job,
+                                size_t triangle) {
+    const meso_mesh *base = t->surface->base;
+    if (++s->current == 0) { /* stamp wrapped: clear once every 2^32 triangles */
+        memset(s->stamp, 0, ((size_t)t->n + 1) * ((size_t)t->n + 1) * sizeof(*s->stamp));
+        s->current = 1;
+    }
+    s->num_nodes = 0;
+    const int32_t keys[3][2] = {{0, 0}, {t->n, 0}, {0, t->n}};
+    for (int k = 0; k < 3; k++) {
+        uint32_t i = base->indices[triangle * 3 + (size_t)k];
+        displace_vertex *v = &s->nodes[s->num_nodes];
+        *v = t->corners[i]; /* displaced once, on the first run */
+        v->key_b = keys[k][0];
+        v->key_c = keys[k][1];
+        if (t->tests && t->tests->vertex_hook) t->tests->vertex_hook(t->tests->user, v);
+        node_store(s, t->n, (int32_t)s->num_nodes);
+        s->num_nodes++;
+    }
+    size_t top = 0;
+    if (!push(s, &top, 0, 1, 2, 0, job)) return false;
+    while (top > 0) {
+        tess_entry e = s->stack[--top];
+        int32_t m[3];
+        int present = 0;
+        for (int k = 0; k < 3; k++) {
+            m[k] = edge_midpoint(t, s, job, e.v[k], e.v[(k + 1) % 3]);
+            present += m[k] >= 0;
+        }
+        if (job->result != MESO_OK) return false;
+        int32_t d = e.depth + 1;
+        bool ok = true;
+        if (present == 0) {
+            if (!emit_triangle(s, job, &e)) return false;
+        } else if (present == 3) {
+            /* "Tessellate with selected midpoints": the regular 1-to-4 split */
+            ok = push(s, &top, m[1], m[2], m[0], d, job) && push(s, &top, e.v[2], m[2], m[1], d, job) &&
+                 push(s, &top, m[0], e.v[1], m[1], d, job) &&
+                 push(s, &top, e.v[0], m[0], m[2], d, job);
+        } else if (present == 1) {
+            /* rotate so that the midpoint is on edge (a, b): split into (a, m, c), (m, b, c) */
+            int r = m[0] >= 0 ? 0 : (m[1] >= 0 ? 1 : 2);
+            int32_t a = e.v[r], b = e.v[(r + 1) % 3], c = e.v[(r + 2) % 3], mm = m[r];
+            ok = push(s, &top, mm, b, c, d, job) && push(s, &top, a, mm, c, d, job);
+        } else {
+            /* two midpoints: rotate so the missing one is on edge (c, a); cut the corner b off
+             * and split the quad (a, m0, m1, c) along its shorter diagonal */
+            int r = m[0] < 0 ? 1 : (m[1] < 0 ? 2 : 0);
+            int32_t a = e.v[r], b = e.v[(r + 1) % 3], c = e.v[(r + 2) % 3];
+            int32_t m0 = m[r], m1 = m[(r + 1) % 3];
+            ok = push(s, &top, m0, b, m1, d, job);
+            if (ok && base_distance2(s, a, m1) <= base_distance2(s, m0, c))
+                ok = push(s, &top, a, m1, c, d, job) && push(s, &top, a, m0, m1, d, job);
+            else if (ok)
+                ok = push(s, &top, m0, m1, c, d, job) && push(s, &top, a, m0, c, d, job);
+        }
+        if (!ok) return false;
+    }
+    return true;
+}
+
+typedef struct run_args {
+    displace_tessellator *t;
+} run_args;
+
+static void run_job(void *user, size_t index, int thread_index) {
+    displace_tessellator *t = ((run_args *)user)->t;
+    tess_job *job = &t->jobs[index];
+    tess_scratch *s = &t->scratch[thread_index];
+    job->num_vertices = job->num_triangles = 0;
+    memset(&job->stats, 0, sizeof(job->stats));
+    job->result = MESO_OK;
+    for (size_t i = 0; i < job->count; i++)
+        if (!tessellate_triangle(t, s, job, job->first + i)) return;
+}
+
+static void join_job(void *user, size_t index, int thread_index) {
+    (void)thread_index;
+    displace_tessellator *t = ((run_args *)user)->t;
+    const tess_job *job = &t->jobs[index];
+    size_t v0 = job->vertex_offset, n = job->num_vertices;
+    memcpy(t->mesh.positions + v0, job->positions, n * sizeof(meso_vec3));
+    memcpy(t->mesh.normals + v0, job->normals, n * sizeof(meso_vec3));
+    memcpy(t->mesh.tangents + v0, job->tangents, n * sizeof(meso_vec3));
+    memcpy(t->mesh.bitangents + v0, job->bitangents, n * sizeof(meso_vec3));
+    memcpy(t->mesh.uvs + v0, job->uvs, n * sizeof(meso_vec2));
+    uint32_t *out = t->mesh.indices + job->triangle_offset * 3;
+    for (size_t i = 0; i < job->num_triangles * 3; i++) out[i] = job->indices[i] + (uint32_t)v0;
+}
+
+static bool mesh_reserve(displace_tessellator *t, size_t vertices, size_t triangles) {
+    if (vertices > t->cap_vertices) {
+        GROW(t->mesh.positions, vertices, meso_vec3);
+        GROW(t->mesh.normals, vertices, meso_vec3);
+        GROW(t->mesh.tangents, vertices, meso_vec3);
+        GROW(t->mesh.bitangents, vertices, meso_vec3);
+        GROW(t->mesh.uvs, vertices, meso_vec2);
+        t->cap_vertices = vertices;
+    }
+    if (triangles > t->cap_triangles) {
+        GROW(t->mesh.indices, triangles * 3, uint32_t);
+        t->cap_triangles = triangles;
+    }
+    return true;
+}
+
+meso_result displace_tessellator_run(meso_context *ctx, displace_tessellator *t,
+                                     const displace_edge_tests *tests, const meso_mesh **out_mesh,
+                                     displace_tess_stats *out_stats) {
+    *out_mesh = NULL;
+    if (out_stats) memset(out_stats, 0, sizeof(*out_stats));
+    if (!ensure_scratch(t, meso_context_num_threads(ctx)))
+        return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: tessellation scratch",
+                              t->surface->object->name);
+    t->tests = tests;
+    if (!t->corners_ready) {
+        const meso_mesh *base = t->surface->base;
+        for (size_t i = 0; i < base->num_vertices; i++) {
+            displace_vertex *v = &t->corners[i];
+            memset(v, 0, sizeof(*v));
+            v->base = base->positions[i];
+            v->normal = base->normals[i];
+            v->tangent = base->tangents ? base->tangents[i] : (meso_vec3){0, 0, 0};
+            v->bitangent = base->bitangents ? base->bitangents[i] : (meso_vec3){0, 0, 0};
+            v->uv = base->uvs ? base->uvs[i] : (meso_vec2){0, 0};
+            displace_vertex_finish(t->surface, v);
+            v->surface_normal = v->unit_normal;
+            v->clip = (meso_vec4){0, 0, 0, 1};
+            v->parent_a = v->parent_b = -1;
+            v->out_index = UINT32_MAX;
+            v->inserted = 1;
+            if (tests && tests->vertex_static) tests->vertex_static(tests->user, v);
+        }
+        t->corners_ready = true;
+    }
+    run_args args = {t};
+    meso_parallel_for(ctx, t->num_jobs, run_job, &args);
+    t->tests = NULL;
+    size_t vertices = 0, triangles = 0;
+    displace_tess_stats stats = {0};
+    for (size_t j = 0; j < t->num_jobs; j++) { /* fixed order: deterministic sums */
+        tess_job *job = &t->jobs[j];
+        if (job->result == MESO_ERROR_LIMIT)
+            return meso_log_error(ctx, MESO_ERROR_LIMIT,
+                                  "%s: tessellation: more than %u triangles",
+                                  t->surface->object->name, MESO_MESH_MAX_TRIANGLES);
+        if (job->result != MESO_OK)
+            return meso_log_error(ctx, job->result, "%s: tessellation output",
+                                  t->surface->object->name);
+        job->vertex_offset = vertices;
+        job->triangle_offset = triangles;
+        vertices += job->num_vertices;
+        triangles += job->num_triangles;
+        for (int d = 0; d < DISPLACE_MAX_DEPTH; d++) stats.per_depth[d] += job->stats.per_depth[d];
+        for (int c = 0; c < DISPLACE_NUM_COUNTERS; c++) stats.counters[c] += job->stats.counters[c];
+        stats.grid_limited += job->stats.grid_limited;
+    }
+    if (triangles > MESO_MESH_MAX_TRIANGLES || vertices > MESO_MESH_MAX_VERTICES)
+        return meso_log_error(ctx, MESO_ERROR_LIMIT,
+                              "%s: tessellation: %zu triangles exceed the limit %u",
+                              t->surface->object->name, triangles, MESO_MESH_MAX_TRIANGLES);
+    if (!mesh_reserve(t, vertices, triangles))
+        return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: tessellation: %zu triangles",
+                              t->surface->object->name, triangles);
+    meso_parallel_for(ctx, t->num_jobs, join_job, &args);
+    t->mesh.num_vertices = vertices;
+    t->mesh.num_triangles = triangles;
+    stats.triangles = triangles;
+    stats.vertices = vertices;
+    if (out_stats) *out_stats = stats;
+    *out_mesh = &t->mesh;
+    return MESO_OK;
+}
+
+/* ---- Shadow maps -------------------------------------------------------------------------- */
+
+static meso_mat4 ortho(float left, float right, float bottom, float top, float z_near,
+                       float z_far) {
+    meso_mat4 r = {{0}};
+    r.m[0] = 2.0f / (right - left);
+    r.m[5] = 2.0f / (top - bottom);
+    r.m[10] = -2.0f / (z_far - z_near);
+    r.m[12] = -(right + left) / (right - left);
+    r.m[13] = -(top + bottom) / (top - bottom);
+    r.m[14] = -(z_far + z_near) / (z_far - z_near);
+    r.m[15] = 1.0f;
+    return r;
+}
+
+static void mesh_bounds(const meso_mesh *mesh, meso_vec3 *lo, meso_vec3 *hi) {
+    *lo = (meso_vec3){INFINITY, INFINITY, INFINITY};
+    *hi = (meso_vec3){-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < mesh->num_vertices; i++) {
+        meso_vec3 p = mesh->positions[i];
+        lo->x = fminf(lo->x, p.x), lo->y = fminf(lo->y, p.y), lo->z = fminf(lo->z, p.z);
+        hi->x = fmaxf(hi->x, p.x), hi->y = fmaxf(hi->y, p.y), hi->z = fmaxf(hi->z, p.z);
+    }
+}
+
+static meso_vec3 pick_up(meso_vec3 forward) {
+    return fabsf(forward.y) < 0.9f ? (meso_vec3){0, 1, 0} : (meso_vec3){1, 0, 0};
+}
+
+meso_result displace_shadows_render(meso_context *ctx, displace_shadows *shadows,
+                                    const meso_scene *scene, const meso_mesh *mesh) {
+    double start = meso_time_seconds();
+    shadows->num_lights = 0;
+    if (!shadows->options.enabled || scene->num_lights <= 0 || mesh->num_triangles == 0)
+        return MESO_OK;
+    size_t size = (size_t)shadows->options.size, count = (size_t)scene->num_lights;
+    if (!shadows->depth) {
+        shadows->depth = malloc(count * size * size * sizeof(float));
+        if (!shadows->depth)
+            return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "shadow maps: %zu x %zu x %zu",
+                                  count, size, size);
+    }
+    meso_vec3 lo, hi;
+    mesh_bounds(mesh, &lo, &hi);
+    meso_vec3 center = meso_vec3_scale(meso_vec3_add(lo, hi), 0.5f);
+    float radius = 0.5f * meso_vec3_length(meso_vec3_sub(hi, lo));
+    float margin = 1e-3f * radius + 1e-6f;
+    for (size_t l = 0; l < count; l++) {
+        const meso_light *light = &scene->lights[l];
+        displace_light_map *map = &shadows->lights[l];
+        memset(map, 0, sizeof(*map));
+        float *depth = shadows->depth + l * size * size;
+        map->depth = depth;
+        if (light->type == MESO_LIGHT_DIRECTIONAL) {
+            meso_vec3 dir = meso_vec3_normalize(light->direction);
+            meso_vec3 eye = meso_vec3_madd(center, dir, 2.0f * radius + 1.0f);
+            meso_mat4 view = meso_mat4_look_at(eye, center, pick_up(dir));
+            /* fit the light's frustum to the bounds' eight corners in light space */
+            float x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+            float d0 = INFINITY, d1 = -INFINITY;
+            for (int c = 0; c < 8; c++) {
+                meso_vec3 p = {c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y, c & 4 ? hi.z : lo.z};
+                meso_vec3 q = meso_mat4_transform_point(view, p);
+                x0 = fminf(x0, q.x), x1 = fmaxf(x1, q.x), y0 = fminf(y0, q.y), y1 = fmaxf(y1, q.y);
+                d0 = fminf(d0, -q.z), d1 = fmaxf(d1, -q.z);
+            }
+            /* square texels: the larger extent on both axes */
+            float half = 0.5f * fmaxf(x1 - x0, y1 - y0) + margin;
+            float cx = 0.5f * (x0 + x1), cy = 0.5f * (y0 + y1);
+            meso_mat4 proj = ortho(cx - half, cx + half, cy - half, cy + half, d0 - margin,
+                                   d1 + margin);
+            map->view_projection = meso_mat4_mul(proj, view);
+            map->texel_size = 2.0f * half / (float)size;
+        } else {
+            meso_vec3 to_center = meso_vec3_sub(center, light->position);
+            float distance = meso_vec3_length(to_center);
+            if (!(distance > radius * 1.01f)) {
+                meso_log_warning(ctx, "shadow maps: point light %zu lies inside the displaced "
+                                      "mesh's bounds: it casts no shadow map", l);
+                continue;
+            }
+            float fov = 2.0f * asinf(radius / distance) * 1.02f;
+            float z_near = fmaxf(distance - radius, 1e-3f * distance) * 0.99f;
+            meso_mat4 view = meso_mat4_look_at(light->position, center,
+                                               pick_up(meso_vec3_normalize(to_center)));
+            meso_mat4 proj = meso_mat4_perspective(fov, 1.0f, z_near, (distance + radius) * 1.01f);
+            map->view_projection = meso_mat4_mul(proj, view);
+            map->texel_size = 2.0f * tanf(0.5f * fov) / (float)size;
+        }
+        meso_result r = meso_raster_depth_map(ctx, mesh, map->view_projection, (int)size,
+                                              (int)size, depth);
+        if (r != MESO_OK) return r;
+        map->active = true;
+    }
+    shadows->num_lights = (int)count;
+    shadows->seconds = meso_time_seconds() - start;
+    return MESO_OK;
+}
+
+static float lit_tap(const displace_light_map *map, int size, int i, int j, float z) {
+    i = i < 0 ? 0 : (i >= size ? size - 1 : i);
+    j = j < 0 ? 0 : (j >= size ? size - 1 : j);
+    return z <= map->depth[(size_t)j * (size_t)size + (size_t)i] ? 1.0f : 0.0f;
+}
+
+void displace_shadows_visibility(const displace_shadows *shadows, const meso_scene *scene,
+                                 meso_vec3 position, meso_vec3 normal, meso_vec3 face_normal,
+                                 float *visibility) {
+    for (int l = 0; l < scene->num_lights; l++) {
+        visibility[l] = 1.0f;
+        if (l >= shadows->num_lights || !shadows->lights[l].active) continue;
+        const displace_light_map *map = &shadows->lights[l];
+        const meso_light *light = &scene->lights[l];
+        meso_vec3 to_light = meso_light_direction(light, position);
+        /* facing away from the light: no diffuse or specular term for visibility to scale */
+        if (meso_vec3_dot(normal, to_light) <= 0.0f) continue;
+        /* slope-scaled bias: a texel of the map spans tan(angle) texels of depth on a surface
+         * tilted from the light; moving the receiver toward the light by that much removes
+         * self-shadowing acne without a depth-unit constant */
+        float c = fabsf(meso_vec3_dot(face_normal, to_light));
+        c = c < 0.1f ? 0.1f : c;
+        float slope = sqrtf(fmaxf(0.0f, 1.0f - c * c)) / c;
+        float texel = map->texel_size;
+        if (light->type != MESO_LIGHT_DIRECTIONAL)
+            texel *= meso_vec3_length(meso_vec3_sub(light->position, position));
+        float offset = shadows->options.bias * texel * (1.0f + slope);
+        meso_vec3 p = meso_vec3_madd(position, to_light, offset);
+        meso_vec4 clip =
+            meso_mat4_mul_vec4(map->view_projection, (meso_vec4){p.x, p.y, p.z, 1.0f});
+        if (!(clip.w > 0.0f)) continue;
+        float nx = clip.x / clip.w, ny = clip.y / clip.w, nz = clip.z / clip.w;
+        if (!(nx >= -1.0f && nx <= 1.0f && ny >= -1.0f && ny <= 1.0f)) continue;
+        float z = nz * 0.5f + 0.5f;
+        int size = shadows->options.size;
+        /* continuous texel coordinates whose integers are the sample centres */
+        float x = (nx * 0.5f + 0.5f) * (float)size - 0.5f;
+        float y = (0.5f - ny * 0.5f) * (float)size - 0.5f;
+        if (shadows->options.pcf) {
+            float fx = floorf(x), fy = floorf(y);
+            int i = (int)fx, j = (int)fy;
+            float tx = x - fx, ty = y - fy;
+            float top = lit_tap(map, size, i, j, z) * (1.0f - tx) + lit_tap(map, size, i + 1, j, z) * tx;
+            float bottom =
+                lit_tap(map, size, i, j + 1, z) * (1.0f - tx) + lit_tap(map, size, i + 1, j + 1, z) * tx;
+            visibility[l] = top * (1.0f - ty) + bottom * ty;
+        } else {
+            visibility[l] = lit_tap(map, size, (int)floorf(x + 0.5f), (int)floorf(y + 0.5f), z);
+        }
+    }
+}
+
+void displace_shadows_release(displace_shadows *shadows) {
+    if (!shadows) return;
+    free(shadows->depth);
+    shadows->depth = NULL;
+    shadows->num_lights = 0;
+}
+
+/* ---- Shading ------------------------------------------------------------------------------ */
+
+void displace_shade(const displace_surface *surface, const displace_shadows *shadows,
+                    const meso_mesh *mesh, const meso_frame *frame, meso_fragment *fragments,
+                    size_t count) {
+    enum { CHUNK = 64 };
+    int num_lights = frame->scene->num_lights;
+    float visibility[CHUNK * MESO_SCENE_MAX_LIGHTS];
+    for (size_t first = 0; first < count; first += CHUNK) {
+        size_t n = count - first < CHUNK ? count - first : CHUNK;
+        for (size_t f = 0; f < n; f++) {
+            meso_fragment *frag = &fragments[first + f];
+            meso_vec3 normal = frag->normal;
+            if (surface->heightfield) {
+                /* the bump-map operation on the interpolated BASE frame (slides, "Hardware
+                 * Architecture"): the same normal every other technique shades with */
+                meso_vec2 g = displace_gradient(surface, frag->uv);
+                meso_vec3 n3 = meso_displaced_normal(frag->normal, frag->tangent,
+                                                     frag->bitangent, surface->depth, g);
+                if (meso_vec3_dot(n3, n3) > 0.0f && meso_vec3_is_finite(n3)) normal = n3;
+            }
+            meso_vec3 face = frag->normal;
+            if (mesh && frag->triangle < mesh->num_triangles) {
+                const uint32_t *t = mesh->indices + (size_t)frag->triangle * 3;
+                meso_vec3 p0 = mesh->positions[t[0]];
+                meso_vec3 e = meso_vec3_cross(meso_vec3_sub(mesh->positions[t[1]], p0),
+                                              meso_vec3_sub(mesh->positions[t[2]], p0));
+                if (meso_vec3_dot(e, e) > 0.0f) face = meso_vec3_normalize(e);
+            }
+            displace_shadows_visibility(shadows, frame->scene, frag->position, normal, face,
+                                        visibility + f * (size_t)num_lights);
+            frag->normal = normal;
+        }
+        meso_shade_fragments(frame, surface->object, fragments + first, n, visibility);
+    }
+}

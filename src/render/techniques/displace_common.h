@@ -1,0 +1,197 @@
+/* Shared code of the two geometry techniques, `displacement` (uniform) and `tessellation`
+ * (Doggett & Hirche 2000): vertex displacement (DESIGN.md), the recursive midpoint tessellator
+ * with its triangle stack, shading with the height field's normal, and shadow maps of the
+ * displaced mesh. Private to src/render/techniques.
+ *
+ * Crack-freeness (Doggett & Hirche 2000, "Approach": "avoid cracks between triangles by only
+ * evaluating the edge"): every vertex record is computed from the two records of the edge it
+ * halves by a symmetric formula ((a + b) * 0.5 is commutative in IEEE arithmetic), and the
+ * decision to insert it sees only those three records, given in a canonical order. So two base
+ * triangles sharing an edge (same positions, normals, tangent frames, and uvs equal up to whole
+ * tiles under repeat wrapping) produce bit-identical edge vertices and the same decisions.
+ */
+#ifndef MESO_DISPLACE_COMMON_H
+#define MESO_DISPLACE_COMMON_H
+
+#include "meso/bake_sat.h"
+#include "render_internal.h"
+
+/* Recursion limit of the tessellator: 2^10 segments per base edge. */
+#define DISPLACE_MAX_LEVEL 10
+/* Emitted triangles are counted per recursion depth up to this (deeper ones in the last). */
+#define DISPLACE_MAX_DEPTH 32
+/* Counters a technique's edge test may increment (meaning defined by the technique). */
+#define DISPLACE_NUM_COUNTERS 8
+
+/* ---- The displaced surface ---------------------------------------------------------------- */
+
+typedef struct displace_surface {
+    const meso_object *object;
+    const meso_mesh *base;              /* object->mesh, world space */
+    const meso_heightfield *heightfield; /* NULL: no mesostructure (h = 1 everywhere) */
+    float depth;                         /* world units */
+    bool repeat;                         /* height field wraps: uv taken modulo 1 */
+} displace_surface;
+
+/* Fill from an object; validates that the mesh has UVs when there is a height field. */
+meso_result displace_surface_init(meso_context *ctx, const meso_object *object,
+                                  displace_surface *out_surface);
+
+/* uv as the height field is sampled: modulo 1 with repeat wrapping, so that vertices on a UV
+ * seam (u = 0 on one side, u = 1 on the other) see the same heights. */
+static inline meso_vec2 displace_texture_uv(const displace_surface *surface, meso_vec2 uv) {
+    if (!surface->repeat) return uv;
+    return (meso_vec2){uv.x - floorf(uv.x), uv.y - floorf(uv.y)};
+}
+
+/* The level at which the longest edge of the base mesh spans at most one texel of the height
+ * field (Chebyshev length: max(|du| W, |dv| H)), at most max_level; 0 without a height field. */
+int displace_texel_level(const displace_surface *surface, int max_level);
+
+/* Height and its gradient at a texture-space point (wrapped as above). */
+float displace_height(const displace_surface *surface, meso_vec2 uv);
+meso_vec2 displace_gradient(const displace_surface *surface, meso_vec2 uv);
+
+/* A vertex of a tessellated base triangle. */
+typedef struct displace_vertex {
+    /* interpolated over the flat base triangle (midpoints of midpoints) */
+    meso_vec3 base;                /* P on the base triangle */
+    meso_vec3 normal;              /* interpolated vertex normal, not normalised */
+    meso_vec3 tangent, bitangent;  /* dP/du, dP/dv */
+    meso_vec2 uv;                  /* as the mesh has it (uv_scale applied, not wrapped) */
+    /* derived by displace_vertex_finish */
+    meso_vec2 texture_uv;          /* displace_texture_uv(uv) */
+    meso_vec3 unit_normal;         /* N = normalize(normal) */
+    float height;                  /* h(uv) */
+    meso_vec3 position;            /* P' = P - (1 - h) depth N (DESIGN.md) */
+    /* filled by the technique's vertex hook (tessellation: the edge tests' inputs) */
+    meso_vec3 surface_normal;      /* normal of the displaced surface (bump-map operation) */
+    meso_vec4 clip;                /* view_projection * position */
+    /* bookkeeping of the tessellator */
+    int32_t key_b, key_c;          /* barycentric grid coordinates of corners 1 and 2 */
+    int32_t parent_a, parent_b;    /* the edge this vertex halves (-1: a corner) */
+    uint32_t out_index;            /* index in the job's output, UINT32_MAX until emitted */
+    int8_t inserted;               /* the decision on its edge */
+} displace_vertex;
+
+/* Compute the derived fields from the interpolated ones. */
+void displace_vertex_finish(const displace_surface *surface, displace_vertex *vertex);
+
+/* ---- The recursive midpoint tessellator --------------------------------------------------- */
+
+/* Doggett & Hirche 2000, "Adaptive Tessellation" and "Hardware Architecture": per base triangle,
+ * a triangle stack; for each popped triangle the midpoints of its three edges are computed,
+ * displaced, handed to the vertex hook (transform, surface normal) and inserted when `insert`
+ * says so; the triangle is then split with the selected midpoints (1-, 2- or 3-midpoint
+ * patterns) and its children pushed, or emitted when no midpoint is selected.
+ *
+ * The recursion limit is a property of the EDGE, not of the triangle, so that both triangles of
+ * an edge agree: vertices live on the barycentric grid of 2^max_level segments per base edge,
+ * and an edge whose midpoint is not a grid point is never split. */
+typedef struct displace_edge_tests {
+    /* Called once per new vertex after displacement, for its view-independent data (the
+     * surface normal); for the base mesh's vertices only on the first run, whose results are
+     * kept, so it must give the same answer on every run (may be NULL). */
+    void (*vertex_static)(const void *user, displace_vertex *vertex);
+    /* Called once per vertex per run after vertex_static, for the frame's data (the
+     * transformed position) (may be NULL). */
+    void (*vertex_hook)(const void *user, displace_vertex *vertex);
+    /* Whether to reject m, the midpoint of the edge (a, b), before it is displaced: m has only
+     * its interpolated fields and texture_uv (the recursion-limit tests need no more, so the
+     * work of displacing rejected midpoints is saved). May be NULL. */
+    bool (*veto)(const void *user, const displace_vertex *a, const displace_vertex *b,
+                 const displace_vertex *m, uint64_t *counters);
+    /* Whether to insert m (displaced, hooked) unless vetoed. a and b come in a canonical order
+     * (by position), and both answers must depend only on the three records. `counters` are
+     * the calling job's DISPLACE_NUM_COUNTERS statistics. */
+    bool (*insert)(const void *user, const displace_vertex *a, const displace_vertex *b,
+                   const displace_vertex *m, uint64_t *counters);
+    const void *user;
+} displace_edge_tests;
+
+typedef struct displace_tess_stats {
+    uint64_t triangles;
+    uint64_t vertices;
+    uint64_t per_depth[DISPLACE_MAX_DEPTH]; /* emitted triangles by recursion depth */
+    uint64_t grid_limited;                  /* midpoints not on the grid (recursion limit) */
+    uint64_t counters[DISPLACE_NUM_COUNTERS];
+} displace_tess_stats;
+
+typedef struct displace_tessellator displace_tessellator;
+
+/* A tessellator for `surface` (which must outive it) with the recursion limit max_level in
+ * [0, DISPLACE_MAX_LEVEL]. Scratch for every worker of ctx is allocated here. */
+meso_result displace_tessellator_create(meso_context *ctx, const displace_surface *surface,
+                                        int max_level, displace_tessellator **out_tessellator);
+/* Tessellate every base triangle (in parallel, fixed jobs: byte-identical for any thread
+ * count). *out_mesh is owned by the tessellator and valid until the next run. */
+meso_result displace_tessellator_run(meso_context *ctx, displace_tessellator *tessellator,
+                                     const displace_edge_tests *tests, const meso_mesh **out_mesh,
+                                     displace_tess_stats *out_stats);
+size_t displace_tessellator_memory(const displace_tessellator *tessellator);
+void displace_tessellator_destroy(displace_tessellator *tessellator);
+
+/* ---- Shadow maps -------------------------------------------------------------------------- */
+
+typedef struct displace_shadow_options {
+    bool enabled;      /* "shadows" (1) */
+    int size;          /* "shadow_map_size" (2048) */
+    float bias;        /* "shadow_bias" in shadow-map texels, scaled by the slope (1.5) */
+    bool pcf;          /* "shadow_pcf" (1): 2 x 2 bilinear percentage-closer filtering */
+} displace_shadow_options;
+
+/* The option names read by displace_shadow_options_read, for meso_technique_check_options. */
+#define DISPLACE_SHADOW_OPTION_NAMES "shadows", "shadow_map_size", "shadow_bias", "shadow_pcf"
+
+meso_result displace_shadow_options_read(meso_context *ctx, const meso_object *object,
+                                         const char *technique,
+                                         displace_shadow_options *out_options);
+
+typedef struct displace_light_map {
+    bool active;            /* false: the light casts no shadow (visibility 1) */
+    meso_mat4 view_projection;
+    float texel_size;       /* world size of a texel (ortho) or its angle in radians (point) */
+    const float *depth;     /* size x size, inside displace_shadows.depth */
+} displace_light_map;
+
+typedef struct displace_shadows {
+    displace_shadow_options options;
+    int num_lights;
+    displace_light_map lights[MESO_SCENE_MAX_LIGHTS];
+    float *depth;           /* num_lights * size * size, owned */
+    double seconds;         /* time of the last render */
+} displace_shadows;
+
+/* Render a light-space depth map of `mesh` for every light of the scene with
+ * meso_raster_depth_map: orthographic fitted to the mesh's bounds for directional lights,
+ * perspective for point lights outside the bounds (a point light inside them casts no shadow
+ * map; a warning says so). Does nothing when shadows are disabled. */
+meso_result displace_shadows_render(meso_context *ctx, displace_shadows *shadows,
+                                    const meso_scene *scene, const meso_mesh *mesh);
+/* visibility[i] in [0,1] for every light of the scene at `position` with shading normal
+ * `normal` (lights behind it are not looked up: they add nothing) on a surface with geometric
+ * normal `face_normal` (for the slope-scaled bias). Pure, thread-safe. */
+void displace_shadows_visibility(const displace_shadows *shadows, const meso_scene *scene,
+                                 meso_vec3 position, meso_vec3 normal, meso_vec3 face_normal,
+                                 float *visibility);
+void displace_shadows_release(displace_shadows *shadows);
+
+/* ---- Shading ------------------------------------------------------------------------------ */
+
+/* Shade fragments of `mesh` (the displaced mesh, whose normals/tangents/bitangents carry the
+ * BASE frame): the normal is the height field's (meso_displaced_normal at the fragment's uv,
+ * the bump-map operation of the slides' "Hardware Architecture"), shadows from `shadows`. */
+void displace_shade(const displace_surface *surface, const displace_shadows *shadows,
+                    const meso_mesh *mesh, const meso_frame *frame, meso_fragment *fragments,
+                    size_t count);
+
+/* Read an integer option in [lo, hi] (fallback when unset); errors name object and option. */
+meso_result displace_option_int(meso_context *ctx, const meso_object *object,
+                                const char *technique, const char *name, int lo, int hi,
+                                int fallback, int *out_value);
+/* Read a finite number option in [lo, hi]. */
+meso_result displace_option_float(meso_context *ctx, const meso_object *object,
+                                  const char *technique, const char *name, double lo, double hi,
+                                  double fallback, float *out_value);
+
+#endif

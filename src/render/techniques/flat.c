@@ -1,0 +1,30 @@
+/* flat: the base mesh shaded with its smooth interpolated normal; the mesostructure is ignored.
+ * The baseline every other technique improves on (docs/techniques/flat.md). */
+#include "render_internal.h"
+
+static meso_result flat_prepare(meso_context *ctx, const meso_scene *scene,
+                                const meso_object *object, void **out_state) {
+    (void)scene;
+    *out_state = NULL;
+    return meso_technique_check_options(ctx, object, "flat", (const char *const[]){NULL});
+}
+
+static void flat_release(void *state) { (void)state; }
+
+static void flat_shade(const void *state, const meso_frame *frame, const meso_object *object,
+                       meso_fragment *fragments, size_t count) {
+    (void)state;
+    meso_shade_fragments(frame, object, fragments, count, NULL);
+}
+
+const meso_technique meso_technique_flat = {
+    .info = {.name = "flat",
+             .summary = "the base mesh with its interpolated normal, no mesostructure",
+             .paper = "Gouraud 1971 / Phong 1975 smooth normals (baseline)",
+             .kind = MESO_TECHNIQUE_PER_PIXEL,
+             .accepts = MESO_TECHNIQUE_ACCEPTS_NONE | MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD |
+                        MESO_TECHNIQUE_ACCEPTS_SOLID},
+    .prepare = flat_prepare,
+    .release = flat_release,
+    .shade = flat_shade,
+};

@@ -1,0 +1,90 @@
+/* parallax: parallax mapping (Kaneko et al. 2001, "Detailed shape representation with parallax
+ * mapping", §3): each pixel's texture coordinates are shifted along the view direction by
+ * u' = u + tan(theta_u) depth(u, v), v' = v + tan(theta_v) depth(u, v) (§3.1), with the depth
+ * read at the unshifted coordinates, depth(u, v) ~ depth(u', v') (§3.2). Option
+ * `offset_limiting` (Welsh 2004, "Parallax mapping with offset limiting") drops the division by
+ * cos(theta) so the shift never exceeds the depth: no swimming at grazing angles, less parallax.
+ * No self-shadow, no silhouette, no depth correction: that is the method.
+ * docs/techniques/parallax.md. */
+#include "relief_common.h"
+
+typedef struct parallax_state {
+    relief_heights heights;
+    bool offset_limiting;
+} parallax_state;
+
+static const char *const known_options[] = {"offset_limiting", NULL};
+
+static void release(void *state) {
+    parallax_state *s = state;
+    if (!s) return;
+    relief_heights_deinit(&s->heights);
+    free(s);
+}
+
+static meso_result prepare(meso_context *ctx, const meso_scene *scene, const meso_object *object,
+                           void **out_state) {
+    (void)scene;
+    *out_state = NULL;
+    meso_result r = meso_technique_check_options(ctx, object, "parallax", known_options);
+    if (r != MESO_OK) return r;
+    int limiting = 0;
+    parallax_state *s = calloc(1, sizeof *s);
+    if (!s) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
+    if ((r = relief_read_option(ctx, object, "parallax", "offset_limiting", 0, 0, 1, &limiting)) !=
+            MESO_OK ||
+        (r = relief_heights_init(ctx, object, &s->heights)) != MESO_OK) {
+        release(s);
+        return r;
+    }
+    s->offset_limiting = limiting != 0;
+    *out_state = s;
+    return MESO_OK;
+}
+
+static void shade(const void *state, const meso_frame *frame, const meso_object *object,
+                  meso_fragment *fragments, size_t count) {
+    const parallax_state *s = state;
+    const relief_heights *m = &s->heights;
+    float depth = object->mesostructure.depth;
+    for (size_t start = 0; start < count; start += RELIEF_LANES) {
+        int n = count - start < RELIEF_LANES ? (int)(count - start) : RELIEF_LANES;
+        meso_fragment *f = fragments + start;
+        relief_lanes l;
+        relief_lanes_load(&l, frame, f, n);
+        v8f x, y;
+        relief_lanes_texel(m, &l, &x, &y);
+        v8f cu = v8_dot(l.view, l.bn), cv = v8_dot(l.view, l.nt), cn = v8_dot(l.view, l.tb);
+        /* §3.1: tan(theta_u) = (view along u) / (view along -N), in uv per world depth; with
+         * offset limiting, per unit length of the view ray instead. */
+        v8f along = s->offset_limiting ? v8_sqrt(v8_dot(l.view, l.view)) : -cn;
+        v8i on = v8_mask_from_bits(depth > 0.0f ? v8_mask_bits(cn < 0.0f) & l.frame_bits : 0);
+        v8f scale = v8_select(on, depth / v8_select(on, along, v8_splat(1.0f)), v8_splat(0.0f));
+        /* §3.2: the depth read at the unshifted coordinates stands for the shifted point's. */
+        v8f d = 1.0f - relief_sample8(m, x, y);
+        v8f uo = cu * scale * d, vo = cv * scale * d;
+        v8f gu, gv;
+        relief_gradient8(m, x + uo * (float)m->width, y - vo * (float)m->height, &gu, &gv);
+        v8vec3 normal = relief_normal8(&l, depth, gu, gv);
+        v8f su = l.u + uo, sv = l.v + vo;
+        for (int k = 0; k < n; ++k)
+            f[k].color = meso_shade_point(frame, object, f[k].position, v8_lane3(normal, k),
+                                          (meso_vec2){su[k], sv[k]}, NULL);
+    }
+}
+
+static size_t memory(const void *state) {
+    return state ? relief_heights_memory(&((const parallax_state *)state)->heights) : 0;
+}
+
+const meso_technique meso_technique_parallax = {
+    .info = {.name = "parallax",
+             .summary = "parallax mapping: one texture-coordinate shift along the view",
+             .paper = "Kaneko et al. 2001, §3.1-3.4",
+             .kind = MESO_TECHNIQUE_PER_PIXEL,
+             .accepts = MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD},
+    .prepare = prepare,
+    .release = release,
+    .shade = shade,
+    .memory = memory,
+};

@@ -1,0 +1,576 @@
+/* Shared by the per-pixel height-field techniques (parallax, horizon, relief, relief_exact):
+ * the view ray in the object's texture space, a padded copy of the height field with an
+ * 8-wide bilinear sampler, the option reader, and the relief family's silhouette (per-vertex
+ * quadric), depth correction, self-shadow and shading code.
+ *
+ * Texture space of a fragment. With T = dP/du, B = dP/dv and N unit at the fragment, the view
+ * vector V = P - eye (unnormalised) is written V = du T + dv B + dn N (dual basis). Along the
+ * ray P + t V (t >= 0 from the base mesh), the texture coordinates are uv + t (du, dv) and the
+ * depth below the base surface in shell units (d = 1 - h, d = 0 at the mesh, DESIGN.md) is
+ *     d(t) = t (a - b t),   a = -dn / depth,   b = (qa x^2 + qb y^2) / depth
+ * where (x, y) = (V.normalize(T), V.normalize(B)) and (qa, qb) the per-vertex quadric
+ * interpolated at the fragment (Oliveira & Policarpo 2005, summarised in Policarpo & Oliveira
+ * 2006 §2.1): on a curved mesh the surface falls away below the tangent plane by qa x^2 + qb y^2,
+ * so d counts from the curved surface and a ray whose d returns to 0 leaves the shell (a
+ * silhouette). b = 0 without silhouettes (the flat relief of Policarpo et al. 2005).
+ * The ray hits the height field at the first t with d(t) >= 1 - h(uv(t)).
+ *
+ * Everything is in texel-centre coordinates for sampling: x = u W - 0.5, y = (1 - v) H - 0.5.
+ */
+#ifndef MESO_RELIEF_COMMON_H
+#define MESO_RELIEF_COMMON_H
+
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#if defined(__AVX2__)
+#include <immintrin.h>
+#endif
+
+#include "render_internal.h"
+
+/* ---- 8-wide vectors (GCC vector extensions) ----------------------------------------------- */
+
+typedef float v8f __attribute__((vector_size(32)));
+typedef int32_t v8i __attribute__((vector_size(32)));
+#define RELIEF_LANES 8
+
+static inline v8f v8_splat(float x) { return (v8f){x, x, x, x, x, x, x, x}; }
+static inline v8i v8i_splat(int32_t x) { return (v8i){x, x, x, x, x, x, x, x}; }
+/* mask lanes are all ones (true) or zero (false), as comparisons of vectors return them */
+static inline v8f v8_select(v8i mask, v8f a, v8f b) {
+    return (v8f)((mask & (v8i)a) | (~mask & (v8i)b));
+}
+static inline v8f v8_min(v8f a, v8f b) { return v8_select(a < b, a, b); }
+static inline v8f v8_max(v8f a, v8f b) { return v8_select(a > b, a, b); }
+static inline int v8_mask_bits(v8i mask) {
+#if defined(__AVX2__)
+    return _mm256_movemask_ps((__m256)mask);
+#else
+    int bits = 0;
+    for (int k = 0; k < RELIEF_LANES; ++k) bits |= (mask[k] != 0) << k;
+    return bits;
+#endif
+}
+static inline v8i v8_mask_from_bits(int bits) {
+    const v8i lane_bit = {1, 2, 4, 8, 16, 32, 64, 128};
+    return (v8i_splat(bits) & lane_bit) != 0;
+}
+static inline v8f v8_floor(v8f x) {
+#if defined(__AVX2__)
+    return (v8f)_mm256_floor_ps((__m256)x);
+#else
+    v8f r;
+    for (int k = 0; k < RELIEF_LANES; ++k) r[k] = floorf(x[k]);
+    return r;
+#endif
+}
+static inline v8f v8_gather(const float *base, v8i index) {
+#if defined(__AVX2__)
+    return (v8f)_mm256_i32gather_ps(base, (__m256i)index, 4);
+#else
+    v8f r;
+    for (int k = 0; k < RELIEF_LANES; ++k) r[k] = base[index[k]];
+    return r;
+#endif
+}
+
+/* ---- The height field, padded ------------------------------------------------------------- */
+
+/* A (W + 1) x (H + 1) copy of the height field whose last row and column repeat the wrapped
+ * first ones (or the clamped last ones), so a bilinear lookup reads four texels without
+ * wrapping indices in the inner loop. */
+typedef struct relief_heights {
+    const meso_heightfield *source;
+    int width, height, stride;
+    bool clamp;
+    float *padded;
+} relief_heights;
+
+static inline meso_result relief_heights_init(meso_context *ctx, const meso_object *object,
+                                              relief_heights *out) {
+    const meso_heightfield *hf = object->mesostructure.height_field;
+    memset(out, 0, sizeof *out);
+    if (!hf || hf->width <= 0 || hf->height <= 0)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "%s: mesostructure: a height field is required", object->name);
+    if (hf->width >= (1 << 15) || hf->height >= (1 << 15))
+        return meso_log_error(ctx, MESO_ERROR_LIMIT,
+                              "%s: mesostructure: %d x %d exceeds 32767 texels a side",
+                              object->name, hf->width, hf->height);
+    size_t n = (size_t)(hf->width + 1) * (size_t)(hf->height + 1);
+    out->padded = malloc(n * sizeof(float));
+    if (!out->padded)
+        return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
+    out->source = hf;
+    out->width = hf->width;
+    out->height = hf->height;
+    out->stride = hf->width + 1;
+    out->clamp = hf->wrap == MESO_WRAP_CLAMP;
+    for (int j = 0; j <= hf->height; ++j)
+        for (int i = 0; i <= hf->width; ++i)
+            out->padded[(size_t)j * (size_t)out->stride + (size_t)i] =
+                meso_heightfield_texel(hf, i, j);
+    return MESO_OK;
+}
+
+static inline void relief_heights_deinit(relief_heights *h) {
+    free(h->padded);
+    h->padded = NULL;
+}
+
+static inline size_t relief_heights_memory(const relief_heights *h) {
+    return (size_t)(h->width + 1) * (size_t)(h->height + 1) * sizeof(float);
+}
+
+/* h at texel-centre coordinates (x, y): the bilinear surface of meso_heightfield_sample. */
+static inline float relief_sample(const relief_heights *m, float x, float y) {
+    float fw = (float)m->width, fh = (float)m->height;
+    if (m->clamp) {
+        x = meso_clampf(x, 0.0f, fw - 1.0f);
+        y = meso_clampf(y, 0.0f, fh - 1.0f);
+    } else {
+        x -= fw * floorf(x * (1.0f / fw));
+        y -= fh * floorf(y * (1.0f / fh));
+    }
+    int i = (int)x, j = (int)y;
+    i = i > m->width - 1 ? m->width - 1 : i;
+    j = j > m->height - 1 ? m->height - 1 : j;
+    float tx = x - (float)i, ty = y - (float)j;
+    const float *r0 = m->padded + (size_t)j * (size_t)m->stride + (size_t)i, *r1 = r0 + m->stride;
+    float top = r0[0] + (r0[1] - r0[0]) * tx, bottom = r1[0] + (r1[1] - r1[0]) * tx;
+    return top + (bottom - top) * ty;
+}
+
+/* Eight lookups at once; the hot loop of every search (4 gathers of 8 texels). */
+static inline v8f relief_sample8(const relief_heights *m, v8f x, v8f y) {
+    float fw = (float)m->width, fh = (float)m->height;
+    if (m->clamp) {
+        x = v8_min(v8_max(x, v8_splat(0.0f)), v8_splat(fw - 1.0f));
+        y = v8_min(v8_max(y, v8_splat(0.0f)), v8_splat(fh - 1.0f));
+    } else {
+        x -= fw * v8_floor(x * (1.0f / fw));
+        y -= fh * v8_floor(y * (1.0f / fh));
+    }
+    v8i i = __builtin_convertvector(x, v8i), j = __builtin_convertvector(y, v8i);
+    v8i wmax = v8i_splat(m->width - 1), hmax = v8i_splat(m->height - 1);
+    i = (v8i)v8_select(i > wmax, (v8f)wmax, (v8f)i);
+    j = (v8i)v8_select(j > hmax, (v8f)hmax, (v8f)j);
+    v8f tx = x - __builtin_convertvector(i, v8f), ty = y - __builtin_convertvector(j, v8f);
+    v8i index = j * m->stride + i;
+    v8f h00 = v8_gather(m->padded, index), h10 = v8_gather(m->padded + 1, index);
+    v8f h01 = v8_gather(m->padded + m->stride, index);
+    v8f h11 = v8_gather(m->padded + m->stride + 1, index);
+    v8f top = h00 + (h10 - h00) * tx, bottom = h01 + (h11 - h01) * tx;
+    return top + (bottom - top) * ty;
+}
+
+/* ---- Options ------------------------------------------------------------------------------ */
+
+/* An integer option in [lo, hi] (booleans: 0..1); the message names the object and option. */
+static inline meso_result relief_read_option(meso_context *ctx, const meso_object *object,
+                                             const char *technique, const char *name, int fallback,
+                                             int lo, int hi, int *out_value) {
+    double v = meso_object_option(object, name, (double)fallback);
+    if (!(v >= (double)lo && v <= (double)hi) || v != floor(v))
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "%s: technique_options.%s: %g is not an integer in %d..%d (%s)",
+                              object->name, name, v, lo, hi, technique);
+    *out_value = (int)v;
+    return MESO_OK;
+}
+
+/* ---- The view ray in texture space -------------------------------------------------------- */
+
+/* Write a world direction D in the fragment's frame: D = cu T + cv B + cn N. False when the
+ * frame is degenerate (no UVs). */
+static inline bool relief_frame_solve(const meso_fragment *f, meso_vec3 dir, float *cu, float *cv,
+                                      float *cn) {
+    meso_vec3 bn = meso_vec3_cross(f->bitangent, f->normal);
+    meso_vec3 nt = meso_vec3_cross(f->normal, f->tangent);
+    meso_vec3 tb = meso_vec3_cross(f->tangent, f->bitangent);
+    float det = meso_vec3_dot(f->tangent, bn);
+    if (!(fabsf(det) > 1e-20f)) return false;
+    float inv = 1.0f / det;
+    *cu = meso_vec3_dot(dir, bn) * inv;
+    *cv = meso_vec3_dot(dir, nt) * inv;
+    *cn = meso_vec3_dot(dir, tb) * inv;
+    return true;
+}
+
+/* The quadric (a, b) at the fragment: per-vertex values interpolated by its barycentrics. */
+static inline meso_vec2 relief_fragment_quadric(const meso_object *object, const meso_fragment *f) {
+    const meso_mesh *mesh = object->mesh;
+    if (!mesh || !mesh->quadrics || f->triangle >= mesh->num_triangles)
+        return (meso_vec2){0.0f, 0.0f};
+    const uint32_t *t = mesh->indices + 3 * (size_t)f->triangle;
+    return meso_vec2_barycentric(mesh->quadrics[t[0]], mesh->quadrics[t[1]], mesh->quadrics[t[2]],
+                                 f->b0, f->b1, f->b2);
+}
+
+/* A batch of up to 8 rays as vectors; lanes >= count are inactive (t_end = 0, found). */
+typedef struct relief_batch {
+    int count;
+    v8f x0, y0, xd, yd, a, b, t_end;
+    int flat_bits;  /* lanes whose hit is t = 0 without a search */
+    int floor_bits; /* lanes whose search ends on the floor */
+} relief_batch;
+
+/* Relief mapping's search (Policarpo et al. 2005, as in Policarpo & Oliveira 2006 §2.1 and
+ * Appendix A): `linear_steps` uniform steps along the ray until the first sample below the
+ * surface, then `binary_steps` halvings of that bracket, then one secant step between the
+ * bracket's ends (exact where the surface is planar, e.g. h constant). Writes t of the hit per
+ * lane; returns the bits of lanes that hit (the others left the shell: silhouette). */
+static inline int relief_search8(const relief_heights *m, const relief_batch *batch,
+                                 int linear_steps, int binary_steps, v8f *out_t) {
+    int all = (1 << batch->count) - 1;
+    v8i lanes = v8_mask_from_bits(all), floor_mask = v8_mask_from_bits(batch->floor_bits);
+    /* t = 0: a texel at full height is hit where the ray enters (h = 1: exactly the mesh). */
+    v8f h = relief_sample8(m, batch->x0, batch->y0);
+    v8i found = ((h >= 1.0f) | v8_mask_from_bits(batch->flat_bits)) & lanes;
+    v8f t_lo = v8_splat(0.0f), t_hi = v8_splat(0.0f), f_lo = v8_splat(-1.0f), f_hi = h - 1.0f;
+    v8f inv_n = v8_splat(1.0f / (float)linear_steps);
+    v8f t_prev = v8_splat(0.0f), f_prev = h - 1.0f;
+    for (int k = 1; k <= linear_steps && v8_mask_bits(found) != all; ++k) {
+        v8f t = batch->t_end * ((float)k * inv_n);
+        v8f d = t * (batch->a - batch->b * t);
+        h = relief_sample8(m, batch->x0 + batch->xd * t, batch->y0 + batch->yd * t);
+        v8f f = d + h - 1.0f; /* >= 0: at or below the surface */
+        v8i below = f >= 0.0f;
+        if (k == linear_steps) below |= floor_mask; /* d = 1 there, whatever rounding says */
+        v8i fresh = below & ~found & lanes;
+        t_lo = v8_select(fresh, t_prev, t_lo);
+        f_lo = v8_select(fresh, f_prev, f_lo);
+        t_hi = v8_select(fresh, t, t_hi);
+        f_hi = v8_select(fresh, v8_max(f, v8_splat(0.0f)), f_hi);
+        found |= fresh;
+        t_prev = t;
+        f_prev = f;
+    }
+    /* Binary search inside [t_lo, t_hi] (lanes hit at t = 0 have an empty bracket). */
+    for (int k = 0; k < binary_steps; ++k) {
+        v8f t = (t_lo + t_hi) * 0.5f;
+        v8f d = t * (batch->a - batch->b * t);
+        h = relief_sample8(m, batch->x0 + batch->xd * t, batch->y0 + batch->yd * t);
+        v8f f = d + h - 1.0f;
+        v8i below = f >= 0.0f;
+        t_hi = v8_select(below, t, t_hi);
+        f_hi = v8_select(below, f, f_hi);
+        t_lo = v8_select(below, t_lo, t);
+        f_lo = v8_select(below, f_lo, f);
+    }
+    /* Secant between the bracket's ends: f_lo < 0 <= f_hi. */
+    v8f span = f_hi - f_lo;
+    v8f w = v8_select(span > 1e-12f, -f_lo / v8_max(span, v8_splat(1e-12f)), v8_splat(1.0f));
+    *out_t = t_lo + (t_hi - t_lo) * w;
+    v8i empty = t_hi <= t_lo;
+    *out_t = v8_select(empty, t_hi, *out_t);
+    return v8_mask_bits(found) & all;
+}
+
+/* ---- Shadows ------------------------------------------------------------------------------ */
+
+/* Light rays from the hits of one batch toward one light, in texel-centre coordinates: from
+ * (x, y, d) at s = 0 to (x + xd, y + yd, 0) at s = 1, where the ray reaches the mesh. */
+typedef struct relief_shadow_batch {
+    int count;
+    v8f x, y, d, xd, yd;
+    int active_bits; /* lanes that need a search (lit lanes at d = 0 and dark ones do not) */
+} relief_shadow_batch;
+
+/* Depth bias of the shadow test, in shell units: the hit lies on the surface (up to the
+ * search's error), and a light ray leaving it must not find it again. */
+#define RELIEF_SHADOW_BIAS 0.004f
+
+/* Self-shadowing by a second linear search toward the light (Policarpo & Oliveira 2006 §2.1):
+ * blocked where a sample lies below the surface. Returns the bits of blocked lanes. */
+static inline int relief_shadow_search8(const relief_heights *m, const relief_shadow_batch *s,
+                                        int steps) {
+    int blocked = 0, pending = s->active_bits;
+    float inv = 1.0f / (float)steps;
+    /* Sample k = steps is on the mesh (d = 0): nothing is above it. */
+    for (int k = 1; k < steps && pending; ++k) {
+        float frac = (float)k * inv;
+        v8f h = relief_sample8(m, s->x + s->xd * frac, s->y + s->yd * frac);
+        v8f f = s->d * (1.0f - frac) + h - 1.0f;
+        int bits = v8_mask_bits(f > RELIEF_SHADOW_BIAS) & pending;
+        blocked |= bits;
+        pending &= ~bits;
+    }
+    return blocked;
+}
+
+/* ---- Eight fragments as vectors ---------------------------------------------------------- */
+
+typedef struct v8vec3 {
+    v8f x, y, z;
+} v8vec3;
+
+static inline v8f v8_sqrt(v8f x) {
+#if defined(__AVX2__)
+    return (v8f)_mm256_sqrt_ps((__m256)x);
+#else
+    v8f r;
+    for (int k = 0; k < RELIEF_LANES; ++k) r[k] = sqrtf(x[k]);
+    return r;
+#endif
+}
+static inline v8f v8_dot(v8vec3 a, v8vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static inline v8vec3 v8_cross(v8vec3 a, v8vec3 b) {
+    return (v8vec3){a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+static inline v8vec3 v8_madd(v8vec3 a, v8vec3 b, v8f s) {
+    return (v8vec3){a.x + b.x * s, a.y + b.y * s, a.z + b.z * s};
+}
+static inline v8vec3 v8_splat3(meso_vec3 a) {
+    return (v8vec3){v8_splat(a.x), v8_splat(a.y), v8_splat(a.z)};
+}
+static inline meso_vec3 v8_lane3(v8vec3 a, int k) { return (meso_vec3){a.x[k], a.y[k], a.z[k]}; }
+
+/* Up to eight fragments in structure-of-arrays form with their texture-space frame: the dual
+ * basis (B x N, N x T, T x B) / det writes a world direction D as (du, dv, dn) with
+ * D = du T + dv B + dn N by three dot products (relief_frame_solve, eight at once). Lanes past
+ * `count` repeat lane 0, so every lane holds finite values. */
+typedef struct relief_lanes {
+    int count;
+    v8vec3 position, normal, tangent, bitangent, view;
+    v8vec3 bn, nt, tb; /* dual basis, divided by det */
+    v8f u, v, depth;
+    int frame_bits; /* lanes whose frame is not degenerate */
+} relief_lanes;
+
+static inline void relief_lanes_load(relief_lanes *l, const meso_frame *frame,
+                                     const meso_fragment *f, int count) {
+    l->count = count;
+    for (int k = 0; k < RELIEF_LANES; ++k) {
+        const meso_fragment *g = &f[k < count ? k : 0];
+        l->position.x[k] = g->position.x;
+        l->position.y[k] = g->position.y;
+        l->position.z[k] = g->position.z;
+        l->normal.x[k] = g->normal.x;
+        l->normal.y[k] = g->normal.y;
+        l->normal.z[k] = g->normal.z;
+        l->tangent.x[k] = g->tangent.x;
+        l->tangent.y[k] = g->tangent.y;
+        l->tangent.z[k] = g->tangent.z;
+        l->bitangent.x[k] = g->bitangent.x;
+        l->bitangent.y[k] = g->bitangent.y;
+        l->bitangent.z[k] = g->bitangent.z;
+        l->u[k] = g->uv.x;
+        l->v[k] = g->uv.y;
+        l->depth[k] = g->depth;
+    }
+    v8vec3 eye = v8_splat3(frame->eye);
+    l->view = (v8vec3){l->position.x - eye.x, l->position.y - eye.y, l->position.z - eye.z};
+    v8vec3 bn = v8_cross(l->bitangent, l->normal), nt = v8_cross(l->normal, l->tangent);
+    v8vec3 tb = v8_cross(l->tangent, l->bitangent);
+    v8f det = v8_dot(l->tangent, bn);
+    v8i ok = (det > 1e-20f) | (det < -1e-20f);
+    l->frame_bits = v8_mask_bits(ok) & ((1 << count) - 1);
+    v8f inv = v8_select(ok, 1.0f / v8_select(ok, det, v8_splat(1.0f)), v8_splat(0.0f));
+    l->bn = (v8vec3){bn.x * inv, bn.y * inv, bn.z * inv};
+    l->nt = (v8vec3){nt.x * inv, nt.y * inv, nt.z * inv};
+    l->tb = (v8vec3){tb.x * inv, tb.y * inv, tb.z * inv};
+}
+
+/* Texel-centre coordinates of the fragments' uv. */
+static inline void relief_lanes_texel(const relief_heights *m, const relief_lanes *l, v8f *x,
+                                      v8f *y) {
+    *x = l->u * (float)m->width - 0.5f;
+    *y = (1.0f - l->v) * (float)m->height - 0.5f;
+}
+
+/* The gradient (dh/du, dh/dv) at texel-centre coordinates: meso_heightfield_gradient's
+ * central differences one texel apart, eight at once. */
+static inline void relief_gradient8(const relief_heights *m, v8f x, v8f y, v8f *gu, v8f *gv) {
+    *gu = (relief_sample8(m, x + 1.0f, y) - relief_sample8(m, x - 1.0f, y)) *
+          (0.5f * (float)m->width);
+    *gv = (relief_sample8(m, x, y - 1.0f) - relief_sample8(m, x, y + 1.0f)) *
+          (0.5f * (float)m->height);
+}
+
+/* meso_displaced_normal eight at once: normalize(cross(T + depth h_u N, B + depth h_v N)),
+ * turned to N's side. A zero gradient keeps the interpolated normal itself, so a flat field
+ * draws exactly the `flat` image. */
+static inline v8vec3 relief_normal8(const relief_lanes *l, float depth, v8f gu, v8f gv) {
+    v8vec3 du = v8_madd(l->tangent, l->normal, gu * depth);
+    v8vec3 dv = v8_madd(l->bitangent, l->normal, gv * depth);
+    v8vec3 n = v8_cross(du, dv);
+    v8f len2 = v8_dot(n, n);
+    v8i ok = (len2 > 1e-30f) & (len2 < 1e30f);
+    v8f inv = 1.0f / v8_sqrt(v8_select(ok, len2, v8_splat(1.0f)));
+    inv = v8_select(v8_dot(n, l->normal) < 0.0f, -inv, inv);
+    v8i keep = ~ok | ((gu == 0.0f) & (gv == 0.0f));
+    return (v8vec3){v8_select(keep, l->normal.x, n.x * inv),
+                    v8_select(keep, l->normal.y, n.y * inv),
+                    v8_select(keep, l->normal.z, n.z * inv)};
+}
+
+/* ---- The relief family's fragment loop ---------------------------------------------------- */
+
+/* The tracer of one variant: its search for the view rays and its shadow test, each given
+ * `count` (1 or 2) batches of eight rays at once, so a tracer whose steps are chains of
+ * dependent operations can interleave two batches. */
+typedef struct relief_tracer {
+    const void *user;
+    /* Per batch: t of the hit per lane and the bits of lanes that hit. */
+    void (*search)(const void *user, const relief_batch *batches, int count, v8f *out_t,
+                   int *out_hit);
+    /* Per batch: the bits of blocked lanes (batches may have no active lane). */
+    void (*shadow)(const void *user, const relief_shadow_batch *batches, int count,
+                   int *out_blocked);
+} relief_tracer;
+
+typedef struct relief_params {
+    bool shadows, silhouettes;
+} relief_params;
+
+/* The view rays of eight fragments (see the top of this file). */
+static inline void relief_batch_setup(const relief_heights *m, const meso_object *object,
+                                      const meso_fragment *f, const relief_lanes *l,
+                                      bool silhouettes, relief_batch *batch, v8f *out_du,
+                                      v8f *out_dv) {
+    float depth = object->mesostructure.depth;
+    int all = (1 << l->count) - 1;
+    v8f cu = v8_dot(l->view, l->bn), cv = v8_dot(l->view, l->nt), cn = v8_dot(l->view, l->tb);
+    int enter = depth > 0.0f ? v8_mask_bits(cn < 0.0f) & l->frame_bits : 0;
+    v8i on = v8_mask_from_bits(enter);
+    v8f zero = v8_splat(0.0f);
+    memset(batch, 0, sizeof *batch);
+    batch->count = l->count;
+    relief_lanes_texel(m, l, &batch->x0, &batch->y0);
+    cu = v8_select(on, cu, zero);
+    cv = v8_select(on, cv, zero);
+    batch->xd = cu * (float)m->width;
+    batch->yd = -cv * (float)m->height;
+    float inv_depth = depth > 0.0f ? 1.0f / depth : 0.0f;
+    batch->a = v8_select(on, -cn * inv_depth, zero);
+    if (silhouettes && object->mesh && object->mesh->quadrics) {
+        v8f qa = zero, qb = zero;
+        for (int k = 0; k < l->count; ++k) {
+            meso_vec2 q = relief_fragment_quadric(object, &f[k]);
+            qa[k] = q.x;
+            qb[k] = q.y;
+        }
+        v8f tl = v8_sqrt(v8_dot(l->tangent, l->tangent));
+        v8f bl = v8_sqrt(v8_dot(l->bitangent, l->bitangent));
+        v8f x = v8_select(tl > 0.0f, v8_dot(l->view, l->tangent) / tl, zero);
+        v8f y = v8_select(bl > 0.0f, v8_dot(l->view, l->bitangent) / bl, zero);
+        batch->b = v8_select(on, (qa * x * x + qb * y * y) * inv_depth, zero);
+    }
+    /* d(t) = 1 at the smaller root of b t^2 - a t + 1 = 0 (stable for b -> 0); without a real
+     * root the convex shell is left at t = a / b. */
+    v8f disc = batch->a * batch->a - 4.0f * batch->b;
+    v8i floor_mask = disc >= 0.0f;
+    v8f t_floor = 2.0f / (batch->a + v8_sqrt(v8_max(disc, zero)));
+    v8f t_exit = batch->a / v8_select(floor_mask, v8_splat(1.0f), batch->b);
+    batch->t_end = v8_select(on, v8_select(floor_mask, t_floor, t_exit), zero);
+    batch->floor_bits = v8_mask_bits(floor_mask) & enter;
+    batch->flat_bits = all & ~enter;
+    *out_du = cu;
+    *out_dv = cv;
+}
+
+/* Shade `count` fragments with a tracer, sixteen at a time as two batches of eight: view
+ * rays, hits, depth correction, the displaced normal at the hit, self-shadows per light,
+ * meso_shade_point. */
+static inline void relief_shade_fragments(const relief_heights *m, const relief_tracer *tracer,
+                                          relief_params params, const meso_frame *frame,
+                                          const meso_object *object, meso_fragment *fragments,
+                                          size_t count) {
+    const meso_scene *scene = frame->scene;
+    int num_lights =
+        scene->num_lights < MESO_SCENE_MAX_LIGHTS ? scene->num_lights : MESO_SCENE_MAX_LIGHTS;
+    float depth = object->mesostructure.depth;
+    for (size_t start = 0; start < count; start += 2 * RELIEF_LANES) {
+        relief_lanes l[2];
+        relief_batch batch[2];
+        v8f du[2], dv[2], t[2], hx[2], hy[2], hd[2], out_depth[2], hit_u[2], hit_v[2];
+        v8vec3 hit_pos[2], normal[2];
+        int hit[2], n[2], groups = 0;
+        for (int g = 0; g < 2; ++g) {
+            size_t first = start + (size_t)g * RELIEF_LANES;
+            if (first >= count) break;
+            n[g] = count - first < RELIEF_LANES ? (int)(count - first) : RELIEF_LANES;
+            relief_lanes_load(&l[g], frame, fragments + first, n[g]);
+            relief_batch_setup(m, object, fragments + first, &l[g], params.silhouettes, &batch[g],
+                               &du[g], &dv[g]);
+            groups = g + 1;
+        }
+        tracer->search(tracer->user, batch, groups, t, hit);
+        for (int g = 0; g < groups; ++g) {
+            /* The hits in texel space, their depth d and the gradient there. */
+            hx[g] = batch[g].x0 + batch[g].xd * t[g];
+            hy[g] = batch[g].y0 + batch[g].yd * t[g];
+            hd[g] = v8_max(t[g] * (batch[g].a - batch[g].b * t[g]), v8_splat(0.0f));
+            v8f gu, gv;
+            relief_gradient8(m, hx[g], hy[g], &gu, &gv);
+            hit_pos[g] = v8_madd(l[g].position, l[g].view, t[g]);
+            hit_u[g] = l[g].u + du[g] * t[g];
+            hit_v[g] = l[g].v + dv[g] * t[g];
+            out_depth[g] = l[g].depth * (1.0f + t[g]); /* dot(P + t V - eye, forward) */
+            normal[g] = relief_normal8(&l[g], depth, gu, gv);
+        }
+        float vis[2][MESO_SCENE_MAX_LIGHTS][RELIEF_LANES];
+        for (int li = 0; li < num_lights; ++li) {
+            relief_shadow_batch sb[2];
+            int dark[2] = {0, 0}, any = 0;
+            for (int g = 0; g < groups; ++g) {
+                for (int k = 0; k < RELIEF_LANES; ++k) vis[g][li][k] = 1.0f;
+                memset(&sb[g], 0, sizeof sb[g]);
+                sb[g].count = n[g];
+                if (!params.shadows || !hit[g]) continue;
+                const meso_light *light = &scene->lights[li];
+                v8vec3 L;
+                if (light->type == MESO_LIGHT_DIRECTIONAL) {
+                    L = v8_splat3(light->direction);
+                } else {
+                    v8vec3 p = v8_splat3(light->position);
+                    L = (v8vec3){p.x - hit_pos[g].x, p.y - hit_pos[g].y, p.z - hit_pos[g].z};
+                    v8f inv = 1.0f / v8_sqrt(v8_max(v8_dot(L, L), v8_splat(1e-30f)));
+                    L = (v8vec3){L.x * inv, L.y * inv, L.z * inv};
+                }
+                v8f lu = v8_dot(L, l[g].bn), lv = v8_dot(L, l[g].nt), ln = v8_dot(L, l[g].tb);
+                /* A light below the shell's top (or no frame): the surface itself blocks it. */
+                int up = v8_mask_bits(ln > 0.0f) & l[g].frame_bits;
+                dark[g] = hit[g] & ~up;
+                sb[g].active_bits = hit[g] & up & v8_mask_bits(hd[g] > 0.0f);
+                /* From d to d = 0 the light ray travels d depth / ln world units. */
+                v8f s = hd[g] * depth / v8_select(ln > 0.0f, ln, v8_splat(1.0f));
+                sb[g].x = hx[g];
+                sb[g].y = hy[g];
+                sb[g].d = hd[g];
+                sb[g].xd = lu * s * (float)m->width;
+                sb[g].yd = -lv * s * (float)m->height;
+                any |= sb[g].active_bits;
+            }
+            if (any) {
+                int blocked[2] = {0, 0};
+                tracer->shadow(tracer->user, sb, groups, blocked);
+                for (int g = 0; g < groups; ++g) dark[g] |= blocked[g] & sb[g].active_bits;
+            }
+            for (int g = 0; g < groups; ++g)
+                for (int k = 0; k < n[g]; ++k)
+                    if (dark[g] >> k & 1) vis[g][li][k] = 0.0f;
+        }
+        for (int g = 0; g < groups; ++g) {
+            meso_fragment *f = fragments + start + (size_t)g * RELIEF_LANES;
+            for (int k = 0; k < n[g]; ++k) {
+                if (!(hit[g] >> k & 1)) {
+                    f[k].discard = true; /* the ray left the curved shell: silhouette */
+                    continue;
+                }
+                float v_lane[MESO_SCENE_MAX_LIGHTS];
+                for (int li = 0; li < num_lights; ++li) v_lane[li] = vis[g][li][k];
+                f[k].out_depth = out_depth[g][k];
+                f[k].color = meso_shade_point(
+                    frame, object, v8_lane3(hit_pos[g], k), v8_lane3(normal[g], k),
+                    (meso_vec2){hit_u[g][k], hit_v[g][k]}, num_lights ? v_lane : NULL);
+            }
+        }
+    }
+}
+
+#endif

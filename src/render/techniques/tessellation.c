@@ -1,0 +1,338 @@
+/* `tessellation`: adaptive view-dependent tessellation of displacement maps (Doggett & Hirche
+ * 2000). Per base triangle and in any order, edges are halved recursively ("Adaptive
+ * Tessellation": calculate edge midpoint, displace, transform, calculate surface normal,
+ * conditionally insert, tessellate with the selected midpoints), where the "Edge Tests" say so:
+ *
+ *   surface detection (propose a midpoint)
+ *     normal_test  "Surface Normal Variance Test": some component of the displaced surface
+ *                  normal at the midpoint differs from that at an end point by more than
+ *                  normal_threshold (high-frequency change);
+ *     area_test    "Local Area Average Height Test": the mean height over a box around the
+ *                  midpoint differs from the mean of the boxes around the end points by more than
+ *                  area_threshold (height units), boxes from a summed-area table (low-frequency
+ *                  change); each box has a radius of a quarter of the edge's length in texels,
+ *                  so the three boxes tile the edge;
+ *   recursion limits (veto a midpoint)
+ *     view_test    "View Dependent Test": the screen-space Manhattan length of the displaced
+ *                  edge is at most view_threshold samples (stops sub-pixel triangles); also
+ *                  (an extension for "invisible triangles") base normals facing away from the
+ *                  eye at both end points;
+ *     limit_test   "Refinement Limit Test": the rounded texel coordinates of the midpoint equal
+ *                  those of an end point (no new surface detail).
+ *
+ * insert = (normal OR area, or "yes" when neither is enabled) AND NOT vetoed by view or limit,
+ * and nothing at all when every test is off (the base mesh). The vetoes are evaluated first,
+ * before the midpoint is displaced, as they are the cheaper ones; the statistics count in that
+ * order. Extension: edges longer than span_texels texels are proposed untested (three samples
+ * cannot see detail between them). Crack-free by construction: a decision sees only the edge
+ * (displace_common.h). Measured behaviour: docs/techniques/tessellation.md. */
+#include "displace_common.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+enum {
+    COUNT_EDGES,        /* edges evaluated (midpoints computed) */
+    COUNT_LIMIT_VETO,   /* refinement limit test rejected */
+    COUNT_VIEW_VETO,    /* view dependent test rejected */
+    COUNT_NORMAL_YES,   /* normal test proposed */
+    COUNT_AREA_YES,     /* area test proposed */
+    COUNT_NO_DETAIL,    /* neither surface test proposed */
+    COUNT_INSERTED,
+    COUNT_SPAN_YES,     /* longer than span_texels: proposed untested */
+};
+
+typedef struct tessellation_state {
+    displace_surface surface;
+    meso_sat *sat;
+    int max_level;
+    bool normal_test, area_test, view_test, limit_test;
+    float normal_threshold, area_threshold, view_threshold, span_texels;
+    displace_tessellator *tessellator;
+    const meso_mesh *mesh;
+    displace_shadows shadows;
+    bool shadows_valid; /* for shadow_view_projection and the target size below */
+    meso_mat4 shadow_view_projection;
+    int shadow_width, shadow_height;
+    displace_tess_stats stats;
+} tessellation_state;
+
+/* What the edge tests read during one frame. */
+typedef struct frame_tests {
+    const tessellation_state *state;
+    meso_mat4 view_projection;
+    meso_vec3 eye;
+    float width, height, z_near;
+} frame_tests;
+
+static const char *const tessellation_options[] = {
+    "max_level",   "normal_test",    "normal_threshold", "area_test",  "area_threshold",
+    "view_test",   "view_threshold", "limit_test",       "span_texels",
+    DISPLACE_SHADOW_OPTION_NAMES, NULL};
+
+/* "Calculate surface normal": once per vertex, kept for the base mesh's vertices. */
+static void tests_vertex_static(const void *user, displace_vertex *v) {
+    const frame_tests *ft = user;
+    const tessellation_state *s = ft->state;
+    if (s->normal_test && s->surface.heightfield) {
+        /* the bump-map operation: the height field's gradient in the base frame */
+        meso_vec2 g = meso_heightfield_gradient(s->surface.heightfield, v->texture_uv.x,
+                                                v->texture_uv.y);
+        v->surface_normal = meso_displaced_normal(v->unit_normal, v->tangent, v->bitangent,
+                                                  s->surface.depth, g);
+    }
+}
+
+/* "Transform midpoint": once per vertex and frame (slides, "Hardware Architecture": vertices
+ * are only transformed once). */
+static void tests_vertex(const void *user, displace_vertex *v) {
+    const frame_tests *ft = user;
+    const tessellation_state *s = ft->state;
+    if (s->view_test)
+        v->clip = meso_mat4_mul_vec4(ft->view_projection,
+                                     (meso_vec4){v->position.x, v->position.y, v->position.z, 1});
+}
+
+static bool normals_differ(meso_vec3 a, meso_vec3 b, float threshold) {
+    return fabsf(a.x - b.x) > threshold || fabsf(a.y - b.y) > threshold ||
+           fabsf(a.z - b.z) > threshold;
+}
+
+/* Whether the edge is longer than the threshold on screen (Manhattan, in samples). */
+static bool view_says_long(const frame_tests *ft, const displace_vertex *a,
+                           const displace_vertex *b) {
+    bool front_a = a->clip.w > ft->z_near * 0.5f, front_b = b->clip.w > ft->z_near * 0.5f;
+    if (!front_a && !front_b) return false; /* behind the camera: invisible */
+    if (!front_a || !front_b) return true;  /* crosses the eye plane: keep refining */
+    float ax = a->clip.x / a->clip.w * 0.5f * ft->width, ay = a->clip.y / a->clip.w * 0.5f * ft->height;
+    float bx = b->clip.x / b->clip.w * 0.5f * ft->width, by = b->clip.y / b->clip.w * 0.5f * ft->height;
+    return fabsf(bx - ax) + fabsf(by - ay) > ft->state->view_threshold;
+}
+
+/* Whether the base surface faces away from the eye at both end points by more than the
+ * shell's own tilt can hide (cos < -0.2, ~12 degrees past the silhouette): such an edge lies on
+ * the far side of the object and is invisible. An edge-only test, so still crack-free. */
+static bool view_says_hidden(const frame_tests *ft, const displace_vertex *a,
+                             const displace_vertex *b) {
+    meso_vec3 ea = meso_vec3_normalize(meso_vec3_sub(ft->eye, a->position));
+    meso_vec3 eb = meso_vec3_normalize(meso_vec3_sub(ft->eye, b->position));
+    return meso_vec3_dot(a->unit_normal, ea) < -0.2f && meso_vec3_dot(b->unit_normal, eb) < -0.2f;
+}
+
+static void texel_of(const meso_heightfield *hf, meso_vec2 uv, int64_t *i, int64_t *j) {
+    *i = (int64_t)floorf(meso_clampf(uv.x, -1e6f, 1e6f) * (float)hf->width);
+    *j = (int64_t)floorf((1.0f - meso_clampf(uv.y, -1e6f, 1e6f)) * (float)hf->height);
+}
+
+/* The recursion limits, before the midpoint is displaced. */
+static bool tests_veto(const void *user, const displace_vertex *a, const displace_vertex *b,
+                       const displace_vertex *m, uint64_t *counters) {
+    const frame_tests *ft = user;
+    const tessellation_state *s = ft->state;
+    const meso_heightfield *hf = s->surface.heightfield;
+    counters[COUNT_EDGES]++;
+    if (!s->normal_test && !s->area_test && !s->view_test && !s->limit_test) {
+        counters[COUNT_NO_DETAIL]++;
+        return true; /* every test off: the base mesh */
+    }
+    if (s->limit_test && hf) {
+        /* "Compare rounded texture coordinate": unwrapped uvs, so a seam's two sides (u and
+         * u + 1) compare alike */
+        int64_t ia, ja, ib, jb, im, jm;
+        texel_of(hf, a->uv, &ia, &ja);
+        texel_of(hf, b->uv, &ib, &jb);
+        texel_of(hf, m->uv, &im, &jm);
+        if ((im == ia && jm == ja) || (im == ib && jm == jb)) {
+            counters[COUNT_LIMIT_VETO]++;
+            return true;
+        }
+    }
+    if (s->view_test && (!view_says_long(ft, a, b) || view_says_hidden(ft, a, b))) {
+        counters[COUNT_VIEW_VETO]++;
+        return true;
+    }
+    return false;
+}
+
+/* Surface detection on the displaced midpoint. */
+static bool tests_insert(const void *user, const displace_vertex *a, const displace_vertex *b,
+                         const displace_vertex *m, uint64_t *counters) {
+    const frame_tests *ft = user;
+    const tessellation_state *s = ft->state;
+    const meso_heightfield *hf = s->surface.heightfield;
+    if ((s->normal_test || s->area_test) && hf) {
+        bool detail = false;
+        float du = (b->uv.x - a->uv.x) * (float)hf->width;
+        float dv = (b->uv.y - a->uv.y) * (float)hf->height;
+        float span = fmaxf(fabsf(du), fabsf(dv)); /* the edge's length in texels */
+        if (s->span_texels > 0.0f && span > s->span_texels) {
+            /* three samples cannot see detail between them on a long edge (a 2-triangle plane
+             * over a periodic map samples the same spot of every tile): split it untested */
+            counters[COUNT_SPAN_YES]++;
+            counters[COUNT_INSERTED]++;
+            return true;
+        }
+        if (s->normal_test && (normals_differ(m->surface_normal, a->surface_normal,
+                                              s->normal_threshold) ||
+                               normals_differ(m->surface_normal, b->surface_normal,
+                                              s->normal_threshold))) {
+            counters[COUNT_NORMAL_YES]++;
+            detail = true;
+        }
+        if (s->area_test && !detail) {
+            float radius = 0.25f * span;
+            float ha = meso_sat_box_average(s->sat, a->texture_uv.x, a->texture_uv.y, radius);
+            float hb = meso_sat_box_average(s->sat, b->texture_uv.x, b->texture_uv.y, radius);
+            float hm = meso_sat_box_average(s->sat, m->texture_uv.x, m->texture_uv.y, radius);
+            /* the midpoint's neighbourhood against the straight edge's: a linear slope adds
+             * nothing, a groove or ridge between the end points does */
+            if (fabsf(hm - 0.5f * (ha + hb)) > s->area_threshold) {
+                counters[COUNT_AREA_YES]++;
+                detail = true;
+            }
+        }
+        if (!detail) {
+            counters[COUNT_NO_DETAIL]++;
+            return false;
+        }
+    }
+    counters[COUNT_INSERTED]++;
+    return true;
+}
+
+static void tessellation_release(void *state) {
+    tessellation_state *s = state;
+    if (!s) return;
+    displace_tessellator_destroy(s->tessellator);
+    displace_shadows_release(&s->shadows);
+    meso_sat_destroy(s->sat);
+    free(s);
+}
+
+static meso_result tessellation_prepare(meso_context *ctx, const meso_scene *scene,
+                                        const meso_object *object, void **out_state) {
+    (void)scene;
+    *out_state = NULL;
+    const char *name = "tessellation";
+    meso_result r = meso_technique_check_options(ctx, object, name, tessellation_options);
+    if (r != MESO_OK) return r;
+    tessellation_state *s = calloc(1, sizeof(*s));
+    if (!s) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: tessellation", object->name);
+    int normal = 1, area = 1, view = 1, limit = 1;
+    if ((r = displace_surface_init(ctx, object, &s->surface)) ||
+        (r = displace_option_int(ctx, object, name, "max_level", -1, DISPLACE_MAX_LEVEL, -1,
+                                 &s->max_level)) ||
+        (r = displace_option_int(ctx, object, name, "normal_test", 0, 1, 1, &normal)) ||
+        (r = displace_option_int(ctx, object, name, "area_test", 0, 1, 1, &area)) ||
+        (r = displace_option_int(ctx, object, name, "view_test", 0, 1, 1, &view)) ||
+        (r = displace_option_int(ctx, object, name, "limit_test", 0, 1, 1, &limit)) ||
+        (r = displace_option_float(ctx, object, name, "normal_threshold", 0.0, 2.0, 0.2,
+                                   &s->normal_threshold)) ||
+        (r = displace_option_float(ctx, object, name, "area_threshold", 0.0, 1.0, 0.05,
+                                   &s->area_threshold)) ||
+        (r = displace_option_float(ctx, object, name, "view_threshold", 0.0, 1e6, 2.0,
+                                   &s->view_threshold)) ||
+        (r = displace_option_float(ctx, object, name, "span_texels", 0.0, 1e6, 32.0,
+                                   &s->span_texels)) ||
+        (r = displace_shadow_options_read(ctx, object, name, &s->shadows.options)))
+        goto fail;
+    if (s->max_level < 0) /* automatic: down to texel density (the limit test stops there) */
+        s->max_level = displace_texel_level(&s->surface, DISPLACE_MAX_LEVEL);
+    s->normal_test = normal != 0;
+    s->area_test = area != 0;
+    s->view_test = view != 0;
+    s->limit_test = limit != 0;
+    if (s->area_test && s->surface.heightfield &&
+        (r = meso_bake_sat(ctx, s->surface.heightfield, &s->sat)) != MESO_OK)
+        goto fail;
+    if ((r = displace_tessellator_create(ctx, &s->surface, s->max_level, &s->tessellator)))
+        goto fail;
+    *out_state = s;
+    return MESO_OK;
+fail:
+    tessellation_release(s);
+    return r;
+}
+
+static bool same_matrix(meso_mat4 a, meso_mat4 b) { return memcmp(&a, &b, sizeof(a)) == 0; }
+
+static meso_result tessellation_geometry(meso_context *ctx, void *state, const meso_frame *frame,
+                                         const meso_mesh **out_mesh) {
+    tessellation_state *s = state;
+    *out_mesh = NULL;
+    frame_tests ft = {s, frame->view_projection, frame->eye, (float)frame->width,
+                      (float)frame->height, frame->z_near};
+    displace_edge_tests tests = {tests_vertex_static, tests_vertex, tests_veto, tests_insert, &ft};
+    double start = meso_time_seconds();
+    s->mesh = NULL;
+    meso_result r = displace_tessellator_run(ctx, s->tessellator, &tests, &s->mesh, &s->stats);
+    if (r != MESO_OK) return r;
+    double tessellated = meso_time_seconds();
+    /* The mesh is a function of the camera (view test) and the target size only, and lights
+     * are static: the shadow maps are redrawn when either changes. */
+    if (!s->shadows_valid || !same_matrix(s->shadow_view_projection, frame->view_projection) ||
+        s->shadow_width != frame->width || s->shadow_height != frame->height) {
+        s->shadows_valid = false;
+        r = displace_shadows_render(ctx, &s->shadows, frame->scene, s->mesh);
+        if (r != MESO_OK) return r;
+        s->shadows_valid = true;
+        s->shadow_view_projection = frame->view_projection;
+        s->shadow_width = frame->width;
+        s->shadow_height = frame->height;
+    }
+    const uint64_t *c = s->stats.counters;
+    char levels[512];
+    size_t used = 0;
+    levels[0] = 0;
+    for (int d = 0; d < DISPLACE_MAX_DEPTH && used < sizeof(levels) - 32; d++)
+        if (s->stats.per_depth[d])
+            used += (size_t)snprintf(levels + used, sizeof(levels) - used, "%s%d: %llu",
+                                     used ? ", " : "", d,
+                                     (unsigned long long)s->stats.per_depth[d]);
+    meso_log_info(ctx,
+                  "%s: tessellation: %llu triangles (per level %s) in %.2f ms; edges %llu: "
+                  "limit test rejected %llu, view test rejected %llu, long edges split %llu, "
+                  "normal test proposed %llu, area test proposed %llu (of the rest), no detail %llu, "
+                  "inserted %llu, recursion limit %llu",
+                  s->surface.object->name, (unsigned long long)s->stats.triangles, levels,
+                  1e3 * (tessellated - start), (unsigned long long)c[COUNT_EDGES],
+                  (unsigned long long)c[COUNT_LIMIT_VETO], (unsigned long long)c[COUNT_VIEW_VETO],
+                  (unsigned long long)c[COUNT_SPAN_YES], (unsigned long long)c[COUNT_NORMAL_YES],
+                  (unsigned long long)c[COUNT_AREA_YES],
+                  (unsigned long long)c[COUNT_NO_DETAIL], (unsigned long long)c[COUNT_INSERTED],
+                  (unsigned long long)s->stats.grid_limited);
+    *out_mesh = s->mesh;
+    return MESO_OK;
+}
+
+static void tessellation_shade(const void *state, const meso_frame *frame,
+                               const meso_object *object, meso_fragment *fragments, size_t count) {
+    (void)object;
+    const tessellation_state *s = state;
+    displace_shade(&s->surface, &s->shadows, s->mesh, frame, fragments, count);
+}
+
+static size_t tessellation_memory(const void *state) {
+    const tessellation_state *s = state;
+    if (!s) return 0;
+    size_t bytes = displace_tessellator_memory(s->tessellator);
+    if (s->sat) bytes += ((size_t)s->sat->width + 1) * ((size_t)s->sat->height + 1) * sizeof(double);
+    if (s->shadows.depth)
+        bytes += (size_t)s->shadows.num_lights * (size_t)s->shadows.options.size *
+                 (size_t)s->shadows.options.size * sizeof(float);
+    return bytes;
+}
+
+const meso_technique meso_technique_tessellation = {
+    .info = {.name = "tessellation",
+             .summary = "adaptive view-dependent tessellation by edge midpoints, shadow-mapped",
+             .paper = "Doggett & Hirche 2000, \"Adaptive Tessellation\", \"Edge Tests\"",
+             .kind = MESO_TECHNIQUE_GEOMETRY,
+             .accepts = MESO_TECHNIQUE_ACCEPTS_NONE | MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD},
+    .prepare = tessellation_prepare,
+    .release = tessellation_release,
+    .geometry = tessellation_geometry,
+    .shade = tessellation_shade,
+    .memory = tessellation_memory,
+};

@@ -1,0 +1,647 @@
+/* vdm: view-dependent displacement mapping (Wang et al. 2003, §3.2 and Fig. 6): per fragment
+ * the view direction in the local frame and the curvature along it select the baked distance
+ * d(x, y, theta, phi, c) to the mesostructure; no intersection -> discard (silhouette); the
+ * real texture coordinate T' = T - d V_xy; shadows by a second lookup along the light (flat
+ * surface approximation, §3.2); shading at T' with the height field's normal.
+ * The map is baked (src/bake/bake_vdm.c) and cached. docs/techniques/vdm.md. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#if defined(__F16C__)
+#include <immintrin.h>
+#endif
+
+#include "meso/bake_vdm.h"
+#include "render_internal.h"
+
+#define HALF_PI_F 1.57079632679f
+#define TWO_PI_F 6.28318530718f
+#define MAX_LEVELS 12
+
+typedef struct vdm_state {
+    meso_vdm *vdm;
+    meso_vdm_view view;
+    bool raw; /* "compressed" 0: the 5D table itself */
+    bool shadows, silhouettes, curvature;
+    bool nearest_silhouette; /* theta_MVM of the nearest texel (§3.2) or interpolated */
+    int num_eigen;           /* k used at render time (<= the bake's) */
+    int num_mvm;
+    float depth_tiles; /* shell depth in tiles (the bake's "depth") */
+    float tile_world;  /* world length of one tile: curvature and offsets */
+    float shadow_bias; /* shell depths */
+    bool clamp;
+    /* The compressed data re-laid for 8-wide loads (§3.3 reconstruction as dot products):
+     * weights [row][lanes], eigen_t [column][lanes] (E_VDM transposed, zero past k),
+     * mvm_t [c][lanes] (E_MVM transposed, zero past m); lanes = max(k, m) rounded up to 8. */
+    int lanes;
+    float *weights, *eigen_t, *mvm_t;
+    /* §4: "VDM as a texture map is easily anti-aliased by mip-mapping": d = sum W E is linear
+     * in W, so box-filtering W over (x, y) filters the reconstructed table exactly. Level 0 is
+     * `weights`; used when minified (and far less memory traffic: speed on busy textures). */
+    bool mipmap;
+    int num_levels;
+    int level_width[MAX_LEVELS], level_height[MAX_LEVELS];
+    uint16_t *level_weights[MAX_LEVELS]; /* half floats: half the memory traffic */
+} vdm_state;
+
+typedef float v8f __attribute__((vector_size(32)));
+#define MAX_CHUNKS (MESO_VDM_MAX_EIGEN / 8)
+
+static inline v8f load8(const float *p) {
+    v8f v;
+    memcpy(&v, p, sizeof(v));
+    return v;
+}
+/* 8 half floats to floats (F16C when the CPU has it). */
+static inline v8f load8h(const uint16_t *p) {
+#if defined(__F16C__)
+    __m256 v = _mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)p));
+    v8f out;
+    memcpy(&out, &v, sizeof(out));
+    return out;
+#else
+    v8f out;
+    for (int i = 0; i < 8; i++) {
+        _Float16 h;
+        memcpy(&h, p + i, sizeof(h));
+        out[i] = (float)h;
+    }
+    return out;
+#endif
+}
+static inline uint16_t to_half(float x) {
+    _Float16 h = (_Float16)x;
+    uint16_t bits;
+    memcpy(&bits, &h, sizeof(bits));
+    return bits;
+}
+static inline float sum8(v8f v) {
+    return ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]));
+}
+
+static const char *const known_options[] = {"compressed",
+                                            "eigenfunctions",
+                                            "mvm_eigenfunctions",
+                                            "shadows",
+                                            "silhouettes",
+                                            "curvature",
+                                            "resolution",
+                                            "num_theta",
+                                            "num_phi",
+                                            "num_curvatures",
+                                            "shadow_bias",
+                                            "silhouette_filter",
+                                            "mipmap",
+                                            NULL};
+
+static void vdm_release(void *state) {
+    vdm_state *s = state;
+    if (!s) return;
+    meso_vdm_destroy(s->vdm);
+    for (int l = 0; l < s->num_levels; l++) free(s->level_weights[l]);
+    free(s->weights);
+    free(s->eigen_t);
+    free(s->mvm_t);
+    free(s);
+}
+
+/* An integer option in [lo, hi]. */
+static meso_result read_int(meso_context *ctx, const meso_object *object, const char *name,
+                            int fallback, int lo, int hi, int *out) {
+    double v = meso_object_option(object, name, fallback);
+    if (!(v >= lo && v <= hi) || v != floor(v))
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "%s: technique_options.%s: %g must be an integer in %d-%d",
+                              object->name, name, v, lo, hi);
+    *out = (int)v;
+    return MESO_OK;
+}
+
+/* World length of one tile: sqrt(world area / uv area) over the mesh (uv_scale applied). VDM
+ * §3.2 asks for a locally uniform texture scale; this is its average. */
+static float tile_world_length(const meso_mesh *mesh) {
+    double world = 0.0, uv = 0.0;
+    for (size_t t = 0; t < mesh->num_triangles; t++) {
+        uint32_t a = mesh->indices[3 * t], b = mesh->indices[3 * t + 1],
+                 c = mesh->indices[3 * t + 2];
+        meso_vec3 e1 = meso_vec3_sub(mesh->positions[b], mesh->positions[a]);
+        meso_vec3 e2 = meso_vec3_sub(mesh->positions[c], mesh->positions[a]);
+        world += 0.5 * meso_vec3_length(meso_vec3_cross(e1, e2));
+        meso_vec2 f1 = {mesh->uvs[b].x - mesh->uvs[a].x, mesh->uvs[b].y - mesh->uvs[a].y};
+        meso_vec2 f2 = {mesh->uvs[c].x - mesh->uvs[a].x, mesh->uvs[c].y - mesh->uvs[a].y};
+        uv += 0.5 * fabs((double)f1.x * f2.y - (double)f1.y * f2.x);
+    }
+    return uv > 0.0 && world > 0.0 ? (float)sqrt(world / uv) : 0.0f;
+}
+
+/* Pad and transpose the compressed arrays for the 8-wide lookups (see vdm_state). */
+static meso_result relayout(meso_context *ctx, const meso_object *object, vdm_state *s) {
+    const meso_vdm_view *v = &s->view;
+    int used = s->num_eigen > s->num_mvm ? s->num_eigen : s->num_mvm;
+    int lanes = (used + 7) / 8 * 8;
+    size_t rows = (size_t)v->width * v->height * v->num_phi;
+    int vdm_columns = v->num_theta * v->num_curvatures;
+    s->lanes = lanes;
+    s->weights = calloc(rows * (size_t)lanes, sizeof(float));
+    s->eigen_t = calloc((size_t)vdm_columns * lanes, sizeof(float));
+    s->mvm_t = calloc((size_t)v->num_curvatures * lanes, sizeof(float));
+    if (!s->weights || !s->eigen_t || !s->mvm_t)
+        return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
+    int copy = used < v->num_weights ? used : v->num_weights;
+    for (size_t r = 0; r < rows; r++)
+        memcpy(s->weights + r * lanes, v->weights + r * v->num_weights, sizeof(float) * copy);
+    /* the mip pyramid of W: 2 x 2 box filter (in float), wrapping odd sizes; stored as halves */
+    s->num_levels = 1;
+    s->level_width[0] = v->width;
+    s->level_height[0] = v->height;
+    float *level = s->weights;
+    size_t level_size = rows * (size_t)lanes;
+    s->level_weights[0] = malloc(level_size * sizeof(uint16_t));
+    if (!s->level_weights[0])
+        return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
+    for (size_t i = 0; i < level_size; i++) s->level_weights[0][i] = to_half(level[i]);
+    while (s->mipmap && s->num_levels < MAX_LEVELS &&
+           (s->level_width[s->num_levels - 1] > 1 || s->level_height[s->num_levels - 1] > 1)) {
+        int l = s->num_levels, pw = s->level_width[l - 1], ph = s->level_height[l - 1];
+        int w = pw > 1 ? pw / 2 : 1, h = ph > 1 ? ph / 2 : 1;
+        size_t size = (size_t)w * h * v->num_phi * lanes;
+        float *dst = calloc(size, sizeof(float));
+        uint16_t *half = malloc(size * sizeof(uint16_t));
+        if (!dst || !half) {
+            free(dst);
+            free(half);
+            if (level != s->weights) free(level);
+            return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
+        }
+        for (int j = 0; j < h; j++)
+            for (int i = 0; i < w; i++)
+                for (int p = 0; p < v->num_phi; p++) {
+                    float *out = dst + (((size_t)j * w + i) * v->num_phi + p) * lanes;
+                    for (int q = 0; q < 4; q++) {
+                        int si = (2 * i + (q & 1)) % pw, sj = (2 * j + (q >> 1)) % ph;
+                        const float *in = level + (((size_t)sj * pw + si) * v->num_phi + p) * lanes;
+                        for (int k = 0; k < lanes; k++) out[k] += 0.25f * in[k];
+                    }
+                }
+        for (size_t i = 0; i < size; i++) half[i] = to_half(dst[i]);
+        if (level != s->weights) free(level);
+        level = dst;
+        s->level_weights[l] = half;
+        s->level_width[l] = w;
+        s->level_height[l] = h;
+        s->num_levels++;
+    }
+    if (level != s->weights) free(level);
+    free(s->weights); /* only the halves are read */
+    s->weights = NULL;
+    for (int i = 0; i < s->num_eigen && i < v->num_vdm; i++)
+        for (int col = 0; col < vdm_columns; col++)
+            s->eigen_t[(size_t)col * lanes + i] = v->eigen_vdm[(size_t)i * vdm_columns + col];
+    for (int i = 0; i < s->num_mvm && i < v->num_mvm; i++)
+        for (int c = 0; c < v->num_curvatures; c++)
+            s->mvm_t[(size_t)c * lanes + i] = v->eigen_mvm[(size_t)i * v->num_curvatures + c];
+    return MESO_OK;
+}
+
+static meso_result vdm_prepare(meso_context *ctx, const meso_scene *scene,
+                               const meso_object *object, void **out_state) {
+    (void)scene;
+    *out_state = NULL;
+    meso_result r = meso_technique_check_options(ctx, object, "vdm", known_options);
+    if (r != MESO_OK) return r;
+    const meso_mesostructure *ms = &object->mesostructure;
+    if (ms->kind != MESO_MESOSTRUCTURE_HEIGHT_FIELD || !ms->height_field)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "%s: technique vdm needs a height field", object->name);
+    if (!object->mesh->uvs)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "%s: technique vdm needs texture coordinates", object->name);
+    int compressed, eigen, mvm, shadows, silhouettes, curvature, resolution, num_theta, num_phi,
+        num_curvatures, silhouette_filter, mipmap;
+    if ((r = read_int(ctx, object, "compressed", 1, 0, 1, &compressed)) ||
+        (r = read_int(ctx, object, "eigenfunctions", 8, 1, MESO_VDM_MAX_EIGEN, &eigen)) ||
+        (r = read_int(ctx, object, "mvm_eigenfunctions", 4, 1, MESO_VDM_MAX_EIGEN, &mvm)) ||
+        (r = read_int(ctx, object, "shadows", 1, 0, 1, &shadows)) ||
+        (r = read_int(ctx, object, "silhouettes", 1, 0, 1, &silhouettes)) ||
+        (r = read_int(ctx, object, "curvature", 1, 0, 1, &curvature)) ||
+        (r = read_int(ctx, object, "silhouette_filter", 0, 0, 1, &silhouette_filter)) ||
+        (r = read_int(ctx, object, "mipmap", 1, 0, 1, &mipmap)) ||
+        (r = read_int(ctx, object, "resolution", 128, 8, MESO_VDM_MAX_SIDE, &resolution)) ||
+        (r = read_int(ctx, object, "num_theta", 32, 2, MESO_VDM_MAX_THETA, &num_theta)) ||
+        (r = read_int(ctx, object, "num_phi", 8, 1, MESO_VDM_MAX_PHI, &num_phi)) ||
+        (r = read_int(ctx, object, "num_curvatures", 16, 1, MESO_VDM_MAX_CURVATURES,
+                      &num_curvatures)))
+        return r;
+    double bias = meso_object_option(object, "shadow_bias", 0.1);
+    if (!(bias >= 0.0 && bias <= 10.0))
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "%s: technique_options.shadow_bias: %g must be in [0, 10]",
+                              object->name, bias);
+    float tile = tile_world_length(object->mesh);
+    if (!(tile > 0.0f))
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "%s: vdm: the texture coordinates cover no area", object->name);
+    float depth_tiles = ms->depth / tile;
+    if (!(depth_tiles > 0.0f && depth_tiles <= 16.0f))
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "%s: mesostructure.depth: %g is %g tiles; vdm needs (0, 16]",
+                              object->name, ms->depth, depth_tiles);
+    vdm_state *s = calloc(1, sizeof(*s));
+    if (!s) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
+    /* The bake keeps at least the paper's 8 + 4 eigenfunctions, so renders with fewer (Fig. 8)
+     * share one cached bake. */
+    meso_vdm_desc desc = {.heightfield = ms->height_field,
+                          .depth = depth_tiles,
+                          .width = resolution,
+                          .height = resolution,
+                          .num_theta = num_theta,
+                          .num_phi = num_phi,
+                          .num_curvatures = num_curvatures,
+                          .vdm_eigenfunctions = eigen > 8 ? eigen : 8,
+                          .mvm_eigenfunctions = mvm > 4 ? mvm : 4,
+                          .keep_raw = !compressed};
+    int rank = num_theta * num_curvatures + num_curvatures;
+    int rows = resolution * resolution * num_phi;
+    rank = rank < rows ? rank : rows;
+    if (desc.vdm_eigenfunctions > rank) desc.vdm_eigenfunctions = rank;
+    if (desc.mvm_eigenfunctions > rank) desc.mvm_eigenfunctions = rank;
+    if (eigen > rank || mvm > rank) {
+        vdm_release(s);
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "%s: technique_options.eigenfunctions: at most %d for this table",
+                              object->name, rank);
+    }
+    r = meso_vdm_bake_cached(ctx, &desc, &s->vdm);
+    if (r != MESO_OK) {
+        vdm_release(s);
+        return r;
+    }
+    s->view = meso_vdm_get_view(s->vdm);
+    s->raw = !compressed && s->view.raw;
+    s->shadows = shadows;
+    s->silhouettes = silhouettes;
+    s->curvature = curvature;
+    s->nearest_silhouette = silhouette_filter == 0;
+    s->mipmap = mipmap;
+    s->num_eigen = eigen;
+    s->num_mvm = mvm;
+    s->depth_tiles = depth_tiles;
+    s->tile_world = tile;
+    s->shadow_bias = (float)bias;
+    s->clamp = ms->height_field->wrap == MESO_WRAP_CLAMP;
+    if (!s->raw && (r = relayout(ctx, object, s)) != MESO_OK) {
+        vdm_release(s);
+        return r;
+    }
+    *out_state = s;
+    return MESO_OK;
+}
+
+/* ---- Lookups (multilinear over x, y, phi, theta, c; §4: "interpolated") ------------------- */
+
+typedef struct axis {
+    int i0, i1;
+    float w;
+} axis;
+
+static inline axis axis_clamp(float x, int n) {
+    if (n <= 1 || x <= 0.0f) return (axis){0, 0, 0.0f};
+    if (x >= (float)(n - 1)) return (axis){n - 1, n - 1, 0.0f};
+    int i = (int)x;
+    return (axis){i, i + 1, x - (float)i};
+}
+static inline axis axis_wrap(float x, int n) {
+    float f = floorf(x);
+    int i = (int)f % n;
+    i += i < 0 ? n : 0;
+    return (axis){i, i + 1 == n ? 0 : i + 1, x - f};
+}
+
+typedef struct texel_axes {
+    axis x, y, phi;
+} texel_axes;
+
+static inline texel_axes texel_axes_of(const vdm_state *s, meso_vec2 uv, float phi, int width,
+                                       int height) {
+    const meso_vdm_view *v = &s->view;
+    float x = uv.x * (float)width - 0.5f, y = (1.0f - uv.y) * (float)height - 0.5f;
+    texel_axes a;
+    if (s->clamp) {
+        a.x = axis_clamp(x, width);
+        a.y = axis_clamp(y, height);
+    } else {
+        a.x = axis_wrap(x, width);
+        a.y = axis_wrap(y, height);
+    }
+    a.phi = axis_wrap(phi * (float)v->num_phi / TWO_PI_F, v->num_phi);
+    return a;
+}
+
+static inline size_t row_of(const meso_vdm_view *v, int ix, int iy, int ip) {
+    return ((size_t)iy * (size_t)v->width + (size_t)ix) * (size_t)v->num_phi + (size_t)ip;
+}
+static inline size_t level_row(int width, int num_phi, int ix, int iy, int ip) {
+    return ((size_t)iy * (size_t)width + (size_t)ix) * (size_t)num_phi + (size_t)ip;
+}
+
+/* The curvature and theta axes as 4 (column, weight) pairs of the VDM part. */
+typedef struct column_set {
+    int col[4];
+    float w[4];
+    axis c;
+} column_set;
+
+static inline column_set columns_of(const meso_vdm_view *v, float theta, float c) {
+    axis t = axis_clamp(theta * (float)v->num_theta / HALF_PI_F - 0.5f, v->num_theta);
+    float cn = v->num_curvatures > 1
+                   ? (c - v->curvature_min) / (v->curvature_max - v->curvature_min) *
+                         (float)(v->num_curvatures - 1)
+                   : 0.0f;
+    axis ca = axis_clamp(cn, v->num_curvatures);
+    column_set cs = {
+        {ca.i0 * v->num_theta + t.i0, ca.i0 * v->num_theta + t.i1, ca.i1 * v->num_theta + t.i0,
+         ca.i1 * v->num_theta + t.i1},
+        {(1.0f - ca.w) * (1.0f - t.w), (1.0f - ca.w) * t.w, ca.w * (1.0f - t.w), ca.w * t.w},
+        ca};
+    return cs;
+}
+
+/* d in shell depths at (uv, theta, phi, c) (§3.3: sum_i W^i(x, y, phi) E^i(theta, c)); the
+ * interpolation is separable, so W is interpolated trilinearly and E bilinearly. Also
+ * theta_MVM from the nearest texel (§3.2: "its nearest sample value in texture space for
+ * silhouette determination"), linear in phi and c. */
+static inline float lookup(const vdm_state *s, meso_vec2 uv, float theta, float phi, float c,
+                           int level, float *out_max_theta) {
+    const meso_vdm_view *v = &s->view;
+    level = s->raw ? 0 : level;
+    int lw = s->raw ? v->width : s->level_width[level];
+    int lh = s->raw ? v->height : s->level_height[level];
+    texel_axes a = texel_axes_of(s, uv, phi, lw, lh);
+    column_set cs = columns_of(v, theta, c);
+    int nearest_x = a.x.w < 0.5f ? a.x.i0 : a.x.i1, nearest_y = a.y.w < 0.5f ? a.y.i0 : a.y.i1;
+    bool nearest = s->nearest_silhouette;
+    int mvm_base = v->num_theta * v->num_curvatures;
+    if (s->raw) {
+        int columns = v->raw_columns;
+        float d = 0.0f;
+        for (int corner = 0; corner < 8; corner++) {
+            float w = (corner & 1 ? a.x.w : 1.0f - a.x.w) * (corner & 2 ? a.y.w : 1.0f - a.y.w) *
+                      (corner & 4 ? a.phi.w : 1.0f - a.phi.w);
+            if (w == 0.0f) continue;
+            const float *row =
+                v->raw + row_of(v, corner & 1 ? a.x.i1 : a.x.i0, corner & 2 ? a.y.i1 : a.y.i0,
+                                corner & 4 ? a.phi.i1 : a.phi.i0) *
+                             columns;
+            d += w * (cs.w[0] * row[cs.col[0]] + cs.w[1] * row[cs.col[1]] +
+                      cs.w[2] * row[cs.col[2]] + cs.w[3] * row[cs.col[3]]);
+        }
+        if (out_max_theta && !nearest) {
+            float m = 0.0f;
+            for (int corner = 0; corner < 8; corner++) {
+                float w = (corner & 1 ? a.x.w : 1.0f - a.x.w) *
+                          (corner & 2 ? a.y.w : 1.0f - a.y.w) *
+                          (corner & 4 ? a.phi.w : 1.0f - a.phi.w);
+                if (w == 0.0f) continue;
+                const float *row =
+                    v->raw + row_of(v, corner & 1 ? a.x.i1 : a.x.i0, corner & 2 ? a.y.i1 : a.y.i0,
+                                    corner & 4 ? a.phi.i1 : a.phi.i0) *
+                                 columns;
+                m += w *
+                     (row[mvm_base + cs.c.i0] * (1.0f - cs.c.w) + row[mvm_base + cs.c.i1] * cs.c.w);
+            }
+            *out_max_theta = m;
+        } else if (out_max_theta) {
+            float m = 0.0f;
+            for (int q = 0; q < 2; q++) {
+                const float *row =
+                    v->raw + row_of(v, nearest_x, nearest_y, q ? a.phi.i1 : a.phi.i0) * columns;
+                float wq = q ? a.phi.w : 1.0f - a.phi.w;
+                m += wq *
+                     (row[mvm_base + cs.c.i0] * (1.0f - cs.c.w) + row[mvm_base + cs.c.i1] * cs.c.w);
+            }
+            *out_max_theta = m;
+        }
+        return d;
+    }
+    /* §3.3: d = sum_i W^i E^i_VDM: W trilinear over (x, y, phi), E bilinear over (theta, c) */
+    int lanes = s->lanes, chunks = lanes / 8;
+    const uint16_t *weights = s->level_weights[level];
+    v8f w[MAX_CHUNKS] = {{0}};
+    float wx[2] = {1.0f - a.x.w, a.x.w}, wy[2] = {1.0f - a.y.w, a.y.w};
+    float wp[2] = {1.0f - a.phi.w, a.phi.w};
+    int ix[2] = {a.x.i0, a.x.i1}, iy[2] = {a.y.i0, a.y.i1}, ip[2] = {a.phi.i0, a.phi.i1};
+    for (int corner = 0; corner < 8; corner++) {
+        float cw = wx[corner & 1] * wy[(corner >> 1) & 1] * wp[corner >> 2];
+        if (cw == 0.0f) continue;
+        const uint16_t *row = weights + level_row(lw, v->num_phi, ix[corner & 1],
+                                                  iy[(corner >> 1) & 1], ip[corner >> 2]) *
+                                            lanes;
+        for (int j = 0; j < chunks; j++) w[j] += cw * load8h(row + 8 * j);
+    }
+    v8f dot = {0};
+    for (int j = 0; j < chunks; j++) {
+        v8f e = cs.w[0] * load8(s->eigen_t + (size_t)cs.col[0] * lanes + 8 * j) +
+                cs.w[1] * load8(s->eigen_t + (size_t)cs.col[1] * lanes + 8 * j) +
+                cs.w[2] * load8(s->eigen_t + (size_t)cs.col[2] * lanes + 8 * j) +
+                cs.w[3] * load8(s->eigen_t + (size_t)cs.col[3] * lanes + 8 * j);
+        dot += w[j] * e;
+    }
+    if (out_max_theta) {
+        /* theta_MVM = sum_i W^i E^i_MVM(c), with W interpolated or of the nearest texel */
+        if (nearest) {
+            const uint16_t *r0 =
+                weights + level_row(lw, v->num_phi, nearest_x, nearest_y, a.phi.i0) * lanes;
+            const uint16_t *r1 =
+                weights + level_row(lw, v->num_phi, nearest_x, nearest_y, a.phi.i1) * lanes;
+            for (int j = 0; j < chunks; j++)
+                w[j] = wp[0] * load8h(r0 + 8 * j) + wp[1] * load8h(r1 + 8 * j);
+        }
+        v8f m = {0};
+        for (int j = 0; j < chunks; j++) {
+            v8f e = (1.0f - cs.c.w) * load8(s->mvm_t + (size_t)cs.c.i0 * lanes + 8 * j) +
+                    cs.c.w * load8(s->mvm_t + (size_t)cs.c.i1 * lanes + 8 * j);
+            m += w[j] * e;
+        }
+        *out_max_theta = sum8(m);
+    }
+    (void)mvm_base;
+    return sum8(dot);
+}
+
+/* VDM §3.2: c_V = (c_max (V.C_max)^2 + c_min (V.C_min)^2) / (1 - (V.N)^2) at one vertex. */
+static inline float curvature_along(const meso_mesh *mesh, uint32_t vertex, meso_vec3 eye) {
+    meso_vec3 view = meso_vec3_normalize(meso_vec3_sub(eye, mesh->positions[vertex]));
+    float vn = meso_vec3_dot(view, mesh->normals[vertex]);
+    float a = meso_vec3_dot(view, mesh->curvature_dir_max[vertex]);
+    float b = meso_vec3_dot(view, mesh->curvature_dir_min[vertex]);
+    float denominator = 1.0f - vn * vn;
+    if (denominator < 1e-6f) /* V along N: every direction is equally likely; the mean */
+        return 0.5f * (mesh->curvature_max[vertex] + mesh->curvature_min[vertex]);
+    return (mesh->curvature_max[vertex] * a * a + mesh->curvature_min[vertex] * b * b) /
+           denominator;
+}
+
+/* A world direction in the bake's texture space (u, v, depth; see vdm_shade), unit. */
+static inline meso_vec3 to_bake_space(meso_vec3 dir, meso_vec3 t, meso_vec3 b, meso_vec3 n,
+                                      float scale_u, float scale_v, float scale_depth) {
+    return meso_vec3_normalize((meso_vec3){meso_vec3_dot(dir, t) / scale_u,
+                                           meso_vec3_dot(dir, b) / scale_v,
+                                           meso_vec3_dot(dir, n) / scale_depth});
+}
+
+/* World length of one texture unit along the tangent-plane direction (hx, hy). */
+static inline float horizontal_scale(float hx, float hy, float scale_u, float scale_v) {
+    float x = hx / scale_u, y = hy / scale_v;
+    return sqrtf((hx * hx + hy * hy) / (x * x + y * y));
+}
+
+static void vdm_shade(const void *state, const meso_frame *frame, const meso_object *object,
+                      meso_fragment *fragments, size_t count) {
+    const vdm_state *s = state;
+    const meso_scene *scene = frame->scene;
+    const meso_mesh *mesh = object->mesh;
+    const meso_heightfield *hf = object->mesostructure.height_field;
+    float depth_world = object->mesostructure.depth, depth_tiles = s->depth_tiles;
+    float theta_step = HALF_PI_F / (float)s->view.num_theta;
+    bool has_curvature = s->curvature && mesh->curvature_max && mesh->curvature_min &&
+                         mesh->curvature_dir_max && mesh->curvature_dir_min;
+    /* shading runs 8-wide over a chunk once its fragments know P', N' and T' */
+    enum { CHUNK = 64 };
+    float chunk_visibility[CHUNK * MESO_SCENE_MAX_LIGHTS];
+    int num_lights = scene->num_lights;
+    for (size_t start = 0; start < count; start += CHUNK) {
+        size_t end = start + CHUNK < count ? start + CHUNK : count;
+        for (size_t fi = start; fi < end; fi++) {
+            meso_fragment *f = &fragments[fi];
+            float *visibility = chunk_visibility + (fi - start) * (size_t)num_lights;
+            for (int li = 0; li < num_lights; li++) visibility[li] = 1.0f;
+            meso_vec3 n = f->normal;
+            /* the local frame of §3.2: the normal and the texture directions */
+            meso_vec3 t =
+                meso_vec3_normalize(meso_vec3_madd(f->tangent, n, -meso_vec3_dot(n, f->tangent)));
+            meso_vec3 b = meso_vec3_madd(f->bitangent, n, -meso_vec3_dot(n, f->bitangent));
+            b = meso_vec3_normalize(meso_vec3_madd(b, t, -meso_vec3_dot(t, b)));
+            meso_vec3 view = meso_vec3_normalize(meso_vec3_sub(frame->eye, f->position));
+            if (meso_vec3_dot(view, n) <= 1e-4f) { /* grazing or from behind the base surface */
+                f->discard = true;
+                continue;
+            }
+            /* The bake's space is texture space: u, v in tiles and depth in tiles of the average
+             * scale (depth_tiles = depth / tile_world). Map V there with the local dP/du, dP/dv,
+             * which also covers textures stretched differently in u and v (sphere poles, teapot)
+             * where §3.2 assumes a locally uniform scale. */
+            float scale_u = meso_vec3_length(f->tangent), scale_v = meso_vec3_length(f->bitangent);
+            if (!(scale_u > 0.0f && scale_v > 0.0f)) {
+                f->discard = true;
+                continue;
+            }
+            meso_vec3 vb = to_bake_space(view, t, b, n, scale_u, scale_v, s->tile_world);
+            float theta = acosf(fminf(vb.z, 1.0f)), phi = atan2f(vb.y, vb.x);
+            float c = 0.0f;
+            if (has_curvature) {
+                const uint32_t *tri = mesh->indices + 3 * (size_t)f->triangle;
+                /* per vertex, then interpolated (§3.2) */
+                c = f->b0 * curvature_along(mesh, tri[0], frame->eye) +
+                    f->b1 * curvature_along(mesh, tri[1], frame->eye) +
+                    f->b2 * curvature_along(mesh, tri[2], frame->eye);
+                /* world 1/length -> bake space: y = x^2 c / 2 scaled by 1/s_h across and 1/s
+                 * down gives c s_h^2 / s, s_h the world length of one bake unit along V_xy */
+                float hx = meso_vec3_dot(view, t), hy = meso_vec3_dot(view, b);
+                float world_per_unit = hx * hx + hy * hy > 1e-12f
+                                           ? horizontal_scale(hx, hy, scale_u, scale_v)
+                                           : s->tile_world;
+                c *= world_per_unit * world_per_unit / s->tile_world;
+            }
+            float max_theta = HALF_PI_F;
+            int level = 0;
+            if (s->num_levels > 1) {
+                /* texels under the pixel: its world size at this depth over the texel's */
+                float footprint = meso_vec3_length(frame->pixel_right) * f->depth;
+                float rho = footprint * sqrtf((float)s->view.width * (float)s->view.height /
+                                              (scale_u * scale_v));
+                while (rho >= 2.0f && level + 1 < s->num_levels) {
+                    rho *= 0.5f;
+                    level++;
+                }
+            }
+            float d = lookup(s, f->uv, theta, phi, c, level, s->silhouettes ? &max_theta : NULL);
+            /* Silhouette determination (§3.2): d = -1, i.e. theta beyond theta_MVM (§3.3); the
+             * half step puts the boundary between the last valid sample and the first invalid. */
+            if (s->silhouettes && theta > max_theta + 0.5f * theta_step) {
+                f->discard = true;
+                continue;
+            }
+            d = d > 0.0f ? d : 0.0f;
+            /* Real texture coordinate (§3.2): T' = T - d V_xy (V toward the eye), in tiles. */
+            float offset = d * depth_tiles;
+            meso_vec2 uv = {f->uv.x - offset * vb.x, f->uv.y - offset * vb.y};
+            float h = meso_heightfield_sample(hf, uv.x, uv.y);
+            float below = (1.0f - h) * depth_world;
+            meso_vec3 position = meso_vec3_madd(f->position, t, -offset * vb.x * scale_u);
+            position = meso_vec3_madd(position, b, -offset * vb.y * scale_v);
+            position = meso_vec3_madd(position, n, -below);
+            meso_vec2 gradient = meso_heightfield_gradient(hf, uv.x, uv.y);
+            meso_vec3 normal =
+                meso_displaced_normal(n, f->tangent, f->bitangent, depth_world, gradient);
+
+            /* Shadow determination (§3.2, Fig. 5), flat-surface approximation, c_L ignored as in
+             * the paper: P'' = T' + h tan(theta_L) L; lit when d_L reaches P' (h sec(theta_L)). */
+            for (int li = 0; li < num_lights && s->shadows; li++) {
+                meso_vec3 l = meso_light_direction(&scene->lights[li], position);
+                if (meso_vec3_dot(l, n) <= 1e-4f) {
+                    visibility[li] = 0.0f; /* below the reference surface's horizon */
+                    continue;
+                }
+                if (meso_vec3_dot(l, normal) <= 0.0f) continue; /* unlit anyway: skip the lookup */
+                meso_vec3 lb = to_bake_space(l, t, b, n, scale_u, scale_v, s->tile_world);
+                float lz = lb.z;
+                float depth_below = 1.0f - h; /* shell depths */
+                if (depth_below <= 0.0f) continue;
+                float reach = depth_below * depth_tiles / lz; /* P' to P'' along L, bake units */
+                meso_vec2 uv_light = {uv.x + reach * lb.x, uv.y + reach * lb.y};
+                float theta_l = acosf(fminf(lz, 1.0f)), phi_l = atan2f(lb.y, lb.x);
+                float max_theta_l = HALF_PI_F;
+                float d_l = lookup(s, uv_light, theta_l, phi_l, 0.0f, level, &max_theta_l);
+                if (theta_l > max_theta_l + 0.5f * theta_step) continue; /* the ray meets nothing */
+                float expected = depth_below / lz;
+                if (d_l < expected - s->shadow_bias * (1.0f + expected)) visibility[li] = 0.0f;
+            }
+            float out_depth = meso_vec3_dot(meso_vec3_sub(position, frame->eye), frame->forward);
+            f->out_depth = out_depth > f->depth ? out_depth : f->depth;
+            f->position = position;
+            f->normal = normal;
+            f->uv = uv;
+        }
+        meso_shade_fragments(frame, object, fragments + start, end - start, chunk_visibility);
+    }
+}
+
+static size_t vdm_memory(const void *state) {
+    const vdm_state *s = state;
+    if (!s) return 0;
+    const meso_vdm_view *v = &s->view;
+    size_t rows = (size_t)v->width * v->height * v->num_phi;
+    size_t bytes = sizeof(float) * (rows * (size_t)v->num_weights +
+                                    (size_t)v->num_vdm * v->num_theta * v->num_curvatures +
+                                    (size_t)v->num_mvm * v->num_curvatures);
+    if (v->raw) bytes += sizeof(float) * rows * (size_t)v->raw_columns;
+    for (int l = 0; l < s->num_levels; l++)
+        bytes += sizeof(uint16_t) * (size_t)s->lanes * s->level_width[l] * s->level_height[l] *
+                 (size_t)v->num_phi;
+    if (s->eigen_t)
+        bytes += sizeof(float) * (size_t)s->lanes *
+                 ((size_t)v->num_theta * v->num_curvatures + (size_t)v->num_curvatures);
+    return bytes;
+}
+
+const meso_technique meso_technique_vdm = {
+    .info = {.name = "vdm",
+             .summary = "view-dependent displacement map: silhouettes, occlusion, shadows (SVD)",
+             .paper = "Wang et al. 2003, View-Dependent Displacement Mapping, §3",
+             .kind = MESO_TECHNIQUE_PER_PIXEL,
+             .accepts = MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD},
+    .prepare = vdm_prepare,
+    .release = vdm_release,
+    .shade = vdm_shade,
+    .memory = vdm_memory,
+};

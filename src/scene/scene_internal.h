@@ -1,0 +1,63 @@
+/* Private to the scene module: the parser's state and the typed JSON getters that name the
+ * key path in every error ("scene.json: objects[0].mesostructure.depth: must be ..."). */
+#ifndef MESO_SCENE_INTERNAL_H
+#define MESO_SCENE_INTERNAL_H
+
+#include <cjson/cJSON.h>
+
+#include "meso/scene.h"
+
+#define SCENE_PATH_MAX 4096 /* resolved file paths */
+#define SCENE_KEY_MAX 256   /* key paths such as objects[12].mesostructure.height_map */
+
+typedef struct scene_parser {
+    meso_context *ctx;
+    const char *file;     /* the scene's name in messages */
+    const char *base_dir; /* relative paths resolve against it */
+} scene_parser;
+
+/* A key path: "" at the top, "objects[0]", "objects[0].material". */
+typedef struct scene_key {
+    char text[SCENE_KEY_MAX];
+} scene_key;
+
+scene_key scene_key_child(const scene_key *parent, const char *key);
+scene_key scene_key_index(const scene_key *parent, int index);
+
+/* Log "<file>: <key path>: <reason>" (or "<file>: <reason>" at the top) and return code. */
+meso_result scene_error(const scene_parser *p, meso_result code, const scene_key *key,
+                        const char *format, ...) __attribute__((format(printf, 4, 5)));
+
+/* `item` must be an object whose keys are all in allowed[] (NULL-terminated), each once. */
+meso_result scene_check_object(const scene_parser *p, const cJSON *item, const scene_key *key,
+                               const char *const allowed[]);
+
+/* Typed getters of obj[name]. Absent keys leave *out at the default given and return MESO_OK,
+ * unless `required`. Wrong types and non-finite numbers are MESO_ERROR_FORMAT naming the key. */
+meso_result scene_get_number(const scene_parser *p, const cJSON *obj, const scene_key *key,
+                             const char *name, bool required, double *out);
+/* An integer in [min_value, max_value]; above max_value is MESO_ERROR_LIMIT when limit_error. */
+meso_result scene_get_int(const scene_parser *p, const cJSON *obj, const scene_key *key,
+                          const char *name, long min_value, long max_value, bool limit_error,
+                          long *out);
+/* A finite number > 0 (positive) or >= 0. */
+meso_result scene_get_positive(const scene_parser *p, const cJSON *obj, const scene_key *key,
+                               const char *name, bool allow_zero, bool required, float *out);
+meso_result scene_get_vec3(const scene_parser *p, const cJSON *obj, const scene_key *key,
+                           const char *name, bool non_negative, bool required, meso_vec3 *out);
+meso_result scene_get_vec2(const scene_parser *p, const cJSON *obj, const scene_key *key,
+                           const char *name, bool positive, meso_vec2 *out);
+meso_result scene_get_string(const scene_parser *p, const cJSON *obj, const scene_key *key,
+                             const char *name, bool required, const char **out);
+
+/* Resolve a path from the scene against base_dir (absolute paths stay). */
+meso_result scene_resolve_path(const scene_parser *p, const scene_key *key, const char *path,
+                               char out[SCENE_PATH_MAX]);
+
+/* Parse objects[index] into *object (zeroed by the caller; released by scene_object_deinit
+ * whatever the result). */
+meso_result scene_parse_object(const scene_parser *p, const cJSON *item, int index,
+                               meso_object *object);
+void scene_object_deinit(meso_object *object);
+
+#endif

@@ -1,0 +1,429 @@
+/* One scene object: shape and transform -> world-space mesh with tangent frames; material with
+ * its colour map; mesostructure (height field or solid); technique and its options
+ * (docs/scene-format.md). */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "scene_internal.h"
+
+/* ---- Helpers ------------------------------------------------------------------------------ */
+
+static meso_result copy_name(const scene_parser *p, const scene_key *key, const char *value,
+                             char out[MESO_NAME_MAX]) {
+    if (strlen(value) >= MESO_NAME_MAX)
+        return scene_error(p, MESO_ERROR_FORMAT, key, "longer than %d bytes", MESO_NAME_MAX - 1);
+    snprintf(out, MESO_NAME_MAX, "%s", value);
+    return MESO_OK;
+}
+
+/* A missing referenced file is reported with the scene, the key and the resolved path, which
+ * the loaders' own messages (naming only the file) would not say. */
+static meso_result check_readable(const scene_parser *p, const scene_key *key, const char *path) {
+    FILE *file = fopen(path, "rb");
+    if (!file)
+        return scene_error(p, MESO_ERROR_IO, key, "%s: cannot open: %s", path, strerror(errno));
+    fclose(file);
+    return MESO_OK;
+}
+
+/* A library call refused parameters the parser let through (e.g. an odd weave count): report
+ * it as a bad value of the scene, at the key, with the library's reason. */
+static meso_result relog_as_format(const scene_parser *p, const scene_key *key, meso_result r) {
+    if (r != MESO_ERROR_INVALID_ARGUMENT) return r;
+    char reason[1024];
+    snprintf(reason, sizeof(reason), "%s", meso_context_last_error(p->ctx));
+    return scene_error(p, MESO_ERROR_FORMAT, key, "%s", reason);
+}
+
+static const char *base_name(const char *path) {
+    const char *slash = strrchr(path, '/');
+    return slash ? slash + 1 : path;
+}
+
+/* ---- Mesostructure ------------------------------------------------------------------------ */
+
+static meso_result parse_procedural_heightfield(const scene_parser *p, const cJSON *item,
+                                                const scene_key *key, meso_wrap wrap,
+                                                bool want_color, meso_object *object,
+                                                meso_image **out_color) {
+    static const char *const keys[] = {"procedural", "resolution", "rows", "columns", "gap",
+                                       "bevel",      "roughness",  "seed", NULL};
+    meso_result r = scene_check_object(p, item, key, keys);
+    if (r != MESO_OK) return r;
+    const char *name = NULL;
+    r = scene_get_string(p, item, key, "procedural", true, &name);
+    if (r != MESO_OK) return r;
+    meso_heightfield_desc desc = {.wrap = wrap};
+    if (!meso_heightfield_kind_from_name(name, &desc.kind)) {
+        scene_key k = scene_key_child(key, "procedural");
+        return scene_error(p, MESO_ERROR_FORMAT, &k,
+                           "unknown procedural height field \"%s\" (bricks, bumps, weave, tiles)",
+                           name);
+    }
+    long resolution = 0, rows = 0, columns = 0, seed = 0;
+    float gap = 0.0f, bevel = 0.0f, roughness = 0.0f;
+    if ((r = scene_get_int(p, item, key, "resolution", 1, MESO_IMAGE_MAX_SIDE, true,
+                           &resolution)) ||
+        (r = scene_get_int(p, item, key, "rows", 1, 1024, false, &rows)) ||
+        (r = scene_get_int(p, item, key, "columns", 1, 1024, false, &columns)) ||
+        (r = scene_get_int(p, item, key, "seed", 0, 4294967295L, false, &seed)) ||
+        (r = scene_get_positive(p, item, key, "gap", false, false, &gap)) ||
+        (r = scene_get_positive(p, item, key, "bevel", false, false, &bevel)) ||
+        (r = scene_get_positive(p, item, key, "roughness", true, false, &roughness)))
+        return r;
+    if (gap >= 0.9f) {
+        scene_key k = scene_key_child(key, "gap");
+        return scene_error(p, MESO_ERROR_FORMAT, &k, "must be in (0, 0.9), not %g", (double)gap);
+    }
+    if (bevel > 0.5f) {
+        scene_key k = scene_key_child(key, "bevel");
+        return scene_error(p, MESO_ERROR_FORMAT, &k, "must be in (0, 0.5], not %g", (double)bevel);
+    }
+    if (roughness > 1.0f) {
+        scene_key k = scene_key_child(key, "roughness");
+        return scene_error(p, MESO_ERROR_FORMAT, &k, "must be in [0, 1], not %g",
+                           (double)roughness);
+    }
+    desc.resolution = (int)resolution;
+    desc.rows = (int)rows;
+    desc.columns = (int)columns;
+    desc.seed = (uint32_t)seed;
+    desc.gap = gap;
+    desc.bevel = bevel;
+    desc.roughness = roughness;
+    meso_mesostructure *m = &object->mesostructure;
+    r = meso_heightfield_create_procedural(p->ctx, &desc, &m->height_field,
+                                           want_color ? out_color : NULL);
+    if (r != MESO_OK) return relog_as_format(p, key, r);
+    snprintf(m->source, sizeof(m->source), "%s", meso_heightfield_kind_name(desc.kind));
+    return MESO_OK;
+}
+
+static meso_result parse_procedural_solid(const scene_parser *p, const cJSON *item,
+                                          const scene_key *key, meso_object *object) {
+    static const char *const keys[] = {"procedural", "count", "thickness", NULL};
+    meso_result r = scene_check_object(p, item, key, keys);
+    if (r != MESO_OK) return r;
+    const char *name = NULL;
+    r = scene_get_string(p, item, key, "procedural", true, &name);
+    if (r != MESO_OK) return r;
+    meso_solid_desc desc = {0};
+    if (!meso_solid_kind_from_name(name, &desc.kind)) {
+        scene_key k = scene_key_child(key, "procedural");
+        return scene_error(p, MESO_ERROR_FORMAT, &k,
+                           "unknown procedural solid \"%s\" (weave, chain, grid, squama, helix)",
+                           name);
+    }
+    long count = 0;
+    float thickness = 0.0f;
+    if ((r = scene_get_int(p, item, key, "count", 1, 256, false, &count)) ||
+        (r = scene_get_positive(p, item, key, "thickness", false, false, &thickness)))
+        return r;
+    desc.count = (int)count;
+    desc.thickness = thickness;
+    meso_mesostructure *m = &object->mesostructure;
+    r = meso_solid_create_procedural(p->ctx, &desc, &m->solid);
+    if (r != MESO_OK) return relog_as_format(p, key, r);
+    snprintf(m->source, sizeof(m->source), "%s", meso_solid_kind_name(desc.kind));
+    return MESO_OK;
+}
+
+static meso_result parse_mesostructure(const scene_parser *p, const cJSON *item,
+                                       const scene_key *key, bool want_color, meso_object *object,
+                                       meso_image **out_color) {
+    static const char *const keys[] = {"height_map", "solid", "depth", "wrap", NULL};
+    meso_result r = scene_check_object(p, item, key, keys);
+    if (r != MESO_OK) return r;
+    meso_mesostructure *m = &object->mesostructure;
+    const cJSON *height_map = cJSON_GetObjectItemCaseSensitive(item, "height_map");
+    const cJSON *solid = cJSON_GetObjectItemCaseSensitive(item, "solid");
+    if (height_map && solid)
+        return scene_error(p, MESO_ERROR_FORMAT, key, "height_map and solid exclude each other");
+    if (!height_map && !solid)
+        return scene_error(p, MESO_ERROR_FORMAT, key, "needs a height_map or a solid");
+    r = scene_get_positive(p, item, key, "depth", true, true, &m->depth);
+    if (r != MESO_OK) return r;
+    const char *wrap = "repeat";
+    r = scene_get_string(p, item, key, "wrap", false, &wrap);
+    if (r != MESO_OK) return r;
+    if (strcmp(wrap, "repeat") == 0) {
+        m->wrap = MESO_WRAP_REPEAT;
+    } else if (strcmp(wrap, "clamp") == 0) {
+        m->wrap = MESO_WRAP_CLAMP;
+    } else {
+        scene_key k = scene_key_child(key, "wrap");
+        return scene_error(p, MESO_ERROR_FORMAT, &k, "must be \"repeat\" or \"clamp\", not \"%s\"",
+                           wrap);
+    }
+
+    if (height_map) {
+        m->kind = MESO_MESOSTRUCTURE_HEIGHT_FIELD;
+        scene_key k = scene_key_child(key, "height_map");
+        if (cJSON_IsObject(height_map))
+            return parse_procedural_heightfield(p, height_map, &k, m->wrap, want_color, object,
+                                                out_color);
+        if (!cJSON_IsString(height_map))
+            return scene_error(p, MESO_ERROR_FORMAT, &k,
+                               "must be a PNG path or {\"procedural\": NAME, ...}");
+        char path[SCENE_PATH_MAX];
+        if ((r = scene_resolve_path(p, &k, height_map->valuestring, path)) ||
+            (r = check_readable(p, &k, path)))
+            return r;
+        r = meso_heightfield_load_png(p->ctx, path, m->wrap, &m->height_field);
+        if (r != MESO_OK) return r;
+        snprintf(m->source, sizeof(m->source), "%s", base_name(height_map->valuestring));
+        return MESO_OK;
+    }
+    m->kind = MESO_MESOSTRUCTURE_SOLID;
+    scene_key k = scene_key_child(key, "solid");
+    if (cJSON_IsObject(solid)) return parse_procedural_solid(p, solid, &k, object);
+    if (cJSON_IsString(solid))
+        return scene_error(p, MESO_ERROR_UNSUPPORTED, &k, "voxel files are not supported yet");
+    return scene_error(p, MESO_ERROR_FORMAT, &k, "must be {\"procedural\": NAME, ...}");
+}
+
+/* ---- Material ----------------------------------------------------------------------------- */
+
+static meso_result load_color_map(const scene_parser *p, const scene_key *key, const char *file,
+                                  meso_wrap wrap, meso_texture **out_texture) {
+    char path[SCENE_PATH_MAX];
+    meso_result r;
+    if ((r = scene_resolve_path(p, key, file, path)) || (r = check_readable(p, key, path)))
+        return r;
+    meso_image *image = NULL;
+    r = meso_image_load_png(p->ctx, path, &image);
+    if (r != MESO_OK) return r;
+    /* Colour maps are authored in sRGB; shading is linear (DESIGN.md). Alpha stays linear. */
+    int colour_channels = image->channels >= 3 ? 3 : 1;
+    size_t n = (size_t)image->width * (size_t)image->height;
+    for (size_t t = 0; t < n; t++)
+        for (int c = 0; c < colour_channels; c++) {
+            float *value = &image->pixels[t * (size_t)image->channels + (size_t)c];
+            *value = meso_srgb_to_linear(*value);
+        }
+    r = meso_texture_create(p->ctx, image, wrap, true, out_texture);
+    meso_image_destroy(image);
+    return r;
+}
+
+static meso_result parse_material(const scene_parser *p, const cJSON *item, const scene_key *key,
+                                  const meso_image *generated_color, meso_object *object) {
+    static const char *const keys[] = {"albedo", "color_map", "specular", "shininess", NULL};
+    meso_material *mat = &object->material;
+    mat->albedo = (meso_vec3){0.8f, 0.8f, 0.8f};
+    mat->specular = (meso_vec3){0.0f, 0.0f, 0.0f};
+    mat->shininess = 32.0f;
+    if (!item) return MESO_OK;
+    meso_result r = scene_check_object(p, item, key, keys);
+    if (r != MESO_OK) return r;
+    const char *color_map = NULL;
+    if ((r = scene_get_vec3(p, item, key, "albedo", true, false, &mat->albedo)) ||
+        (r = scene_get_vec3(p, item, key, "specular", true, false, &mat->specular)) ||
+        (r = scene_get_positive(p, item, key, "shininess", false, false, &mat->shininess)) ||
+        (r = scene_get_string(p, item, key, "color_map", false, &color_map)))
+        return r;
+    if (!color_map) return MESO_OK;
+    scene_key k = scene_key_child(key, "color_map");
+    const meso_mesostructure *m = &object->mesostructure;
+    meso_wrap wrap = m->kind != MESO_MESOSTRUCTURE_NONE ? m->wrap : MESO_WRAP_REPEAT;
+    if (strcmp(color_map, "mesostructure") == 0) {
+        if (!generated_color)
+            return scene_error(p, MESO_ERROR_FORMAT, &k,
+                               "\"mesostructure\" needs a procedural height_map");
+        return meso_texture_create(p->ctx, generated_color, wrap, true, &mat->color_map);
+    }
+    return load_color_map(p, &k, color_map, wrap, &mat->color_map);
+}
+
+/* ---- Shape and transform ------------------------------------------------------------------ */
+
+static meso_result parse_transform(const scene_parser *p, const cJSON *item, const scene_key *key,
+                                   meso_mat4 *out) {
+    static const char *const keys[] = {"translate", "rotate_deg", "scale", NULL};
+    *out = meso_mat4_identity();
+    if (!item) return MESO_OK;
+    meso_result r = scene_check_object(p, item, key, keys);
+    if (r != MESO_OK) return r;
+    meso_vec3 translate = {0, 0, 0}, rotate = {0, 0, 0};
+    float scale = 1.0f;
+    if ((r = scene_get_vec3(p, item, key, "translate", false, false, &translate)) ||
+        (r = scene_get_vec3(p, item, key, "rotate_deg", false, false, &rotate)) ||
+        (r = scene_get_positive(p, item, key, "scale", false, false, &scale)))
+        return r;
+    const float to_radians = MESO_PI / 180.0f;
+    /* Scale, then rotate about X, then Y, then Z, then translate (column vectors). */
+    meso_mat4 m = meso_mat4_scale(scale);
+    m = meso_mat4_mul(meso_mat4_rotate((meso_vec3){1, 0, 0}, rotate.x * to_radians), m);
+    m = meso_mat4_mul(meso_mat4_rotate((meso_vec3){0, 1, 0}, rotate.y * to_radians), m);
+    m = meso_mat4_mul(meso_mat4_rotate((meso_vec3){0, 0, 1}, rotate.z * to_radians), m);
+    *out = meso_mat4_mul(meso_mat4_translate(translate), m);
+    return MESO_OK;
+}
+
+static meso_result create_mesh(const scene_parser *p, const cJSON *obj, const scene_key *key,
+                               meso_mesh **out_mesh) {
+    static const char *const shape_params[] = {"size", "minor_radius", "height", "segments"};
+    const cJSON *shape = cJSON_GetObjectItemCaseSensitive(obj, "shape");
+    scene_key shape_key = scene_key_child(key, "shape");
+    meso_result r;
+    if (cJSON_IsObject(shape)) {
+        static const char *const keys[] = {"file", NULL};
+        for (size_t k = 0; k < sizeof(shape_params) / sizeof(shape_params[0]); k++)
+            if (cJSON_GetObjectItemCaseSensitive(obj, shape_params[k])) {
+                scene_key pk = scene_key_child(key, shape_params[k]);
+                return scene_error(p, MESO_ERROR_FORMAT, &pk, "applies to built-in shapes only");
+            }
+        const char *file = NULL;
+        if ((r = scene_check_object(p, shape, &shape_key, keys)) ||
+            (r = scene_get_string(p, shape, &shape_key, "file", true, &file)))
+            return r;
+        scene_key file_key = scene_key_child(&shape_key, "file");
+        char path[SCENE_PATH_MAX];
+        if ((r = scene_resolve_path(p, &file_key, file, path)) ||
+            (r = check_readable(p, &file_key, path)))
+            return r;
+        return meso_mesh_load(p->ctx, path, out_mesh);
+    }
+    if (shape && !cJSON_IsString(shape))
+        return scene_error(p, MESO_ERROR_FORMAT, &shape_key,
+                           "must be a shape name or {\"file\": PATH}");
+    const char *name = shape ? shape->valuestring : "plane";
+    meso_shape_desc desc = {0};
+    if (!meso_shape_kind_from_name(name, &desc.kind))
+        return scene_error(p, MESO_ERROR_FORMAT, &shape_key,
+                           "unknown shape \"%s\" (plane, sphere, torus, cylinder, vase, teapot)",
+                           name);
+    long segments = 0;
+    if ((r = scene_get_positive(p, obj, key, "size", false, false, &desc.size)) ||
+        (r = scene_get_positive(p, obj, key, "minor_radius", false, false, &desc.minor_radius)) ||
+        (r = scene_get_positive(p, obj, key, "height", false, false, &desc.height)) ||
+        (r = scene_get_int(p, obj, key, "segments", 1, 4096, true, &segments)))
+        return r;
+    desc.segments = (int)segments;
+    r = meso_mesh_create_shape(p->ctx, &desc, out_mesh);
+    return r == MESO_OK ? r : relog_as_format(p, key, r);
+}
+
+/* World-space mesh, scaled UVs, validated, with tangents, curvature and quadrics. */
+static meso_result build_mesh(const scene_parser *p, const cJSON *obj, const scene_key *key,
+                              meso_object *object) {
+    meso_mat4 transform;
+    meso_vec2 uv_scale = {1.0f, 1.0f};
+    scene_key transform_key = scene_key_child(key, "transform");
+    meso_result r;
+    if ((r = parse_transform(p, cJSON_GetObjectItemCaseSensitive(obj, "transform"), &transform_key,
+                             &transform)) ||
+        (r = scene_get_vec2(p, obj, key, "uv_scale", true, &uv_scale)) ||
+        (r = create_mesh(p, obj, key, &object->mesh)))
+        return r;
+    meso_mesh *mesh = object->mesh;
+    meso_mesh_transform(mesh, transform);
+    if (mesh->uvs) meso_mesh_scale_uvs(mesh, uv_scale);
+    bool require_uvs =
+        object->mesostructure.kind != MESO_MESOSTRUCTURE_NONE || object->material.color_map != NULL;
+    char label[SCENE_KEY_MAX + 1100];
+    snprintf(label, sizeof(label), "%s: %s", p->file, key->text);
+    if ((r = meso_mesh_validate(p->ctx, mesh, label, require_uvs))) return r;
+    if (!mesh->uvs) return MESO_OK;
+    if ((r = meso_mesh_compute_tangents(p->ctx, mesh)) ||
+        (r = meso_mesh_compute_curvature(p->ctx, mesh)) ||
+        (r = meso_mesh_compute_quadrics(p->ctx, mesh)))
+        return r;
+    return MESO_OK;
+}
+
+/* ---- Technique ---------------------------------------------------------------------------- */
+
+static meso_result parse_options(const scene_parser *p, const cJSON *item, const scene_key *key,
+                                 meso_object *object) {
+    if (!item) return MESO_OK;
+    if (!cJSON_IsObject(item))
+        return scene_error(p, MESO_ERROR_FORMAT, key, "must be an object of numbers and booleans");
+    for (const cJSON *child = item->child; child; child = child->next) {
+        scene_key k = scene_key_child(key, child->string);
+        if (object->num_options >= MESO_OPTIONS_MAX)
+            return scene_error(p, MESO_ERROR_LIMIT, key, "more than %d options", MESO_OPTIONS_MAX);
+        for (int o = 0; o < object->num_options; o++)
+            if (strcmp(object->options[o].name, child->string) == 0)
+                return scene_error(p, MESO_ERROR_FORMAT, &k, "duplicate key");
+        meso_option *option = &object->options[object->num_options];
+        meso_result r = copy_name(p, &k, child->string, option->name);
+        if (r != MESO_OK) return r;
+        if (cJSON_IsBool(child)) {
+            option->value = cJSON_IsTrue(child) ? 1.0 : 0.0;
+        } else if (cJSON_IsNumber(child) && isfinite(child->valuedouble)) {
+            option->value = child->valuedouble;
+        } else {
+            return scene_error(p, MESO_ERROR_FORMAT, &k, "must be a finite number or a boolean");
+        }
+        object->num_options++;
+    }
+    return MESO_OK;
+}
+
+/* ---- Object ------------------------------------------------------------------------------- */
+
+/* Whether the material asks for the procedural height field's colours. */
+static bool wants_generated_color(const cJSON *obj) {
+    const cJSON *material = cJSON_GetObjectItemCaseSensitive(obj, "material");
+    const cJSON *color_map = cJSON_GetObjectItemCaseSensitive(material, "color_map");
+    return cJSON_IsString(color_map) && strcmp(color_map->valuestring, "mesostructure") == 0;
+}
+
+meso_result scene_parse_object(const scene_parser *p, const cJSON *item, int index,
+                               meso_object *object) {
+    static const char *const keys[] = {
+        "name",      "shape",    "size",     "minor_radius",  "height",    "segments",
+        "transform", "uv_scale", "material", "mesostructure", "technique", "technique_options",
+        NULL};
+    scene_key objects = {"objects"};
+    scene_key key = scene_key_index(&objects, index);
+    meso_image *generated_color = NULL;
+    meso_result r = scene_check_object(p, item, &key, keys);
+    if (r != MESO_OK) return r;
+
+    const char *name = NULL, *technique = "flat";
+    scene_key name_key = scene_key_child(&key, "name");
+    scene_key technique_key = scene_key_child(&key, "technique");
+    if ((r = scene_get_string(p, item, &key, "name", false, &name))) return r;
+    if (name) {
+        if ((r = copy_name(p, &name_key, name, object->name))) return r;
+    } else if ((r = copy_name(p, &name_key, key.text, object->name))) {
+        return r;
+    }
+    if ((r = scene_get_string(p, item, &key, "technique", false, &technique)) ||
+        (r = copy_name(p, &technique_key, technique, object->technique)))
+        return r;
+    if (!technique[0]) return scene_error(p, MESO_ERROR_FORMAT, &technique_key, "empty name");
+    scene_key options_key = scene_key_child(&key, "technique_options");
+    r = parse_options(p, cJSON_GetObjectItemCaseSensitive(item, "technique_options"), &options_key,
+                      object);
+    if (r != MESO_OK) return r;
+
+    const cJSON *mesostructure = cJSON_GetObjectItemCaseSensitive(item, "mesostructure");
+    if (mesostructure) {
+        scene_key k = scene_key_child(&key, "mesostructure");
+        r = parse_mesostructure(p, mesostructure, &k, wants_generated_color(item), object,
+                                &generated_color);
+        if (r != MESO_OK) goto fail;
+    }
+    scene_key material_key = scene_key_child(&key, "material");
+    r = parse_material(p, cJSON_GetObjectItemCaseSensitive(item, "material"), &material_key,
+                       generated_color, object);
+    if (r != MESO_OK) goto fail;
+    r = build_mesh(p, item, &key, object);
+fail:
+    meso_image_destroy(generated_color);
+    return r;
+}
+
+void scene_object_deinit(meso_object *object) {
+    meso_mesh_destroy(object->mesh);
+    meso_texture_destroy(object->material.color_map);
+    meso_heightfield_destroy(object->mesostructure.height_field);
+    meso_solid_destroy(object->mesostructure.solid);
+    memset(object, 0, sizeof(*object));
+}

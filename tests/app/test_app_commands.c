@@ -1,0 +1,126 @@
+/* meso bench and meso info: what they print and write. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+
+#include "test_util.h"
+
+#define BRICKS MESO_SOURCE_DIR "/examples/bricks-plane.json"
+
+/* Run meso with stdout captured into out; returns the exit status. */
+static int run_capture_stdout(const char *arguments, char *out, size_t out_size) {
+    char command[4096];
+    snprintf(command, sizeof(command), "%s %s 2>/dev/null", MESO_PROGRAM, arguments);
+    FILE *p = popen(command, "r");
+    assert_non_null(p);
+    size_t n = fread(out, 1, out_size - 1, p);
+    out[n] = 0;
+    int status = pclose(p);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+static char *read_text(const char *path) {
+    FILE *f = fopen(path, "rb");
+    if (!f) fail_msg("%s was not written", path);
+    fseek(f, 0, SEEK_END);
+    long size = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *data = malloc((size_t)size + 1);
+    assert_non_null(data);
+    assert_int_equal(fread(data, 1, (size_t)size, f), (size_t)size);
+    data[size] = 0;
+    fclose(f);
+    return data;
+}
+
+static void test_app_bench_prints_table_and_writes_json(void **state) {
+    (void)state;
+    static char out[65536];
+    const char *json_path = test_path(test_temp_dir(), "bench.json");
+    char args[4096];
+    snprintf(args, sizeof(args),
+             "bench %s --techniques flat,bump --frames 2 --size 32x32 --threads 2 --json %s",
+             BRICKS, json_path);
+    assert_int_equal(run_capture_stdout(args, out, sizeof(out)), 0);
+    assert_non_null(strstr(out, "machine:"));
+    assert_non_null(strstr(out, "bricks-plane"));
+    assert_non_null(strstr(out, "flat"));
+    assert_non_null(strstr(out, "bump"));
+    char *json = read_text(json_path);
+    static const char *const keys[] = {"\"machine\"", "\"threads\": 2",       "\"width\": 32",
+                                       "\"median_ms\"", "\"median_ms_1_thread\"", "\"scaling\"",
+                                       "\"fps\"",      "\"frames\": 2"};
+    for (size_t i = 0; i < sizeof(keys) / sizeof(keys[0]); i++)
+        if (!strstr(json, keys[i])) fail_msg("bench.json lacks %s:\n%s", keys[i], json);
+    free(json);
+}
+
+static void test_app_bench_unknown_technique_is_usage_error(void **state) {
+    (void)state;
+    const char *err = NULL;
+    char args[4096];
+    snprintf(args, sizeof(args), "bench %s --techniques flat,nope --frames 1", BRICKS);
+    assert_int_equal(test_run_meso(args, &err), 2);
+    assert_non_null(strstr(err, "meso: bench: --techniques: unknown technique 'nope'"));
+}
+
+static void test_app_info_describes_scene_png_and_bake(void **state) {
+    (void)state;
+    static char out[65536];
+    char args[4096];
+    snprintf(args, sizeof(args), "info %s", BRICKS);
+    assert_int_equal(run_capture_stdout(args, out, sizeof(out)), 0);
+    assert_non_null(strstr(out, "objects: 1"));
+    assert_non_null(strstr(out, "height field"));
+    assert_non_null(strstr(out, "depth"));
+    assert_non_null(strstr(out, "technique:"));
+
+    meso_context *ctx = test_context(1);
+    meso_image *image = NULL;
+    assert_int_equal(meso_image_create(ctx, 5, 3, 2, &image), MESO_OK);
+    for (int i = 0; i < 5 * 3 * 2; i++) image->pixels[i] = i % 2 ? 1.0f : 0.25f;
+    const char *png = test_path(test_temp_dir(), "grey-alpha.png");
+    meso_png_desc linear = {.encoding = MESO_ENCODING_LINEAR, .bit_depth = 16};
+    assert_int_equal(meso_image_save_png(ctx, image, png, &linear), MESO_OK);
+    meso_image_destroy(image);
+    snprintf(args, sizeof(args), "info %s", png);
+    assert_int_equal(run_capture_stdout(args, out, sizeof(out)), 0);
+    assert_non_null(strstr(out, "5x3, 2 channels"));
+    assert_non_null(strstr(out, "16-bit grey+alpha"));
+    assert_non_null(strstr(out, "min 0.2500  max 0.2500"));
+
+    float values[6] = {1, 2, 3, 4, 5, 6};
+    meso_bake_file bake = {.kind = "test", .kind_version = 3, .source_hash = 0xabcdef,
+                           .params_json = "{\"answer\": 42}", .num_arrays = 1};
+    bake.arrays[0] = (meso_bake_array){.name = "values", .type = MESO_BAKE_F32, .num_dims = 2,
+                                       .dims = {2, 3}, .data = values};
+    const char *bake_path = test_path(test_temp_dir(), "test.mesobake");
+    assert_int_equal(meso_bake_file_save(ctx, &bake, bake_path), MESO_OK);
+    meso_context_destroy(ctx);
+    snprintf(args, sizeof(args), "info %s", bake_path);
+    assert_int_equal(run_capture_stdout(args, out, sizeof(out)), 0);
+    assert_non_null(strstr(out, "kind: test (version 3)"));
+    assert_non_null(strstr(out, "\"answer\": 42"));
+    assert_non_null(strstr(out, "values"));
+    assert_non_null(strstr(out, "[2 x 3]"));
+}
+
+static void test_app_info_on_folder_is_bad_input(void **state) {
+    (void)state;
+    const char *err = NULL;
+    char args[4096];
+    snprintf(args, sizeof(args), "info %s", test_temp_dir());
+    assert_int_equal(test_run_meso(args, &err), 2);
+    assert_non_null(strstr(err, "is a folder"));
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_app_bench_prints_table_and_writes_json),
+        cmocka_unit_test(test_app_bench_unknown_technique_is_usage_error),
+        cmocka_unit_test(test_app_info_describes_scene_png_and_bake),
+        cmocka_unit_test(test_app_info_on_folder_is_bad_input),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,153 @@
+/* meso render on the bricks example: the PNG's size, no temporary files left behind, the same
+ * bytes for any thread count; --techniques writes its folder. */
+#include <dirent.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "test_util.h"
+
+#define BRICKS MESO_SOURCE_DIR "/examples/bricks-plane.json"
+
+static const char *fresh_dir(const char *name) {
+    const char *dir = test_path(test_temp_dir(), name);
+    static char copy[8][1024];
+    static int next;
+    char *out = copy[next++ % 8];
+    snprintf(out, 1024, "%s", dir);
+    mkdir(out, 0755);
+    return out;
+}
+
+static char *read_whole(const char *path, size_t *out_size) {
+    FILE *f = fopen(path, "rb");
+    if (!f) fail_msg("%s was not written", path);
+    fseek(f, 0, SEEK_END);
+    long size = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *data = malloc((size_t)size + 1);
+    assert_non_null(data);
+    assert_int_equal(fread(data, 1, (size_t)size, f), (size_t)size);
+    fclose(f);
+    *out_size = (size_t)size;
+    return data;
+}
+
+/* The names in dir, sorted, joined by spaces. */
+static void list_dir(const char *dir, char *out, size_t out_size) {
+    struct dirent **entries = NULL;
+    int n = scandir(dir, &entries, NULL, alphasort);
+    assert_true(n >= 0);
+    out[0] = 0;
+    for (int i = 0; i < n; i++) {
+        if (entries[i]->d_name[0] != '.') {
+            strncat(out, entries[i]->d_name, out_size - strlen(out) - 2);
+            strncat(out, " ", out_size - strlen(out) - 1);
+        }
+        free(entries[i]);
+    }
+    free(entries);
+}
+
+static void run_ok(const char *arguments) {
+    const char *err = NULL;
+    int status = test_run_meso(arguments, &err);
+    if (status != 0) fail_msg("meso %s: status %d, stderr: %s", arguments, status, err);
+}
+
+static void test_app_render_writes_png_of_the_asked_size(void **state) {
+    (void)state;
+    const char *dir = fresh_dir("render-size");
+    char args[4096];
+    snprintf(args, sizeof(args), "render %s -o %s --size 64x64 --coverage %s", BRICKS,
+             test_path(dir, "x.png"), test_path(dir, "x.coverage.png"));
+    run_ok(args);
+    meso_context *ctx = test_context(1);
+    meso_image *image = NULL, *coverage = NULL;
+    assert_int_equal(meso_image_load_png(ctx, test_path(dir, "x.png"), &image), MESO_OK);
+    assert_int_equal(image->width, 64);
+    assert_int_equal(image->height, 64);
+    assert_int_equal(meso_image_load_png(ctx, test_path(dir, "x.coverage.png"), &coverage),
+                     MESO_OK);
+    assert_int_equal(coverage->width, 64);
+    /* The bricks plane fills part of the view: some pixels are covered. */
+    float covered = 0.0f;
+    for (int i = 0; i < 64 * 64; i++) covered += coverage->pixels[i * coverage->channels];
+    assert_true(covered > 0.0f);
+    meso_image_destroy(coverage);
+    meso_image_destroy(image);
+    meso_context_destroy(ctx);
+
+    char names[4096];
+    list_dir(dir, names, sizeof(names));
+    assert_string_equal(names, "x.coverage.png x.png "); /* no temporary file left */
+}
+
+static void test_app_render_same_bytes_for_any_thread_count(void **state) {
+    (void)state;
+    const char *dir = fresh_dir("render-threads");
+    char args[4096];
+    snprintf(args, sizeof(args), "render %s -o %s --size 64x64 --threads 1 --quiet", BRICKS,
+             test_path(dir, "one.png"));
+    run_ok(args);
+    snprintf(args, sizeof(args), "render %s -o %s --size 64x64 --threads 2 --quiet", BRICKS,
+             test_path(dir, "two.png"));
+    run_ok(args);
+    size_t size_one = 0, size_two = 0;
+    char *one = read_whole(test_path(dir, "one.png"), &size_one);
+    char *two = read_whole(test_path(dir, "two.png"), &size_two);
+    assert_int_equal(size_one, size_two);
+    assert_memory_equal(one, two, size_one);
+    free(one);
+    free(two);
+    char names[4096];
+    list_dir(dir, names, sizeof(names));
+    assert_string_equal(names, "one.png two.png ");
+}
+
+static void test_app_render_techniques_writes_images_sheet_and_results(void **state) {
+    (void)state;
+    const char *dir = fresh_dir("render-techniques");
+    char args[4096];
+    snprintf(args, sizeof(args), "render %s --techniques flat,bump -o %s --size 32x32 --frames 1",
+             BRICKS, dir);
+    run_ok(args);
+    const char *files[] = {"flat.png",  "flat.coverage.png", "bump.png",
+                           "sheet.png", "results.csv",       "results.json"};
+    for (size_t i = 0; i < sizeof(files) / sizeof(files[0]); i++) {
+        struct stat st;
+        if (stat(test_path(dir, files[i]), &st) != 0 || st.st_size == 0)
+            fail_msg("%s/%s missing", dir, files[i]);
+    }
+    size_t size = 0;
+    char *csv = read_whole(test_path(dir, "results.csv"), &size);
+    csv[size] = 0;
+    assert_non_null(strstr(csv, "scene,technique,status"));
+    assert_non_null(strstr(csv, ",flat,ok,"));
+    assert_non_null(strstr(csv, ",bump,ok,"));
+    free(csv);
+}
+
+static void test_app_info_describes_the_example_and_its_render(void **state) {
+    (void)state;
+    const char *dir = fresh_dir("info");
+    char args[4096];
+    snprintf(args, sizeof(args), "info %s", BRICKS);
+    run_ok(args);
+    snprintf(args, sizeof(args), "render %s -o %s --size 16x8 --quiet", BRICKS,
+             test_path(dir, "small.png"));
+    run_ok(args);
+    snprintf(args, sizeof(args), "info %s", test_path(dir, "small.png"));
+    run_ok(args);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_app_render_writes_png_of_the_asked_size),
+        cmocka_unit_test(test_app_render_same_bytes_for_any_thread_count),
+        cmocka_unit_test(test_app_render_techniques_writes_images_sheet_and_results),
+        cmocka_unit_test(test_app_info_describes_the_example_and_its_render),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

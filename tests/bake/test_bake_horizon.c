@@ -1,0 +1,124 @@
+/* Horizon maps (bake_horizon.h): known horizons of simple fields, interpolation between
+ * azimuths, errors, and byte identity across thread counts. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "test_util.h"
+
+static meso_heightfield *make_field(meso_context *ctx, int w, int h, float value) {
+    meso_heightfield *hf = NULL;
+    assert_int_equal(meso_heightfield_create_constant(ctx, w, h, value, &hf), MESO_OK);
+    return hf;
+}
+
+static float slope_at(const meso_horizon_map *m, int i, int j, int k) {
+    return m
+        ->slopes[((size_t)j * (size_t)m->width + (size_t)i) * (size_t)m->num_azimuths + (size_t)k];
+}
+
+static void test_flat_field_has_horizon_zero_everywhere(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    meso_heightfield *hf = make_field(ctx, 40, 24, 0.7f);
+    meso_horizon_map *map = NULL;
+    assert_int_equal(meso_bake_horizon(ctx, hf, NULL, &map), MESO_OK);
+    assert_int_equal(map->num_azimuths, 8);
+    assert_true(map->max_distance == 64.0f);
+    for (size_t k = 0; k < (size_t)40 * 24 * 8; ++k) assert_true(map->slopes[k] == 0.0f);
+    meso_horizon_map_destroy(map);
+    meso_heightfield_destroy(hf);
+    meso_context_destroy(ctx);
+}
+
+/* One texel at full height on a zero field: seen from 5 texels to its left, the horizon toward
+ * +u has slope 1 / (5 / 64) (rise 1 over 5 texels of a 64-texel tile); toward -u it is 0. */
+static void test_pillar_gives_its_angle_at_its_distance(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(1);
+    meso_heightfield *hf = make_field(ctx, 64, 64, 0.0f);
+    hf->heights[32 * 64 + 32] = 1.0f;
+    meso_heightfield_update_hash(hf);
+    meso_horizon_map *map = NULL;
+    /* 12 azimuths: the general (bilinear) march; azimuth 3 is phi = 90 deg */
+    assert_int_equal(meso_bake_horizon(ctx, hf,
+                                       &(meso_horizon_desc){.num_azimuths = 12, .max_distance = 16},
+                                       &map),
+                     MESO_OK);
+    assert_true(fabsf(slope_at(map, 27, 32, 0) - 12.8f) < 1e-4f);
+    assert_true(fabsf(slope_at(map, 32, 37, 3) - 12.8f) < 1e-4f);
+    assert_true(slope_at(map, 27, 32, 6) == 0.0f);
+    meso_horizon_map_destroy(map);
+    /* 8 azimuths: the texel-aligned march */
+    assert_int_equal(meso_bake_horizon(ctx, hf, &(meso_horizon_desc){.max_distance = 16}, &map),
+                     MESO_OK);
+    assert_true(fabsf(slope_at(map, 27, 32, 0) - 12.8f) < 1e-4f);
+    assert_true(slope_at(map, 27, 32, 4) == 0.0f);
+    /* +v is up in the image: from 5 rows below the pillar, azimuth 2 (phi = 90 deg) sees it */
+    assert_true(fabsf(slope_at(map, 32, 37, 2) - 12.8f) < 1e-4f);
+    assert_true(slope_at(map, 32, 37, 6) == 0.0f);
+    /* beyond max_distance nothing is seen */
+    assert_true(slope_at(map, 10, 32, 0) == 0.0f);
+    /* halfway between azimuths 0 and 1 the slope is their mean */
+    float mid = meso_horizon_map_slope(map, 27, 32, (float)(M_PI / 8.0));
+    assert_true(fabsf(mid - 0.5f * (slope_at(map, 27, 32, 0) + slope_at(map, 27, 32, 1))) < 1e-5f);
+    meso_horizon_map_destroy(map);
+    meso_heightfield_destroy(hf);
+    meso_context_destroy(ctx);
+}
+
+static void test_bad_desc_fields_are_named(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(1);
+    meso_heightfield *hf = make_field(ctx, 8, 8, 0.5f);
+    meso_horizon_map *map = (meso_horizon_map *)1;
+    assert_int_equal(meso_bake_horizon(ctx, hf, &(meso_horizon_desc){.num_azimuths = 65}, &map),
+                     MESO_ERROR_INVALID_ARGUMENT);
+    assert_null(map);
+    assert_non_null(strstr(meso_context_last_error(ctx), "num_azimuths"));
+    assert_int_equal(meso_bake_horizon(ctx, hf, &(meso_horizon_desc){.max_distance = -3}, &map),
+                     MESO_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(meso_context_last_error(ctx), "max_distance"));
+    assert_int_equal(meso_bake_horizon(ctx, NULL, NULL, &map), MESO_ERROR_INVALID_ARGUMENT);
+    meso_heightfield_destroy(hf);
+    meso_context_destroy(ctx);
+}
+
+static void test_one_and_two_threads_bake_the_same_bytes(void **state) {
+    (void)state;
+    meso_context *one = test_context(1), *two = test_context(2);
+    meso_heightfield *hf = NULL;
+    meso_heightfield_desc desc = {.kind = MESO_HEIGHTFIELD_BRICKS, .resolution = 96};
+    assert_int_equal(meso_heightfield_create_procedural(one, &desc, &hf, NULL), MESO_OK);
+    meso_horizon_map *a = NULL, *b = NULL;
+    assert_int_equal(meso_bake_horizon(one, hf, NULL, &a), MESO_OK);
+    assert_int_equal(meso_bake_horizon(two, hf, NULL, &b), MESO_OK);
+    assert_memory_equal(a->slopes, b->slopes, meso_horizon_map_memory(a));
+    bool any = false;
+    for (size_t k = 0; k < meso_horizon_map_memory(a) / sizeof(float); ++k)
+        any |= a->slopes[k] > 0.0f;
+    assert_true(any); /* bricks have mortar grooves: some horizon is above the tangent plane */
+    meso_horizon_map_destroy(a);
+    meso_horizon_map_destroy(b);
+    /* the general march too */
+    assert_int_equal(meso_bake_horizon(one, hf, &(meso_horizon_desc){.num_azimuths = 6}, &a),
+                     MESO_OK);
+    assert_int_equal(meso_bake_horizon(two, hf, &(meso_horizon_desc){.num_azimuths = 6}, &b),
+                     MESO_OK);
+    assert_memory_equal(a->slopes, b->slopes, meso_horizon_map_memory(a));
+    meso_horizon_map_destroy(a);
+    meso_horizon_map_destroy(b);
+    meso_heightfield_destroy(hf);
+    meso_context_destroy(one);
+    meso_context_destroy(two);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_flat_field_has_horizon_zero_everywhere),
+        cmocka_unit_test(test_pillar_gives_its_angle_at_its_distance),
+        cmocka_unit_test(test_bad_desc_fields_are_named),
+        cmocka_unit_test(test_one_and_two_threads_bake_the_same_bytes),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

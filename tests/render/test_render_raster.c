@@ -1,0 +1,460 @@
+/* The rasterizer: exact coverage (top-left rule), clipping, depth test, supersampling, the ray
+ * mapping shared with the reference, wireframe, depth maps, and renderer errors. */
+#include <math.h>
+
+#include "raster_internal.h"
+#include "render_test_scene.h"
+
+/* ---- A counting technique: every covered sample reaches shade (discarded, so the depth
+ * buffer never hides a second fragment). ---------------------------------------------------- */
+
+static int *g_counts;
+
+static void count_shade(const void *state, const meso_frame *frame, const meso_object *object,
+                        meso_fragment *fragments, size_t count) {
+    (void)state;
+    (void)object;
+    for (size_t i = 0; i < count; i++) {
+        g_counts[(int)fragments[i].y * frame->width + (int)fragments[i].x]++;
+        fragments[i].discard = true;
+    }
+}
+
+static const meso_technique count_technique = {
+    .info = {.name = "count",
+             .kind = MESO_TECHNIQUE_PER_PIXEL,
+             .accepts = MESO_TECHNIQUE_ACCEPTS_NONE},
+    .shade = count_shade,
+};
+
+/* Rasterize the scene's objects with `technique` straight through raster_draw. */
+static void draw_with(meso_context *ctx, const meso_scene *scene, const meso_technique *technique,
+                      int width, int height, float *color, float *coverage, float *depth,
+                      meso_frame *out_frame) {
+    meso_frame frame;
+    meso_frame_init(&frame, scene, width, height);
+    raster_object objects[TEST_SCENE_MAX_OBJECTS];
+    const meso_mesh *meshes[TEST_SCENE_MAX_OBJECTS];
+    for (int i = 0; i < scene->num_objects; i++) {
+        objects[i] = (raster_object){&scene->objects[i], technique, NULL};
+        meshes[i] = scene->objects[i].mesh;
+    }
+    raster_pass pass;
+    memset(&pass, 0, sizeof(pass));
+    uint64_t triangles = 0, fragments = 0;
+    assert_int_equal(raster_draw(ctx, &pass, &frame, objects, meshes, scene->num_objects, false,
+                                 color, coverage, depth, &triangles, &fragments),
+                     MESO_OK);
+    raster_pass_release(&pass);
+    if (out_frame) *out_frame = frame;
+}
+
+/* Screen position of a world point (double precision, independent of the rasterizer). */
+static void project(const meso_frame *frame, meso_vec3 p, double *sx, double *sy) {
+    const float *m = frame->view_projection.m;
+    double x = m[0] * p.x + m[4] * p.y + m[8] * p.z + m[12];
+    double y = m[1] * p.x + m[5] * p.y + m[9] * p.z + m[13];
+    double w = m[3] * p.x + m[7] * p.y + m[11] * p.z + m[15];
+    *sx = (x / w * 0.5 + 0.5) * frame->width;
+    *sy = (0.5 - 0.5 * y / w) * frame->height;
+}
+
+/* Signed distance (samples) of (x, y) inside the convex screen polygon: > 0 inside. */
+static double inside_distance(const double *px, const double *py, int n, double x, double y) {
+    double area = 0.0;
+    for (int i = 0; i < n; i++) area += px[i] * py[(i + 1) % n] - px[(i + 1) % n] * py[i];
+    double best = INFINITY;
+    for (int i = 0; i < n; i++) {
+        double ex = px[(i + 1) % n] - px[i], ey = py[(i + 1) % n] - py[i];
+        double d = (ex * (y - py[i]) - ey * (x - px[i])) / sqrt(ex * ex + ey * ey);
+        d = area > 0 ? d : -d;
+        best = d < best ? d : best;
+    }
+    return best;
+}
+
+/* Counts every sample of the scene once; then: no sample twice, every sample well inside the
+ * outline (world points `outline`) once, every sample well outside never. */
+static void check_exact_coverage(meso_context *ctx, const meso_scene *scene, int width, int height,
+                                 const meso_vec3 *outline, int n) {
+    size_t samples = (size_t)width * (size_t)height;
+    float *color = malloc(3 * samples * sizeof(float));
+    float *coverage = malloc(samples * sizeof(float));
+    float *depth = malloc(samples * sizeof(float));
+    g_counts = calloc(samples, sizeof(int));
+    meso_frame frame;
+    draw_with(ctx, scene, &count_technique, width, height, color, coverage, depth, &frame);
+    double px[64], py[64];
+    for (int i = 0; i < n; i++) project(&frame, outline[i], &px[i], &py[i]);
+    int inside = 0;
+    for (int y = 0; y < height; y++) {
+        for (int x = 0; x < width; x++) {
+            int c = g_counts[y * width + x];
+            double d = inside_distance(px, py, n, x + 0.5, y + 0.5);
+            if (c > 1) fail_msg("sample (%d, %d) covered %d times", x, y, c);
+            if (d > 0.01 && c != 1) fail_msg("sample (%d, %d) inside not covered", x, y);
+            if (d < -0.01 && c != 0) fail_msg("sample (%d, %d) outside covered", x, y);
+            inside += c;
+        }
+    }
+    assert_true(inside > (int)(samples / 10));
+    free(g_counts);
+    free(color);
+    free(coverage);
+    free(depth);
+}
+
+static void test_raster_plane_of_many_triangles_covers_each_sample_once(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    test_scene ts;
+    test_scene_init(&ts, 97, 83);
+    test_scene_add(&ts, test_shape(ctx, MESO_SHAPE_PLANE, 1.6f, 17, (meso_vec3){0}), "flat");
+    meso_vec3 outline[4] = {{-0.8f, 0, -0.8f}, {0.8f, 0, -0.8f}, {0.8f, 0, 0.8f}, {-0.8f, 0, 0.8f}};
+    check_exact_coverage(ctx, &ts.scene, 97, 83, outline, 4);
+    /* straight down: grid lines parallel to the sample rows and columns */
+    ts.scene.camera = (meso_camera){{0, 2, 0}, {0, 0, 0}, {0, 0, -1}, 40.0f};
+    check_exact_coverage(ctx, &ts.scene, 64, 64, outline, 4);
+    test_scene_free(&ts);
+    meso_context_destroy(ctx);
+}
+
+/* A disc of thin triangles around a centre that projects exactly onto a sample centre. */
+static meso_mesh *fan_mesh(meso_context *ctx, int n, float radius) {
+    meso_mesh *mesh = NULL;
+    assert_int_equal(meso_mesh_create(ctx, (size_t)n + 1, (size_t)n, false, &mesh), MESO_OK);
+    mesh->positions[0] = (meso_vec3){0, 0, 0};
+    for (int i = 0; i < n; i++) {
+        float a = 2.0f * MESO_PI * (float)i / (float)n;
+        mesh->positions[i + 1] = (meso_vec3){radius * cosf(a), 0.0f, -radius * sinf(a)};
+    }
+    for (int i = 0; i <= n; i++) mesh->normals[i] = (meso_vec3){0, 1, 0};
+    for (int i = 0; i < n; i++) {
+        mesh->indices[3 * i + 0] = 0;
+        mesh->indices[3 * i + 1] = (uint32_t)(i + 1);
+        mesh->indices[3 * i + 2] = (uint32_t)((i + 1) % n + 1);
+    }
+    return mesh;
+}
+
+static void test_raster_fan_of_thin_triangles_covers_each_sample_once(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    test_scene ts;
+    test_scene_init(&ts, 65, 65);
+    ts.scene.camera = (meso_camera){{0, 2, 0}, {0, 0, 0}, {0, 0, -1}, 40.0f};
+    int n = 48;
+    test_scene_add(&ts, fan_mesh(ctx, n, 0.6f), "flat");
+    meso_vec3 outline[48];
+    for (int i = 0; i < n; i++) outline[i] = ts.objects[0].mesh->positions[i + 1];
+    check_exact_coverage(ctx, &ts.scene, 65, 65, outline, n);
+    /* oblique view as well */
+    ts.scene.camera = (meso_camera){{0.3f, 1.0f, 1.4f}, {0, 0, 0}, {0, 1, 0}, 50.0f};
+    check_exact_coverage(ctx, &ts.scene, 80, 61, outline, n);
+    test_scene_free(&ts);
+    meso_context_destroy(ctx);
+}
+
+static void check_camera_close_to_plane(float size) {
+    meso_context *ctx = test_context(2);
+    test_scene ts;
+    test_scene_init(&ts, 64, 48);
+    ts.scene.camera = (meso_camera){{0, 0.0005f, 0}, {0, 0.0005f, -1}, {0, 1, 0}, 40.0f};
+    test_scene_add(&ts, test_shape(ctx, MESO_SHAPE_PLANE, size, 1, (meso_vec3){0}), "flat");
+    meso_framebuffer *fb = NULL;
+    assert_int_equal(meso_render_scene(ctx, &ts.scene, NULL, &fb), MESO_OK);
+    for (int i = 0; i < 64 * 48 * 3; i++) assert_true(isfinite(fb->color[i]));
+    for (int y = 0; y < 48; y++) {
+        for (int x = 0; x < 64; x++) {
+            float c = fb->coverage[y * 64 + x];
+            if (y <= 22) assert_true(c == 0.0f); /* sky: above the horizon at row 24 */
+            if (y >= 25) {
+                assert_true(c == 1.0f);
+                assert_true(isfinite(fb->depth[y * 64 + x]) && fb->depth[y * 64 + x] > 0.0f);
+            }
+        }
+    }
+    meso_framebuffer_destroy(fb);
+    test_scene_free(&ts);
+    meso_context_destroy(ctx);
+}
+
+static void test_raster_camera_close_to_large_plane_clips_at_near_plane(void **state) {
+    (void)state;
+    check_camera_close_to_plane(100.0f);
+    /* vertices so far out that the guard band clips them too */
+    check_camera_close_to_plane(1e5f);
+}
+
+static void render_two_planes(meso_context *ctx, bool high_first, meso_framebuffer **out) {
+    test_scene ts;
+    test_scene_init(&ts, 48, 40);
+    meso_mesh *low = test_shape(ctx, MESO_SHAPE_PLANE, 1.5f, 3, (meso_vec3){0.2f, 0.0f, 0.0f});
+    meso_mesh *high = test_shape(ctx, MESO_SHAPE_PLANE, 1.0f, 2, (meso_vec3){0.0f, 0.2f, 0.0f});
+    meso_object *a = test_scene_add(&ts, high_first ? high : low, "flat");
+    meso_object *b = test_scene_add(&ts, high_first ? low : high, "flat");
+    (high_first ? a : b)->material.albedo = (meso_vec3){0.9f, 0.1f, 0.1f};
+    (high_first ? b : a)->material.albedo = (meso_vec3){0.1f, 0.1f, 0.9f};
+    assert_int_equal(meso_render_scene(ctx, &ts.scene, NULL, out), MESO_OK);
+    test_scene_free(&ts);
+}
+
+static void test_raster_nearer_surface_wins_in_any_order(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    meso_framebuffer *a = NULL, *b = NULL;
+    render_two_planes(ctx, true, &a);
+    render_two_planes(ctx, false, &b);
+    size_t n = (size_t)a->width * (size_t)a->height;
+    assert_memory_equal(a->color, b->color, 3 * n * sizeof(float));
+    assert_memory_equal(a->depth, b->depth, n * sizeof(float));
+    /* the centre shows the high (red) plane */
+    size_t centre = (size_t)(a->height / 2) * (size_t)a->width + (size_t)(a->width / 2);
+    assert_true(a->color[3 * centre] > a->color[3 * centre + 2]);
+    meso_framebuffer_destroy(a);
+    meso_framebuffer_destroy(b);
+    meso_context_destroy(ctx);
+}
+
+static void test_raster_supersampling_averages_the_fine_grid(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    test_scene ts;
+    test_scene_init(&ts, 40, 30);
+    test_scene_add(&ts, test_shape(ctx, MESO_SHAPE_SPHERE, 0.8f, 24, (meso_vec3){0}), "flat");
+    meso_framebuffer *fine = NULL, *ss = NULL;
+    meso_renderer *r = NULL;
+    assert_int_equal(meso_renderer_create(ctx, &ts.scene, &(meso_render_desc){.samples = 4}, &r),
+                     MESO_OK);
+    assert_int_equal(meso_framebuffer_create(ctx, 40, 30, &ss), MESO_OK);
+    assert_int_equal(meso_renderer_render(r, ss), MESO_OK);
+    meso_renderer_destroy(r);
+    ts.scene.width = 80, ts.scene.height = 60;
+    assert_int_equal(meso_render_scene(ctx, &ts.scene, NULL, &fine), MESO_OK);
+    int fractional = 0;
+    for (int y = 0; y < 30; y++) {
+        for (int x = 0; x < 40; x++) {
+            float cov = 0.0f, c = 0.0f, d = INFINITY;
+            for (int j = 0; j < 2; j++)
+                for (int i = 0; i < 2; i++) {
+                    size_t s = (size_t)(2 * y + j) * 80 + (size_t)(2 * x + i);
+                    cov += fine->coverage[s];
+                    c += fine->color[3 * s];
+                    d = fminf(d, fine->depth[s]);
+                }
+            size_t p = (size_t)y * 40 + (size_t)x;
+            assert_true(ss->coverage[p] == cov * 0.25f);
+            assert_true(fabsf(ss->color[3 * p] - c * 0.25f) < 1e-6f);
+            assert_true(ss->depth[p] == d);
+            fractional += ss->coverage[p] > 0.0f && ss->coverage[p] < 1.0f;
+        }
+    }
+    assert_true(fractional > 10); /* the silhouette has partial pixels */
+    meso_framebuffer_destroy(fine);
+    meso_framebuffer_destroy(ss);
+    test_scene_free(&ts);
+    meso_context_destroy(ctx);
+}
+
+/* ---- The ray mapping: fragments agree with meso_frame_ray_direction ----------------------- */
+
+static const meso_mesh *g_mesh;
+static double g_worst;
+static int g_checked;
+
+static void ray_shade(const void *state, const meso_frame *frame, const meso_object *object,
+                      meso_fragment *fragments, size_t count) {
+    (void)state;
+    (void)object;
+    for (size_t i = 0; i < count; i++) {
+        const meso_fragment *f = &fragments[i];
+        const uint32_t *idx = g_mesh->indices + 3 * f->triangle;
+        /* the surface point from the barycentrics alone, projected back to the screen */
+        meso_vec3 p = meso_vec3_barycentric(g_mesh->positions[idx[0]], g_mesh->positions[idx[1]],
+                                            g_mesh->positions[idx[2]], f->b0, f->b1, f->b2);
+        double sx, sy;
+        project(frame, p, &sx, &sy);
+        double err = fmax(fabs(sx - f->x), fabs(sy - f->y));
+        g_worst = err > g_worst ? err : g_worst;
+        /* the position lies on the sample's ray at view depth `depth` */
+        meso_vec3 dir = meso_frame_ray_direction(frame, f->x, f->y);
+        assert_true(fabsf(meso_vec3_dot(dir, frame->forward) - 1.0f) < 1e-5f);
+        meso_vec3 q = meso_vec3_madd(frame->eye, dir, f->depth);
+        assert_true(meso_vec3_length(meso_vec3_sub(q, p)) < 1e-4f);
+        assert_true(fabsf(meso_vec3_dot(meso_vec3_sub(f->position, frame->eye), frame->forward) -
+                          f->depth) < 1e-4f);
+        g_checked++;
+    }
+}
+
+static void test_raster_fragments_lie_on_the_frame_rays(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(1);
+    test_scene ts;
+    test_scene_init(&ts, 70, 50);
+    ts.scene.camera = (meso_camera){{0.4f, 1.0f, 1.5f}, {0, 0.1f, 0}, {0, 1, 0}, 45.0f};
+    meso_mesh *sphere = test_shape(ctx, MESO_SHAPE_SPHERE, 0.7f, 20, (meso_vec3){0});
+    test_scene_add(&ts, sphere, "flat");
+    const meso_technique ray_technique = {
+        .info = {.name = "ray", .accepts = MESO_TECHNIQUE_ACCEPTS_NONE}, .shade = ray_shade};
+    size_t n = 70 * 50;
+    float *color = malloc(3 * n * sizeof(float)), *cov = malloc(n * sizeof(float));
+    float *depth = malloc(n * sizeof(float));
+    g_mesh = sphere;
+    g_worst = 0.0;
+    g_checked = 0;
+    draw_with(ctx, &ts.scene, &ray_technique, 70, 50, color, cov, depth, NULL);
+    assert_true(g_checked > 500);
+    /* vertices snap to 1/256 sample: positions agree to that */
+    if (!(g_worst < 1.0 / 256.0)) fail_msg("fragment and ray disagree by %g samples", g_worst);
+    free(color);
+    free(cov);
+    free(depth);
+    test_scene_free(&ts);
+    meso_context_destroy(ctx);
+}
+
+static void test_raster_wireframe_draws_edges(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    test_scene ts;
+    test_scene_init(&ts, 64, 64);
+    test_scene_add(&ts, test_shape(ctx, MESO_SHAPE_SPHERE, 0.8f, 12, (meso_vec3){0}), "flat");
+    meso_framebuffer *plain = NULL, *wire = NULL;
+    assert_int_equal(meso_render_scene(ctx, &ts.scene, NULL, &plain), MESO_OK);
+    assert_int_equal(
+        meso_render_scene(ctx, &ts.scene, &(meso_render_desc){.wireframe = true}, &wire), MESO_OK);
+    int changed = 0;
+    for (int i = 0; i < 64 * 64; i++) {
+        changed += plain->color[3 * i] != wire->color[3 * i];
+        assert_true(plain->coverage[i] == wire->coverage[i]);
+    }
+    assert_true(changed > 100);
+    meso_framebuffer_destroy(plain);
+    meso_framebuffer_destroy(wire);
+    test_scene_free(&ts);
+    meso_context_destroy(ctx);
+}
+
+static void test_raster_depth_map_is_thread_independent_and_bounded(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(1);
+    meso_mesh *sphere = test_shape(ctx, MESO_SHAPE_SPHERE, 0.7f, 24, (meso_vec3){0});
+    test_scene ts;
+    test_scene_init(&ts, 50, 50);
+    meso_frame frame;
+    meso_frame_init(&frame, &ts.scene, 50, 50);
+    float *a = malloc(50 * 50 * sizeof(float)), *b = malloc(50 * 50 * sizeof(float));
+    assert_int_equal(meso_raster_depth_map(ctx, sphere, frame.view_projection, 50, 50, a), MESO_OK);
+    meso_context_set_num_threads(ctx, 3);
+    assert_int_equal(meso_raster_depth_map(ctx, sphere, frame.view_projection, 50, 50, b), MESO_OK);
+    assert_memory_equal(a, b, 50 * 50 * sizeof(float));
+    int covered = 0;
+    for (int i = 0; i < 50 * 50; i++) {
+        if (isinf(a[i])) continue;
+        assert_true(a[i] > 0.0f && a[i] < 1.0f);
+        covered++;
+    }
+    assert_true(covered > 200 && covered < 50 * 50);
+    assert_true(isinf(a[0]) && !isinf(a[25 * 50 + 25]));
+    free(a);
+    free(b);
+    meso_mesh_destroy(sphere);
+    meso_context_destroy(ctx);
+}
+
+/* ---- Renderer errors ------------------------------------------------------------------------ */
+
+static void test_renderer_unknown_technique_names_object_and_known_ones(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(1);
+    test_scene ts;
+    test_scene_init(&ts, 16, 16);
+    test_scene_add(&ts, test_shape(ctx, MESO_SHAPE_PLANE, 1.0f, 1, (meso_vec3){0}), "flat");
+    test_scene_add(&ts, test_shape(ctx, MESO_SHAPE_PLANE, 1.0f, 1, (meso_vec3){0}), "foo");
+    meso_renderer *r = (meso_renderer *)&ts; /* must be reset to NULL */
+    assert_int_equal(meso_renderer_create(ctx, &ts.scene, NULL, &r), MESO_ERROR_INVALID_ARGUMENT);
+    assert_null(r);
+    const char *msg = meso_context_last_error(ctx);
+    assert_non_null(strstr(msg, "objects[1]"));
+    assert_non_null(strstr(msg, "'foo'"));
+    assert_non_null(strstr(msg, "flat, bump"));
+    /* an override is checked too */
+    snprintf(ts.objects[1].technique, MESO_NAME_MAX, "flat");
+    assert_int_equal(
+        meso_renderer_create(ctx, &ts.scene, &(meso_render_desc){.technique = "nope"}, &r),
+        MESO_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(meso_context_last_error(ctx), "'nope'"));
+    test_scene_free(&ts);
+    meso_context_destroy(ctx);
+}
+
+static void test_renderer_rejects_technique_for_wrong_mesostructure(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(1);
+    test_scene ts;
+    test_scene_init(&ts, 16, 16);
+    test_scene_add(&ts, test_shape(ctx, MESO_SHAPE_PLANE, 1.0f, 1, (meso_vec3){0}), "bump");
+    meso_renderer *r = NULL;
+    assert_int_equal(meso_renderer_create(ctx, &ts.scene, NULL, &r), MESO_ERROR_INVALID_ARGUMENT);
+    const char *msg = meso_context_last_error(ctx);
+    assert_non_null(strstr(msg, "objects[0]"));
+    assert_non_null(strstr(msg, "'bump'"));
+    test_scene_free(&ts);
+    meso_context_destroy(ctx);
+}
+
+static void test_renderer_rejects_reference_mixed_with_others(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(1);
+    test_scene ts;
+    test_scene_init(&ts, 16, 16);
+    test_scene_add(&ts, test_shape(ctx, MESO_SHAPE_PLANE, 1.0f, 1, (meso_vec3){0}), "flat");
+    test_scene_add(&ts, test_shape(ctx, MESO_SHAPE_PLANE, 1.0f, 1, (meso_vec3){0}), "reference");
+    meso_renderer *r = NULL;
+    assert_int_equal(meso_renderer_create(ctx, &ts.scene, NULL, &r), MESO_ERROR_INVALID_ARGUMENT);
+    const char *msg = meso_context_last_error(ctx);
+    assert_non_null(strstr(msg, "objects[1]"));
+    assert_non_null(strstr(msg, "reference"));
+    assert_non_null(strstr(msg, "objects[0]"));
+    assert_int_equal(meso_renderer_create(ctx, &ts.scene, &(meso_render_desc){.samples = -1}, &r),
+                     MESO_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(meso_context_last_error(ctx), "samples"));
+    test_scene_free(&ts);
+    meso_context_destroy(ctx);
+}
+
+static void test_renderer_empty_scene_is_background(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    test_scene ts;
+    test_scene_init(&ts, 20, 10);
+    meso_framebuffer *fb = NULL;
+    assert_int_equal(meso_render_scene(ctx, &ts.scene, &(meso_render_desc){.samples = 2}, &fb),
+                     MESO_OK);
+    for (int i = 0; i < 200; i++) {
+        assert_true(fb->color[3 * i + 1] == 0.2f);
+        assert_true(fb->coverage[i] == 0.0f);
+        assert_true(isinf(fb->depth[i]));
+    }
+    meso_framebuffer_destroy(fb);
+    meso_context_destroy(ctx);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_raster_plane_of_many_triangles_covers_each_sample_once),
+        cmocka_unit_test(test_raster_fan_of_thin_triangles_covers_each_sample_once),
+        cmocka_unit_test(test_raster_camera_close_to_large_plane_clips_at_near_plane),
+        cmocka_unit_test(test_raster_nearer_surface_wins_in_any_order),
+        cmocka_unit_test(test_raster_supersampling_averages_the_fine_grid),
+        cmocka_unit_test(test_raster_fragments_lie_on_the_frame_rays),
+        cmocka_unit_test(test_raster_wireframe_draws_edges),
+        cmocka_unit_test(test_raster_depth_map_is_thread_independent_and_bounded),
+        cmocka_unit_test(test_renderer_unknown_technique_names_object_and_known_ones),
+        cmocka_unit_test(test_renderer_rejects_technique_for_wrong_mesostructure),
+        cmocka_unit_test(test_renderer_rejects_reference_mixed_with_others),
+        cmocka_unit_test(test_renderer_empty_scene_is_background),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,229 @@
+/* flat and bump: byte-identical images for any thread count, their shading, the registry and
+ * the shared shading functions. */
+#include <math.h>
+
+#include "render_internal.h"
+#include "render_test_scene.h"
+
+static void render_threads(test_scene *ts, const char *technique, int threads,
+                           meso_framebuffer **out) {
+    meso_context *ctx = test_context(threads);
+    assert_int_equal(
+        meso_render_scene(ctx, &ts->scene, &(meso_render_desc){.technique = technique}, out),
+        MESO_OK);
+    meso_context_destroy(ctx);
+}
+
+static void check_thread_identity(test_scene *ts, const char *technique) {
+    meso_framebuffer *fb[3] = {NULL, NULL, NULL};
+    const int threads[3] = {1, 2, 4};
+    for (int i = 0; i < 3; i++) render_threads(ts, technique, threads[i], &fb[i]);
+    size_t n = (size_t)fb[0]->width * (size_t)fb[0]->height;
+    int covered = 0;
+    for (size_t p = 0; p < n; p++) covered += fb[0]->coverage[p] > 0.0f;
+    assert_true(covered > (int)(n / 8));
+    for (int i = 1; i < 3; i++) {
+        assert_memory_equal(fb[0]->color, fb[i]->color, 3 * n * sizeof(float));
+        assert_memory_equal(fb[0]->depth, fb[i]->depth, n * sizeof(float));
+        assert_memory_equal(fb[0]->coverage, fb[i]->coverage, n * sizeof(float));
+    }
+    for (int i = 0; i < 3; i++) meso_framebuffer_destroy(fb[i]);
+}
+
+static void test_flat_and_bump_are_identical_for_1_2_4_threads_on_a_sphere(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(1);
+    test_scene ts;
+    test_scene_init(&ts, 160, 120);
+    meso_object *o =
+        test_scene_add(&ts, test_shape(ctx, MESO_SHAPE_SPHERE, 0.9f, 64, (meso_vec3){0}), "flat");
+    test_object_bricks(ctx, o);
+    check_thread_identity(&ts, "flat");
+    check_thread_identity(&ts, "bump");
+    test_scene_free(&ts);
+    meso_context_destroy(ctx);
+}
+
+static void test_flat_and_bump_are_identical_for_1_2_4_threads_on_a_plane(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(1);
+    test_scene ts;
+    test_scene_init(&ts, 150, 100);
+    meso_object *o =
+        test_scene_add(&ts, test_shape(ctx, MESO_SHAPE_PLANE, 2.0f, 8, (meso_vec3){0}), "flat");
+    test_object_bricks(ctx, o);
+    o->material.specular = (meso_vec3){0.3f, 0.3f, 0.3f};
+    check_thread_identity(&ts, "flat");
+    check_thread_identity(&ts, "bump");
+    test_scene_free(&ts);
+    meso_context_destroy(ctx);
+}
+
+static void test_bump_changes_shading_but_not_coverage_or_depth(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    test_scene ts;
+    test_scene_init(&ts, 96, 96);
+    meso_object *o =
+        test_scene_add(&ts, test_shape(ctx, MESO_SHAPE_PLANE, 2.0f, 4, (meso_vec3){0}), "flat");
+    test_object_bricks(ctx, o);
+    meso_framebuffer *flat = NULL, *bump = NULL;
+    assert_int_equal(
+        meso_render_scene(ctx, &ts.scene, &(meso_render_desc){.technique = "flat"}, &flat),
+        MESO_OK);
+    assert_int_equal(
+        meso_render_scene(ctx, &ts.scene, &(meso_render_desc){.technique = "bump"}, &bump),
+        MESO_OK);
+    size_t n = 96 * 96;
+    assert_memory_equal(flat->coverage, bump->coverage, n * sizeof(float));
+    assert_memory_equal(flat->depth, bump->depth, n * sizeof(float));
+    int differ = 0;
+    for (size_t i = 0; i < 3 * n; i++) differ += fabsf(flat->color[i] - bump->color[i]) > 1e-3f;
+    assert_true(differ > 100); /* mortar grooves shade differently */
+    meso_framebuffer_destroy(flat);
+    meso_framebuffer_destroy(bump);
+    test_scene_free(&ts);
+    meso_context_destroy(ctx);
+}
+
+static void test_registry_lists_flat_first_and_reference_last(void **state) {
+    (void)state;
+    size_t n = meso_technique_count();
+    assert_true(n >= 3);
+    assert_string_equal(meso_technique_get(0)->name, "flat");
+    assert_string_equal(meso_technique_get(1)->name, "bump");
+    const meso_technique_info *ref = meso_technique_get(n - 1);
+    assert_string_equal(ref->name, "reference");
+    assert_int_equal(ref->kind, MESO_TECHNIQUE_REFERENCE);
+    assert_null(meso_technique_get(n));
+    assert_ptr_equal(meso_technique_find("bump"), meso_technique_get(1));
+    assert_null(meso_technique_find("nope"));
+    assert_null(meso_technique_lookup(NULL));
+    const meso_technique *bump = meso_technique_lookup("bump");
+    assert_int_equal(bump->info.accepts, MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD);
+    assert_non_null(bump->info.paper);
+}
+
+static void test_unknown_technique_option_names_object_and_option(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(1);
+    test_scene ts;
+    test_scene_init(&ts, 16, 16);
+    meso_object *o =
+        test_scene_add(&ts, test_shape(ctx, MESO_SHAPE_PLANE, 1.0f, 1, (meso_vec3){0}), "flat");
+    snprintf(o->options[0].name, MESO_NAME_MAX, "steps");
+    o->options[0].value = 3;
+    o->num_options = 1;
+    meso_renderer *r = NULL;
+    assert_int_equal(meso_renderer_create(ctx, &ts.scene, NULL, &r), MESO_ERROR_INVALID_ARGUMENT);
+    const char *msg = meso_context_last_error(ctx);
+    assert_non_null(strstr(msg, "objects[0]"));
+    assert_non_null(strstr(msg, "steps"));
+    const char *const known[] = {"steps", NULL};
+    assert_int_equal(meso_technique_check_options(ctx, o, "x", known), MESO_OK);
+    test_scene_free(&ts);
+    meso_context_destroy(ctx);
+}
+
+static void test_shade_point_follows_the_shading_model(void **state) {
+    (void)state;
+    test_scene ts;
+    test_scene_init(&ts, 8, 8);
+    ts.scene.lights[0].direction = (meso_vec3){0, 1, 0};
+    meso_object o;
+    memset(&o, 0, sizeof(o));
+    o.material.albedo = (meso_vec3){0.5f, 0.25f, 1.0f};
+    meso_frame frame;
+    meso_frame_init(&frame, &ts.scene, 8, 8);
+    meso_vec3 c = meso_shade_point(&frame, &o, (meso_vec3){0, 0, 0}, (meso_vec3){0, 1, 0},
+                                   (meso_vec2){0, 0}, NULL);
+    assert_true(fabsf(c.x - 0.5f * 1.1f) < 1e-6f && fabsf(c.y - 0.25f * 1.1f) < 1e-6f);
+    float shadowed = 0.0f;
+    c = meso_shade_point(&frame, &o, (meso_vec3){0, 0, 0}, (meso_vec3){0, 1, 0}, (meso_vec2){0, 0},
+                         &shadowed);
+    assert_true(fabsf(c.x - 0.05f) < 1e-6f);
+    /* facing away: ambient only, and no specular */
+    o.material.specular = (meso_vec3){1, 1, 1};
+    c = meso_shade_point(&frame, &o, (meso_vec3){0, 0, 0}, (meso_vec3){0, -1, 0}, (meso_vec2){0, 0},
+                         NULL);
+    assert_true(fabsf(c.x - 0.05f) < 1e-6f);
+}
+
+/* The colour map in the shading equals meso_texture_sample's bilinear level-0 lookup, for
+ * repeat and clamp, out-of-range and non-finite uvs, in single points and in batches. */
+static void test_shading_samples_the_color_map_like_meso_texture_sample(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(1);
+    meso_image *image = NULL;
+    assert_int_equal(meso_image_create(ctx, 5, 3, 3, &image), MESO_OK);
+    for (int i = 0; i < 5 * 3 * 3; i++) image->pixels[i] = (float)((i * 37) % 11) / 10.0f;
+    test_scene ts;
+    test_scene_init(&ts, 8, 8);
+    ts.scene.num_lights = 0;
+    ts.scene.ambient = (meso_vec3){1.0f, 1.0f, 1.0f};
+    meso_frame frame;
+    meso_frame_init(&frame, &ts.scene, 8, 8);
+    const meso_vec2 uvs[] = {{0.1f, 0.2f}, {0.95f, 0.03f}, {-0.3f, 1.7f}, {1.0f, 1.0f},
+                             {0.0f, 0.0f}, {-1e-9f, 0.5f}, {3.2f, -7.9f}, {0.5f, NAN},
+                             {INFINITY, 0.5f}, {0.4999f, 0.5001f}, {123.456f, 0.25f}};
+    size_t n = sizeof(uvs) / sizeof(uvs[0]);
+    for (int wrap = 0; wrap < 2; wrap++) {
+        meso_texture *texture = NULL;
+        assert_int_equal(meso_texture_create(ctx, image, wrap ? MESO_WRAP_CLAMP : MESO_WRAP_REPEAT,
+                                             false, &texture),
+                         MESO_OK);
+        meso_object o;
+        memset(&o, 0, sizeof(o));
+        o.material.albedo = (meso_vec3){1.0f, 1.0f, 1.0f};
+        o.material.color_map = texture;
+        meso_fragment frags[16];
+        memset(frags, 0, sizeof(frags));
+        for (size_t i = 0; i < n; i++) {
+            meso_vec4 want = meso_texture_sample(texture, uvs[i], 0.0f, MESO_FILTER_BILINEAR);
+            meso_vec3 got = meso_shade_point(&frame, &o, (meso_vec3){0, 0, 0}, (meso_vec3){0, 1, 0},
+                                             uvs[i], NULL);
+            if (fabsf(got.x - want.x) > 1e-6f || fabsf(got.y - want.y) > 1e-6f ||
+                fabsf(got.z - want.z) > 1e-6f)
+                fail_msg("wrap %d uv (%g, %g): %g %g %g, want %g %g %g", wrap, uvs[i].x, uvs[i].y,
+                         got.x, got.y, got.z, want.x, want.y, want.z);
+            frags[i].normal = (meso_vec3){0, 1, 0};
+            frags[i].uv = uvs[i];
+        }
+        meso_shade_fragments(&frame, &o, frags, n, NULL);
+        for (size_t i = 0; i < n; i++) {
+            meso_vec3 one = meso_shade_point(&frame, &o, frags[i].position, frags[i].normal,
+                                             frags[i].uv, NULL);
+            assert_memory_equal(&one, &frags[i].color, sizeof(one)); /* the same bits */
+        }
+        meso_texture_destroy(texture);
+    }
+    meso_image_destroy(image);
+    meso_context_destroy(ctx);
+}
+
+static void test_displaced_normal_tilts_against_the_slope(void **state) {
+    (void)state;
+    meso_vec3 n = {0, 1, 0}, t = {1, 0, 0}, b = {0, 0, -1};
+    meso_vec3 flat = meso_displaced_normal(n, t, b, 0.1f, (meso_vec2){0, 0});
+    assert_true(fabsf(flat.y - 1.0f) < 1e-6f);
+    meso_vec3 tilted = meso_displaced_normal(n, t, b, 1.0f, (meso_vec2){1, 0});
+    assert_true(fabsf(tilted.x + sqrtf(0.5f)) < 1e-5f && fabsf(tilted.y - sqrtf(0.5f)) < 1e-5f);
+    /* no tangent frame: the normal itself */
+    meso_vec3 none =
+        meso_displaced_normal(n, (meso_vec3){0}, (meso_vec3){0}, 1.0f, (meso_vec2){1, 1});
+    assert_true(none.y == 1.0f);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_flat_and_bump_are_identical_for_1_2_4_threads_on_a_sphere),
+        cmocka_unit_test(test_flat_and_bump_are_identical_for_1_2_4_threads_on_a_plane),
+        cmocka_unit_test(test_bump_changes_shading_but_not_coverage_or_depth),
+        cmocka_unit_test(test_registry_lists_flat_first_and_reference_last),
+        cmocka_unit_test(test_unknown_technique_option_names_object_and_option),
+        cmocka_unit_test(test_shade_point_follows_the_shading_model),
+        cmocka_unit_test(test_displaced_normal_tilts_against_the_slope),
+        cmocka_unit_test(test_shading_samples_the_color_map_like_meso_texture_sample),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

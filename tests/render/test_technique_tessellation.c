@@ -1,0 +1,252 @@
+/* `tessellation` (Doggett & Hirche 2000): crack-free for every combination of the four edge
+ * tests on closed meshes, the base mesh when every test is off, fewer triangles when the camera
+ * moves away (view test), nothing inserted on a constant height field, deterministic. */
+#include "displace_fixture.h"
+
+extern const meso_technique meso_technique_tessellation;
+static const meso_technique *technique = &meso_technique_tessellation;
+
+static void set_tests(fixture *f, int normal, int area, int view, int limit) {
+    fixture_set_option(f, "normal_test", normal);
+    fixture_set_option(f, "area_test", area);
+    fixture_set_option(f, "view_test", view);
+    fixture_set_option(f, "limit_test", limit);
+    fixture_set_option(f, "shadows", 0);
+}
+
+static size_t triangle_count(fixture *f) {
+    void *state = NULL;
+    size_t count = fixture_geometry(f, technique, &state)->num_triangles;
+    technique->release(state);
+    return count;
+}
+
+static void check_closed_for_every_combination(fixture *f) {
+    fixture_set_option(f, "max_level", 4);
+    /* low thresholds so that every test inserts plenty */
+    fixture_set_option(f, "normal_threshold", 0.05);
+    fixture_set_option(f, "area_threshold", 0.01);
+    fixture_set_option(f, "view_threshold", 2.0);
+    size_t base = f->mesh->num_triangles, refined = 0;
+    for (int combo = 0; combo < 16; combo++) {
+        set_tests(f, combo & 1, (combo >> 1) & 1, (combo >> 2) & 1, (combo >> 3) & 1);
+        void *state = NULL;
+        const meso_mesh *mesh = fixture_geometry(f, technique, &state);
+        size_t open = fixture_count_open_edges(mesh);
+        if (open != 0)
+            fail_msg("tests normal %d area %d view %d limit %d: %zu open edges in %zu triangles",
+                     combo & 1, (combo >> 1) & 1, (combo >> 2) & 1, (combo >> 3) & 1, open,
+                     mesh->num_triangles);
+        refined += mesh->num_triangles > base;
+        technique->release(state);
+    }
+    assert_true(refined >= 12); /* the check saw real tessellations, not just base meshes */
+}
+
+static void test_tessellation_sphere_has_no_cracks_for_every_test_combination(void **state) {
+    (void)state;
+    fixture f;
+    fixture_init(&f, 2);
+    fixture_sphere(&f, 1);
+    check_closed_for_every_combination(&f);
+    fixture_deinit(&f);
+}
+
+static void test_tessellation_torus_has_no_cracks_across_uv_seams(void **state) {
+    (void)state;
+    fixture f;
+    fixture_init(&f, 2);
+    fixture_torus(&f, 12, 8);
+    check_closed_for_every_combination(&f);
+    fixture_deinit(&f);
+}
+
+static void test_tessellation_with_every_test_off_returns_the_base_mesh(void **state) {
+    (void)state;
+    fixture f;
+    fixture_init(&f, 1);
+    fixture_heights(&f, 32, FIELD_CONSTANT, 1.0f); /* h = 1: vertices stay on the mesh */
+    fixture_torus(&f, 10, 6);
+    set_tests(&f, 0, 0, 0, 0);
+    void *st = NULL;
+    const meso_mesh *mesh = fixture_geometry(&f, technique, &st);
+    assert_int_equal(mesh->num_triangles, f.mesh->num_triangles);
+    for (size_t t = 0; t < mesh->num_triangles * 3; t++) {
+        meso_vec3 a = mesh->positions[mesh->indices[t]], b = f.mesh->positions[f.mesh->indices[t]];
+        /* exactly equal (== rather than bits: -0 + 0 gives +0) */
+        assert_true(a.x == b.x && a.y == b.y && a.z == b.z);
+    }
+    technique->release(st);
+    /* with a real height field too: the same triangles, only displaced */
+    fixture_heights(&f, 32, FIELD_BUMPS, 0.0f);
+    assert_int_equal(triangle_count(&f), f.mesh->num_triangles);
+    fixture_deinit(&f);
+}
+
+static void test_tessellation_view_test_makes_fewer_triangles_farther_away(void **state) {
+    (void)state;
+    fixture f;
+    fixture_init(&f, 2);
+    fixture_sphere(&f, 1);
+    set_tests(&f, 0, 0, 1, 0);
+    fixture_set_option(&f, "max_level", 6);
+    const float distances[] = {2.5f, 3.0f, 4.0f, 6.0f, 10.0f, 20.0f, 40.0f};
+    size_t previous = SIZE_MAX, first = 0, last = 0;
+    for (size_t i = 0; i < sizeof(distances) / sizeof(distances[0]); i++) {
+        f.scene.camera.eye = (meso_vec3){0.0f, 0.3f * distances[i], distances[i]};
+        size_t count = triangle_count(&f);
+        if (count > previous)
+            fail_msg("distance %g: %zu triangles, more than %zu nearer", distances[i], count,
+                     previous);
+        if (i == 0) first = count;
+        last = count;
+        previous = count;
+    }
+    assert_true(first > 4 * last);
+    assert_true(last >= f.mesh->num_triangles);
+    fixture_deinit(&f);
+}
+
+static void test_tessellation_constant_height_field_inserts_nothing(void **state) {
+    (void)state;
+    fixture f;
+    fixture_init(&f, 1);
+    fixture_heights(&f, 64, FIELD_CONSTANT, 0.3f);
+    fixture_plane(&f, 2);
+    fixture_set_option(&f, "normal_threshold", 0.0);
+    fixture_set_option(&f, "area_threshold", 0.0);
+    fixture_set_option(&f, "span_texels", 0.0); /* the surface tests alone */
+    const int combos[3][2] = {{1, 0}, {0, 1}, {1, 1}};
+    for (int c = 0; c < 3; c++) {
+        /* with the recursion limits on, as by default: they only veto */
+        set_tests(&f, combos[c][0], combos[c][1], 1, 1);
+        assert_int_equal(triangle_count(&f), f.mesh->num_triangles);
+    }
+    /* the same plane with bumps does get refined by each test alone */
+    fixture_heights(&f, 64, FIELD_BUMPS, 0.0f);
+    for (int c = 0; c < 2; c++) {
+        set_tests(&f, combos[c][0], combos[c][1], 0, 0);
+        assert_true(triangle_count(&f) > f.mesh->num_triangles * 4);
+    }
+    fixture_deinit(&f);
+}
+
+static void test_tessellation_max_level_bounds_the_count(void **state) {
+    (void)state;
+    fixture f;
+    fixture_init(&f, 1);
+    fixture_plane(&f, 1);
+    set_tests(&f, 1, 1, 0, 0);
+    fixture_set_option(&f, "normal_threshold", 0.0);
+    fixture_set_option(&f, "area_threshold", 0.0);
+    for (int level = 0; level <= 5; level++) {
+        fixture_set_option(&f, "max_level", level);
+        size_t count = triangle_count(&f);
+        assert_true(count <= (size_t)2 << (2 * level));
+        assert_true(count >= 2);
+    }
+    fixture_deinit(&f);
+}
+
+static void test_tessellation_output_does_not_depend_on_thread_count(void **state) {
+    (void)state;
+    fixture one, two;
+    fixture_init(&one, 1);
+    fixture_init(&two, 2);
+    fixture_torus(&one, 12, 8);
+    fixture_torus(&two, 12, 8);
+    set_tests(&one, 1, 1, 1, 1);
+    set_tests(&two, 1, 1, 1, 1);
+    void *sa = NULL, *sb = NULL;
+    const meso_mesh *a = fixture_geometry(&one, technique, &sa);
+    const meso_mesh *b = fixture_geometry(&two, technique, &sb);
+    assert_int_equal(a->num_triangles, b->num_triangles);
+    assert_int_equal(a->num_vertices, b->num_vertices);
+    assert_memory_equal(a->positions, b->positions, a->num_vertices * sizeof(meso_vec3));
+    assert_memory_equal(a->indices, b->indices, a->num_triangles * 3 * sizeof(uint32_t));
+    /* the same state after its context gains a thread (meso bench measures scaling so) */
+    meso_context_set_num_threads(one.ctx, 2);
+    const meso_mesh *c = NULL;
+    assert_int_equal(technique->geometry(one.ctx, sa, &one.frame, &c), MESO_OK);
+    assert_int_equal(c->num_triangles, b->num_triangles);
+    assert_memory_equal(c->positions, b->positions, b->num_vertices * sizeof(meso_vec3));
+    assert_memory_equal(c->indices, b->indices, b->num_triangles * 3 * sizeof(uint32_t));
+    technique->release(sa);
+    technique->release(sb);
+    fixture_deinit(&one);
+    fixture_deinit(&two);
+}
+
+static void test_tessellation_rejects_bad_options_naming_them(void **state) {
+    (void)state;
+    fixture f;
+    fixture_init(&f, 1);
+    fixture_plane(&f, 1);
+    f.object.mesh = f.mesh;
+    void *st = NULL;
+    fixture_set_option(&f, "normal_treshold", 0.1); /* typo */
+    assert_int_equal(technique->prepare(f.ctx, &f.scene, &f.object, &st),
+                     MESO_ERROR_INVALID_ARGUMENT);
+    assert_null(st);
+    assert_non_null(strstr(meso_context_last_error(f.ctx), "normal_treshold"));
+    fixture_clear_options(&f);
+    fixture_set_option(&f, "max_level", 11);
+    assert_int_equal(technique->prepare(f.ctx, &f.scene, &f.object, &st),
+                     MESO_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(meso_context_last_error(f.ctx), "max_level"));
+    fixture_clear_options(&f);
+    fixture_set_option(&f, "view_threshold", -1.0);
+    assert_int_equal(technique->prepare(f.ctx, &f.scene, &f.object, &st),
+                     MESO_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(meso_context_last_error(f.ctx), "view_threshold"));
+    assert_null(st);
+    fixture_deinit(&f);
+}
+
+static void test_tessellation_shades_a_lit_flat_surface_unshadowed(void **state) {
+    (void)state;
+    fixture f;
+    fixture_init(&f, 1);
+    fixture_heights(&f, 32, FIELD_CONSTANT, 0.5f);
+    fixture_plane(&f, 2);
+    fixture_set_option(&f, "shadow_map_size", 256);
+    f.scene.lights[0].direction = meso_vec3_normalize((meso_vec3){0.3f, 1.0f, 0.2f});
+    void *st = NULL;
+    const meso_mesh *mesh = fixture_geometry(&f, technique, &st);
+    /* a fragment at the centroid of every output triangle, as the rasterizer would make it */
+    float expected = 0.8f * (0.1f + f.scene.lights[0].direction.y);
+    for (size_t t = 0; t < mesh->num_triangles; t++) {
+        const uint32_t *i = &mesh->indices[t * 3];
+        meso_fragment frag = {0};
+        frag.triangle = (uint32_t)t;
+        frag.b0 = frag.b1 = frag.b2 = 1.0f / 3.0f;
+        frag.position = meso_vec3_barycentric(mesh->positions[i[0]], mesh->positions[i[1]],
+                                              mesh->positions[i[2]], 1 / 3.f, 1 / 3.f, 1 / 3.f);
+        frag.normal = mesh->normals[i[0]];
+        frag.tangent = mesh->tangents[i[0]];
+        frag.bitangent = mesh->bitangents[i[0]];
+        frag.uv = meso_vec2_barycentric(mesh->uvs[i[0]], mesh->uvs[i[1]], mesh->uvs[i[2]],
+                                        1 / 3.f, 1 / 3.f, 1 / 3.f);
+        technique->shade(st, &f.frame, &f.object, &frag, 1);
+        assert_float_equal(frag.color.x, expected, 2e-3f);
+        /* the displaced surface is at -(1 - h) depth */
+        assert_float_equal(frag.position.y, -0.05f, 1e-6f);
+    }
+    technique->release(st);
+    fixture_deinit(&f);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_tessellation_sphere_has_no_cracks_for_every_test_combination),
+        cmocka_unit_test(test_tessellation_torus_has_no_cracks_across_uv_seams),
+        cmocka_unit_test(test_tessellation_with_every_test_off_returns_the_base_mesh),
+        cmocka_unit_test(test_tessellation_view_test_makes_fewer_triangles_farther_away),
+        cmocka_unit_test(test_tessellation_constant_height_field_inserts_nothing),
+        cmocka_unit_test(test_tessellation_max_level_bounds_the_count),
+        cmocka_unit_test(test_tessellation_output_does_not_depend_on_thread_count),
+        cmocka_unit_test(test_tessellation_rejects_bad_options_naming_them),
+        cmocka_unit_test(test_tessellation_shades_a_lit_flat_surface_unshadowed),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
