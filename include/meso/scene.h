@@ -11,6 +11,8 @@
 #ifndef MESO_SCENE_H
 #define MESO_SCENE_H
 
+#include <string.h>
+
 #include "meso/core.h"
 #include "meso/geom.h"
 #include "meso/image.h"
@@ -105,8 +107,15 @@ meso_result meso_scene_parse(meso_context *ctx, const char *json, const char *na
                              const char *base_dir, meso_scene **out_scene);
 void meso_scene_destroy(meso_scene *scene);
 
-/* The option's value, or `fallback` when the object does not set it. */
-double meso_object_option(const meso_object *object, const char *name, double fallback);
+/* The option's value, or `fallback` when the object does not set it. Inline: renderers read
+ * options of scene structs without linking the scene parser. Pure, thread-safe. */
+static inline double meso_object_option(const meso_object *object, const char *name,
+                                        double fallback) {
+    if (!object || !name) return fallback;
+    for (int i = 0; i < object->num_options; i++)
+        if (strcmp(object->options[i].name, name) == 0) return object->options[i].value;
+    return fallback;
+}
 
 #ifdef __cplusplus
 }

@@ -307,6 +307,8 @@ meso_result meso_mesh_load(meso_context *ctx, const char *path, meso_mesh **out_
 fail:
     meso_mesh_destroy(mesh);
     free(s.instances);
+    pthread_mutex_lock(&import_lock);
     aiReleaseImport(scene);
+    pthread_mutex_unlock(&import_lock);
     return r;
 }

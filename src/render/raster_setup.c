@@ -253,10 +253,8 @@ static void setup_source_triangle(const raster_bins *bins, const raster_mesh *rm
     }
 }
 
-static void setup_chunk(void *user, size_t job, int thread_index) {
-    (void)thread_index;
-    raster_bins *bins = user;
-    raster_chunk *chunk = &bins->chunks[job];
+/* Set up the chunk's source triangles and bin them into tiles. */
+static void process_chunk(const raster_bins *bins, raster_chunk *chunk) {
     const raster_mesh *rm = &bins->meshes[chunk->mesh];
     chunk->num_triangles = 0;
     chunk->num_entries = 0;
@@ -302,6 +300,16 @@ static void setup_chunk(void *user, size_t job, int thread_index) {
     for (size_t i = num_tiles; i > 0; i--) start[i] = start[i - 1];
     start[0] = 0;
     chunk->num_entries = total;
+}
+
+static void setup_chunk(void *user, size_t job, int thread_index) {
+    (void)thread_index;
+    raster_bins *bins = user;
+    /* Work on a copy: neighbouring chunks share cache lines and are set up by other threads
+     * at the same time (no false sharing on every triangle). */
+    raster_chunk local = bins->chunks[job];
+    process_chunk(bins, &local);
+    bins->chunks[job] = local;
 }
 
 meso_result raster_bins_build(meso_context *ctx, raster_bins *bins, const meso_mesh *const *meshes,

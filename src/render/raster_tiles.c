@@ -35,7 +35,7 @@ static void load_attributes(const meso_mesh *mesh, uint32_t triangle, vertex_att
     a->has_tangents = mesh->tangents && mesh->bitangents;
     a->has_uvs = mesh->uvs != NULL;
     for (int k = 0; k < 3; k++) {
-        a->n[k] = mesh->normals[idx[k]];
+        a->n[k] = mesh->normals ? mesh->normals[idx[k]] : (meso_vec3){0.0f, 0.0f, 0.0f};
         if (a->has_tangents) {
             a->t[k] = mesh->tangents[idx[k]];
             a->b[k] = mesh->bitangents[idx[k]];

@@ -4,14 +4,14 @@
 #include "render_internal.h"
 #include "render_simd.h"
 
+static inline v8i sel_i(v8i mask, v8i a, v8i b) { return (a & mask) | (b & ~mask); }
+
 /* The colour map at eight uvs: bilinear between texel centres at level 0 with the texture's
  * wrap (the arithmetic of meso_texture_sample(t, uv, 0, MESO_FILTER_BILINEAR): uv reduced to
  * [0, 1) for repeat, x = u W - 0.5, y = (1 - v) H - 0.5), 0 for a non-finite uv. The index
  * arithmetic runs in vectors; only the texel loads are per lane. */
-static inline v8i sel_i(v8i mask, v8i a, v8i b) { return (a & mask) | (b & ~mask); }
-
-static void sample_color_map(const meso_texture *t, v8f u, v8f v, int lanes, v8f *out_r,
-                             v8f *out_g, v8f *out_b) {
+static void sample_color_map(const meso_texture *t, v8f u, v8f v, int lanes, v8f *out_r, v8f *out_g,
+                             v8f *out_b) {
     const meso_image *level = t->levels[0];
     int w = level->width, h = level->height;
     v8i finite = ((u - u) == v8_splat(0.0f)) & ((v - v) == v8_splat(0.0f));
@@ -46,8 +46,8 @@ static void sample_color_map(const meso_texture *t, v8f u, v8f v, int lanes, v8f
     v8i row0 = j0 * wv, row1 = j1 * wv;
     v8i a = (row0 + i0) * 4, b = (row0 + i1) * 4, c = (row1 + i0) * 4, d = (row1 + i1) * 4;
     const float *p = level->pixels;
-    v8f ar = v8_splat(0.0f), ag = ar, ab = ar, br = ar, bg = ar, bb = ar, cr = ar, cg = ar,
-        cb = ar, dr = ar, dg = ar, db = ar;
+    v8f ar = v8_splat(0.0f), ag = ar, ab = ar, br = ar, bg = ar, bb = ar, cr = ar, cg = ar, cb = ar,
+        dr = ar, dg = ar, db = ar;
     for (int k = 0; k < lanes; k++) { /* lanes past `lanes` are not used */
         ar[k] = p[a[k]], ag[k] = p[a[k] + 1], ab[k] = p[a[k] + 2];
         br[k] = p[b[k]], bg[k] = p[b[k] + 1], bb[k] = p[b[k] + 2];
@@ -82,8 +82,8 @@ static inline v8f rsqrt_safe(v8f len2, v8i *nonzero) {
     return splat(1.0f) / v8_sqrt(len2);
 }
 
-/* colour = albedo * map(uv) * (ambient + sum_i c_i max(0, N.L_i) v_i) + sum_i spec c_i (N.H)^s v_i
- */
+/* colour = albedo map(uv) (ambient + sum_i c_i max(0, N.L_i) v_i) + sum_i spec c_i (N.H_i)^s v_i
+ * (DESIGN.md), specular only where N.L_i > 0 and N.H_i > 0. */
 __attribute__((noinline)) static void shade_eight(const meso_frame *frame,
                                                   const meso_object *object, const shade_lanes *in,
                                                   int lanes, v8f *out_r, v8f *out_g, v8f *out_b) {

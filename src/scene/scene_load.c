@@ -243,9 +243,3 @@ void meso_scene_destroy(meso_scene *scene) {
     free(scene);
 }
 
-double meso_object_option(const meso_object *object, const char *name, double fallback) {
-    if (!object || !name) return fallback;
-    for (int i = 0; i < object->num_options; i++)
-        if (strcmp(object->options[i].name, name) == 0) return object->options[i].value;
-    return fallback;
-}

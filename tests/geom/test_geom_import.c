@@ -119,6 +119,14 @@ static void test_unparsable_file_is_a_format_error_naming_the_path(void **state)
                               "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n");
     assert_int_equal(meso_mesh_load(ctx, far, &mesh), MESO_ERROR_FORMAT);
     assert_non_null(strstr(meso_context_last_error(ctx), "far.ply"));
+    /* A face with no corners makes assimp's Triangulate abort the process. */
+    const char *empty =
+        write_text("empty_face.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                                     "property float y\nproperty float z\nelement face 1\n"
+                                     "property list uchar int vertex_indices\nend_header\n"
+                                     "0 0 0\n1 0 0\n0 1 0\n0\n");
+    assert_int_equal(meso_mesh_load(ctx, empty, &mesh), MESO_ERROR_FORMAT);
+    assert_non_null(strstr(meso_context_last_error(ctx), "empty_face.ply"));
     const char *garbage = write_text("garbage.xyzzy", "\x01\x02 this is not a mesh\n");
     assert_int_equal(meso_mesh_load(ctx, garbage, &mesh), MESO_ERROR_FORMAT);
     assert_non_null(strstr(meso_context_last_error(ctx), garbage));

@@ -232,7 +232,7 @@ static meso_result vdm_prepare(meso_context *ctx, const meso_scene *scene,
         (r = read_int(ctx, object, "num_curvatures", 16, 1, MESO_VDM_MAX_CURVATURES,
                       &num_curvatures)))
         return r;
-    double bias = meso_object_option(object, "shadow_bias", 0.1);
+    double bias = meso_object_option(object, "shadow_bias", 0.2);
     if (!(bias >= 0.0 && bias <= 10.0))
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "%s: technique_options.shadow_bias: %g must be in [0, 10]",
@@ -481,6 +481,48 @@ static inline float curvature_along(const meso_mesh *mesh, uint32_t vertex, meso
            denominator;
 }
 
+/* h(u, v) and its gradient as meso_heightfield_sample / meso_heightfield_gradient compute
+ * them (bilinear between texel centres; central differences one texel apart), from one 4 x 4
+ * block of texels whose wrapped indices are found once: the five bilinear samples share their
+ * fractions. */
+static inline float height_and_gradient(const meso_heightfield *hf, meso_vec2 uv,
+                                        meso_vec2 *out_gradient) {
+    float x = uv.x * (float)hf->width - 0.5f, y = (1.0f - uv.y) * (float)hf->height - 0.5f;
+    float fx = floorf(x), fy = floorf(y), tx = x - fx, ty = y - fy;
+    int i = (int)fx, j = (int)fy;
+    int cols[4], rows[4];
+    for (int k = 0; k < 4; k++) {
+        int c = i - 1 + k, r = j - 1 + k;
+        if (hf->wrap == MESO_WRAP_CLAMP) {
+            c = c < 0 ? 0 : (c >= hf->width ? hf->width - 1 : c);
+            r = r < 0 ? 0 : (r >= hf->height ? hf->height - 1 : r);
+        } else {
+            c %= hf->width;
+            c += c < 0 ? hf->width : 0;
+            r %= hf->height;
+            r += r < 0 ? hf->height : 0;
+        }
+        cols[k] = c;
+        rows[k] = r;
+    }
+    float t[4][4];
+    for (int r = 0; r < 4; r++)
+        for (int c = 0; c < 4; c++)
+            t[r][c] = hf->heights[(size_t)rows[r] * (size_t)hf->width + (size_t)cols[c]];
+#define BILERP(r, c)                                                                               \
+    ((t[r][c] + (t[r][(c) + 1] - t[r][c]) * tx) +                                                  \
+     ((t[(r) + 1][c] + (t[(r) + 1][(c) + 1] - t[(r) + 1][c]) * tx) -                               \
+      (t[r][c] + (t[r][(c) + 1] - t[r][c]) * tx)) *                                                \
+         ty)
+    float h = BILERP(1, 1);
+    float right = BILERP(1, 2), left = BILERP(1, 0);
+    float up = BILERP(0, 1), down = BILERP(2, 1); /* +v is one row up */
+#undef BILERP
+    out_gradient->x = (right - left) * 0.5f * (float)hf->width;
+    out_gradient->y = (up - down) * 0.5f * (float)hf->height;
+    return h;
+}
+
 /* A world direction in the bake's texture space (u, v, depth; see vdm_shade), unit. */
 static inline meso_vec3 to_bake_space(meso_vec3 dir, meso_vec3 t, meso_vec3 b, meso_vec3 n,
                                       float scale_u, float scale_v, float scale_depth) {
@@ -509,6 +551,8 @@ static void vdm_shade(const void *state, const meso_frame *frame, const meso_obj
     enum { CHUNK = 64 };
     float chunk_visibility[CHUNK * MESO_SCENE_MAX_LIGHTS];
     int num_lights = scene->num_lights;
+    uint32_t cached_triangle = UINT32_MAX;
+    float vertex_c[3] = {0.0f, 0.0f, 0.0f};
     for (size_t start = 0; start < count; start += CHUNK) {
         size_t end = start + CHUNK < count ? start + CHUNK : count;
         for (size_t fi = start; fi < end; fi++) {
@@ -539,11 +583,14 @@ static void vdm_shade(const void *state, const meso_frame *frame, const meso_obj
             float theta = acosf(fminf(vb.z, 1.0f)), phi = atan2f(vb.y, vb.x);
             float c = 0.0f;
             if (has_curvature) {
-                const uint32_t *tri = mesh->indices + 3 * (size_t)f->triangle;
-                /* per vertex, then interpolated (§3.2) */
-                c = f->b0 * curvature_along(mesh, tri[0], frame->eye) +
-                    f->b1 * curvature_along(mesh, tri[1], frame->eye) +
-                    f->b2 * curvature_along(mesh, tri[2], frame->eye);
+                /* per vertex, then interpolated (§3.2); a batch is usually one triangle */
+                if (f->triangle != cached_triangle) {
+                    const uint32_t *tri = mesh->indices + 3 * (size_t)f->triangle;
+                    for (int k = 0; k < 3; k++)
+                        vertex_c[k] = curvature_along(mesh, tri[k], frame->eye);
+                    cached_triangle = f->triangle;
+                }
+                c = f->b0 * vertex_c[0] + f->b1 * vertex_c[1] + f->b2 * vertex_c[2];
                 /* world 1/length -> bake space: y = x^2 c / 2 scaled by 1/s_h across and 1/s
                  * down gives c s_h^2 / s, s_h the world length of one bake unit along V_xy */
                 float hx = meso_vec3_dot(view, t), hy = meso_vec3_dot(view, b);
@@ -575,12 +622,12 @@ static void vdm_shade(const void *state, const meso_frame *frame, const meso_obj
             /* Real texture coordinate (§3.2): T' = T - d V_xy (V toward the eye), in tiles. */
             float offset = d * depth_tiles;
             meso_vec2 uv = {f->uv.x - offset * vb.x, f->uv.y - offset * vb.y};
-            float h = meso_heightfield_sample(hf, uv.x, uv.y);
+            meso_vec2 gradient;
+            float h = height_and_gradient(hf, uv, &gradient);
             float below = (1.0f - h) * depth_world;
             meso_vec3 position = meso_vec3_madd(f->position, t, -offset * vb.x * scale_u);
             position = meso_vec3_madd(position, b, -offset * vb.y * scale_v);
             position = meso_vec3_madd(position, n, -below);
-            meso_vec2 gradient = meso_heightfield_gradient(hf, uv.x, uv.y);
             meso_vec3 normal =
                 meso_displaced_normal(n, f->tangent, f->bitangent, depth_world, gradient);
 
