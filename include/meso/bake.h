@@ -8,10 +8,10 @@
  * The representations have a header each, included here:
  *   bake_file.h        the container (docs/bake-format.md) and the bake cache
  *   bake_vdm.h         view-dependent displacement maps + MVM, SVD-compressed (VDM §3)
- *   bake_horizon.h     horizon maps (bump/horizon baselines)
- *   bake_minmax.h      min-max height pyramids
- *   bake_sat.h         summed-area tables
- *   bake_isosurface.h  isosurfaces of solids
+ *   bake_horizon.h     horizon maps (Max 1988; Sloan & Cohen 2000)
+ *   bake_minmax.h      min-max mip pyramids of height fields (hierarchical ray tracing)
+ *   bake_sat.h         summed-area tables of height fields (Crow 1984)
+ *   bake_isosurface.h  isosurfaces of solid mesostructure, extracted in texture space
  */
 #ifndef MESO_BAKE_H
 #define MESO_BAKE_H
