@@ -21,6 +21,9 @@ static size_t global_options(app_globals *g, app_option *out) {
          "show the progress bar even when stderr is not a terminal", NULL, 0, 0},
         {"--quiet", NULL, APP_OPTION_FLAG, &g->quiet, NULL,
          "no summary, notes, warnings or progress bar on stderr (errors still)", NULL, 0, 0},
+        {"--verbose", "-v", APP_OPTION_FLAG, &g->verbose, NULL,
+         "also print the library's information lines (triangle counts, memory, bake times)",
+         NULL, 0, 0},
         {"--help", "-h", APP_OPTION_FLAG, &g->help, NULL, "print this help and exit", NULL, 0, 0},
     };
     memcpy(out, options, sizeof(options));
@@ -225,10 +228,11 @@ static void log_to_stderr(void *user, meso_log_level level, const char *message)
     const app_globals *g = user;
     /* Errors are printed once, by app_fail, from the context's last error. */
     if (level == MESO_LOG_WARNING && !g->quiet) fprintf(stderr, "meso: warning: %s\n", message);
+    if (level == MESO_LOG_INFO && g->verbose && !g->quiet) fprintf(stderr, "meso: %s\n", message);
 }
 
 meso_context *app_context_create(const app_globals *globals) {
-    /* The logger reads only `quiet`, which is fixed for the program's life. */
+    /* The logger reads only `quiet` and `verbose`, which are fixed for the program's life. */
     static app_globals logger_globals;
     logger_globals = *globals;
     meso_context_desc desc = {

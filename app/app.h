@@ -59,6 +59,7 @@ typedef struct app_globals {
     int threads;   /* --threads N: 0 = every core */
     bool progress; /* --progress: the bar even when stderr is not a terminal */
     bool quiet;    /* --quiet: only errors */
+    bool verbose;  /* --verbose: the library's info lines too */
     bool help;     /* --help */
 } app_globals;
 

@@ -233,6 +233,16 @@ static meso_result info_bake(meso_context *ctx, const char *path) {
         printf("]  %.3f MiB\n", (double)bytes / (1024.0 * 1024.0));
     }
     printf("total: %.3f MiB\n", (double)total / (1024.0 * 1024.0));
+    if (!strcmp(bake->kind, "vdm")) {
+        /* VDM §3.3: sizes and the reconstruction error for each eigenfunction count. */
+        size_t needed = meso_vdm_describe(bake, NULL, 0);
+        char *report = needed ? malloc(needed + 1) : NULL;
+        if (report) {
+            meso_vdm_describe(bake, report, needed + 1);
+            fputs(report, stdout);
+            free(report);
+        }
+    }
     meso_bake_file_destroy(bake);
     return MESO_OK;
 }

@@ -18,14 +18,6 @@ static const command commands[] = {
 };
 #define NUM_COMMANDS (sizeof(commands) / sizeof(commands[0]))
 
-/* Until app/cmd_compare.c is linked in, `meso compare` says it is missing. */
-__attribute__((weak)) int meso_cmd_compare(int argc, char **argv) {
-    (void)argc;
-    (void)argv;
-    fprintf(stderr, "meso: compare: not available in this build\n");
-    return APP_EXIT_FAILURE;
-}
-
 static void print_help(void) {
     printf("meso %s: surface mesostructure rendering on the CPU\n\n"
            "Usage: meso COMMAND [options]\n\nCommands:\n",
@@ -33,7 +25,7 @@ static void print_help(void) {
     for (size_t i = 0; i < NUM_COMMANDS; i++)
         printf("  %-10s %s\n", commands[i].name, commands[i].summary);
     printf("  %-10s %s\n", "help", "the help of a command (meso help render)");
-    printf("\nGlobal options (every command): --threads N, --progress, --quiet, --help\n"
+    printf("\nGlobal options (every command): --threads N, --progress, --quiet, --verbose, --help\n"
            "Options: meso --help, meso --version\n\n"
            "Examples:\n"
            "  meso demo -o demo\n"
