@@ -92,15 +92,37 @@ static inline float meso_heightfield_texel(const meso_heightfield *hf, int i, in
     return hf->heights[(size_t)j * (size_t)hf->width + (size_t)i];
 }
 
+/* The two texel indices around a sample, i and i + 1, wrapped to [0, n). Most lookups fall
+ * inside the map, so that case costs a compare instead of the two integer divisions of
+ * meso_heightfield_texel: the hot loops of every technique sample through here. */
+static inline void meso_heightfield_wrap_pair(meso_wrap wrap, int i, int n, int *out_i0,
+                                              int *out_i1) {
+    if ((unsigned)i < (unsigned)(n - 1)) {
+        *out_i0 = i;
+        *out_i1 = i + 1;
+    } else if (wrap == MESO_WRAP_CLAMP) {
+        *out_i0 = i < 0 ? 0 : (i >= n ? n - 1 : i);
+        *out_i1 = i + 1 < 0 ? 0 : (i + 1 >= n ? n - 1 : i + 1);
+    } else {
+        int w = i % n;
+        w += w < 0 ? n : 0;
+        *out_i0 = w;
+        *out_i1 = w + 1 == n ? 0 : w + 1;
+    }
+}
+
 /* h(u, v): bilinear between texel centres (DESIGN.md). */
 static inline float meso_heightfield_sample(const meso_heightfield *hf, float u, float v) {
     float x = u * (float)hf->width - 0.5f;
     float y = (1.0f - v) * (float)hf->height - 0.5f;
     float fx = floorf(x), fy = floorf(y);
-    int i = (int)fx, j = (int)fy;
     float tx = x - fx, ty = y - fy;
-    float h00 = meso_heightfield_texel(hf, i, j), h10 = meso_heightfield_texel(hf, i + 1, j);
-    float h01 = meso_heightfield_texel(hf, i, j + 1), h11 = meso_heightfield_texel(hf, i + 1, j + 1);
+    int i0, i1, j0, j1;
+    meso_heightfield_wrap_pair(hf->wrap, (int)fx, hf->width, &i0, &i1);
+    meso_heightfield_wrap_pair(hf->wrap, (int)fy, hf->height, &j0, &j1);
+    const float *row0 = hf->heights + (size_t)j0 * (size_t)hf->width;
+    const float *row1 = hf->heights + (size_t)j1 * (size_t)hf->width;
+    float h00 = row0[i0], h10 = row0[i1], h01 = row1[i0], h11 = row1[i1];
     float top = h00 + (h10 - h00) * tx, bottom = h01 + (h11 - h01) * tx;
     return top + (bottom - top) * ty;
 }

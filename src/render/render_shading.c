@@ -203,15 +203,3 @@ void meso_shade_fragments(const meso_frame *frame, const meso_object *object,
     }
 }
 
-meso_vec3 meso_displaced_normal(meso_vec3 normal, meso_vec3 tangent, meso_vec3 bitangent,
-                                float depth, meso_vec2 gradient) {
-    /* P' = P - (1 - h) depth N: dP'/du = T + depth h_u N, dP'/dv = B + depth h_v N
-     * (Blinn 1978, with the variation of N over the surface neglected). */
-    meso_vec3 du = meso_vec3_madd(tangent, normal, depth * gradient.x);
-    meso_vec3 dv = meso_vec3_madd(bitangent, normal, depth * gradient.y);
-    meso_vec3 n = meso_vec3_cross(du, dv);
-    float len2 = meso_vec3_dot(n, n);
-    if (!(len2 > 0.0f) || !isfinite(len2)) return normal;
-    n = meso_vec3_scale(n, 1.0f / sqrtf(len2));
-    return meso_vec3_dot(n, normal) < 0.0f ? meso_vec3_negate(n) : n;
-}
