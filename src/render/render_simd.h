@@ -1,5 +1,6 @@
-/* Eight-lane float vectors (GCC vector extensions) for the rasterizer's fragment fill and the
- * shading: the same source compiles to AVX on x86-64 and to pairs of SSE/NEON ops elsewhere. */
+/* Eight-lane float vectors (GCC vector extensions) for the rasterizer's fragment fill, the
+ * shading and the relief family's searches: the same source compiles to AVX on x86-64 and to
+ * pairs of SSE/NEON ops elsewhere. */
 #ifndef MESO_RENDER_SIMD_H
 #define MESO_RENDER_SIMD_H
 
@@ -14,6 +15,7 @@ typedef int32_t v8i __attribute__((vector_size(32)));
 #define V8_LANES 8
 
 static inline v8f v8_splat(float x) { return (v8f){x, x, x, x, x, x, x, x}; }
+static inline v8i v8i_splat(int32_t x) { return (v8i){x, x, x, x, x, x, x, x}; }
 
 /* mask ? a : b per lane (mask lanes all ones or all zeros, as vector comparisons give). */
 static inline v8f v8_select(v8i mask, v8f a, v8f b) {
@@ -38,6 +40,35 @@ static inline v8f v8_floor(v8f x) {
 #else
     v8f r;
     for (int i = 0; i < V8_LANES; i++) r[i] = floorf(x[i]);
+    return r;
+#endif
+}
+
+static inline v8f v8_min(v8f a, v8f b) { return v8_select(a < b, a, b); }
+static inline v8f v8_max(v8f a, v8f b) { return v8_select(a > b, a, b); }
+
+/* Lane k's mask as bit k, and back. */
+static inline int v8_mask_bits(v8i mask) {
+#if defined(__AVX__)
+    return _mm256_movemask_ps((__m256)mask);
+#else
+    int bits = 0;
+    for (int k = 0; k < V8_LANES; ++k) bits |= (mask[k] != 0) << k;
+    return bits;
+#endif
+}
+static inline v8i v8_mask_from_bits(int bits) {
+    const v8i lane_bit = {1, 2, 4, 8, 16, 32, 64, 128};
+    return (v8i_splat(bits) & lane_bit) != 0;
+}
+
+/* base[index[k]] per lane. */
+static inline v8f v8_gather(const float *base, v8i index) {
+#if defined(__AVX2__)
+    return (v8f)_mm256_i32gather_ps(base, (__m256i)index, 4);
+#else
+    v8f r;
+    for (int k = 0; k < V8_LANES; ++k) r[k] = base[index[k]];
     return r;
 #endif
 }

@@ -25,57 +25,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#if defined(__AVX2__)
-#include <immintrin.h>
-#endif
-
 #include "render_internal.h"
+#include "render_simd.h"
 
-/* ---- 8-wide vectors (GCC vector extensions) ----------------------------------------------- */
-
-typedef float v8f __attribute__((vector_size(32)));
-typedef int32_t v8i __attribute__((vector_size(32)));
-#define RELIEF_LANES 8
-
-static inline v8f v8_splat(float x) { return (v8f){x, x, x, x, x, x, x, x}; }
-static inline v8i v8i_splat(int32_t x) { return (v8i){x, x, x, x, x, x, x, x}; }
-/* mask lanes are all ones (true) or zero (false), as comparisons of vectors return them */
-static inline v8f v8_select(v8i mask, v8f a, v8f b) {
-    return (v8f)((mask & (v8i)a) | (~mask & (v8i)b));
-}
-static inline v8f v8_min(v8f a, v8f b) { return v8_select(a < b, a, b); }
-static inline v8f v8_max(v8f a, v8f b) { return v8_select(a > b, a, b); }
-static inline int v8_mask_bits(v8i mask) {
-#if defined(__AVX2__)
-    return _mm256_movemask_ps((__m256)mask);
-#else
-    int bits = 0;
-    for (int k = 0; k < RELIEF_LANES; ++k) bits |= (mask[k] != 0) << k;
-    return bits;
-#endif
-}
-static inline v8i v8_mask_from_bits(int bits) {
-    const v8i lane_bit = {1, 2, 4, 8, 16, 32, 64, 128};
-    return (v8i_splat(bits) & lane_bit) != 0;
-}
-static inline v8f v8_floor(v8f x) {
-#if defined(__AVX2__)
-    return (v8f)_mm256_floor_ps((__m256)x);
-#else
-    v8f r;
-    for (int k = 0; k < RELIEF_LANES; ++k) r[k] = floorf(x[k]);
-    return r;
-#endif
-}
-static inline v8f v8_gather(const float *base, v8i index) {
-#if defined(__AVX2__)
-    return (v8f)_mm256_i32gather_ps(base, (__m256i)index, 4);
-#else
-    v8f r;
-    for (int k = 0; k < RELIEF_LANES; ++k) r[k] = base[index[k]];
-    return r;
-#endif
-}
+#define RELIEF_LANES V8_LANES
 
 /* ---- The height field, padded ------------------------------------------------------------- */
 
@@ -308,15 +261,6 @@ typedef struct v8vec3 {
     v8f x, y, z;
 } v8vec3;
 
-static inline v8f v8_sqrt(v8f x) {
-#if defined(__AVX2__)
-    return (v8f)_mm256_sqrt_ps((__m256)x);
-#else
-    v8f r;
-    for (int k = 0; k < RELIEF_LANES; ++k) r[k] = sqrtf(x[k]);
-    return r;
-#endif
-}
 static inline v8f v8_dot(v8vec3 a, v8vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 static inline v8vec3 v8_cross(v8vec3 a, v8vec3 b) {
     return (v8vec3){a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
