@@ -10,6 +10,6 @@ for scene in examples/bricks-plane.json examples/bumps-sphere.json examples/bric
              examples/weave-torus.json examples/effects/occlusion-overhead-light.json \
              examples/effects/shadow-top-view.json; do
     name=$(basename "$scene" .json)
-    "$meso" render "$scene" --techniques all -o "$out/$name" --quiet
+    "$meso" render "$scene" --techniques all -o "$out/$name" --quiet >/dev/null
 done
 python3 scripts/techniques_tables.py "$out"

@@ -17,8 +17,8 @@
 
 #define RASTER_TILE_SIZE 32 /* samples a side of a screen tile */
 #define RASTER_CHUNK_TRIANGLES                                                                     \
-    512                        /* source triangles per setup chunk (times                          \
-                                  num_tiles / 4096 above 4096 tiles) */
+    256                        /* source triangles per setup chunk (times                          \
+                                  num_tiles / 2048 above 2048 tiles) */
 #define RASTER_SUBPIXEL_BITS 8 /* vertices snap to 1/256 sample */
 #define RASTER_SUBPIXEL_ONE (1 << RASTER_SUBPIXEL_BITS)
 #define RASTER_GUARD_SAMPLES 262144.0 /* |screen coordinate| bound after guard-band clipping */

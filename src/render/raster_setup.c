@@ -338,7 +338,7 @@ meso_result raster_bins_build(meso_context *ctx, raster_bins *bins, const meso_m
      * larger chunks so that the per-chunk tile tables (4 bytes a tile) stay within about
      * 32 bytes a triangle. */
     size_t num_tiles = (size_t)bins->tiles_x * (size_t)bins->tiles_y;
-    size_t chunk_size = RASTER_CHUNK_TRIANGLES * (num_tiles > 4096 ? num_tiles / 4096 : 1);
+    size_t chunk_size = RASTER_CHUNK_TRIANGLES * (num_tiles > 2048 ? num_tiles / 2048 : 1);
     size_t chunks = 0;
     for (int m = 0; m < num_meshes; m++) {
         bins->meshes[m].mesh = meshes[m];

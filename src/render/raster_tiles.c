@@ -129,10 +129,12 @@ static size_t gather_fragments(const raster_triangle *tri, int x0, int y0, int x
         step_x[k] = (int64_t)tri->edge_a[k] * RASTER_SUBPIXEL_ONE;
         step_y[k] = (int64_t)tri->edge_b[k] * RASTER_SUBPIXEL_ONE;
     }
-    const float ga0 = tri->ga[0], ga1 = tri->ga[1], ga2 = tri->ga[2];
-    const float gb0 = tri->gb[0], gb1 = tri->gb[1], gb2 = tri->gb[2];
-    const float gc0 = tri->gc[0], gc1 = tri->gc[1], gc2 = tri->gc[2];
-    int candidates[RASTER_TILE_SIZE];
+    const v8f ga0 = splat(tri->ga[0]), ga1 = splat(tri->ga[1]), ga2 = splat(tri->ga[2]);
+    const v8f ref_x = splat(tri->ref_x);
+    /* padded by one group of 8, and every entry a sample of the row, so that whole groups of
+     * candidates read valid depths */
+    int candidates[RASTER_TILE_SIZE + LANES];
+    for (int i = 0; i < RASTER_TILE_SIZE + LANES; i++) candidates[i] = x0;
     /* padded by one group of 8 for the vector fill */
     float frag_depth[RASTER_TILE_SIZE * RASTER_TILE_SIZE + LANES];
     int32_t frag_x[RASTER_TILE_SIZE * RASTER_TILE_SIZE + LANES];
@@ -140,30 +142,46 @@ static size_t gather_fragments(const raster_triangle *tri, int x0, int y0, int x
     size_t n = 0;
     for (int y = y0; y <= y1; y++) {
         int64_t e0 = row[0], e1 = row[1], e2 = row[2];
-        int m = 0;
-        for (int x = x0; x <= x1; x++, e0 += step_x[0], e1 += step_x[1], e2 += step_x[2]) {
-            candidates[m] = x;
-            m += (e0 | e1 | e2) >= 0;
-        }
+        /* The edge functions are linear along the row: their signs at both ends accept or
+         * reject the whole row at once (most rows of a large triangle). */
+        int64_t span = x1 - x0;
+        int64_t f0 = e0 + step_x[0] * span, f1 = e1 + step_x[1] * span, f2 = e2 + step_x[2] * span;
         row[0] += step_y[0], row[1] += step_y[1], row[2] += step_y[2];
-        if (!m) continue;
+        if ((e0 & f0) < 0 || (e1 & f1) < 0 || (e2 & f2) < 0) continue; /* outside one edge */
+        int m = 0;
+        if ((e0 | e1 | e2 | f0 | f1 | f2) >= 0) { /* inside all three */
+            for (int x = x0; x <= x1; x++) candidates[m++] = x;
+        } else {
+            for (int x = x0; x <= x1; x++, e0 += step_x[0], e1 += step_x[1], e2 += step_x[2]) {
+                candidates[m] = x;
+                m += (e0 | e1 | e2) >= 0;
+            }
+            if (!m) continue;
+        }
         float fy = (float)y + 0.5f - tri->ref_y;
-        float cy0 = gc0 + gb0 * fy, cy1 = gc1 + gb1 * fy, cy2 = gc2 + gb2 * fy;
+        v8f cy0 = splat(tri->gc[0] + tri->gb[0] * fy), cy1 = splat(tri->gc[1] + tri->gb[1] * fy);
+        v8f cy2 = splat(tri->gc[2] + tri->gb[2] * fy);
         /* depth: the tile's own buffer, RASTER_TILE_SIZE a row, origin (tx0, ty0) */
         const float *zrow = depth + (y - ty0) * RASTER_TILE_SIZE;
         uint32_t base = (uint32_t)((y - ty0) * RASTER_TILE_SIZE);
-        for (int i = 0; i < m; i++) {
-            int x = candidates[i];
-            float fx = (float)x + 0.5f - tri->ref_x;
-            float inv_depth = (cy0 + ga0 * fx) + (cy1 + ga1 * fx) + (cy2 + ga2 * fx);
-            float d = 1.0f / inv_depth;
-            pixels[n] = base + (uint32_t)(x - tx0);
-            frag_depth[n] = d;
-            frag_x[n] = x;
-            frag_y[n] = y;
-            /* kept (branch-free) when in front of the camera and nearer than the buffer; a
-             * NaN fails both tests */
-            n += (inv_depth > 0.0f) & (d < zrow[x - tx0]);
+        /* The depths of eight candidates at a time: one vector division instead of eight. */
+        for (int first = 0; first < m; first += LANES) {
+            v8i x, column;
+            memcpy(&x, candidates + first, sizeof(x));
+            column = x - v8i_splat(tx0);
+            v8f fx = (__builtin_convertvector(x, v8f) + splat(0.5f)) - ref_x;
+            v8f inv_depth = (cy0 + ga0 * fx) + (cy1 + ga1 * fx) + (cy2 + ga2 * fx);
+            v8f d = splat(1.0f) / inv_depth;
+            /* kept when in front of the camera and nearer than the buffer; a NaN fails both */
+            int keep = v8_mask_bits((inv_depth > splat(0.0f)) & (d < v8_gather(zrow, column)));
+            int lanes = m - first < LANES ? m - first : LANES;
+            for (int k = 0; k < lanes; k++) { /* compacted without branches */
+                pixels[n] = base + (uint32_t)column[k];
+                frag_depth[n] = d[k];
+                frag_x[n] = x[k];
+                frag_y[n] = y;
+                n += (size_t)(keep >> k & 1);
+            }
         }
     }
     if (!n) return 0;

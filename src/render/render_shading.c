@@ -1,16 +1,14 @@
 /* The shading model every technique and the reference share (DESIGN.md, "Shading"). */
 #include <math.h>
 
-#include "render_internal.h"
-#include "render_simd.h"
+#include "render_shading.h"
 
 static inline v8i sel_i(v8i mask, v8i a, v8i b) { return (a & mask) | (b & ~mask); }
 
 /* The colour map at eight uvs: bilinear between texel centres at level 0 with the texture's
  * wrap (the arithmetic of meso_texture_sample(t, uv, 0, MESO_FILTER_BILINEAR): uv reduced to
- * [0, 1) for repeat, x = u W - 0.5, y = (1 - v) H - 0.5), 0 for a non-finite uv. The index
- * arithmetic runs in vectors; only the texel loads are per lane. */
-static void sample_color_map(const meso_texture *t, v8f u, v8f v, int lanes, v8f *out_r, v8f *out_g,
+ * [0, 1) for repeat, x = u W - 0.5, y = (1 - v) H - 0.5), 0 for a non-finite uv. */
+static void sample_color_map(const meso_texture *t, v8f u, v8f v, v8f *out_r, v8f *out_g,
                              v8f *out_b) {
     const meso_image *level = t->levels[0];
     int w = level->width, h = level->height;
@@ -44,16 +42,15 @@ static void sample_color_map(const meso_texture *t, v8f u, v8f v, int lanes, v8f
         i1 = sel_i(i1 >= wv, i1 - wv, i1), j1 = sel_i(j1 >= hv, j1 - hv, j1);
     }
     v8i row0 = j0 * wv, row1 = j1 * wv;
+    /* In range in every lane (a non-finite uv became 0 above), so all eight lanes load:
+     * twelve gathers beat 96 scalar loads into vector lanes. */
     v8i a = (row0 + i0) * 4, b = (row0 + i1) * 4, c = (row1 + i0) * 4, d = (row1 + i1) * 4;
     const float *p = level->pixels;
-    v8f ar = v8_splat(0.0f), ag = ar, ab = ar, br = ar, bg = ar, bb = ar, cr = ar, cg = ar, cb = ar,
-        dr = ar, dg = ar, db = ar;
-    for (int k = 0; k < lanes; k++) { /* lanes past `lanes` are not used */
-        ar[k] = p[a[k]], ag[k] = p[a[k] + 1], ab[k] = p[a[k] + 2];
-        br[k] = p[b[k]], bg[k] = p[b[k] + 1], bb[k] = p[b[k] + 2];
-        cr[k] = p[c[k]], cg[k] = p[c[k] + 1], cb[k] = p[c[k] + 2];
-        dr[k] = p[d[k]], dg[k] = p[d[k] + 1], db[k] = p[d[k] + 2];
-    }
+    v8f ar, ag, ab, br, bg, bb, cr, cg, cb, dr, dg, db;
+    ar = v8_gather(p, a), ag = v8_gather(p + 1, a), ab = v8_gather(p + 2, a);
+    br = v8_gather(p, b), bg = v8_gather(p + 1, b), bb = v8_gather(p + 2, b);
+    cr = v8_gather(p, c), cg = v8_gather(p + 1, c), cb = v8_gather(p + 2, c);
+    dr = v8_gather(p, d), dg = v8_gather(p + 1, d), db = v8_gather(p + 2, d);
     v8f top, bottom;
     top = ar + (br - ar) * tx, bottom = cr + (dr - cr) * tx;
     *out_r = v8_select(finite, top + (bottom - top) * ty, v8_splat(0.0f));
@@ -64,16 +61,10 @@ static void sample_color_map(const meso_texture *t, v8f u, v8f v, int lanes, v8f
 }
 
 /* ---- Eight points at a time ----------------------------------------------------------------
- * meso_shade_point and meso_shade_fragments both run this one function (one lane or eight), so
- * a technique that shades a batch and the reference that shades single points get the same
- * bits. GCC vector extensions: 8 floats a vector. */
+ * meso_shade_point, meso_shade_fragments and meso_shade_batch8 all run this one function (one
+ * lane or eight), so a technique that shades a batch and the reference that shades single
+ * points get the same bits. GCC vector extensions: 8 floats a vector. */
 #define LANES V8_LANES
-
-typedef struct shade_lanes {
-    v8f px, py, pz, nx, ny, nz;
-    meso_vec2 uv[LANES];
-    const float *visibility[LANES]; /* per lane: NULL or one value a light */
-} shade_lanes;
 
 #define splat v8_splat
 #define select_v v8_select
@@ -84,18 +75,17 @@ static inline v8f rsqrt_safe(v8f len2, v8i *nonzero) {
 
 /* colour = albedo map(uv) (ambient + sum_i c_i max(0, N.L_i) v_i) + sum_i spec c_i (N.H_i)^s v_i
  * (DESIGN.md), specular only where N.L_i > 0 and N.H_i > 0. */
-__attribute__((noinline)) static void shade_eight(const meso_frame *frame,
-                                                  const meso_object *object, const shade_lanes *in,
-                                                  int lanes, v8f *out_r, v8f *out_g, v8f *out_b) {
+void meso_shade_batch8(const meso_frame *frame, const meso_object *object,
+                       const meso_shade_batch *in, int lanes, v8f *out_r, v8f *out_g,
+                       v8f *out_b) {
     const meso_scene *scene = frame->scene;
     const meso_material *m = &object->material;
     v8f br = splat(m->albedo.x), bg = splat(m->albedo.y), bb = splat(m->albedo.z);
     if (m->color_map) {
         /* Level 0, bilinear, in every technique and the reference, so images compare pixel by
          * pixel (no mip selection that would depend on screen derivatives). */
-        v8f u, v, tr, tg, tb;
-        for (int i = 0; i < LANES; i++) u[i] = in->uv[i].x, v[i] = in->uv[i].y;
-        sample_color_map(m->color_map, u, v, lanes, &tr, &tg, &tb);
+        v8f tr, tg, tb;
+        sample_color_map(m->color_map, in->u, in->v, &tr, &tg, &tb);
         br *= tr, bg *= tg, bb *= tb;
     }
     bool has_specular = m->specular.x > 0.0f || m->specular.y > 0.0f || m->specular.z > 0.0f;
@@ -126,8 +116,7 @@ __attribute__((noinline)) static void shade_eight(const meso_frame *frame,
             lz = select_v(nonzero, lz * inv, lz);
         }
         v8f ndl = in->nx * lx + in->ny * ly + in->nz * lz;
-        v8f vis = splat(1.0f);
-        for (int i = 0; i < lanes; i++) vis[i] = in->visibility[i] ? in->visibility[i][li] : 1.0f;
+        v8f vis = in->visibility[li];
         v8i lit = (ndl > splat(0.0f)) & (vis > splat(0.0f));
         if (!v8_any(lit)) continue;
         v8f w = ndl * vis;
@@ -167,15 +156,14 @@ __attribute__((noinline)) static void shade_eight(const meso_frame *frame,
 
 meso_vec3 meso_shade_point(const meso_frame *frame, const meso_object *object, meso_vec3 position,
                            meso_vec3 normal, meso_vec2 uv, const float *visibility) {
-    shade_lanes in;
+    meso_shade_batch in;
     in.px = splat(position.x), in.py = splat(position.y), in.pz = splat(position.z);
     in.nx = splat(normal.x), in.ny = splat(normal.y), in.nz = splat(normal.z);
-    for (int i = 0; i < LANES; i++) {
-        in.uv[i] = uv;
-        in.visibility[i] = visibility;
-    }
+    in.u = splat(uv.x), in.v = splat(uv.y);
+    for (int i = 0; i < frame->scene->num_lights; i++)
+        in.visibility[i] = splat(visibility ? visibility[i] : 1.0f);
     v8f r, g, b;
-    shade_eight(frame, object, &in, 1, &r, &g, &b);
+    meso_shade_batch8(frame, object, &in, 1, &r, &g, &b);
     return (meso_vec3){r[0], g[0], b[0]};
 }
 
@@ -184,22 +172,21 @@ void meso_shade_fragments(const meso_frame *frame, const meso_object *object,
     int num_lights = frame->scene->num_lights;
     for (size_t first = 0; first < count; first += LANES) {
         int lanes = count - first < LANES ? (int)(count - first) : LANES;
-        shade_lanes in;
+        meso_shade_batch in;
+        if (!visibility) meso_shade_batch_all_visible(&in, frame);
         for (int i = 0; i < LANES; i++) {
             /* unused lanes repeat the last fragment: finite inputs, results ignored */
-            const meso_fragment *f = &fragments[first + (size_t)(i < lanes ? i : lanes - 1)];
+            size_t k = first + (size_t)(i < lanes ? i : lanes - 1);
+            const meso_fragment *f = &fragments[k];
             in.px[i] = f->position.x, in.py[i] = f->position.y, in.pz[i] = f->position.z;
             in.nx[i] = f->normal.x, in.ny[i] = f->normal.y, in.nz[i] = f->normal.z;
-            in.uv[i] = f->uv;
-            in.visibility[i] = visibility
-                                   ? visibility + (first + (size_t)(i < lanes ? i : lanes - 1)) *
-                                                      (size_t)num_lights
-                                   : NULL;
+            in.u[i] = f->uv.x, in.v[i] = f->uv.y;
+            for (int li = 0; visibility && li < num_lights; li++)
+                in.visibility[li][i] = visibility[k * (size_t)num_lights + li];
         }
         v8f r, g, b;
-        shade_eight(frame, object, &in, lanes, &r, &g, &b);
+        meso_shade_batch8(frame, object, &in, lanes, &r, &g, &b);
         for (int i = 0; i < lanes; i++)
             fragments[first + (size_t)i].color = (meso_vec3){r[i], g[i], b[i]};
     }
 }
-

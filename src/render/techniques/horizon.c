@@ -123,12 +123,15 @@ static void shade(const void *state, const meso_frame *frame, const meso_object 
         relief_lanes_texel(m, &l, &x, &y);
         relief_gradient8(m, x, y, &gu, &gv);
         v8vec3 normal = relief_normal8(&l, depth, gu, gv);
+        meso_shade_batch in = {.px = l.position.x, .py = l.position.y, .pz = l.position.z,
+                               .nx = normal.x, .ny = normal.y, .nz = normal.z,
+                               .u = l.u, .v = l.v};
+        meso_shade_batch_all_visible(&in, frame);
         for (int k = 0; k < n; ++k) {
-            float vis[MESO_SCENE_MAX_LIGHTS];
             for (int li = 0; li < num_lights; ++li) {
+                float *vis = &in.visibility[li][k];
                 meso_vec3 L = meso_light_direction(&scene->lights[li], f[k].position);
                 float lu, lv, ln;
-                vis[li] = 1.0f;
                 if (!(depth > 0.0f) || !relief_frame_solve(&f[k], L, &lu, &lv, &ln)) continue;
                 /* The light's azimuth in (u, v) and its elevation above the tangent plane:
                  * rise ln over the run |lu T + lv B| (world units). */
@@ -146,13 +149,14 @@ static void shade(const void *state, const meso_frame *frame, const meso_object 
                 float sin_d = ln * run - along * rise, cos_d = along * run + ln * rise;
                 float norm = sqrtf((ln * ln + along * along) * (run * run + rise * rise));
                 sin_d = norm > 0.0f ? sin_d / norm : 1.0f;
-                vis[li] = cos_d < 0.0f && sin_d < 0.0f
-                              ? 0.0f
-                              : smooth_step(-SOFT_RADIANS, SOFT_RADIANS, sin_d);
+                *vis = cos_d < 0.0f && sin_d < 0.0f
+                           ? 0.0f
+                           : smooth_step(-SOFT_RADIANS, SOFT_RADIANS, sin_d);
             }
-            f[k].color = meso_shade_point(frame, object, f[k].position, v8_lane3(normal, k),
-                                          f[k].uv, num_lights ? vis : NULL);
         }
+        v8f r, g, b;
+        meso_shade_batch8(frame, object, &in, n, &r, &g, &b);
+        for (int k = 0; k < n; ++k) f[k].color = (meso_vec3){r[k], g[k], b[k]};
     }
 }
 

@@ -66,10 +66,13 @@ static void shade(const void *state, const meso_frame *frame, const meso_object 
         v8f gu, gv;
         relief_gradient8(m, x + uo * (float)m->width, y - vo * (float)m->height, &gu, &gv);
         v8vec3 normal = relief_normal8(&l, depth, gu, gv);
-        v8f su = l.u + uo, sv = l.v + vo;
-        for (int k = 0; k < n; ++k)
-            f[k].color = meso_shade_point(frame, object, f[k].position, v8_lane3(normal, k),
-                                          (meso_vec2){su[k], sv[k]}, NULL);
+        meso_shade_batch in = {.px = l.position.x, .py = l.position.y, .pz = l.position.z,
+                               .nx = normal.x, .ny = normal.y, .nz = normal.z,
+                               .u = l.u + uo, .v = l.v + vo};
+        meso_shade_batch_all_visible(&in, frame);
+        v8f r, g, b;
+        meso_shade_batch8(frame, object, &in, n, &r, &g, &b);
+        for (int k = 0; k < n; ++k) f[k].color = (meso_vec3){r[k], g[k], b[k]};
     }
 }
 

@@ -25,8 +25,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "render_internal.h"
-#include "render_simd.h"
+#include "render_shading.h"
 
 #define RELIEF_LANES V8_LANES
 
@@ -419,7 +418,7 @@ static inline void relief_batch_setup(const relief_heights *m, const meso_object
 
 /* Shade `count` fragments with a tracer, sixteen at a time as two batches of eight: view
  * rays, hits, depth correction, the displaced normal at the hit, self-shadows per light,
- * meso_shade_point. */
+ * meso_shade_batch8. */
 static inline void relief_shade_fragments(const relief_heights *m, const relief_tracer *tracer,
                                           relief_params params, const meso_frame *frame,
                                           const meso_object *object, meso_fragment *fragments,
@@ -457,12 +456,11 @@ static inline void relief_shade_fragments(const relief_heights *m, const relief_
             out_depth[g] = l[g].depth * (1.0f + t[g]); /* dot(P + t V - eye, forward) */
             normal[g] = relief_normal8(&l[g], depth, gu, gv);
         }
-        float vis[2][MESO_SCENE_MAX_LIGHTS][RELIEF_LANES];
+        meso_shade_batch in[2];
         for (int li = 0; li < num_lights; ++li) {
             relief_shadow_batch sb[2];
             int dark[2] = {0, 0}, any = 0;
             for (int g = 0; g < groups; ++g) {
-                for (int k = 0; k < RELIEF_LANES; ++k) vis[g][li][k] = 1.0f;
                 memset(&sb[g], 0, sizeof sb[g]);
                 sb[g].count = n[g];
                 if (!params.shadows || !hit[g]) continue;
@@ -496,22 +494,23 @@ static inline void relief_shade_fragments(const relief_heights *m, const relief_
                 for (int g = 0; g < groups; ++g) dark[g] |= blocked[g] & sb[g].active_bits;
             }
             for (int g = 0; g < groups; ++g)
-                for (int k = 0; k < n[g]; ++k)
-                    if (dark[g] >> k & 1) vis[g][li][k] = 0.0f;
+                in[g].visibility[li] = v8_select(v8_mask_from_bits(dark[g]), v8_splat(0.0f),
+                                                 v8_splat(1.0f));
         }
         for (int g = 0; g < groups; ++g) {
             meso_fragment *f = fragments + start + (size_t)g * RELIEF_LANES;
+            in[g].px = hit_pos[g].x, in[g].py = hit_pos[g].y, in[g].pz = hit_pos[g].z;
+            in[g].nx = normal[g].x, in[g].ny = normal[g].y, in[g].nz = normal[g].z;
+            in[g].u = hit_u[g], in[g].v = hit_v[g];
+            v8f r, gr, b;
+            meso_shade_batch8(frame, object, &in[g], n[g], &r, &gr, &b);
             for (int k = 0; k < n[g]; ++k) {
                 if (!(hit[g] >> k & 1)) {
                     f[k].discard = true; /* the ray left the curved shell: silhouette */
                     continue;
                 }
-                float v_lane[MESO_SCENE_MAX_LIGHTS];
-                for (int li = 0; li < num_lights; ++li) v_lane[li] = vis[g][li][k];
                 f[k].out_depth = out_depth[g][k];
-                f[k].color = meso_shade_point(
-                    frame, object, v8_lane3(hit_pos[g], k), v8_lane3(normal[g], k),
-                    (meso_vec2){hit_u[g][k], hit_v[g][k]}, num_lights ? v_lane : NULL);
+                f[k].color = (meso_vec3){r[k], gr[k], b[k]};
             }
         }
     }
