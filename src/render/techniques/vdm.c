@@ -26,6 +26,7 @@ typedef struct vdm_state {
     bool nearest_silhouette; /* theta_MVM of the nearest texel (§3.2) or interpolated */
     int num_eigen;           /* k used at render time (<= the bake's) */
     int num_mvm;
+    int refine_steps; /* 0: the paper's interpolated d; else refine_hit with this many steps */
     float depth_tiles; /* shell depth in tiles (the bake's "depth") */
     float tile_world;  /* world length of one tile: curvature and offsets */
     float shadow_bias; /* shell depths */
@@ -92,6 +93,7 @@ static const char *const known_options[] = {"compressed",
                                             "shadow_bias",
                                             "silhouette_filter",
                                             "mipmap",
+                                            "refine_steps",
                                             NULL};
 
 static void vdm_release(void *state) {
@@ -217,7 +219,7 @@ static meso_result vdm_prepare(meso_context *ctx, const meso_scene *scene,
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "%s: technique vdm needs texture coordinates", object->name);
     int compressed, eigen, mvm, shadows, silhouettes, curvature, resolution, num_theta, num_phi,
-        num_curvatures, silhouette_filter, mipmap;
+        num_curvatures, silhouette_filter, mipmap, refine_steps;
     if ((r = read_int(ctx, object, "compressed", 1, 0, 1, &compressed)) ||
         (r = read_int(ctx, object, "eigenfunctions", 8, 1, MESO_VDM_MAX_EIGEN, &eigen)) ||
         (r = read_int(ctx, object, "mvm_eigenfunctions", 4, 1, MESO_VDM_MAX_EIGEN, &mvm)) ||
@@ -226,13 +228,15 @@ static meso_result vdm_prepare(meso_context *ctx, const meso_scene *scene,
         (r = read_int(ctx, object, "curvature", 1, 0, 1, &curvature)) ||
         (r = read_int(ctx, object, "silhouette_filter", 0, 0, 1, &silhouette_filter)) ||
         (r = read_int(ctx, object, "mipmap", 1, 0, 1, &mipmap)) ||
+        (r = read_int(ctx, object, "refine_steps", 3, 0, 16, &refine_steps)) ||
         (r = read_int(ctx, object, "resolution", 128, 8, MESO_VDM_MAX_SIDE, &resolution)) ||
         (r = read_int(ctx, object, "num_theta", 32, 2, MESO_VDM_MAX_THETA, &num_theta)) ||
         (r = read_int(ctx, object, "num_phi", 8, 1, MESO_VDM_MAX_PHI, &num_phi)) ||
         (r = read_int(ctx, object, "num_curvatures", 16, 1, MESO_VDM_MAX_CURVATURES,
                       &num_curvatures)))
         return r;
-    double bias = meso_object_option(object, "shadow_bias", 0.2);
+    /* Interpolated d errs by a good part of a shell depth at jumps; refined, by far less. */
+    double bias = meso_object_option(object, "shadow_bias", refine_steps > 0 ? 0.05 : 0.2);
     if (!(bias >= 0.0 && bias <= 10.0))
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "%s: technique_options.shadow_bias: %g must be in [0, 10]",
@@ -285,6 +289,7 @@ static meso_result vdm_prepare(meso_context *ctx, const meso_scene *scene,
     s->mipmap = mipmap;
     s->num_eigen = eigen;
     s->num_mvm = mvm;
+    s->refine_steps = refine_steps;
     s->depth_tiles = depth_tiles;
     s->tile_world = tile;
     s->shadow_bias = (float)bias;
@@ -366,12 +371,13 @@ static inline column_set columns_of(const meso_vdm_view *v, float theta, float c
     return cs;
 }
 
-/* d in shell depths at (uv, theta, phi, c) (§3.3: sum_i W^i(x, y, phi) E^i(theta, c)); the
- * interpolation is separable, so W is interpolated trilinearly and E bilinearly. Also
+/* d in shell depths at (uv, theta, phi, c) (§3.3: sum_i W^i(x, y, phi) E^i(theta, c)),
+ * trilinear over (x, y, phi) and bilinear over (theta, c). out_corners (NULL or 8 values)
+ * receives d at the 8 (x, y, phi) corners, the candidates refine_hit chooses from. Also
  * theta_MVM from the nearest texel (§3.2: "its nearest sample value in texture space for
  * silhouette determination"), linear in phi and c. */
 static inline float lookup(const vdm_state *s, meso_vec2 uv, float theta, float phi, float c,
-                           int level, float *out_max_theta) {
+                           int level, float *out_max_theta, float *out_corners) {
     const meso_vdm_view *v = &s->view;
     level = s->raw ? 0 : level;
     int lw = s->raw ? v->width : s->level_width[level];
@@ -387,13 +393,15 @@ static inline float lookup(const vdm_state *s, meso_vec2 uv, float theta, float 
         for (int corner = 0; corner < 8; corner++) {
             float w = (corner & 1 ? a.x.w : 1.0f - a.x.w) * (corner & 2 ? a.y.w : 1.0f - a.y.w) *
                       (corner & 4 ? a.phi.w : 1.0f - a.phi.w);
-            if (w == 0.0f) continue;
+            if (w == 0.0f && !out_corners) continue;
             const float *row =
                 v->raw + row_of(v, corner & 1 ? a.x.i1 : a.x.i0, corner & 2 ? a.y.i1 : a.y.i0,
                                 corner & 4 ? a.phi.i1 : a.phi.i0) *
                              columns;
-            d += w * (cs.w[0] * row[cs.col[0]] + cs.w[1] * row[cs.col[1]] +
-                      cs.w[2] * row[cs.col[2]] + cs.w[3] * row[cs.col[3]]);
+            float corner_d = cs.w[0] * row[cs.col[0]] + cs.w[1] * row[cs.col[1]] +
+                             cs.w[2] * row[cs.col[2]] + cs.w[3] * row[cs.col[3]];
+            if (out_corners) out_corners[corner] = corner_d;
+            d += w * corner_d;
         }
         if (out_max_theta && !nearest) {
             float m = 0.0f;
@@ -426,25 +434,32 @@ static inline float lookup(const vdm_state *s, meso_vec2 uv, float theta, float 
     /* §3.3: d = sum_i W^i E^i_VDM: W trilinear over (x, y, phi), E bilinear over (theta, c) */
     int lanes = s->lanes, chunks = lanes / 8;
     const uint16_t *weights = s->level_weights[level];
-    v8f w[MAX_CHUNKS] = {{0}};
+    v8f e[MAX_CHUNKS]; /* E^i(theta, c), bilinear */
+    for (int j = 0; j < chunks; j++)
+        e[j] = cs.w[0] * load8(s->eigen_t + (size_t)cs.col[0] * lanes + 8 * j) +
+               cs.w[1] * load8(s->eigen_t + (size_t)cs.col[1] * lanes + 8 * j) +
+               cs.w[2] * load8(s->eigen_t + (size_t)cs.col[2] * lanes + 8 * j) +
+               cs.w[3] * load8(s->eigen_t + (size_t)cs.col[3] * lanes + 8 * j);
+    v8f w[MAX_CHUNKS] = {{0}}; /* W interpolated, for theta_MVM */
     float wx[2] = {1.0f - a.x.w, a.x.w}, wy[2] = {1.0f - a.y.w, a.y.w};
     float wp[2] = {1.0f - a.phi.w, a.phi.w};
     int ix[2] = {a.x.i0, a.x.i1}, iy[2] = {a.y.i0, a.y.i1}, ip[2] = {a.phi.i0, a.phi.i1};
+    float d = 0.0f;
     for (int corner = 0; corner < 8; corner++) {
         float cw = wx[corner & 1] * wy[(corner >> 1) & 1] * wp[corner >> 2];
-        if (cw == 0.0f) continue;
+        if (cw == 0.0f && !out_corners) continue;
         const uint16_t *row = weights + level_row(lw, v->num_phi, ix[corner & 1],
                                                   iy[(corner >> 1) & 1], ip[corner >> 2]) *
                                             lanes;
-        for (int j = 0; j < chunks; j++) w[j] += cw * load8h(row + 8 * j);
-    }
-    v8f dot = {0};
-    for (int j = 0; j < chunks; j++) {
-        v8f e = cs.w[0] * load8(s->eigen_t + (size_t)cs.col[0] * lanes + 8 * j) +
-                cs.w[1] * load8(s->eigen_t + (size_t)cs.col[1] * lanes + 8 * j) +
-                cs.w[2] * load8(s->eigen_t + (size_t)cs.col[2] * lanes + 8 * j) +
-                cs.w[3] * load8(s->eigen_t + (size_t)cs.col[3] * lanes + 8 * j);
-        dot += w[j] * e;
+        v8f dot = {0};
+        for (int j = 0; j < chunks; j++) {
+            v8f wj = load8h(row + 8 * j);
+            dot += wj * e[j];
+            w[j] += cw * wj;
+        }
+        float corner_d = sum8(dot);
+        if (out_corners) out_corners[corner] = corner_d;
+        d += cw * corner_d;
     }
     if (out_max_theta) {
         /* theta_MVM = sum_i W^i E^i_MVM(c), with W interpolated or of the nearest texel */
@@ -465,7 +480,83 @@ static inline float lookup(const vdm_state *s, meso_vec2 uv, float theta, float 
         *out_max_theta = sum8(m);
     }
     (void)mvm_base;
-    return sum8(dot);
+    return d;
+}
+
+/* Beyond the paper: the hit chosen among the 8 (x, y, phi) corner samples of the table, then
+ * refined on the height field. d(x, y, phi) jumps where the view ray grazes past a bump
+ * (from the bump's near side to the ground behind it), so the paper's interpolated d lands
+ * between the two surfaces -- on the hidden far side of the bump, lit from the wrong side:
+ * with 8 azimuths 45 degrees apart, and asymmetric maps seen off the axes, most of a cone's
+ * outline is such a jump (docs/techniques/vdm.md, random cones: 21.9 dB before, see there
+ * after). Each corner d is a distance the ray may have at this pixel; along the pixel's own
+ * ray (bake space, unit vb, d in shell depths) a point d is below the height field when
+ * r(d) = d vb.z - (1 - h(T - d depth_tiles vb.xy)) >= 0. The first corner with r >= 0
+ * brackets the first crossing after the last one with r < 0 (0 is above the surface unless
+ * the mesostructure touches it); `steps` of the Illinois regula falsi close in. Where the 8
+ * corners agree the table is smooth and d is used as the paper does: no height samples. When
+ * the ray is above the surface at every corner, returns past_every_corner (NAN: the largest
+ * corner, the nearest to where the hit must be). */
+static float refine_hit(const meso_heightfield *hf, meso_vec2 uv, meso_vec3 vb,
+                        float depth_tiles, const float corners_in[8], float d, int steps,
+                        float past_every_corner) {
+    float corners[8];
+    for (int i = 0; i < 8; i++) { /* insertion sort, ascending */
+        float x = corners_in[i] > 0.0f ? corners_in[i] : 0.0f;
+        int j = i;
+        for (; j > 0 && corners[j - 1] > x; j--) corners[j] = corners[j - 1];
+        corners[j] = x;
+    }
+    if (corners[7] - corners[0] < 0.02f) return d; /* 1/50 shell depth: smooth */
+    float step_u = depth_tiles * vb.x, step_v = depth_tiles * vb.y;
+#define RESIDUAL(t)                                                                                \
+    ((t) * vb.z - (1.0f - meso_heightfield_sample(hf, uv.x - (t) * step_u, uv.y - (t) * step_v)))
+    float lo = 0.0f, r_lo = RESIDUAL(0.0f);
+    if (r_lo >= 0.0f) return 0.0f;
+    float hi = -1.0f, r_hi = 0.0f;
+    for (int i = 0; i < 8; i++) {
+        if (corners[i] <= lo) continue;
+        float r = RESIDUAL(corners[i]);
+        if (r >= 0.0f) {
+            hi = corners[i];
+            r_hi = r;
+            break;
+        }
+        lo = corners[i];
+        r_lo = r;
+    }
+    if (hi < 0.0f) { /* above the surface at every candidate: a few steps further on */
+        float stride = fmaxf(corners[7] - corners[0], 0.125f);
+        for (int k = 1; k <= 4 && hi < 0.0f; k++) {
+            float x = corners[7] + stride * (float)k, r = RESIDUAL(x);
+            if (r >= 0.0f) {
+                hi = x;
+                r_hi = r;
+            } else {
+                lo = x;
+                r_lo = r;
+            }
+        }
+        if (hi < 0.0f) return isnan(past_every_corner) ? corners[7] : past_every_corner;
+    }
+    int side = 0;
+    for (int k = 0; k < steps; k++) {
+        float x = lo + (hi - lo) * r_lo / (r_lo - r_hi);
+        float r = RESIDUAL(x);
+        if (r >= 0.0f) {
+            hi = x;
+            r_hi = r;
+            if (side > 0) r_lo *= 0.5f; /* Illinois: the stale end keeps moving */
+            side = 1;
+        } else {
+            lo = x;
+            r_lo = r;
+            if (side < 0) r_hi *= 0.5f;
+            side = -1;
+        }
+    }
+#undef RESIDUAL
+    return lo + (hi - lo) * r_lo / (r_lo - r_hi);
 }
 
 /* VDM §3.2: c_V = (c_max (V.C_max)^2 + c_min (V.C_min)^2) / (1 - (V.N)^2) at one vertex. */
@@ -611,13 +702,17 @@ static void vdm_shade(const void *state, const meso_frame *frame, const meso_obj
                     level++;
                 }
             }
-            float d = lookup(s, f->uv, theta, phi, c, level, s->silhouettes ? &max_theta : NULL);
+            float corners[8];
+            float d = lookup(s, f->uv, theta, phi, c, level, s->silhouettes ? &max_theta : NULL,
+                             s->refine_steps > 0 ? corners : NULL);
             /* Silhouette determination (§3.2): d = -1, i.e. theta beyond theta_MVM (§3.3); the
              * half step puts the boundary between the last valid sample and the first invalid. */
             if (s->silhouettes && theta > max_theta + 0.5f * theta_step) {
                 f->discard = true;
                 continue;
             }
+            if (s->refine_steps > 0)
+                d = refine_hit(hf, f->uv, vb, depth_tiles, corners, d, s->refine_steps, NAN);
             d = d > 0.0f ? d : 0.0f;
             /* Real texture coordinate (§3.2): T' = T - d V_xy (V toward the eye), in tiles. */
             float offset = d * depth_tiles;
@@ -648,8 +743,13 @@ static void vdm_shade(const void *state, const meso_frame *frame, const meso_obj
                 meso_vec2 uv_light = {uv.x + reach * lb.x, uv.y + reach * lb.y};
                 float theta_l = acosf(fminf(lz, 1.0f)), phi_l = atan2f(lb.y, lb.x);
                 float max_theta_l = HALF_PI_F;
-                float d_l = lookup(s, uv_light, theta_l, phi_l, 0.0f, level, &max_theta_l);
+                float light_corners[8];
+                float d_l = lookup(s, uv_light, theta_l, phi_l, 0.0f, level, &max_theta_l,
+                                   s->refine_steps > 0 ? light_corners : NULL);
                 if (theta_l > max_theta_l + 0.5f * theta_step) continue; /* the ray meets nothing */
+                if (s->refine_steps > 0) /* the same jumps as the view's: P' seen from P'' */
+                    d_l = refine_hit(hf, uv_light, lb, depth_tiles, light_corners, d_l,
+                                     s->refine_steps, INFINITY); /* nothing in the way: lit */
                 float expected = depth_below / lz;
                 if (d_l < expected - s->shadow_bias * (1.0f + expected)) visibility[li] = 0.0f;
             }
