@@ -166,6 +166,7 @@ static inline meso_vec2 relief_fragment_quadric(const meso_object *object, const
 typedef struct relief_batch {
     int count;
     v8f x0, y0, xd, yd, a, b, t_end;
+    v8f qa, qb; /* the quadric at each fragment (0 without silhouettes): shadows use it too */
     int flat_bits;  /* lanes whose hit is t = 0 without a search */
     int floor_bits; /* lanes whose search ends on the floor */
 } relief_batch;
@@ -225,10 +226,14 @@ static inline int relief_search8(const relief_heights *m, const relief_batch *ba
 /* ---- Shadows ------------------------------------------------------------------------------ */
 
 /* Light rays from the hits of one batch toward one light, in texel-centre coordinates: from
- * (x, y, d) at s = 0 to (x + xd, y + yd, 0) at s = 1, where the ray reaches the mesh. */
+ * (x, y, d) at s = 0 to (x + xd, y + yd, 0) at s = 1, where the ray leaves the shell. The
+ * depth along the way is d (1 - s) + bulge s (1 - s): on a curved mesh (the quadric of the
+ * view rays, above) the surface falls away from a rising light ray, which so leaves the
+ * shell sooner and, between its ends, lies deeper than the straight line (bulge >= 0 when
+ * convex); flat: bulge = 0. */
 typedef struct relief_shadow_batch {
     int count;
-    v8f x, y, d, xd, yd;
+    v8f x, y, d, xd, yd, bulge;
     int active_bits; /* lanes that need a search (lit lanes at d = 0 and dark ones do not) */
 } relief_shadow_batch;
 
@@ -246,7 +251,7 @@ static inline int relief_shadow_search8(const relief_heights *m, const relief_sh
     for (int k = 1; k < steps && pending; ++k) {
         float frac = (float)k * inv;
         v8f h = relief_sample8(m, s->x + s->xd * frac, s->y + s->yd * frac);
-        v8f f = s->d * (1.0f - frac) + h - 1.0f;
+        v8f f = (s->d + s->bulge * frac) * (1.0f - frac) + h - 1.0f;
         int bits = v8_mask_bits(f > RELIEF_SHADOW_BIAS) & pending;
         blocked |= bits;
         pending &= ~bits;
@@ -397,6 +402,8 @@ static inline void relief_batch_setup(const relief_heights *m, const meso_object
             qa[k] = q.x;
             qb[k] = q.y;
         }
+        batch->qa = qa;
+        batch->qb = qb;
         v8f tl = v8_sqrt(v8_dot(l->tangent, l->tangent));
         v8f bl = v8_sqrt(v8_dot(l->bitangent, l->bitangent));
         v8f x = v8_select(tl > 0.0f, v8_dot(l->view, l->tangent) / tl, zero);
@@ -475,15 +482,39 @@ static inline void relief_shade_fragments(const relief_heights *m, const relief_
                     L = (v8vec3){L.x * inv, L.y * inv, L.z * inv};
                 }
                 v8f lu = v8_dot(L, l[g].bn), lv = v8_dot(L, l[g].nt), ln = v8_dot(L, l[g].tb);
-                /* A light below the shell's top (or no frame): the surface itself blocks it. */
-                int up = v8_mask_bits(ln > 0.0f) & l[g].frame_bits;
+                /* The light ray leaves the shell where d(s) = hd - (ln s + q s^2) / depth
+                 * reaches 0 (s in world units along L, q = qa xL^2 + qb yL^2 the quadric
+                 * along L, as the view rays' b): s_out = 2 hd depth / (ln + sqrt(ln^2 +
+                 * 4 q hd depth)). On a convex mesh that can be so even for a light a little
+                 * below the tangent plane (the band past the terminator the truth still
+                 * lights); without a real positive root the surface itself blocks the light. */
+                v8f tl = v8_sqrt(v8_dot(l[g].tangent, l[g].tangent));
+                v8f bl = v8_sqrt(v8_dot(l[g].bitangent, l[g].bitangent));
+                v8f xl = v8_select(tl > 0.0f, v8_dot(L, l[g].tangent) / tl, v8_splat(0.0f));
+                v8f yl = v8_select(bl > 0.0f, v8_dot(L, l[g].bitangent) / bl, v8_splat(0.0f));
+                v8f q = batch[g].qa * xl * xl + batch[g].qb * yl * yl;
+                /* The light's elevation over the tangent plane at the hit, not at the entry:
+                 * the hit lies t V away, where the curved surface has turned by 2 q. */
+                v8f xv = v8_select(tl > 0.0f, v8_dot(l[g].view, l[g].tangent) / tl,
+                                   v8_splat(0.0f));
+                v8f yv = v8_select(bl > 0.0f, v8_dot(l[g].view, l[g].bitangent) / bl,
+                                   v8_splat(0.0f));
+                ln += 2.0f * t[g] * (batch[g].qa * xv * xl + batch[g].qb * yv * yl);
+                v8f reach = hd[g] * depth;
+                v8f disc = ln * ln + 4.0f * q * reach;
+                v8f denominator = ln + v8_sqrt(v8_max(disc, v8_splat(0.0f)));
+                v8i leaves = (disc >= 0.0f) & (denominator > 0.0f);
+                /* hit at the top (hd = 0): lit exactly when the light is above the plane */
+                v8i top = hd[g] <= 0.0f;
+                leaves = (leaves & ~top) | ((ln > 0.0f) & top);
+                int up = v8_mask_bits(leaves) & l[g].frame_bits;
                 dark[g] = hit[g] & ~up;
                 sb[g].active_bits = hit[g] & up & v8_mask_bits(hd[g] > 0.0f);
-                /* From d to d = 0 the light ray travels d depth / ln world units. */
-                v8f s = hd[g] * depth / v8_select(ln > 0.0f, ln, v8_splat(1.0f));
+                v8f s = 2.0f * reach / v8_select(leaves, denominator, v8_splat(1.0f));
                 sb[g].x = hx[g];
                 sb[g].y = hy[g];
                 sb[g].d = hd[g];
+                sb[g].bulge = v8_select(leaves, q * s * s / depth, v8_splat(0.0f));
                 sb[g].xd = lu * s * (float)m->width;
                 sb[g].yd = -lv * s * (float)m->height;
                 any |= sb[g].active_bits;

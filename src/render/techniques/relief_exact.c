@@ -455,9 +455,9 @@ static void shadow(const void *user, const relief_shadow_batch *batches, int cou
                                  .y0 = b->y - h * v8_floor(b->y * (1.0f / h)),
                                  .xd = b->xd,
                                  .yd = b->yd,
-                                 .c0 = b->d,
-                                 .c1 = -b->d,
-                                 .c2 = v8_splat(0.0f),
+                                 .c0 = b->d, /* d (1 - s) + bulge s (1 - s) */
+                                 .c1 = b->bulge - b->d,
+                                 .c2 = -b->bulge,
                                  .t0 = v8_splat(0.0f),
                                  .t1 = v8_splat(1.0f),
                                  .bias = RELIEF_SHADOW_BIAS};
@@ -466,7 +466,7 @@ static void shadow(const void *user, const relief_shadow_batch *batches, int cou
             int blocked = 0;
             for (int p = 1; p <= 3 && (b->active_bits & ~blocked); ++p) {
                 float sp = 0.25f * (float)p;
-                v8f f = b->d * (1.0f - sp) - 1.0f +
+                v8f f = (b->d + b->bulge * sp) * (1.0f - sp) - 1.0f +
                         relief_sample8(&s->heights, b->x + b->xd * sp, b->y + b->yd * sp);
                 blocked |= v8_mask_bits(f > RELIEF_SHADOW_BIAS) & b->active_bits;
             }
@@ -482,8 +482,16 @@ static void shadow(const void *user, const relief_shadow_batch *batches, int cou
         int blocked = 0;
         for (int k = 0; k < b->count; ++k) {
             if (!(b->active_bits >> k & 1)) continue;
-            exact_ray r = {b->x[k],  b->y[k], b->xd[k], b->yd[k], b->d[k],
-                           -b->d[k], 0.0,     0.0,      1.0,      RELIEF_SHADOW_BIAS};
+            exact_ray r = {b->x[k],
+                           b->y[k],
+                           b->xd[k],
+                           b->yd[k],
+                           b->d[k],
+                           b->bulge[k] - b->d[k],
+                           -b->bulge[k],
+                           0.0,
+                           1.0,
+                           RELIEF_SHADOW_BIAS};
             double t;
             if (trace_any(s, &r, &t)) blocked |= 1 << k;
         }
