@@ -457,10 +457,11 @@ meso_result meso_bake_vdm(meso_context *ctx, const meso_vdm_desc *desc, meso_vdm
 
     resample_heightfield(d.heightfield, d.width, d.height, grid);
     bake_job job = {.desc = d, .grid = grid, .clamp = d.heightfield->wrap == MESO_WRAP_CLAMP};
-    /* A table of up to 512 MiB (the 128^2 default: 277 MB) is held between the passes instead
-     * of cast again: half the bake. Larger ones, or no memory for it, stream twice. */
+    /* A table of up to 2 GiB (128^2: 277 MB, 256^2: 1.1 GB) is held between the passes
+     * instead of cast again: half the bake. Larger ones (512^2: 4.4 GB), or no memory for
+     * it, stream twice. */
     float *table = vdm->raw;
-    if (!table && (uint64_t)rows * (uint64_t)columns <= (UINT64_C(1) << 27))
+    if (!table && (uint64_t)rows * (uint64_t)columns <= (UINT64_C(1) << 29))
         table = malloc(sizeof(float) * rows * (size_t)columns);
     meso_bake_rows source = {
         .rows = rows,

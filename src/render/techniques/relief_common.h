@@ -356,6 +356,29 @@ static inline v8vec3 relief_normal8(const relief_lanes *l, float depth, v8f gu, 
                     v8_select(keep, l->normal.z, n.z * inv)};
 }
 
+/* The displaced normal n, found in the frame of the fragment where the ray entered, carried
+ * to the hit t V away on the curved mesh: the quadric surface -(qa x^2 + qb y^2) has the
+ * normal N + 2 qa x T^ + 2 qb y B^ (unnormalised) at (x, y), so every normal there is turned
+ * by the rotation that takes N to it (small angle: n + (N_hit - N), renormalised). Flat
+ * meshes (q = 0) keep n. Without it a sphere is shaded as if every hit faced the entry's
+ * way: a uniform error over its lit side (docs/techniques/relief.md). */
+static inline v8vec3 relief_curve_normal8(const relief_lanes *l, const relief_batch *batch, v8f t,
+                                          v8vec3 n) {
+    v8f tl = v8_sqrt(v8_dot(l->tangent, l->tangent));
+    v8f bl = v8_sqrt(v8_dot(l->bitangent, l->bitangent));
+    v8f zero = v8_splat(0.0f);
+    v8f it = v8_select(tl > 0.0f, 1.0f / v8_select(tl > 0.0f, tl, v8_splat(1.0f)), zero);
+    v8f ib = v8_select(bl > 0.0f, 1.0f / v8_select(bl > 0.0f, bl, v8_splat(1.0f)), zero);
+    /* (x, y) of the hit from the entry, world units along T^ and B^; the turn 2 q (x, y) */
+    v8f sx = 2.0f * batch->qa * t * v8_dot(l->view, l->tangent) * it * it;
+    v8f sy = 2.0f * batch->qb * t * v8_dot(l->view, l->bitangent) * ib * ib;
+    v8vec3 turned = {n.x + l->tangent.x * sx + l->bitangent.x * sy,
+                     n.y + l->tangent.y * sx + l->bitangent.y * sy,
+                     n.z + l->tangent.z * sx + l->bitangent.z * sy};
+    v8f inv = 1.0f / v8_sqrt(v8_max(v8_dot(turned, turned), v8_splat(1e-30f)));
+    return (v8vec3){turned.x * inv, turned.y * inv, turned.z * inv};
+}
+
 /* ---- The relief family's fragment loop ---------------------------------------------------- */
 
 /* The tracer of one variant: its search for the view rays and its shadow test, each given
@@ -462,6 +485,8 @@ static inline void relief_shade_fragments(const relief_heights *m, const relief_
             hit_v[g] = l[g].v + dv[g] * t[g];
             out_depth[g] = l[g].depth * (1.0f + t[g]); /* dot(P + t V - eye, forward) */
             normal[g] = relief_normal8(&l[g], depth, gu, gv);
+            if (params.silhouettes) normal[g] = relief_curve_normal8(&l[g], &batch[g], t[g],
+                                                                     normal[g]);
         }
         meso_shade_batch in[2];
         for (int li = 0; li < num_lights; ++li) {
