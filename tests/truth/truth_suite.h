@@ -79,22 +79,6 @@ static void render_images(const meso_scene *scene, const char *technique, meso_i
     meso_framebuffer_destroy(fb);
 }
 
-static truth_scene *get_scene(const char *name) {
-    size_t index = TRUTH_NUM_SCENES;
-    for (size_t i = 0; i < TRUTH_NUM_SCENES; i++)
-        if (strcmp(truth_scenes[i], name) == 0) index = i;
-    if (index == TRUTH_NUM_SCENES) fail_msg("%s: not in truth_scenes[]", name);
-    truth_scene *ts = &truth_loaded[index];
-    if (ts->scene) return ts;
-    char path[1024];
-    snprintf(path, sizeof(path), "%s/%s.json", TRUTH_DATA_DIR, name);
-    if (meso_scene_load(truth_ctx, path, &ts->scene) != MESO_OK)
-        fail_msg("%s", meso_context_last_error(truth_ctx));
-    render_images(ts->scene, "reference", &ts->color, &ts->coverage);
-    ts->name = name;
-    return ts;
-}
-
 /* Set every object's options to the technique's of truth_options[] (the scene files set none:
  * each technique refuses the others' options). Setting, not appending, so a row that failed
  * half-way leaves nothing behind for the next. */
@@ -110,6 +94,27 @@ static void set_options(meso_scene *scene, const char *technique) {
             option->value = truth_options[i].value;
         }
     }
+}
+
+/* The scene `name` of truth_scenes[], loaded and its reference rendered on first use. */
+static truth_scene *get_scene(const char *name) {
+    size_t index = TRUTH_NUM_SCENES;
+    for (size_t i = 0; i < TRUTH_NUM_SCENES; i++)
+        if (strcmp(truth_scenes[i], name) == 0) index = i;
+    if (index == TRUTH_NUM_SCENES) fail_msg("%s: not in truth_scenes[]", name);
+    truth_scene *ts = &truth_loaded[index];
+    ts->name = name;
+    if (ts->color) return ts;
+    /* A scene that failed to load or to render fails each of its rows, with the message. */
+    if (!ts->scene) {
+        char path[1024];
+        snprintf(path, sizeof(path), "%s/%s.json", TRUTH_DATA_DIR, name);
+        if (meso_scene_load(truth_ctx, path, &ts->scene) != MESO_OK)
+            fail_msg("%s", meso_context_last_error(truth_ctx));
+    }
+    set_options(ts->scene, "reference");
+    render_images(ts->scene, "reference", &ts->color, &ts->coverage);
+    return ts;
 }
 
 static void save_image(const meso_image *image, const char *path) {
@@ -175,7 +180,11 @@ static int truth_run(const char *group, bool (*select)(const char *technique)) {
     static char names[TRUTH_MAX_ROWS][2 * MESO_NAME_MAX];
     size_t count = 0;
     for (size_t i = 0; i < sizeof(truth_rows) / sizeof(truth_rows[0]); i++) {
-        if (!select(truth_rows[i].technique) || count == TRUTH_MAX_ROWS) continue;
+        if (!select(truth_rows[i].technique)) continue;
+        if (count == TRUTH_MAX_ROWS) {
+            print_error("truth_suite.h: more than TRUTH_MAX_ROWS (%d) rows\n", TRUTH_MAX_ROWS);
+            return 1;
+        }
         snprintf(names[count], sizeof(names[count]), "%s/%s", truth_rows[i].scene,
                  truth_rows[i].technique);
         tests[count] = (struct CMUnitTest){.name = names[count],
