@@ -49,65 +49,65 @@ static const truth_option truth_options[] = {
 };
 
 static const truth_row truth_rows[] = {
-    {"cones-plane", "flat", 15.9, 0.925},         /* measured 17.47 dB, IoU 0.9305 */
-    {"cones-plane", "bump", 13.2, 0.925},         /* measured 14.79 dB, IoU 0.9305 */
-    {"cones-plane", "horizon", 13.1, 0.925},      /* measured 14.69 dB, IoU 0.9305 */
-    {"cones-plane", "parallax", 14.9, 0.925},     /* measured 16.43 dB, IoU 0.9305 */
-    {"cones-plane", "relief", 42.4, 0.925},       /* measured 43.98 dB, IoU 0.9305 */
-    {"cones-plane", "relief_exact", 40.4, 0.925}, /* measured 41.96 dB, IoU 0.9305 */
-    {"cones-plane", "vdm", 18.5, 0.925}, /* VDM fix pending: floor from the broken version */
-    {"cones-plane", "tessellation", 30.7, 0.994}, /* measured 32.26 dB, IoU 0.9996 */
-    {"cones-plane", "displacement", 47.9, 0.995}, /* measured 49.43 dB, IoU 1.0000 */
+    {"cones-plane", "flat", 15.5, 0.995},         /* measured 17.01 dB, IoU 1.0000 */
+    {"cones-plane", "bump", 13.0, 0.995},         /* measured 14.56 dB, IoU 1.0000 */
+    {"cones-plane", "horizon", 12.7, 0.995},      /* measured 14.22 dB, IoU 1.0000 */
+    {"cones-plane", "parallax", 14.0, 0.995},     /* measured 15.58 dB, IoU 1.0000 */
+    {"cones-plane", "relief", 37.3, 0.995},       /* measured 38.83 dB, IoU 1.0000 */
+    {"cones-plane", "relief_exact", 34.2, 0.995}, /* measured 35.75 dB, IoU 1.0000 */
+    {"cones-plane", "vdm", 17.3, 0.995}, /* VDM fix pending: floor from the broken version */
+    {"cones-plane", "tessellation", 33.5, 0.995}, /* measured 35.09 dB, IoU 1.0000 */
+    {"cones-plane", "displacement", 36.5, 0.995}, /* measured 38.08 dB, IoU 1.0000 */
 
-    {"cones-clamp", "flat", 15.7, 0.918},         /* measured 17.28 dB, IoU 0.9237 */
-    {"cones-clamp", "bump", 12.8, 0.918},         /* measured 14.31 dB, IoU 0.9237 */
-    {"cones-clamp", "horizon", 12.5, 0.918},      /* measured 14.05 dB, IoU 0.9237 */
-    {"cones-clamp", "parallax", 14.1, 0.918},     /* measured 15.60 dB, IoU 0.9237 */
-    {"cones-clamp", "relief", 36.3, 0.918},       /* measured 37.88 dB, IoU 0.9237 */
-    {"cones-clamp", "relief_exact", 35.6, 0.918}, /* measured 37.13 dB, IoU 0.9237 */
-    {"cones-clamp", "vdm", 18.5, 0.918}, /* VDM fix pending: floor from the broken version */
-    {"cones-clamp", "tessellation", 29.9, 0.994}, /* measured 31.47 dB, IoU 0.9997 */
-    {"cones-clamp", "displacement", 43.6, 0.994}, /* measured 45.18 dB, IoU 0.9999 */
+    {"cones-clamp", "flat", 15.7, 0.925},         /* measured 17.23 dB, IoU 0.9302 */
+    {"cones-clamp", "bump", 12.8, 0.925},         /* measured 14.38 dB, IoU 0.9302 */
+    {"cones-clamp", "horizon", 12.6, 0.925},      /* measured 14.13 dB, IoU 0.9302 */
+    {"cones-clamp", "parallax", 14.2, 0.925},     /* measured 15.73 dB, IoU 0.9302 */
+    {"cones-clamp", "relief", 37.5, 0.925},       /* measured 39.09 dB, IoU 0.9302 */
+    {"cones-clamp", "relief_exact", 36.9, 0.925}, /* measured 38.43 dB, IoU 0.9302 */
+    {"cones-clamp", "vdm", 18.2, 0.925}, /* VDM fix pending: floor from the broken version */
+    {"cones-clamp", "tessellation", 30.5, 0.994}, /* measured 32.07 dB, IoU 0.9998 */
+    {"cones-clamp", "displacement", 45.3, 0.994}, /* measured 46.86 dB, IoU 0.9999 */
 
-    {"cones-mirrored", "flat", 12.7, 0.930},         /* measured 14.28 dB, IoU 0.9360 */
-    {"cones-mirrored", "bump", 12.3, 0.930},         /* measured 13.87 dB, IoU 0.9360 */
-    {"cones-mirrored", "horizon", 12.4, 0.930},      /* measured 13.96 dB, IoU 0.9360 */
-    {"cones-mirrored", "parallax", 14.3, 0.930},     /* measured 15.87 dB, IoU 0.9360 */
-    {"cones-mirrored", "relief", 34.4, 0.930},       /* measured 35.91 dB, IoU 0.9360 */
-    {"cones-mirrored", "relief_exact", 33.4, 0.930}, /* measured 34.92 dB, IoU 0.9360 */
-    {"cones-mirrored", "vdm", 17.9, 0.930}, /* VDM fix pending: floor from the broken version */
-    {"cones-mirrored", "tessellation", 30.7, 0.994}, /* measured 32.26 dB, IoU 0.9997 */
-    {"cones-mirrored", "displacement", 40.2, 0.995}, /* measured 41.80 dB, IoU 1.0000 */
+    {"cones-mirrored", "flat", 13.8, 0.995},         /* measured 15.30 dB, IoU 1.0000 */
+    {"cones-mirrored", "bump", 13.0, 0.995},         /* measured 14.56 dB, IoU 1.0000 */
+    {"cones-mirrored", "horizon", 12.8, 0.995},      /* measured 14.33 dB, IoU 1.0000 */
+    {"cones-mirrored", "parallax", 17.6, 0.995},     /* measured 19.13 dB, IoU 1.0000 */
+    {"cones-mirrored", "relief", 34.7, 0.995},       /* measured 36.29 dB, IoU 1.0000 */
+    {"cones-mirrored", "relief_exact", 32.1, 0.995}, /* measured 33.69 dB, IoU 1.0000 */
+    {"cones-mirrored", "vdm", 20.5, 0.995}, /* VDM fix pending: floor from the broken version */
+    {"cones-mirrored", "tessellation", 32.9, 0.995}, /* measured 34.49 dB, IoU 1.0000 */
+    {"cones-mirrored", "displacement", 34.8, 0.995}, /* measured 36.39 dB, IoU 1.0000 */
 
-    {"cones-rotated", "flat", 12.9, 0.928},         /* measured 14.49 dB, IoU 0.9338 */
-    {"cones-rotated", "bump", 12.5, 0.928},         /* measured 14.05 dB, IoU 0.9338 */
-    {"cones-rotated", "horizon", 12.7, 0.928},      /* measured 14.20 dB, IoU 0.9338 */
-    {"cones-rotated", "parallax", 15.5, 0.928},     /* measured 17.07 dB, IoU 0.9338 */
-    {"cones-rotated", "relief", 38.6, 0.928},       /* measured 40.13 dB, IoU 0.9338 */
-    {"cones-rotated", "relief_exact", 36.8, 0.928}, /* measured 38.39 dB, IoU 0.9338 */
-    {"cones-rotated", "vdm", 18.7, 0.928}, /* VDM fix pending: floor from the broken version */
-    {"cones-rotated", "tessellation", 32.6, 0.994}, /* measured 34.18 dB, IoU 0.9998 */
-    {"cones-rotated", "displacement", 46.1, 0.995}, /* measured 47.64 dB, IoU 1.0000 */
+    {"cones-rotated", "flat", 15.5, 0.995},         /* measured 17.09 dB, IoU 1.0000 */
+    {"cones-rotated", "bump", 13.4, 0.995},         /* measured 14.97 dB, IoU 1.0000 */
+    {"cones-rotated", "horizon", 13.0, 0.995},      /* measured 14.55 dB, IoU 1.0000 */
+    {"cones-rotated", "parallax", 14.6, 0.995},     /* measured 16.16 dB, IoU 1.0000 */
+    {"cones-rotated", "relief", 38.3, 0.995},       /* measured 39.82 dB, IoU 1.0000 */
+    {"cones-rotated", "relief_exact", 34.8, 0.995}, /* measured 36.33 dB, IoU 1.0000 */
+    {"cones-rotated", "vdm", 17.9, 0.995}, /* VDM fix pending: floor from the broken version */
+    {"cones-rotated", "tessellation", 34.5, 0.995}, /* measured 36.10 dB, IoU 1.0000 */
+    {"cones-rotated", "displacement", 37.7, 0.995}, /* measured 39.24 dB, IoU 1.0000 */
 
-    {"cones-uv-scale", "flat", 11.1, 0.918},         /* measured 12.70 dB, IoU 0.9235 */
-    {"cones-uv-scale", "bump", 10.4, 0.918},         /* measured 11.92 dB, IoU 0.9235 */
-    {"cones-uv-scale", "horizon", 10.3, 0.918},      /* measured 11.83 dB, IoU 0.9235 */
-    {"cones-uv-scale", "parallax", 12.8, 0.918},     /* measured 14.31 dB, IoU 0.9235 */
-    {"cones-uv-scale", "relief", 29.9, 0.918},       /* measured 31.43 dB, IoU 0.9235 */
-    {"cones-uv-scale", "relief_exact", 33.2, 0.918}, /* measured 34.78 dB, IoU 0.9235 */
-    {"cones-uv-scale", "vdm", 14.2, 0.918}, /* VDM fix pending: floor from the broken version */
-    {"cones-uv-scale", "tessellation", 25.3, 0.994}, /* measured 26.85 dB, IoU 0.9991 */
-    {"cones-uv-scale", "displacement", 34.4, 0.995}, /* measured 35.96 dB, IoU 1.0000 */
+    {"cones-uv-scale", "flat", 11.9, 0.995},         /* measured 13.42 dB, IoU 1.0000 */
+    {"cones-uv-scale", "bump", 10.5, 0.995},         /* measured 12.03 dB, IoU 1.0000 */
+    {"cones-uv-scale", "horizon", 10.1, 0.995},      /* measured 11.67 dB, IoU 1.0000 */
+    {"cones-uv-scale", "parallax", 12.7, 0.995},     /* measured 14.23 dB, IoU 1.0000 */
+    {"cones-uv-scale", "relief", 29.2, 0.995},       /* measured 30.71 dB, IoU 1.0000 */
+    {"cones-uv-scale", "relief_exact", 31.7, 0.995}, /* measured 33.21 dB, IoU 1.0000 */
+    {"cones-uv-scale", "vdm", 14.0, 0.995}, /* VDM fix pending: floor from the broken version */
+    {"cones-uv-scale", "tessellation", 26.7, 0.995}, /* measured 28.24 dB, IoU 1.0000 */
+    {"cones-uv-scale", "displacement", 26.8, 0.995}, /* measured 28.36 dB, IoU 1.0000 */
 
-    {"cones-sphere", "flat", 20.7, 0.912},         /* measured 22.29 dB, IoU 0.9179 */
-    {"cones-sphere", "bump", 22.4, 0.912},         /* measured 23.92 dB, IoU 0.9179 */
-    {"cones-sphere", "horizon", 22.2, 0.912},      /* measured 23.71 dB, IoU 0.9179 */
-    {"cones-sphere", "parallax", 23.9, 0.912},     /* measured 25.40 dB, IoU 0.9179 */
-    {"cones-sphere", "relief", 25.2, 0.982},       /* measured 26.73 dB, IoU 0.9871 */
-    {"cones-sphere", "relief_exact", 25.2, 0.981}, /* measured 26.71 dB, IoU 0.9866 */
-    {"cones-sphere", "vdm", 24.9, 0.972}, /* VDM fix pending: floor from the broken version */
-    {"cones-sphere", "tessellation", 32.9, 0.994}, /* measured 34.47 dB, IoU 0.9993 */
-    {"cones-sphere", "displacement", 41.7, 0.994}, /* measured 43.26 dB, IoU 0.9999 */
+    {"cones-sphere", "flat", 19.9, 0.900},         /* measured 21.48 dB, IoU 0.9057 */
+    {"cones-sphere", "bump", 21.3, 0.900},         /* measured 22.86 dB, IoU 0.9057 */
+    {"cones-sphere", "horizon", 21.2, 0.900},      /* measured 22.79 dB, IoU 0.9057 */
+    {"cones-sphere", "parallax", 22.9, 0.900},     /* measured 24.49 dB, IoU 0.9057 */
+    {"cones-sphere", "relief", 25.4, 0.980},       /* measured 26.95 dB, IoU 0.9853 */
+    {"cones-sphere", "relief_exact", 25.6, 0.980}, /* measured 27.12 dB, IoU 0.9852 */
+    {"cones-sphere", "vdm", 24.9, 0.975}, /* VDM fix pending: floor from the broken version */
+    {"cones-sphere", "tessellation", 34.3, 0.993}, /* measured 35.88 dB, IoU 0.9988 */
+    {"cones-sphere", "displacement", 40.3, 0.994}, /* measured 41.87 dB, IoU 0.9996 */
 };
 
 #endif
