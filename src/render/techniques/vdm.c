@@ -704,7 +704,7 @@ static void vdm_shade(const void *state, const meso_frame *frame, const meso_obj
             }
             meso_vec3 vb = to_bake_space(view, t, b, n, scale_u, scale_v, s->tile_world);
             float theta = acosf(fminf(vb.z, 1.0f)), phi = atan2f(vb.y, vb.x);
-            float c = 0.0f;
+            float c = 0.0f, c_world = 0.0f;
             if (has_curvature) {
                 /* per vertex, then interpolated (§3.2); a batch is usually one triangle */
                 if (f->triangle != cached_triangle) {
@@ -714,6 +714,7 @@ static void vdm_shade(const void *state, const meso_frame *frame, const meso_obj
                     cached_triangle = f->triangle;
                 }
                 c = f->b0 * vertex_c[0] + f->b1 * vertex_c[1] + f->b2 * vertex_c[2];
+                c_world = c;
                 /* world 1/length -> bake space: y = x^2 c / 2 scaled by 1/s_h across and 1/s
                  * down gives c s_h^2 / s, s_h the world length of one bake unit along V_xy */
                 float hx = meso_vec3_dot(view, t), hy = meso_vec3_dot(view, b);
@@ -755,8 +756,13 @@ static void vdm_shade(const void *state, const meso_frame *frame, const meso_obj
             meso_vec3 position = meso_vec3_madd(f->position, t, -offset * vb.x * scale_u);
             position = meso_vec3_madd(position, b, -offset * vb.y * scale_v);
             position = meso_vec3_madd(position, n, -below);
+            /* Beyond the paper: the normal of the curved mesh at the hit, not at the entry (the
+             * surface has turned by c_V per world unit of the way along V_xy; relief's
+             * relief_curve_normal8 does the same with its quadric). */
+            meso_vec3 along = meso_vec3_sub(meso_vec3_madd(position, n, below), f->position);
+            meso_vec3 n_hit = meso_vec3_normalize(meso_vec3_madd(n, along, c_world));
             meso_vec3 normal =
-                meso_displaced_normal(n, f->tangent, f->bitangent, depth_world, gradient);
+                meso_displaced_normal(n_hit, f->tangent, f->bitangent, depth_world, gradient);
 
             /* Shadow determination (§3.2, Fig. 5), flat-surface approximation, c_L ignored as in
              * the paper: P'' = T' + h tan(theta_L) L; lit when d_L reaches P' (h sec(theta_L)). */
