@@ -526,16 +526,22 @@ static float refine_hit(const meso_heightfield *hf, meso_vec2 uv, meso_vec3 vb,
     float lo = 0.0f, r_lo = RESIDUAL(0.0f);
     if (r_lo >= 0.0f) return 0.0f;
     float hi = -1.0f, r_hi = 0.0f;
-    for (int i = 0; i < 8; i++) {
+    for (int i = 0; i < 8 && hi < 0.0f; i++) {
         if (corners[i] <= lo) continue;
-        float r = RESIDUAL(corners[i]);
-        if (r >= 0.0f) {
-            hi = corners[i];
-            r_hi = r;
-            break;
+        /* half-way first where the gap is wide: a thin tip the ray clips between two
+         * corners' distances would otherwise be stepped over */
+        float start = lo, gap = corners[i] - lo;
+        int inner = gap > 0.3f ? 3 : (gap > 0.2f ? 2 : (gap > 0.1f ? 1 : 0));
+        for (int k = 1; k <= inner + 1; k++) {
+            float x = start + gap * (float)k / (float)(inner + 1), r = RESIDUAL(x);
+            if (r >= 0.0f) {
+                hi = x;
+                r_hi = r;
+                break;
+            }
+            lo = x;
+            r_lo = r;
         }
-        lo = corners[i];
-        r_lo = r;
     }
     if (hi < 0.0f) { /* above the surface at every candidate: a few steps further on */
         float stride = fmaxf(corners[7] - corners[0], 0.125f);
