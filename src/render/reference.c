@@ -68,10 +68,29 @@ bool reference_uv_barycentrics(const meso_vec2 uv[3], meso_vec2 point, float out
     return true;
 }
 
-double reference_option(const meso_object *object, const char *name, double fallback) {
-    for (int i = 0; i < object->num_options && i < MESO_OPTIONS_MAX; i++)
-        if (!strncmp(object->options[i].name, name, MESO_NAME_MAX)) return object->options[i].value;
-    return fallback;
+const meso_technique_option meso_reference_options[MESO_REFERENCE_NUM_OPTIONS] = {
+    MESO_OPTION_ROW(MESO_OPTION_FLOAT, subdivision, 0.125, 64.0, 1.0,
+                    "height fields: micro-triangle edges per texel of the tiled map",
+                    reference_options, subdivision),
+    MESO_OPTION_ROW(MESO_OPTION_FLOAT, view_adaptive, -1.0, 64.0, 2.0,
+                    "height fields: at most this many micro-edges per pixel of the scene's image; "
+                    "<= 0 keeps the texel rule alone",
+                    reference_options, view_adaptive),
+    MESO_OPTION_ROW(MESO_OPTION_INT, resolution, 2, MESO_ISOSURFACE_MAX_RESOLUTION, 128,
+                    "solids: extraction grid cells a tile side in u and v (w: a quarter)",
+                    reference_options, resolution),
+};
+
+meso_result reference_read_options(meso_context *ctx, const meso_scene *scene,
+                                   const meso_object *object, const meso_reference_desc *desc,
+                                   reference_options *out_options) {
+    const meso_technique_info *info = meso_technique_find("reference");
+    meso_technique_options_defaults(info, out_options);
+    /* The desc (tests and tools) replaces the defaults; the scene still has the last word. */
+    if (desc->subdivision > 0) out_options->subdivision = (float)desc->subdivision;
+    if (desc->view_adaptive != 0.0f) out_options->view_adaptive = desc->view_adaptive;
+    if (desc->isosurface.resolution_u > 0) out_options->resolution = desc->isosurface.resolution_u;
+    return meso_technique_options_apply(ctx, scene, object, info, out_options);
 }
 
 size_t reference_base_triangle(const reference_object *ref, uint64_t triangle) {
@@ -186,12 +205,17 @@ meso_result meso_reference_create_with(meso_context *ctx, const meso_scene *scen
                                               : kind == MESO_MESOSTRUCTURE_SOLID
                                                   ? RTC_GEOMETRY_TYPE_QUAD
                                                   : RTC_GEOMETRY_TYPE_TRIANGLE);
+        reference_options options;
         if (kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD) {
             ref->kind = REFERENCE_HEIGHT_FIELD;
-            result = reference_build_heightfield(ctx, scene, &desc, geometry, ref, &total);
+            result = reference_read_options(ctx, scene, object, &desc, &options);
+            if (result == MESO_OK)
+                result = reference_build_heightfield(ctx, scene, &options, geometry, ref, &total);
         } else if (kind == MESO_MESOSTRUCTURE_SOLID) {
             ref->kind = REFERENCE_SOLID;
-            result = reference_build_solid(ctx, &desc, geometry, ref, &total);
+            result = reference_read_options(ctx, scene, object, &desc, &options);
+            if (result == MESO_OK)
+                result = reference_build_solid(ctx, &desc, &options, geometry, ref, &total);
         } else {
             ref->kind = REFERENCE_PLAIN;
             result = build_plain(ctx, geometry, ref, &total);

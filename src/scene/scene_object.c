@@ -337,29 +337,58 @@ static meso_result build_mesh(const scene_parser *p, const cJSON *obj, const sce
 
 /* ---- Technique ---------------------------------------------------------------------------- */
 
+/* One option value: a finite number or a boolean (true = 1). */
+static meso_result parse_option(const scene_parser *p, const cJSON *child, const scene_key *key,
+                                const char *technique, meso_object *object) {
+    scene_key k = scene_key_child(key, child->string);
+    if (object->num_options >= MESO_OPTIONS_MAX)
+        return scene_error(p, MESO_ERROR_LIMIT, key, "more than %d options", MESO_OPTIONS_MAX);
+    for (int o = 0; o < object->num_options; o++)
+        if (strcmp(object->options[o].technique, technique) == 0 &&
+            strcmp(object->options[o].name, child->string) == 0)
+            return scene_error(p, MESO_ERROR_FORMAT, &k, "duplicate key");
+    meso_option *option = &object->options[object->num_options];
+    snprintf(option->technique, sizeof option->technique, "%s", technique);
+    meso_result r = copy_name(p, &k, child->string, option->name);
+    if (r != MESO_OK) return r;
+    if (cJSON_IsBool(child)) {
+        option->value = cJSON_IsTrue(child) ? 1.0 : 0.0;
+    } else if (cJSON_IsNumber(child) && isfinite(child->valuedouble)) {
+        option->value = child->valuedouble;
+    } else {
+        return scene_error(p, MESO_ERROR_FORMAT, &k, "must be a finite number or a boolean");
+    }
+    object->num_options++;
+    return MESO_OK;
+}
+
+/* "technique_options": {"relief": {"linear_steps": 64}, "vdm": {...}} keyed by technique, or
+ * the flat form {"linear_steps": 64} for the object's own technique (technique ""). The names
+ * are checked against the techniques' option tables by the renderer (meso_technique_check_scene),
+ * which this module does not link. */
 static meso_result parse_options(const scene_parser *p, const cJSON *item, const scene_key *key,
                                  meso_object *object) {
     if (!item) return MESO_OK;
     if (!cJSON_IsObject(item))
-        return scene_error(p, MESO_ERROR_FORMAT, key, "must be an object of numbers and booleans");
+        return scene_error(p, MESO_ERROR_FORMAT, key,
+                           "must be an object: {\"TECHNIQUE\": {\"option\": value}}");
     for (const cJSON *child = item->child; child; child = child->next) {
-        scene_key k = scene_key_child(key, child->string);
-        if (object->num_options >= MESO_OPTIONS_MAX)
-            return scene_error(p, MESO_ERROR_LIMIT, key, "more than %d options", MESO_OPTIONS_MAX);
-        for (int o = 0; o < object->num_options; o++)
-            if (strcmp(object->options[o].name, child->string) == 0)
-                return scene_error(p, MESO_ERROR_FORMAT, &k, "duplicate key");
-        meso_option *option = &object->options[object->num_options];
-        meso_result r = copy_name(p, &k, child->string, option->name);
-        if (r != MESO_OK) return r;
-        if (cJSON_IsBool(child)) {
-            option->value = cJSON_IsTrue(child) ? 1.0 : 0.0;
-        } else if (cJSON_IsNumber(child) && isfinite(child->valuedouble)) {
-            option->value = child->valuedouble;
+        meso_result r = MESO_OK;
+        if (!cJSON_IsObject(child)) {
+            r = parse_option(p, child, key, "", object);
         } else {
-            return scene_error(p, MESO_ERROR_FORMAT, &k, "must be a finite number or a boolean");
+            scene_key technique_key = scene_key_child(key, child->string);
+            char technique[MESO_NAME_MAX];
+            if ((r = copy_name(p, &technique_key, child->string, technique)) != MESO_OK) return r;
+            if (!technique[0])
+                return scene_error(p, MESO_ERROR_FORMAT, &technique_key, "empty technique name");
+            for (const cJSON *prev = item->child; prev != child; prev = prev->next)
+                if (strcmp(prev->string, child->string) == 0)
+                    return scene_error(p, MESO_ERROR_FORMAT, &technique_key, "duplicate key");
+            for (const cJSON *option = child->child; option && r == MESO_OK; option = option->next)
+                r = parse_option(p, option, &technique_key, technique, object);
         }
-        object->num_options++;
+        if (r != MESO_OK) return r;
     }
     return MESO_OK;
 }
