@@ -35,7 +35,21 @@ typedef enum app_option_type {
     APP_OPTION_DOUBLE, /* double, within [min, max] */
     APP_OPTION_STRING, /* const char * (points into argv) */
     APP_OPTION_SIZE,   /* app_size: "WxH" */
+    APP_OPTION_SETTING, /* app_settings: "technique.option=value", repeatable (--set) */
 } app_option_type;
+
+/* Technique options from the command line (--set relief.linear_steps=64), each checked against
+ * its technique's option table while parsing; passed on in meso_render_desc.options. */
+typedef struct app_settings {
+    meso_option items[MESO_OPTIONS_MAX];
+    int count;
+} app_settings;
+
+/* The --set row of a command's option table, writing into `settings`. */
+#define APP_SET_OPTION(settings)                                                                 \
+    {"--set", NULL, APP_OPTION_SETTING, (settings), "T.NAME=V",                                  \
+     "set technique T's option NAME for every object (repeatable; meso help T lists them)",     \
+     NULL, 0, 0}
 
 typedef struct app_size {
     int width, height; /* 0 x 0: not given */
@@ -47,7 +61,7 @@ typedef struct app_option {
     const char *name;  /* "--size" */
     const char *alias; /* "-o", or NULL */
     app_option_type type;
-    void *target;             /* bool *, int *, double *, const char **, app_size * */
+    void *target; /* bool *, int *, double *, const char **, app_size *, app_settings * */
     const char *metavar;      /* "WxH" (not for flags) */
     const char *help;         /* one line */
     const char *default_text; /* "the scene's", or NULL for none */
@@ -82,6 +96,9 @@ int app_parse_options(const app_command_help *help, const app_option *options, s
 
 /* Print the command's help (usage, options with defaults, examples) to stdout. */
 void app_print_help(const app_command_help *help, const app_option *options, size_t count);
+
+/* Print a technique's summary, paper, what it draws and its option table (meso help T). */
+void app_print_technique_help(const meso_technique_info *technique);
 
 /* Print "meso: <command>: <message> (see meso <command> --help)" and return 2. */
 int app_usage_error(const char *command, const char *format, ...)
@@ -182,6 +199,7 @@ typedef struct app_compare_all_desc {
     int timing_frames;            /* frames timed after the prepare, median taken (0: 5) */
     double timing_budget_seconds; /* stop timing a technique after this long (0: 2 s) */
     meso_progress *progress;      /* advanced by 1 per technique run (may be NULL) */
+    const app_settings *settings; /* --set: technique options for every run (may be NULL) */
 } app_compare_all_desc;
 
 typedef struct app_compare_all {

@@ -73,6 +73,10 @@ static void render_run(meso_context *ctx, const app_compare_all_desc *desc, cons
     meso_renderer *renderer = NULL;
     meso_framebuffer *fb = NULL;
     meso_render_desc render_desc = {.technique = technique, .samples = samples};
+    if (desc->settings) {
+        render_desc.options = desc->settings->items;
+        render_desc.num_options = desc->settings->count;
+    }
     meso_result result = meso_renderer_create(ctx, desc->scene, &render_desc, &renderer);
     if (result == MESO_OK) result = meso_framebuffer_create(ctx, desc->width, desc->height, &fb);
     double start = meso_time_seconds();

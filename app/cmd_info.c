@@ -141,6 +141,12 @@ static void print_mesostructure(const meso_mesostructure *m) {
 static meso_result info_scene(meso_context *ctx, const char *path) {
     meso_scene *scene = NULL;
     meso_result result = meso_scene_load(ctx, path, &scene);
+    /* What the renderer would refuse (a misspelt technique, an unknown option) is refused here
+     * too, before anything is printed. */
+    if (result == MESO_OK && (result = meso_technique_check_scene(ctx, scene)) != MESO_OK) {
+        meso_scene_destroy(scene);
+        return result;
+    }
     if (result != MESO_OK) return result;
     printf("scene: %s\n", scene->path);
     printf("image: %dx%d, background ", scene->width, scene->height);
@@ -179,7 +185,10 @@ static meso_result info_scene(meso_context *ctx, const char *path) {
         printf("      technique: %s", o->technique);
         if (t) printf(" (%s)", t->paper);
         for (int k = 0; k < o->num_options; k++)
-            printf("%s%s=%g", k ? ", " : "; options: ", o->options[k].name, o->options[k].value);
+            printf("%s%s%s%s=%g", k ? ", " : "; options: ",
+                   o->options[k].technique[0] ? o->options[k].technique : "",
+                   o->options[k].technique[0] ? "." : "", o->options[k].name,
+                   o->options[k].value);
         printf("\n");
     }
     meso_scene_destroy(scene);

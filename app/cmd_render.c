@@ -18,6 +18,7 @@ typedef struct render_options {
     bool wireframe;
     const char *coverage;
     bool linear;
+    app_settings settings; /* --set */
 } render_options;
 
 static const app_command_help render_help = {
@@ -54,7 +55,11 @@ static int render_one(meso_context *ctx, const meso_scene *scene, const render_o
     meso_renderer *renderer = NULL;
     meso_framebuffer *fb = NULL;
     meso_render_desc desc = {
-        .technique = o->technique, .samples = o->samples, .wireframe = o->wireframe};
+        .technique = o->technique,
+        .samples = o->samples,
+        .wireframe = o->wireframe,
+        .options = o->settings.items,
+        .num_options = o->settings.count};
     int width = o->size.width ? o->size.width : scene->width;
     int height = o->size.height ? o->size.height : scene->height;
     meso_encoding encoding = o->linear ? MESO_ENCODING_LINEAR : scene->encoding;
@@ -147,6 +152,7 @@ static int render_all(meso_context *ctx, const meso_scene *scene, const render_o
         .samples = o->samples,
         .reference_samples = o->reference_samples,
         .timing_frames = o->frames,
+        .settings = &o->settings,
     };
     desc.progress = meso_progress_begin(ctx, "render techniques", app_compare_all_count(&desc));
     app_compare_all all;
@@ -197,6 +203,7 @@ int meso_cmd_render(int argc, char **argv) {
          "frames timed per technique after the first, median reported (with --techniques; "
          "at most 2 s each)",
          "5", 1, 1000},
+        APP_SET_OPTION(&o.settings),
     };
     app_globals globals;
     const char *positionals[1];
