@@ -83,7 +83,7 @@ typedef enum meso_progress_mode {
 } meso_progress_mode;
 
 typedef struct meso_context_desc {
-    int num_threads;            /* 0: every core (OpenMP's default) */
+    int num_threads;            /* 0: every core (omp_get_max_threads(): OMP_NUM_THREADS) */
     meso_log_fn log;            /* NULL: warnings and errors are only kept, not printed */
     void *log_user;
     meso_progress_mode progress;
