@@ -59,7 +59,8 @@ static int render_one(meso_context *ctx, const meso_scene *scene, const render_o
         .samples = o->samples,
         .wireframe = o->wireframe,
         .options = o->settings.items,
-        .num_options = o->settings.count};
+        .num_options = o->settings.count,
+        .progress = true};
     int width = o->size.width ? o->size.width : scene->width;
     int height = o->size.height ? o->size.height : scene->height;
     meso_encoding encoding = o->linear ? MESO_ENCODING_LINEAR : scene->encoding;

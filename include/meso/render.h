@@ -125,6 +125,9 @@ typedef struct meso_render_desc {
      * Read during meso_renderer_create only. */
     const meso_option *options;
     int num_options;
+    /* Report progress (the context's bar and callback, docs/cli.md --progress) of the
+     * reference's build and of every frame: for one long render, not for loops of frames. */
+    bool progress;
 } meso_render_desc;
 
 typedef struct meso_render_stats {

@@ -142,6 +142,23 @@ static meso_result build_plain(meso_context *ctx, RTCGeometry geometry, referenc
     return MESO_OK;
 }
 
+/* Embree's build progress, n in [0, 1], as thousandths of the bar. Embree may call from several
+ * threads: each advances by what it alone moved `reported` forward. Never cancels. */
+typedef struct build_progress {
+    meso_progress *progress;
+    _Atomic uint64_t reported;
+} build_progress;
+
+static bool report_build(void *user, double n) {
+    build_progress *b = user;
+    uint64_t target = n >= 1.0 ? 1000 : n > 0.0 ? (uint64_t)(n * 1000.0) : 0;
+    uint64_t seen = atomic_load(&b->reported);
+    while (target > seen && !atomic_compare_exchange_weak(&b->reported, &seen, target)) {
+    }
+    if (target > seen) meso_progress_advance(b->progress, target - seen);
+    return true;
+}
+
 meso_result meso_reference_create_with(meso_context *ctx, const meso_scene *scene,
                                        const meso_reference_desc *desc_in,
                                        meso_reference **out_reference) {
@@ -236,7 +253,11 @@ meso_result meso_reference_create_with(meso_context *ctx, const meso_scene *scen
     bool low = total > REFERENCE_LOW_QUALITY_TRIANGLES;
     rtcSetSceneBuildQuality(reference->scene, low ? RTC_BUILD_QUALITY_LOW
                                                   : RTC_BUILD_QUALITY_MEDIUM);
+    build_progress build = {desc.progress ? meso_progress_begin(ctx, "reference BVH", 1000) : NULL,
+                            0};
+    if (build.progress) rtcSetSceneProgressMonitorFunction(reference->scene, report_build, &build);
     rtcCommitScene(reference->scene);
+    meso_progress_end(build.progress);
     enum RTCError error = rtcGetDeviceError(reference->device);
     if (error != RTC_ERROR_NONE) {
         result = meso_log_error(ctx, error == RTC_ERROR_OUT_OF_MEMORY ? MESO_ERROR_OUT_OF_MEMORY
@@ -401,6 +422,7 @@ static void render_tile(void *user, size_t job, int thread_index) {
     int x0 = (int)(job % (size_t)rj->tiles_x) * TILE, y0 = (int)(job / (size_t)rj->tiles_x) * TILE;
     int x1 = x0 + TILE < frame->width ? x0 + TILE : frame->width;
     int y1 = y0 + TILE < frame->height ? y0 + TILE : frame->height;
+    meso_progress_advance(frame->progress, (uint64_t)(x1 - x0) * (uint64_t)(y1 - y0));
     struct RTCIntersectContext primary, shadow;
     rtcInitIntersectContext(&primary);
     primary.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;

@@ -28,6 +28,8 @@ typedef struct meso_reference_desc {
      * the object's solid); shading then uses central differences of this field. */
     meso_scalar_field_fn solid_field;
     void *solid_field_user;
+    /* Report the acceleration structure's build as progress ("reference BVH"). */
+    bool progress;
 } meso_reference_desc;
 
 /* The reference's option table, for the registry's entry. */

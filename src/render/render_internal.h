@@ -26,6 +26,7 @@ typedef struct meso_frame {
     meso_vec3 corner;        /* eye-relative direction to the top-left corner (0,0) at depth 1 */
     meso_mat4 view, projection, view_projection;
     float z_near, z_far;
+    meso_progress *progress; /* NULL, or advanced by each tile's samples (width x height in all) */
 } meso_frame;
 
 /* Fill a frame for the scene's camera and a target of width x height samples. */

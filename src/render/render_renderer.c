@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "raster_internal.h"
+#include "reference_internal.h"
 
 #define RENDER_MAX_SAMPLES 256 /* samples a pixel (n = 16 a side) */
 
@@ -18,6 +19,7 @@ struct meso_renderer {
     meso_object *view_objects;
     int n; /* supersampling: n x n samples a pixel */
     bool wireframe;
+    bool progress; /* report each frame's progress */
     bool use_reference;
     meso_reference *reference;
     const meso_technique **techniques; /* per object */
@@ -200,6 +202,7 @@ meso_result meso_renderer_create(meso_context *ctx, const meso_scene *scene,
     }
     rd->scene = scene;
     rd->wireframe = d.wireframe;
+    rd->progress = d.progress;
     rd->n = d.samples <= 1 ? 1 : (int)ceil(sqrt((double)d.samples) - 1e-9);
     rd->techniques = calloc(slots, sizeof(*rd->techniques));
     rd->states = calloc(slots, sizeof(*rd->states));
@@ -228,7 +231,10 @@ meso_result meso_renderer_create(meso_context *ctx, const meso_scene *scene,
     }
     rd->use_reference = first_reference >= 0;
     if (rd->use_reference) {
-        if ((r = meso_reference_create(ctx, scene, &rd->reference)) != MESO_OK) goto fail;
+        meso_reference_desc reference_desc = {.progress = d.progress};
+        if ((r = meso_reference_create_with(ctx, scene, &reference_desc, &rd->reference)) !=
+            MESO_OK)
+            goto fail;
         rd->stats.memory_bytes = meso_reference_memory(rd->reference);
     } else {
         for (int i = 0; i < count; i++) {
@@ -281,25 +287,12 @@ static void clear_target(const meso_scene *scene, size_t samples, float *color, 
     }
 }
 
-meso_result meso_renderer_render(meso_renderer *renderer, meso_framebuffer *fb) {
-    meso_renderer *rd = renderer;
-    if (!rd) return MESO_ERROR_INVALID_ARGUMENT;
+/* The frame's work: the reference or the rasterizer, then the supersampling resolve. */
+static meso_result draw_frame(meso_renderer *rd, meso_framebuffer *fb, const meso_frame *f,
+                              size_t samples) {
     meso_context *ctx = rd->ctx;
-    if (!fb || fb->width <= 0 || fb->height <= 0 || !fb->color || !fb->coverage || !fb->depth)
-        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "render: invalid framebuffer");
+    meso_frame frame = *f;
     int n = rd->n;
-    if ((int64_t)fb->width * n > RASTER_MAX_TARGET_SIDE ||
-        (int64_t)fb->height * n > RASTER_MAX_TARGET_SIDE ||
-        (uint64_t)fb->width * (uint64_t)fb->height * (uint64_t)(n * n) > ((uint64_t)1 << 30)) {
-        return meso_log_error(ctx, MESO_ERROR_LIMIT,
-                              "render: %d x %d pixels with %d x %d samples exceed the limit of "
-                              "%d samples a side, 2^30 in all",
-                              fb->width, fb->height, n, n, RASTER_MAX_TARGET_SIDE);
-    }
-    double start = meso_time_seconds();
-    meso_frame frame;
-    meso_frame_init(&frame, rd->scene, fb->width * n, fb->height * n);
-    size_t samples = (size_t)frame.width * (size_t)frame.height;
     float *color = fb->color, *coverage = fb->coverage, *depth = fb->depth;
     meso_result r;
     if (n > 1) {
@@ -332,9 +325,37 @@ meso_result meso_renderer_render(meso_renderer *renderer, meso_framebuffer *fb) 
         raster_resolve(ctx, n, fb->width, fb->height, color, coverage, depth, fb->color,
                        fb->coverage, fb->depth);
     }
-    rd->stats.last_frame_seconds = meso_time_seconds() - start;
     rd->stats.triangles = triangles;
     rd->stats.fragments = fragments;
+    return MESO_OK;
+}
+
+meso_result meso_renderer_render(meso_renderer *renderer, meso_framebuffer *fb) {
+    meso_renderer *rd = renderer;
+    if (!rd) return MESO_ERROR_INVALID_ARGUMENT;
+    meso_context *ctx = rd->ctx;
+    if (!fb || fb->width <= 0 || fb->height <= 0 || !fb->color || !fb->coverage || !fb->depth)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "render: invalid framebuffer");
+    int n = rd->n;
+    if ((int64_t)fb->width * n > RASTER_MAX_TARGET_SIDE ||
+        (int64_t)fb->height * n > RASTER_MAX_TARGET_SIDE ||
+        (uint64_t)fb->width * (uint64_t)fb->height * (uint64_t)(n * n) > ((uint64_t)1 << 30)) {
+        return meso_log_error(ctx, MESO_ERROR_LIMIT,
+                              "render: %d x %d pixels with %d x %d samples exceed the limit of "
+                              "%d samples a side, 2^30 in all",
+                              fb->width, fb->height, n, n, RASTER_MAX_TARGET_SIDE);
+    }
+    double start = meso_time_seconds();
+    meso_frame frame;
+    meso_frame_init(&frame, rd->scene, fb->width * n, fb->height * n);
+    size_t samples = (size_t)frame.width * (size_t)frame.height;
+    if (rd->progress)
+        frame.progress = meso_progress_begin(ctx, rd->use_reference ? "reference" : "render",
+                                             (uint64_t)samples);
+    meso_result r = draw_frame(rd, fb, &frame, samples);
+    meso_progress_end(frame.progress);
+    if (r != MESO_OK) return r;
+    rd->stats.last_frame_seconds = meso_time_seconds() - start;
     return MESO_OK;
 }
 

@@ -142,12 +142,33 @@ static void test_app_info_describes_the_example_and_its_render(void **state) {
     run_ok(args);
 }
 
+/* Defect: --progress showed nothing for one long render (the bar appears after a second). */
+static void test_app_render_progress_shows_for_one_long_render(void **state) {
+    (void)state;
+    const char *dir = fresh_dir("render-progress");
+    char args[4096];
+    snprintf(args, sizeof(args),
+             "render %s -o %s --technique reference --size 512x512 --samples 36 --progress", BRICKS,
+             test_path(dir, "reference.png"));
+    const char *err = NULL;
+    int status = test_run_meso(args, &err);
+    if (status != 0) fail_msg("status %d: %s", status, err);
+    if (!strstr(err, "\rreference ") || !strstr(err, "100%"))
+        fail_msg("no progress bar on stderr: %s", err);
+    /* without --progress (stderr is not a terminal) nothing but the summary */
+    snprintf(args, sizeof(args), "render %s -o %s --technique relief --size 64x64", BRICKS,
+             test_path(dir, "relief.png"));
+    assert_int_equal(test_run_meso(args, &err), 0);
+    assert_null(strchr(err, '\r'));
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_app_render_writes_png_of_the_asked_size),
         cmocka_unit_test(test_app_render_same_bytes_for_any_thread_count),
         cmocka_unit_test(test_app_render_techniques_writes_images_sheet_and_results),
         cmocka_unit_test(test_app_info_describes_the_example_and_its_render),
+        cmocka_unit_test(test_app_render_progress_shows_for_one_long_render),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
