@@ -454,7 +454,11 @@ void app_text_json_string(app_text *text, const char *s) {
 }
 
 void app_text_json_number(app_text *text, double value) {
-    if (isfinite(value))
+    /* Whole numbers (counts such as triangles) as integers, never 2.09715e+06: exact up to
+     * 2^53, where doubles stop holding every integer. */
+    if (isfinite(value) && value == floor(value) && fabs(value) < 9007199254740992.0)
+        app_text_printf(text, "%.0f", value);
+    else if (isfinite(value))
         app_text_printf(text, "%.6g", value);
     else
         app_text_printf(text, "null");
@@ -532,6 +536,9 @@ int app_parse_technique_list(const char *command, const char *list, char *storag
                             known);
             return -1;
         }
+        bool repeated = false; /* relief,relief renders once */
+        for (int k = 0; k < count && !repeated; k++) repeated = strcmp(names[k], name) == 0;
+        if (repeated) continue;
         if (count >= max_names) {
             app_usage_error(command, "--techniques: more than %d techniques", max_names);
             return -1;

@@ -160,7 +160,8 @@ void app_known_techniques(char *out, size_t out_size);
 /* Parse a technique list: "all" (every registered per-pixel and geometry technique, in the
  * registry's order) or names separated by commas. Names must be registered techniques or
  * "reference". Fills names (pointers to static strings or into `list`'s copy in storage, of
- * storage_size bytes) and returns the count, or -1 after printing a usage error for `command`. */
+ * storage_size bytes) and returns the count, or -1 after printing a usage error for `command`.
+ * A name given twice counts once. */
 int app_parse_technique_list(const char *command, const char *list, char *storage,
                              size_t storage_size, const char **names, int max_names);
 
@@ -233,7 +234,8 @@ void app_run_label(const app_run *run, const char *prefix, int cell_width, char 
                    size_t out_size);
 
 /* Write DIR/<prefix><technique>.png (sRGB) for every rendered run, and with coverage also
- * DIR/<prefix><technique>.coverage.png. */
+ * DIR/<prefix><technique>.coverage.png; remove those two files of every other technique (an
+ * earlier run's), so the folder holds what the sheet shows. */
 meso_result app_compare_all_write_images(meso_context *ctx, const app_compare_all *all,
                                          const char *dir, const char *prefix, bool coverage);
 

@@ -142,6 +142,45 @@ static void test_app_info_describes_the_example_and_its_render(void **state) {
     run_ok(args);
 }
 
+/* Defects: "triangles": 2.09715e+06; relief,relief rendered twice; a second run's folder kept
+ * the first run's images beside a sheet that no longer showed them. */
+static void test_app_render_techniques_results_and_folder_are_exact(void **state) {
+    (void)state;
+    const char *dir = fresh_dir("render-techniques-rerun");
+    char args[4096];
+    snprintf(args, sizeof(args),
+             "render %s --techniques bump,parallax -o %s --size 32x32 --frames 1 --quiet", BRICKS,
+             dir);
+    run_ok(args);
+    /* a file of the user's own stays whatever happens */
+    test_write_file(test_path(dir, "notes.txt"), "mine", 4);
+    snprintf(args, sizeof(args),
+             "render %s --techniques relief,relief -o=%s --size 32x32 --frames 1 --quiet "
+             "--set relief.linear_steps=4",
+             BRICKS, dir);
+    run_ok(args);
+    char names[4096];
+    list_dir(dir, names, sizeof(names));
+    assert_string_equal(names, "notes.txt reference.coverage.png reference.png relief.coverage.png "
+                               "relief.png results.csv results.json sheet.png ");
+    size_t size = 0;
+    char *json = read_whole(test_path(dir, "results.json"), &size);
+    json[size] = 0;
+    /* one relief run, after the reference */
+    const char *first = strstr(json, "\"technique\": \"relief\"");
+    assert_non_null(first);
+    assert_null(strstr(first + 1, "\"technique\": \"relief\""));
+    /* the reference's triangle count (~2 M) as an integer */
+    const char *triangles = strstr(json, "\"triangles\": ");
+    assert_non_null(triangles);
+    triangles += strlen("\"triangles\": ");
+    size_t digits = strspn(triangles, "0123456789");
+    assert_true(digits >= 6);
+    assert_true(triangles[digits] == ',' || triangles[digits] == '}');
+    assert_null(strstr(json, "e+"));
+    free(json);
+}
+
 /* Defect: --progress showed nothing for one long render (the bar appears after a second). */
 static void test_app_render_progress_shows_for_one_long_render(void **state) {
     (void)state;
@@ -169,6 +208,7 @@ int main(void) {
         cmocka_unit_test(test_app_render_techniques_writes_images_sheet_and_results),
         cmocka_unit_test(test_app_info_describes_the_example_and_its_render),
         cmocka_unit_test(test_app_render_progress_shows_for_one_long_render),
+        cmocka_unit_test(test_app_render_techniques_results_and_folder_are_exact),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
