@@ -124,7 +124,9 @@ static void print_mesostructure(const meso_mesostructure *m) {
         printf("      mesostructure: height field '%s'", m->source);
         if (m->height_field)
             printf(", %dx%d texels", m->height_field->width, m->height_field->height);
-        printf(", depth %g, wrap %s\n", m->depth, wrap);
+        printf(", depth %g, wrap %s", m->depth, wrap);
+        if (m->offset != 0.0f) printf(", mesh moved %g along its normals (\"height\")", m->offset);
+        printf("\n");
         break;
     case MESO_MESOSTRUCTURE_SOLID:
         printf("      mesostructure: solid '%s'", m->source);

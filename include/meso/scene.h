@@ -64,6 +64,8 @@ typedef struct meso_mesostructure {
     meso_heightfield *height_field; /* HEIGHT_FIELD: owned by the scene */
     meso_solid *solid;              /* SOLID: owned by the scene */
     float depth;                    /* shell thickness, world units */
+    float offset; /* how far the mesh was moved along its normals to make the scene's "height"
+                     convention inward (0 for inward; docs/scene-format.md) */
     meso_wrap wrap;
     char source[MESO_NAME_MAX];     /* "bricks" or the file name, for labels and logs */
 } meso_mesostructure;
