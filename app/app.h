@@ -25,6 +25,7 @@ int meso_cmd_render(int argc, char **argv);
 int meso_cmd_info(int argc, char **argv);
 int meso_cmd_demo(int argc, char **argv);
 int meso_cmd_bench(int argc, char **argv);
+int meso_cmd_cache(int argc, char **argv);
 int meso_cmd_compare(int argc, char **argv); /* app/cmd_compare.c (the compare helper's) */
 
 /* ---- Command-line options ----------------------------------------------------------------- */
