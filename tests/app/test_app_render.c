@@ -181,6 +181,49 @@ static void test_app_render_techniques_results_and_folder_are_exact(void **state
     free(json);
 }
 
+#define SPHERE MESO_SOURCE_DIR "/examples/bumps-sphere.json"
+
+/* Several scenes in one process: OUT/<name>.png each, the same bytes as one at a time. */
+static void test_app_render_batch_writes_one_image_per_scene(void **state) {
+    (void)state;
+    const char *dir = fresh_dir("render-batch");
+    char args[4096];
+    snprintf(args, sizeof(args), "render %s %s -o %s --size 32x32 --technique relief --quiet",
+             BRICKS, SPHERE, test_path(dir, "out"));
+    run_ok(args);
+    snprintf(args, sizeof(args), "render %s -o %s --size 32x32 --technique relief --quiet",
+             SPHERE, test_path(dir, "alone.png"));
+    run_ok(args);
+    char names[4096];
+    list_dir(test_path(dir, "out"), names, sizeof(names));
+    assert_string_equal(names, "bricks-plane.png bumps-sphere.png ");
+    size_t size_a = 0, size_b = 0;
+    char *a = read_whole(test_path(test_path(dir, "out"), "bumps-sphere.png"), &size_a);
+    char *b = read_whole(test_path(dir, "alone.png"), &size_b);
+    assert_int_equal(size_a, size_b);
+    assert_memory_equal(a, b, size_a);
+    free(a);
+    free(b);
+    /* with --techniques: a folder per scene */
+    snprintf(args, sizeof(args),
+             "render %s %s -o %s --size 16x16 --techniques flat --frames 1 --quiet", BRICKS,
+             SPHERE, test_path(dir, "all"));
+    run_ok(args);
+    list_dir(test_path(test_path(dir, "all"), "bumps-sphere"), names, sizeof(names));
+    assert_non_null(strstr(names, "flat.png"));
+    assert_non_null(strstr(names, "sheet.png"));
+    /* two scenes of one name, and --coverage, are refused before any work */
+    const char *err = NULL;
+    snprintf(args, sizeof(args), "render %s %s -o %s", BRICKS, BRICKS, test_path(dir, "twice"));
+    assert_int_equal(test_run_meso(args, &err), 2);
+    assert_non_null(strstr(err, "would both write 'bricks-plane' into the folder"));
+    snprintf(args, sizeof(args), "render %s %s -o %s --coverage c.png", BRICKS, SPHERE,
+             test_path(dir, "cov"));
+    assert_int_equal(test_run_meso(args, &err), 2);
+    struct stat st;
+    assert_true(stat(test_path(dir, "twice"), &st) != 0 && stat(test_path(dir, "cov"), &st) != 0);
+}
+
 /* Defect: --progress showed nothing for one long render (the bar appears after a second). */
 static void test_app_render_progress_shows_for_one_long_render(void **state) {
     (void)state;
@@ -209,6 +252,7 @@ int main(void) {
         cmocka_unit_test(test_app_info_describes_the_example_and_its_render),
         cmocka_unit_test(test_app_render_progress_shows_for_one_long_render),
         cmocka_unit_test(test_app_render_techniques_results_and_folder_are_exact),
+        cmocka_unit_test(test_app_render_batch_writes_one_image_per_scene),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
