@@ -132,7 +132,8 @@ int meso_cmd_cache(int argc, char **argv) {
     int status = app_parse_options(&cache_help, NULL, 0, argc, argv, &globals, positionals, 1,
                                    &num_positionals);
     if (status >= 0) return status;
-    if (num_positionals < 1) return app_usage_error("cache", "missing the action: list, size or clear");
+    if (num_positionals < 1)
+        return app_usage_error("cache", "missing the action: list, size or clear");
     const char *action = positionals[0];
     if (strcmp(action, "list") != 0 && strcmp(action, "size") != 0 && strcmp(action, "clear") != 0)
         return app_usage_error("cache", "unknown action '%s' (list, size or clear)", action);

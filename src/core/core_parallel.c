@@ -17,8 +17,8 @@
 
 struct meso_pool {
     pthread_mutex_t lock;
-    pthread_cond_t wake; /* helpers: a new loop (or stop) */
-    pthread_cond_t done; /* the caller: the last job of the loop finished */
+    pthread_cond_t wake;  /* helpers: a new loop (or stop) */
+    pthread_cond_t done;  /* the caller: the last job of the loop finished */
     pthread_mutex_t busy; /* held by the thread running a loop: one loop at a time */
     pthread_t *helpers;
     int num_helpers;

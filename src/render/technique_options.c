@@ -22,15 +22,15 @@ static void list_option_names(const meso_technique_info *technique, char *buffer
     size_t used = 0;
     buffer[0] = 0;
     for (size_t i = 0; i < technique->num_options; i++) {
-        int w = snprintf(buffer + used, size - used, "%s%s", i ? ", " : "",
-                         technique->options[i].name);
+        int w =
+            snprintf(buffer + used, size - used, "%s%s", i ? ", " : "", technique->options[i].name);
         if (w < 0 || (size_t)w >= size - used) return;
         used += (size_t)w;
     }
 }
 
-meso_result meso_technique_check_option(meso_context *ctx, const char *technique,
-                                        const char *name, double value, const char *where) {
+meso_result meso_technique_check_option(meso_context *ctx, const char *technique, const char *name,
+                                        double value, const char *where) {
     const meso_technique_info *info = meso_technique_find(technique);
     char list[512];
     if (!info) {
@@ -122,12 +122,10 @@ meso_result meso_technique_options_apply(meso_context *ctx, const meso_scene *sc
             }
             char where[1280];
             option_where(scene, object, option, where, sizeof where);
-            meso_result r =
-                meso_technique_check_option(ctx, technique->name, option->name, option->value,
-                                            where);
+            meso_result r = meso_technique_check_option(ctx, technique->name, option->name,
+                                                        option->value, where);
             if (r != MESO_OK) return r;
-            store_value(meso_technique_find_option(technique, option->name), values,
-                        option->value);
+            store_value(meso_technique_find_option(technique, option->name), values, option->value);
         }
     }
     return MESO_OK;
@@ -158,8 +156,8 @@ meso_result meso_technique_check_scene(meso_context *ctx, const meso_scene *scen
                 meso_technique_list_names(list, sizeof list);
                 return meso_log_error(
                     ctx, MESO_ERROR_INVALID_ARGUMENT,
-                    "%s: objects[%d].technique_options.%s: unknown technique (known: %s)", path,
-                    o, option->technique, list);
+                    "%s: objects[%d].technique_options.%s: unknown technique (known: %s)", path, o,
+                    option->technique, list);
             }
             /* Flat options of an object built without a technique name belong to whichever
              * technique draws it: that one checks them. */

@@ -49,8 +49,7 @@ static void write_readme_example(const char *path) {
         fprintf(out, "%.*s\n", (int)(eol - body), body);
         body = eol + 1;
     }
-    fprintf(out, "int main(void) {\n%s    return meso_context_last_error(ctx)[0] != 0;\n}\n",
-               body);
+    fprintf(out, "int main(void) {\n%s    return meso_context_last_error(ctx)[0] != 0;\n}\n", body);
     fclose(out);
 }
 
@@ -60,8 +59,8 @@ static void test_install_to_a_prefix_builds_the_readme_example(void **state) {
     snprintf(dir, sizeof dir, "%s/install", test_temp_dir());
     snprintf(command, sizeof command, "rm -rf '%s' && mkdir -p '%s'", dir, dir);
     assert_int_equal(system(command), 0);
-    snprintf(command, sizeof command, "cmake --install '%s' --prefix '%s/prefix'",
-             MESO_BINARY_DIR, dir);
+    snprintf(command, sizeof command, "cmake --install '%s' --prefix '%s/prefix'", MESO_BINARY_DIR,
+             dir);
     shell(dir, command);
 
     char pc[1300];

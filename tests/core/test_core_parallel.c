@@ -83,7 +83,8 @@ static void *run_loops(void *arg) {
 static void test_loops_from_two_threads_on_one_context(void **state) {
     (void)state;
     meso_context *ctx = test_context(2);
-    concurrent a = {ctx, calloc(64, sizeof(_Atomic int))}, b = {ctx, calloc(64, sizeof(_Atomic int))};
+    concurrent a = {ctx, calloc(64, sizeof(_Atomic int))},
+               b = {ctx, calloc(64, sizeof(_Atomic int))};
     pthread_t ta, tb;
     assert_int_equal(pthread_create(&ta, NULL, run_loops, &a), 0);
     assert_int_equal(pthread_create(&tb, NULL, run_loops, &b), 0);

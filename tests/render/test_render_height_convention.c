@@ -45,8 +45,8 @@ static void assert_same_render(meso_context *ctx, const meso_scene *a, const mes
 }
 
 static const char *const every_technique[] = {
-    "flat",   "bump",         "horizon",      "parallax",  "relief",
-    "relief_exact", "vdm", "tessellation", "displacement", "reference"};
+    "flat",         "bump", "horizon",      "parallax",     "relief",
+    "relief_exact", "vdm",  "tessellation", "displacement", "reference"};
 
 static void test_outward_and_centered_move_the_shell_for_every_technique(void **state) {
     (void)state;

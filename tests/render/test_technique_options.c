@@ -81,8 +81,8 @@ static void test_keyed_option_wins_over_the_flat_form(void **state) {
     (void)state;
     meso_context *ctx = test_context(1);
     meso_scene *keyed = plane_scene(ctx, "relief", "\"relief\": {\"linear_steps\": 1}");
-    meso_scene *both = plane_scene(ctx, "relief",
-                                   "\"linear_steps\": 200, \"relief\": {\"linear_steps\": 1}");
+    meso_scene *both =
+        plane_scene(ctx, "relief", "\"linear_steps\": 200, \"relief\": {\"linear_steps\": 1}");
     meso_framebuffer *a = NULL, *b = NULL;
     assert_int_equal(render(ctx, keyed, NULL, &a), MESO_OK);
     assert_int_equal(render(ctx, both, NULL, &b), MESO_OK);
@@ -159,9 +159,9 @@ static void test_unknown_options_name_the_file_and_key_path(void **state) {
                      cases[i].message);
         /* the renderer refuses it too, whatever technique it is asked for */
         meso_renderer *renderer = NULL;
-        assert_int_equal(meso_renderer_create(ctx, scene,
-                                              &(meso_render_desc){.technique = "flat"}, &renderer),
-                         MESO_ERROR_INVALID_ARGUMENT);
+        assert_int_equal(
+            meso_renderer_create(ctx, scene, &(meso_render_desc){.technique = "flat"}, &renderer),
+            MESO_ERROR_INVALID_ARGUMENT);
         assert_non_null(strstr(meso_context_last_error(ctx), cases[i].message));
         meso_scene_destroy(scene);
     }
