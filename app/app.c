@@ -208,9 +208,10 @@ static int add_setting(const char *command, const app_option *o, const char *tex
     }
     char where[192];
     snprintf(where, sizeof where, "%s %s.%s", o->name, setting.technique, setting.name);
-    meso_result r = meso_technique_check_option(scratch, setting.technique, setting.name,
-                                                setting.value, where);
-    int status = r == MESO_OK ? -1 : app_usage_error(command, "%s", meso_context_last_error(scratch));
+    meso_result r =
+        meso_technique_check_option(scratch, setting.technique, setting.name, setting.value, where);
+    int status =
+        r == MESO_OK ? -1 : app_usage_error(command, "%s", meso_context_last_error(scratch));
     meso_context_destroy(scratch);
     if (status >= 0) return status;
     int slot = 0; /* a later --set of the same option replaces the earlier */

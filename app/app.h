@@ -31,11 +31,11 @@ int meso_cmd_compare(int argc, char **argv); /* app/cmd_compare.c (the compare h
 /* ---- Command-line options ----------------------------------------------------------------- */
 
 typedef enum app_option_type {
-    APP_OPTION_FLAG,   /* bool: present or not */
-    APP_OPTION_INT,    /* int, within [min, max] */
-    APP_OPTION_DOUBLE, /* double, within [min, max] */
-    APP_OPTION_STRING, /* const char * (points into argv) */
-    APP_OPTION_SIZE,   /* app_size: "WxH" */
+    APP_OPTION_FLAG,    /* bool: present or not */
+    APP_OPTION_INT,     /* int, within [min, max] */
+    APP_OPTION_DOUBLE,  /* double, within [min, max] */
+    APP_OPTION_STRING,  /* const char * (points into argv) */
+    APP_OPTION_SIZE,    /* app_size: "WxH" */
     APP_OPTION_SETTING, /* app_settings: "technique.option=value", repeatable (--set) */
 } app_option_type;
 
@@ -47,10 +47,12 @@ typedef struct app_settings {
 } app_settings;
 
 /* The --set row of a command's option table, writing into `settings`. */
-#define APP_SET_OPTION(settings)                                                                 \
-    {"--set", NULL, APP_OPTION_SETTING, (settings), "T.NAME=V",                                  \
-     "set technique T's option NAME for every object (repeatable; meso help T lists them)",     \
-     NULL, 0, 0}
+#define APP_SET_OPTION(settings)                                                                   \
+    {                                                                                              \
+        "--set", NULL, APP_OPTION_SETTING, (settings), "T.NAME=V",                                 \
+            "set technique T's option NAME for every object (repeatable; meso help T lists them)", \
+            NULL, 0, 0                                                                             \
+    }
 
 typedef struct app_size {
     int width, height; /* 0 x 0: not given */

@@ -90,9 +90,8 @@ static meso_result bench_one(meso_context *ctx, const bench_scene *s, const char
     int threads = meso_context_num_threads(ctx);
     meso_renderer *renderer = NULL;
     meso_framebuffer *fb = NULL;
-    meso_render_desc desc = {.technique = technique,
-                             .options = o->settings.items,
-                             .num_options = o->settings.count};
+    meso_render_desc desc = {
+        .technique = technique, .options = o->settings.items, .num_options = o->settings.count};
     meso_result result = meso_renderer_create(ctx, s->scene, &desc, &renderer);
     if (result == MESO_OK)
         result = meso_framebuffer_create(ctx, o->size.width, o->size.height, &fb);

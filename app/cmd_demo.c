@@ -139,8 +139,7 @@ int meso_cmd_demo(int argc, char **argv) {
     }
     if (result == MESO_OK && count == 0) result = MESO_ERROR_FORMAT;
     if (result == MESO_OK)
-        result = render_examples(ctx, examples, count, size, frames, &settings, dir,
-                                 globals.quiet);
+        result = render_examples(ctx, examples, count, size, frames, &settings, dir, globals.quiet);
     char path[4096];
     if (result == MESO_OK && !app_path_join(path, sizeof(path), dir, "sheet.png"))
         result = meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: path too long", dir);

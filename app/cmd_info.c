@@ -189,8 +189,7 @@ static meso_result info_scene(meso_context *ctx, const char *path) {
         for (int k = 0; k < o->num_options; k++)
             printf("%s%s%s%s=%g", k ? ", " : "; options: ",
                    o->options[k].technique[0] ? o->options[k].technique : "",
-                   o->options[k].technique[0] ? "." : "", o->options[k].name,
-                   o->options[k].value);
+                   o->options[k].technique[0] ? "." : "", o->options[k].name, o->options[k].value);
         printf("\n");
     }
     meso_scene_destroy(scene);

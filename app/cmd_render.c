@@ -59,13 +59,12 @@ static int render_one(meso_context *ctx, const meso_scene *scene, const render_o
                       bool quiet) {
     meso_renderer *renderer = NULL;
     meso_framebuffer *fb = NULL;
-    meso_render_desc desc = {
-        .technique = o->technique,
-        .samples = o->samples,
-        .wireframe = o->wireframe,
-        .options = o->settings.items,
-        .num_options = o->settings.count,
-        .progress = true};
+    meso_render_desc desc = {.technique = o->technique,
+                             .samples = o->samples,
+                             .wireframe = o->wireframe,
+                             .options = o->settings.items,
+                             .num_options = o->settings.count,
+                             .progress = true};
     int width = o->size.width ? o->size.width : scene->width;
     int height = o->size.height ? o->size.height : scene->height;
     meso_encoding encoding = o->linear ? MESO_ENCODING_LINEAR : scene->encoding;
@@ -201,8 +200,7 @@ static int check_batch_names(const char *const *paths, int count) {
             scene_name(paths[a], name_a, sizeof name_a);
             scene_name(paths[b], name_b, sizeof name_b);
             if (strcmp(name_a, name_b) == 0)
-                return app_usage_error("render",
-                                       "%s and %s would both write '%s' into the folder",
+                return app_usage_error("render", "%s and %s would both write '%s' into the folder",
                                        paths[a], paths[b], name_a);
         }
     return -1;
@@ -238,9 +236,9 @@ int meso_cmd_render(int argc, char **argv) {
     app_globals globals;
     const char *positionals[MAX_BATCH_SCENES];
     int num_positionals = 0;
-    int status = app_parse_options(&render_help, options, sizeof(options) / sizeof(options[0]),
-                                   argc, argv, &globals, positionals, MAX_BATCH_SCENES,
-                                   &num_positionals);
+    int status =
+        app_parse_options(&render_help, options, sizeof(options) / sizeof(options[0]), argc, argv,
+                          &globals, positionals, MAX_BATCH_SCENES, &num_positionals);
     if (status >= 0) return status;
     if (num_positionals < 1) return app_usage_error("render", "missing the SCENE file");
     if (!o.output) return app_usage_error("render", "missing -o OUT");

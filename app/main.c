@@ -25,8 +25,9 @@ static void print_help(void) {
            MESO_VERSION_STRING);
     for (size_t i = 0; i < NUM_COMMANDS; i++)
         printf("  %-10s %s\n", commands[i].name, commands[i].summary);
-    printf("  %-10s %s\n", "help", "the help of a command or a technique (meso help render, "
-                                   "meso help relief)");
+    printf("  %-10s %s\n", "help",
+           "the help of a command or a technique (meso help render, "
+           "meso help relief)");
     printf("\nGlobal options (every command): --threads N, --progress, --quiet, --verbose, --help\n"
            "Options: meso --help, meso --version\n\n"
            "Examples:\n"
@@ -70,8 +71,9 @@ int main(int argc, char **argv) {
             app_print_technique_help(technique);
             return APP_EXIT_OK;
         }
-        if (!c) return app_usage_error(NULL, "help: '%s' is neither a command nor a technique",
-                                       argv[2]);
+        if (!c)
+            return app_usage_error(NULL, "help: '%s' is neither a command nor a technique",
+                                   argv[2]);
         char *help_argv[] = {argv[2], "--help", NULL};
         return c->run(2, help_argv);
     }

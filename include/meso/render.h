@@ -74,12 +74,12 @@ typedef enum meso_option_type {
 /* One row of a technique's option table: what `meso help TECHNIQUE` prints, and what the one
  * option reader (meso_technique_check_option and the render module's reader) checks. */
 typedef struct meso_technique_option {
-    const char *name;     /* "linear_steps" */
+    const char *name; /* "linear_steps" */
     meso_option_type type;
-    double min, max;      /* inclusive (BOOL: 0, 1) */
+    double min, max; /* inclusive (BOOL: 0, 1) */
     double default_value;
-    const char *doc;      /* one line */
-    size_t offset;        /* where the technique keeps the value in its own option struct */
+    const char *doc; /* one line */
+    size_t offset;   /* where the technique keeps the value in its own option struct */
 } meso_technique_option;
 
 typedef struct meso_technique_info {
@@ -105,8 +105,8 @@ const meso_technique_option *meso_technique_find_option(const meso_technique_inf
  * ("scene.json: objects[0].technique_options.relief.linear_steps", "--set relief.x"):
  * "<where>: 2000 is not an integer in 1..1024". Returns MESO_OK or
  * MESO_ERROR_INVALID_ARGUMENT. Thread-safe. */
-meso_result meso_technique_check_option(meso_context *ctx, const char *technique,
-                                        const char *name, double value, const char *where);
+meso_result meso_technique_check_option(meso_context *ctx, const char *technique, const char *name,
+                                        double value, const char *where);
 /* Check what a scene says about techniques before any work: every object's technique name
  * exists, and every technique option (both forms) passes meso_technique_check_option. The
  * message names the file and the key path: "scene.json: objects[0].technique: unknown technique

@@ -85,9 +85,8 @@ meso_result meso_heightfield_create_from_image(meso_context *ctx, const meso_ima
          * weights, on the values as stored (a height map is data, not colour: no sRGB
          * decoding), so a map painted in colour is not read from its red channel alone.
          * Alpha is ignored. */
-        float value = channels >= 3
-                          ? 0.2126f * pixel[0] + 0.7152f * pixel[1] + 0.0722f * pixel[2]
-                          : pixel[0];
+        float value =
+            channels >= 3 ? 0.2126f * pixel[0] + 0.7152f * pixel[1] + 0.0722f * pixel[2] : pixel[0];
         /* Heights live in [0, 1] (DESIGN.md); a float image may hold anything, NaN included. */
         hf->heights[k] = isfinite(value) ? meso_clampf(value, 0.0f, 1.0f) : 0.0f;
     }

@@ -114,8 +114,6 @@ meso_result reference_build_solid(meso_context *ctx, const meso_reference_desc *
                                   const reference_options *options, RTCGeometry geometry,
                                   reference_object *ref, uint64_t *total);
 
-
-
 /* The base triangle of a traced solid quad (binary search in base_offsets). */
 size_t reference_base_triangle(const reference_object *ref, uint64_t triangle);
 

@@ -97,8 +97,8 @@ void meso_technique_list_names(char *buffer, size_t size);
 
 /* A row of an option table: the value lives at offsetof(struct, member) of the technique's own
  * option struct, with the type and range given. */
-#define MESO_OPTION_ROW(type, name, min, max, default_value, doc, struct_type, member)            \
-    {#name, type, min, max, default_value, doc, offsetof(struct_type, member)}
+#define MESO_OPTION_ROW(type, name, min, max, default_value, doc, struct_type, member)             \
+    { #name, type, min, max, default_value, doc, offsetof(struct_type, member) }
 #define MESO_OPTION_COUNT(table) (sizeof(table) / sizeof((table)[0]))
 
 /* Write the table's defaults into `values` (the technique's option struct). */

@@ -350,8 +350,8 @@ meso_result meso_renderer_render(meso_renderer *renderer, meso_framebuffer *fb) 
     meso_frame_init(&frame, rd->scene, fb->width * n, fb->height * n);
     size_t samples = (size_t)frame.width * (size_t)frame.height;
     if (rd->progress)
-        frame.progress = meso_progress_begin(ctx, rd->use_reference ? "reference" : "render",
-                                             (uint64_t)samples);
+        frame.progress =
+            meso_progress_begin(ctx, rd->use_reference ? "reference" : "render", (uint64_t)samples);
     meso_result r = draw_frame(rd, fb, &frame, samples);
     meso_progress_end(frame.progress);
     if (r != MESO_OK) return r;

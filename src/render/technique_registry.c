@@ -4,7 +4,6 @@
 
 #include "reference_internal.h"
 
-
 /* The reference tracer is a back end (reference.c), not a fragment function: its entry only
  * names it and says what it accepts. */
 static const meso_technique technique_reference = {
@@ -49,8 +48,8 @@ void meso_technique_list_names(char *buffer, size_t size) {
     size_t used = 0;
     buffer[0] = 0;
     for (size_t i = 0; i < NUM_TECHNIQUES; i++) {
-        int w = snprintf(buffer + used, size - used, "%s%s", i ? ", " : "",
-                         techniques[i]->info.name);
+        int w =
+            snprintf(buffer + used, size - used, "%s%s", i ? ", " : "", techniques[i]->info.name);
         if (w < 0 || (size_t)w >= size - used) return;
         used += (size_t)w;
     }

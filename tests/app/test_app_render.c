@@ -191,8 +191,8 @@ static void test_app_render_batch_writes_one_image_per_scene(void **state) {
     snprintf(args, sizeof(args), "render %s %s -o %s --size 32x32 --technique relief --quiet",
              BRICKS, SPHERE, test_path(dir, "out"));
     run_ok(args);
-    snprintf(args, sizeof(args), "render %s -o %s --size 32x32 --technique relief --quiet",
-             SPHERE, test_path(dir, "alone.png"));
+    snprintf(args, sizeof(args), "render %s -o %s --size 32x32 --technique relief --quiet", SPHERE,
+             test_path(dir, "alone.png"));
     run_ok(args);
     char names[4096];
     list_dir(test_path(dir, "out"), names, sizeof(names));
@@ -206,8 +206,8 @@ static void test_app_render_batch_writes_one_image_per_scene(void **state) {
     free(b);
     /* with --techniques: a folder per scene */
     snprintf(args, sizeof(args),
-             "render %s %s -o %s --size 16x16 --techniques flat --frames 1 --quiet", BRICKS,
-             SPHERE, test_path(dir, "all"));
+             "render %s %s -o %s --size 16x16 --techniques flat --frames 1 --quiet", BRICKS, SPHERE,
+             test_path(dir, "all"));
     run_ok(args);
     list_dir(test_path(test_path(dir, "all"), "bumps-sphere"), names, sizeof(names));
     assert_non_null(strstr(names, "flat.png"));

@@ -277,9 +277,9 @@ static void test_colour_height_maps_read_as_luminance(void **state) {
         for (int j = 0; j < 4; j++)
             for (int i = 0; i < 8; i++) {
                 float *p = meso_image_at(image, i, j);
-                p[0] = 0.5f;               /* red constant */
-                p[1] = (float)i / 7.0f;    /* green: a ramp */
-                p[2] = (float)j / 3.0f;    /* blue: another */
+                p[0] = 0.5f;                     /* red constant */
+                p[1] = (float)i / 7.0f;          /* green: a ramp */
+                p[2] = (float)j / 3.0f;          /* blue: another */
                 if (channels == 4) p[3] = 0.25f; /* alpha: ignored */
             }
         meso_heightfield *hf = NULL;
@@ -296,7 +296,8 @@ static void test_colour_height_maps_read_as_luminance(void **state) {
     /* grey + alpha: the grey */
     meso_image *grey = NULL;
     assert_int_equal(meso_image_create(ctx, 2, 1, 2, &grey), MESO_OK);
-    grey->pixels[0] = 0.25f, grey->pixels[1] = 1.0f, grey->pixels[2] = 0.75f, grey->pixels[3] = 0.0f;
+    grey->pixels[0] = 0.25f, grey->pixels[1] = 1.0f, grey->pixels[2] = 0.75f,
+    grey->pixels[3] = 0.0f;
     meso_heightfield *hf = NULL;
     assert_int_equal(meso_heightfield_create_from_image(ctx, grey, MESO_WRAP_REPEAT, &hf), MESO_OK);
     assert_float_equal(texel(hf, 0, 0), 0.25, 0.0);

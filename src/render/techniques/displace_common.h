@@ -142,15 +142,15 @@ typedef struct displace_shadow_options {
 
 /* The option-table rows of the shadow maps, for a struct_type whose `member` is a
  * displace_shadow_options: both geometry techniques list them in their tables. */
-#define DISPLACE_SHADOW_OPTION_ROWS(struct_type, member)                                          \
-    MESO_OPTION_ROW(MESO_OPTION_BOOL, shadows, 0, 1, 1, "shadow maps from every light",           \
-                    struct_type, member.enabled),                                                 \
-        MESO_OPTION_ROW(MESO_OPTION_INT, shadow_map_size, 16, 8192, 2048,                         \
-                        "shadow map texels a side", struct_type, member.size),                    \
-        MESO_OPTION_ROW(MESO_OPTION_FLOAT, shadow_bias, 0.0, 64.0, 1.5,                           \
-                        "depth bias in shadow-map texels, scaled by the slope", struct_type,      \
-                        member.bias),                                                             \
-        MESO_OPTION_ROW(MESO_OPTION_BOOL, shadow_pcf, 0, 1, 1,                                    \
+#define DISPLACE_SHADOW_OPTION_ROWS(struct_type, member)                                           \
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, shadows, 0, 1, 1, "shadow maps from every light",            \
+                    struct_type, member.enabled),                                                  \
+        MESO_OPTION_ROW(MESO_OPTION_INT, shadow_map_size, 16, 8192, 2048,                          \
+                        "shadow map texels a side", struct_type, member.size),                     \
+        MESO_OPTION_ROW(MESO_OPTION_FLOAT, shadow_bias, 0.0, 64.0, 1.5,                            \
+                        "depth bias in shadow-map texels, scaled by the slope", struct_type,       \
+                        member.bias),                                                              \
+        MESO_OPTION_ROW(MESO_OPTION_BOOL, shadow_pcf, 0, 1, 1,                                     \
                         "2 x 2 bilinear percentage-closer filtering", struct_type, member.pcf)
 
 typedef struct displace_light_map {

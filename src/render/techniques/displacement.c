@@ -72,8 +72,7 @@ static meso_result displacement_prepare(meso_context *ctx, const meso_scene *sce
                            object->name, s->level, triangles, MESO_MESH_MAX_TRIANGLES);
         goto fail;
     }
-    if ((r = displace_tessellator_create(ctx, &s->surface, s->level, &s->tessellator)))
-        goto fail;
+    if ((r = displace_tessellator_create(ctx, &s->surface, s->level, &s->tessellator))) goto fail;
     *out_state = s;
     return MESO_OK;
 fail:

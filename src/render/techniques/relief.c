@@ -21,8 +21,8 @@ static const meso_technique_option relief_option_table[] = {
     MESO_OPTION_ROW(MESO_OPTION_BOOL, shadows, 0, 1, 1,
                     "self-shadows: a second linear search toward each light", relief_options,
                     shadows),
-    MESO_OPTION_ROW(MESO_OPTION_INT, shadow_steps, 1, 1024, 16,
-                    "steps of the shadow search", relief_options, shadow_steps),
+    MESO_OPTION_ROW(MESO_OPTION_INT, shadow_steps, 1, 1024, 16, "steps of the shadow search",
+                    relief_options, shadow_steps),
     MESO_OPTION_ROW(MESO_OPTION_BOOL, silhouettes, 0, 1, 1,
                     "silhouettes from per-vertex quadrics (Oliveira & Policarpo 2005)",
                     relief_options, silhouettes),
@@ -64,18 +64,17 @@ static void search(const void *user, const relief_batch *batches, int count, v8f
                    int *out_hit) {
     const relief_state *s = user;
     for (int g = 0; g < count; ++g)
-        out_hit[g] =
-            relief_search8(&s->heights, &batches[g], s->options.linear_steps,
-                           s->options.binary_steps, &out_t[g]);
+        out_hit[g] = relief_search8(&s->heights, &batches[g], s->options.linear_steps,
+                                    s->options.binary_steps, &out_t[g]);
 }
 
 static void shadow(const void *user, const relief_shadow_batch *batches, int count,
                    int *out_blocked) {
     const relief_state *s = user;
     for (int g = 0; g < count; ++g)
-        out_blocked[g] = batches[g].active_bits
-                             ? relief_shadow_search8(&s->heights, &batches[g], s->options.shadow_steps)
-                             : 0;
+        out_blocked[g] = batches[g].active_bits ? relief_shadow_search8(&s->heights, &batches[g],
+                                                                        s->options.shadow_steps)
+                                                : 0;
 }
 
 static void shade(const void *state, const meso_frame *frame, const meso_object *object,

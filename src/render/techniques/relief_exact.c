@@ -39,8 +39,8 @@ typedef struct exact_options {
 static const meso_technique_option exact_option_table[] = {
     MESO_OPTION_ROW(MESO_OPTION_BOOL, shadows, 0, 1, 1,
                     "self-shadows: the exact trace toward each light", exact_options, shadows),
-    MESO_OPTION_ROW(MESO_OPTION_BOOL, silhouettes, 0, 1, 1,
-                    "silhouettes from per-vertex quadrics", exact_options, silhouettes),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, silhouettes, 0, 1, 1, "silhouettes from per-vertex quadrics",
+                    exact_options, silhouettes),
 };
 
 /* A ray in texel-centre coordinates with depth d(t) = c0 + c1 t + c2 t^2 over [t0, t1]; it hits
