@@ -454,6 +454,21 @@ void app_text_json_string(app_text *text, const char *s) {
     app_text_printf(text, "\"");
 }
 
+void app_text_xml(app_text *text, const char *s) {
+    for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
+        if (*p == '<')
+            app_text_printf(text, "&lt;");
+        else if (*p == '>')
+            app_text_printf(text, "&gt;");
+        else if (*p == '&')
+            app_text_printf(text, "&amp;");
+        else if (*p == '"')
+            app_text_printf(text, "&quot;");
+        else if (*p >= 0x20 || *p == '\t')
+            app_text_printf(text, "%c", *p);
+    }
+}
+
 void app_text_json_number(app_text *text, double value) {
     /* Whole numbers (counts such as triangles) as integers, never 2.09715e+06: exact up to
      * 2^53, where doubles stop holding every integer. */

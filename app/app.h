@@ -145,6 +145,8 @@ typedef struct app_text {
 void app_text_printf(app_text *text, const char *format, ...) __attribute__((format(printf, 2, 3)));
 /* Append s as a JSON string literal (quotes and escapes included). */
 void app_text_json_string(app_text *text, const char *s);
+/* Append s as XML character data (<, >, & and " escaped; control characters dropped). */
+void app_text_xml(app_text *text, const char *s);
 /* Append a number as JSON (null for NaN and infinities). */
 void app_text_json_number(app_text *text, double value);
 /* Write the text atomically to path. */
@@ -247,6 +249,13 @@ meso_result app_compare_all_write_images(meso_context *ctx, const app_compare_al
 void app_compare_all_csv(const app_compare_all *all, const char *scene_name, app_text *csv);
 void app_compare_all_json(const app_compare_all *all, const char *scene_name, app_text *json,
                           bool *first);
+
+/* Write the plot of a run (app_plot.c) as SVG: each technique with metrics a labelled point,
+ * median frame time (log axis) against covered PSNR, the reference's time a dashed line.
+ * Writes nothing, and removes an earlier run's plot, when no technique has metrics (the
+ * reference did not render). */
+meso_result app_plot_error_vs_time(meso_context *ctx, const app_compare_all *all,
+                                   const char *scene_name, const char *path);
 
 /* A sheet of labelled cells saved as sRGB PNG: images are linear RGB, NULL cells are drawn as
  * empty (background grey). */

@@ -105,7 +105,7 @@ static void print_results(const app_compare_all *all) {
     }
 }
 
-/* Write sheet.png, results.csv and results.json of `all` into dir. */
+/* Write sheet.png, results.csv, results.json and error-vs-time.svg of `all` into dir. */
 static meso_result write_reports(meso_context *ctx, const app_compare_all *all,
                                  const meso_scene *scene, const char *dir) {
     const meso_image *images[256];
@@ -138,6 +138,8 @@ static meso_result write_reports(meso_context *ctx, const app_compare_all *all,
         result = app_text_write(ctx, &csv, path);
     if (result == MESO_OK && app_path_join(path, sizeof(path), dir, "results.json"))
         result = app_text_write(ctx, &json, path);
+    if (result == MESO_OK && app_path_join(path, sizeof(path), dir, "error-vs-time.svg"))
+        result = app_plot_error_vs_time(ctx, all, scene->path, path);
     app_text_free(&csv);
     app_text_free(&json);
     return result;
@@ -176,7 +178,8 @@ static int render_all(meso_context *ctx, const meso_scene *scene, const render_o
     if (result == MESO_OK) result = write_reports(ctx, &all, scene, o->output);
     if (result == MESO_OK) print_results(&all);
     if (result == MESO_OK && !quiet)
-        fprintf(stderr, "meso: render: %zu images, sheet.png, results.csv and results.json in %s\n",
+        fprintf(stderr, "meso: render: %zu images, sheet.png, results.csv, results.json and "
+                "error-vs-time.svg in %s\n",
                 rendered, o->output);
     int status = result == MESO_OK ? APP_EXIT_OK : app_fail(ctx, result);
     app_compare_all_free(&all);

@@ -161,8 +161,9 @@ static void test_app_render_techniques_results_and_folder_are_exact(void **state
     run_ok(args);
     char names[4096];
     list_dir(dir, names, sizeof(names));
-    assert_string_equal(names, "notes.txt reference.coverage.png reference.png relief.coverage.png "
-                               "relief.png results.csv results.json sheet.png ");
+    assert_string_equal(names,
+                        "error-vs-time.svg notes.txt reference.coverage.png reference.png "
+                        "relief.coverage.png relief.png results.csv results.json sheet.png ");
     size_t size = 0;
     char *json = read_whole(test_path(dir, "results.json"), &size);
     json[size] = 0;
@@ -179,6 +180,15 @@ static void test_app_render_techniques_results_and_folder_are_exact(void **state
     assert_true(triangles[digits] == ',' || triangles[digits] == '}');
     assert_null(strstr(json, "e+"));
     free(json);
+    /* the plot: relief a labelled point, the reference's time a line */
+    char *svg = read_whole(test_path(dir, "error-vs-time.svg"), &size);
+    svg[size] = 0;
+    assert_non_null(strstr(svg, "<svg xmlns="));
+    assert_non_null(strstr(svg, "<circle"));
+    assert_non_null(strstr(svg, ">relief</text>"));
+    assert_non_null(strstr(svg, ">reference "));
+    assert_non_null(strstr(svg, "</svg>"));
+    free(svg);
 }
 
 #define SPHERE MESO_SOURCE_DIR "/examples/bumps-sphere.json"
