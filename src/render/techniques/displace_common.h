@@ -191,13 +191,4 @@ void displace_shade(const displace_surface *surface, const displace_shadows *sha
                     const meso_mesh *mesh, const meso_frame *frame, meso_fragment *fragments,
                     size_t count);
 
-/* Read an integer option in [lo, hi] (fallback when unset); errors name object and option. */
-meso_result displace_option_int(meso_context *ctx, const meso_object *object,
-                                const char *technique, const char *name, int lo, int hi,
-                                int fallback, int *out_value);
-/* Read a finite number option in [lo, hi]. */
-meso_result displace_option_float(meso_context *ctx, const meso_object *object,
-                                  const char *technique, const char *name, double lo, double hi,
-                                  double fallback, float *out_value);
-
 #endif
