@@ -250,12 +250,13 @@ void app_compare_all_csv(const app_compare_all *all, const char *scene_name, app
 void app_compare_all_json(const app_compare_all *all, const char *scene_name, app_text *json,
                           bool *first);
 
-/* Write the plot of a run (app_plot.c) as SVG: each technique with metrics a labelled point,
- * median frame time (log axis) against covered PSNR, the reference's time a dashed line.
+/* Write the plot of a run (app_plot.c) as SVG and PNG: each technique with metrics a labelled
+ * point, median frame time (log axis) against covered PSNR, the reference's time a dashed line.
  * Writes nothing, and removes an earlier run's plot, when no technique has metrics (the
  * reference did not render). */
 meso_result app_plot_error_vs_time(meso_context *ctx, const app_compare_all *all,
-                                   const char *scene_name, const char *path);
+                                   const char *scene_name, const char *path,
+                                   const char *png_path);
 
 /* A sheet of labelled cells saved as sRGB PNG: images are linear RGB, NULL cells are drawn as
  * empty (background grey). */

@@ -138,8 +138,10 @@ static meso_result write_reports(meso_context *ctx, const app_compare_all *all,
         result = app_text_write(ctx, &csv, path);
     if (result == MESO_OK && app_path_join(path, sizeof(path), dir, "results.json"))
         result = app_text_write(ctx, &json, path);
-    if (result == MESO_OK && app_path_join(path, sizeof(path), dir, "error-vs-time.svg"))
-        result = app_plot_error_vs_time(ctx, all, scene->path, path);
+    char png_path[4096];
+    if (result == MESO_OK && app_path_join(path, sizeof(path), dir, "error-vs-time.svg") &&
+        app_path_join(png_path, sizeof(png_path), dir, "error-vs-time.png"))
+        result = app_plot_error_vs_time(ctx, all, scene->path, path, png_path);
     app_text_free(&csv);
     app_text_free(&json);
     return result;
@@ -179,7 +181,7 @@ static int render_all(meso_context *ctx, const meso_scene *scene, const render_o
     if (result == MESO_OK) print_results(&all);
     if (result == MESO_OK && !quiet)
         fprintf(stderr, "meso: render: %zu images, sheet.png, results.csv, results.json and "
-                "error-vs-time.svg in %s\n",
+                "error-vs-time.svg/.png in %s\n",
                 rendered, o->output);
     int status = result == MESO_OK ? APP_EXIT_OK : app_fail(ctx, result);
     app_compare_all_free(&all);

@@ -162,7 +162,8 @@ static void test_app_render_techniques_results_and_folder_are_exact(void **state
     char names[4096];
     list_dir(dir, names, sizeof(names));
     assert_string_equal(names,
-                        "error-vs-time.svg notes.txt reference.coverage.png reference.png "
+                        "error-vs-time.png error-vs-time.svg notes.txt reference.coverage.png "
+                        "reference.png "
                         "relief.coverage.png relief.png results.csv results.json sheet.png ");
     size_t size = 0;
     char *json = read_whole(test_path(dir, "results.json"), &size);
