@@ -5,6 +5,7 @@
  * truth"): PSNR over the whole image and over the pixels both cover, SSIM and coverage IoU. */
 #include "app.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -73,6 +74,10 @@ static void render_run(meso_context *ctx, const app_compare_all_desc *desc, cons
     meso_renderer *renderer = NULL;
     meso_framebuffer *fb = NULL;
     meso_render_desc render_desc = {.technique = technique, .samples = samples};
+    if (desc->settings) {
+        render_desc.options = desc->settings->items;
+        render_desc.num_options = desc->settings->count;
+    }
     meso_result result = meso_renderer_create(ctx, desc->scene, &render_desc, &renderer);
     if (result == MESO_OK) result = meso_framebuffer_create(ctx, desc->width, desc->height, &fb);
     double start = meso_time_seconds();
@@ -210,6 +215,30 @@ void app_run_label(const app_run *run, const char *prefix, int cell_width, char 
     }
 }
 
+/* Remove DIR/<prefix><technique>.png and .coverage.png of every technique this run did not
+ * render: an earlier run's images would otherwise sit beside a sheet that no longer shows
+ * them. Only names meso itself writes are touched. */
+static meso_result remove_stale_images(meso_context *ctx, const app_compare_all *all,
+                                       const char *dir, const char *prefix) {
+    for (size_t t = 0; t < meso_technique_count(); t++) {
+        const char *technique = meso_technique_get(t)->name;
+        bool rendered = false;
+        for (size_t i = 0; i < all->num_runs && !rendered; i++)
+            rendered = all->runs[i].rendered && strcmp(all->runs[i].technique, technique) == 0;
+        if (rendered) continue;
+        static const char *const suffixes[] = {".png", ".coverage.png"};
+        for (int s = 0; s < 2; s++) {
+            char name[256], path[4096];
+            snprintf(name, sizeof(name), "%s%s%s", prefix ? prefix : "", technique, suffixes[s]);
+            if (!app_path_join(path, sizeof(path), dir, name)) continue;
+            if (remove(path) != 0 && errno != ENOENT)
+                return meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot remove the stale image: %s",
+                                      path, strerror(errno));
+        }
+    }
+    return MESO_OK;
+}
+
 meso_result app_compare_all_write_images(meso_context *ctx, const app_compare_all *all,
                                          const char *dir, const char *prefix, bool coverage) {
     for (size_t i = 0; i < all->num_runs; i++) {
@@ -230,7 +259,7 @@ meso_result app_compare_all_write_images(meso_context *ctx, const app_compare_al
         result = meso_image_save_png(ctx, run->coverage, path, &linear);
         if (result != MESO_OK) return result;
     }
-    return MESO_OK;
+    return remove_stale_images(ctx, all, dir, prefix);
 }
 
 void app_compare_all_csv(const app_compare_all *all, const char *scene_name, app_text *csv) {

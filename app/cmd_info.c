@@ -124,7 +124,9 @@ static void print_mesostructure(const meso_mesostructure *m) {
         printf("      mesostructure: height field '%s'", m->source);
         if (m->height_field)
             printf(", %dx%d texels", m->height_field->width, m->height_field->height);
-        printf(", depth %g, wrap %s\n", m->depth, wrap);
+        printf(", depth %g, wrap %s", m->depth, wrap);
+        if (m->offset != 0.0f) printf(", mesh moved %g along its normals (\"height\")", m->offset);
+        printf("\n");
         break;
     case MESO_MESOSTRUCTURE_SOLID:
         printf("      mesostructure: solid '%s'", m->source);
@@ -141,6 +143,12 @@ static void print_mesostructure(const meso_mesostructure *m) {
 static meso_result info_scene(meso_context *ctx, const char *path) {
     meso_scene *scene = NULL;
     meso_result result = meso_scene_load(ctx, path, &scene);
+    /* What the renderer would refuse (a misspelt technique, an unknown option) is refused here
+     * too, before anything is printed. */
+    if (result == MESO_OK && (result = meso_technique_check_scene(ctx, scene)) != MESO_OK) {
+        meso_scene_destroy(scene);
+        return result;
+    }
     if (result != MESO_OK) return result;
     printf("scene: %s\n", scene->path);
     printf("image: %dx%d, background ", scene->width, scene->height);
@@ -179,7 +187,9 @@ static meso_result info_scene(meso_context *ctx, const char *path) {
         printf("      technique: %s", o->technique);
         if (t) printf(" (%s)", t->paper);
         for (int k = 0; k < o->num_options; k++)
-            printf("%s%s=%g", k ? ", " : "; options: ", o->options[k].name, o->options[k].value);
+            printf("%s%s%s%s=%g", k ? ", " : "; options: ",
+                   o->options[k].technique[0] ? o->options[k].technique : "",
+                   o->options[k].technique[0] ? "." : "", o->options[k].name, o->options[k].value);
         printf("\n");
     }
     meso_scene_destroy(scene);

@@ -65,13 +65,16 @@ const char *meso_heightfield_kind_name(meso_heightfield_kind kind);
 meso_result meso_heightfield_create_procedural(meso_context *ctx, const meso_heightfield_desc *desc,
                                                meso_heightfield **out_heightfield,
                                                meso_image **out_color);
-/* A height field from an image's first channel (PNG values as loaded, in [0,1]). */
+/* A height field from an image (values as loaded, in [0,1], clamped): a grey image's grey, an
+ * RGB or RGBA image's luminance 0.2126 R + 0.7152 G + 0.0722 B of the stored values (no sRGB
+ * decoding); alpha is ignored. */
 meso_result meso_heightfield_create_from_image(meso_context *ctx, const meso_image *image,
                                                meso_wrap wrap, meso_heightfield **out_heightfield);
 /* A constant height field (tests and degenerate cases). */
 meso_result meso_heightfield_create_constant(meso_context *ctx, int width, int height, float value,
                                              meso_heightfield **out_heightfield);
-/* Loads a PNG and takes its first channel. Errors name the file. */
+/* Loads a PNG as meso_heightfield_create_from_image reads it. Errors name the file; a constant
+ * map loads, with a warning naming the file ("the height map is constant"). */
 meso_result meso_heightfield_load_png(meso_context *ctx, const char *path, meso_wrap wrap,
                                       meso_heightfield **out_heightfield);
 void meso_heightfield_destroy(meso_heightfield *heightfield);

@@ -270,6 +270,7 @@ static void draw_tile(void *user, size_t job, int thread_index) {
     ty1 = ty1 > frame->height - 1 ? frame->height - 1 : ty1;
     const size_t width = (size_t)frame->width;
     size_t tw = (size_t)(tx1 - tx0 + 1);
+    meso_progress_advance(frame->progress, tw * (size_t)(ty1 - ty0 + 1));
     bool empty = true;
     for (size_t c = 0; c < bins->num_chunks && empty; c++) {
         size_t count;

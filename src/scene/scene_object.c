@@ -131,10 +131,81 @@ static meso_result parse_procedural_solid(const scene_parser *p, const cJSON *it
     return MESO_OK;
 }
 
+static meso_result parse_height_map_or_solid(const scene_parser *p, const cJSON *item,
+                                             const scene_key *key, bool want_color,
+                                             meso_object *object, meso_image **out_color);
+
+/* "height": {"direction", "midlevel", "invert"}: the conventions of other tools (Blender,
+ * Substance), converted once, here, into meso's inward one so that every technique and the
+ * reference see the same field: the values are inverted in the field when asked, and the shell
+ * is placed by moving the mesh along its normals by m->offset (build_mesh):
+ *   inward   the mesh is the shell's top, white on it, black at -depth: offset 0 (meso's own)
+ *   outward  the mesh is the shell's bottom, black on it, white at +depth: offset depth
+ *   centered the value `midlevel` lies on the mesh: offset (1 - midlevel) depth
+ * In each case P' = (P + offset N) - (1 - h) depth N, which is the tool's surface. */
+static meso_result parse_height_convention(const scene_parser *p, const cJSON *item,
+                                           const scene_key *key, meso_mesostructure *m) {
+    static const char *const keys[] = {"direction", "midlevel", "invert", NULL};
+    if (!cJSON_IsObject(item))
+        return scene_error(p, MESO_ERROR_FORMAT, key,
+                           "must be {\"direction\": ..., \"midlevel\": ..., \"invert\": ...}");
+    meso_result r = scene_check_object(p, item, key, keys);
+    if (r != MESO_OK) return r;
+    const char *direction = "inward";
+    double midlevel = 0.5;
+    if ((r = scene_get_string(p, item, key, "direction", false, &direction)) ||
+        (r = scene_get_number(p, item, key, "midlevel", false, &midlevel)))
+        return r;
+    scene_key midlevel_key = scene_key_child(key, "midlevel");
+    bool has_midlevel = cJSON_GetObjectItemCaseSensitive(item, "midlevel") != NULL;
+    if (!(midlevel >= 0.0 && midlevel <= 1.0))
+        return scene_error(p, MESO_ERROR_FORMAT, &midlevel_key, "%g is not in [0, 1]", midlevel);
+    if (strcmp(direction, "inward") == 0 || strcmp(direction, "outward") == 0) {
+        if (has_midlevel)
+            return scene_error(p, MESO_ERROR_FORMAT, &midlevel_key,
+                               "only with \"direction\": \"centered\" (%s places the shell by "
+                               "the mesh)",
+                               direction);
+        m->offset = direction[0] == 'o' ? m->depth : 0.0f;
+    } else if (strcmp(direction, "centered") == 0) {
+        m->offset = (float)(1.0 - midlevel) * m->depth;
+    } else {
+        scene_key k = scene_key_child(key, "direction");
+        return scene_error(p, MESO_ERROR_FORMAT, &k,
+                           "must be \"inward\", \"outward\" or \"centered\", not \"%s\"",
+                           direction);
+    }
+    const cJSON *invert = cJSON_GetObjectItemCaseSensitive(item, "invert");
+    if (invert && !cJSON_IsBool(invert)) {
+        scene_key k = scene_key_child(key, "invert");
+        return scene_error(p, MESO_ERROR_FORMAT, &k, "must be true or false");
+    }
+    if (cJSON_IsTrue(invert)) {
+        meso_heightfield *hf = m->height_field;
+        size_t n = (size_t)hf->width * (size_t)hf->height;
+        for (size_t t = 0; t < n; t++) hf->heights[t] = 1.0f - hf->heights[t];
+        meso_heightfield_update_hash(hf);
+    }
+    return MESO_OK;
+}
+
 static meso_result parse_mesostructure(const scene_parser *p, const cJSON *item,
                                        const scene_key *key, bool want_color, meso_object *object,
                                        meso_image **out_color) {
-    static const char *const keys[] = {"height_map", "solid", "depth", "wrap", NULL};
+    meso_result r = parse_height_map_or_solid(p, item, key, want_color, object, out_color);
+    if (r != MESO_OK) return r;
+    const cJSON *height = cJSON_GetObjectItemCaseSensitive(item, "height");
+    if (!height) return MESO_OK;
+    scene_key k = scene_key_child(key, "height");
+    if (object->mesostructure.kind != MESO_MESOSTRUCTURE_HEIGHT_FIELD)
+        return scene_error(p, MESO_ERROR_FORMAT, &k, "applies to a height_map, not a solid");
+    return parse_height_convention(p, height, &k, &object->mesostructure);
+}
+
+static meso_result parse_height_map_or_solid(const scene_parser *p, const cJSON *item,
+                                             const scene_key *key, bool want_color,
+                                             meso_object *object, meso_image **out_color) {
+    static const char *const keys[] = {"height_map", "solid", "depth", "wrap", "height", NULL};
     meso_result r = scene_check_object(p, item, key, keys);
     if (r != MESO_OK) return r;
     meso_mesostructure *m = &object->mesostructure;
@@ -321,6 +392,10 @@ static meso_result build_mesh(const scene_parser *p, const cJSON *obj, const sce
         return r;
     meso_mesh *mesh = object->mesh;
     meso_mesh_transform(mesh, transform);
+    float offset = object->mesostructure.offset; /* "height": place the shell (see above) */
+    if (offset != 0.0f)
+        for (size_t v = 0; v < mesh->num_vertices; v++)
+            mesh->positions[v] = meso_vec3_madd(mesh->positions[v], mesh->normals[v], offset);
     if (mesh->uvs) meso_mesh_scale_uvs(mesh, uv_scale);
     bool require_uvs =
         object->mesostructure.kind != MESO_MESOSTRUCTURE_NONE || object->material.color_map != NULL;
@@ -337,29 +412,58 @@ static meso_result build_mesh(const scene_parser *p, const cJSON *obj, const sce
 
 /* ---- Technique ---------------------------------------------------------------------------- */
 
+/* One option value: a finite number or a boolean (true = 1). */
+static meso_result parse_option(const scene_parser *p, const cJSON *child, const scene_key *key,
+                                const char *technique, meso_object *object) {
+    scene_key k = scene_key_child(key, child->string);
+    if (object->num_options >= MESO_OPTIONS_MAX)
+        return scene_error(p, MESO_ERROR_LIMIT, key, "more than %d options", MESO_OPTIONS_MAX);
+    for (int o = 0; o < object->num_options; o++)
+        if (strcmp(object->options[o].technique, technique) == 0 &&
+            strcmp(object->options[o].name, child->string) == 0)
+            return scene_error(p, MESO_ERROR_FORMAT, &k, "duplicate key");
+    meso_option *option = &object->options[object->num_options];
+    snprintf(option->technique, sizeof option->technique, "%s", technique);
+    meso_result r = copy_name(p, &k, child->string, option->name);
+    if (r != MESO_OK) return r;
+    if (cJSON_IsBool(child)) {
+        option->value = cJSON_IsTrue(child) ? 1.0 : 0.0;
+    } else if (cJSON_IsNumber(child) && isfinite(child->valuedouble)) {
+        option->value = child->valuedouble;
+    } else {
+        return scene_error(p, MESO_ERROR_FORMAT, &k, "must be a finite number or a boolean");
+    }
+    object->num_options++;
+    return MESO_OK;
+}
+
+/* "technique_options": {"relief": {"linear_steps": 64}, "vdm": {...}} keyed by technique, or
+ * the flat form {"linear_steps": 64} for the object's own technique (technique ""). The names
+ * are checked against the techniques' option tables by the renderer (meso_technique_check_scene),
+ * which this module does not link. */
 static meso_result parse_options(const scene_parser *p, const cJSON *item, const scene_key *key,
                                  meso_object *object) {
     if (!item) return MESO_OK;
     if (!cJSON_IsObject(item))
-        return scene_error(p, MESO_ERROR_FORMAT, key, "must be an object of numbers and booleans");
+        return scene_error(p, MESO_ERROR_FORMAT, key,
+                           "must be an object: {\"TECHNIQUE\": {\"option\": value}}");
     for (const cJSON *child = item->child; child; child = child->next) {
-        scene_key k = scene_key_child(key, child->string);
-        if (object->num_options >= MESO_OPTIONS_MAX)
-            return scene_error(p, MESO_ERROR_LIMIT, key, "more than %d options", MESO_OPTIONS_MAX);
-        for (int o = 0; o < object->num_options; o++)
-            if (strcmp(object->options[o].name, child->string) == 0)
-                return scene_error(p, MESO_ERROR_FORMAT, &k, "duplicate key");
-        meso_option *option = &object->options[object->num_options];
-        meso_result r = copy_name(p, &k, child->string, option->name);
-        if (r != MESO_OK) return r;
-        if (cJSON_IsBool(child)) {
-            option->value = cJSON_IsTrue(child) ? 1.0 : 0.0;
-        } else if (cJSON_IsNumber(child) && isfinite(child->valuedouble)) {
-            option->value = child->valuedouble;
+        meso_result r = MESO_OK;
+        if (!cJSON_IsObject(child)) {
+            r = parse_option(p, child, key, "", object);
         } else {
-            return scene_error(p, MESO_ERROR_FORMAT, &k, "must be a finite number or a boolean");
+            scene_key technique_key = scene_key_child(key, child->string);
+            char technique[MESO_NAME_MAX];
+            if ((r = copy_name(p, &technique_key, child->string, technique)) != MESO_OK) return r;
+            if (!technique[0])
+                return scene_error(p, MESO_ERROR_FORMAT, &technique_key, "empty technique name");
+            for (const cJSON *prev = item->child; prev != child; prev = prev->next)
+                if (strcmp(prev->string, child->string) == 0)
+                    return scene_error(p, MESO_ERROR_FORMAT, &technique_key, "duplicate key");
+            for (const cJSON *option = child->child; option && r == MESO_OK; option = option->next)
+                r = parse_option(p, option, &technique_key, technique, object);
         }
-        object->num_options++;
+        if (r != MESO_OK) return r;
     }
     return MESO_OK;
 }

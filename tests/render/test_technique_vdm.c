@@ -228,7 +228,8 @@ static void test_vdm_rejects_bad_options_naming_them(void **state) {
     expect_option_error(SMALL_BAKE ", \"compressed\": 2", "compressed");
     expect_option_error(SMALL_BAKE ", \"eigenfunctions\": 0", "eigenfunctions");
     expect_option_error(SMALL_BAKE ", \"eigenfunctions\": 40", "eigenfunctions");
-    expect_option_error(SMALL_BAKE ", \"shadow_bias\": -1", "shadow_bias");
+    expect_option_error(SMALL_BAKE ", \"shadow_bias\": -2", "shadow_bias");
+    expect_option_error(SMALL_BAKE ", \"refine_steps\": 17", "refine_steps");
 }
 
 int main(void) {

@@ -79,9 +79,9 @@ static void render_images(const meso_scene *scene, const char *technique, meso_i
     meso_framebuffer_destroy(fb);
 }
 
-/* Set every object's options to the technique's of truth_options[] (the scene files set none:
- * each technique refuses the others' options). Setting, not appending, so a row that failed
- * half-way leaves nothing behind for the next. */
+/* Set every object's options to the technique's of truth_options[], keyed by the technique (the
+ * scene files set none). Setting, not appending, so a row that failed half-way leaves nothing
+ * behind for the next. */
 static void set_options(meso_scene *scene, const char *technique) {
     for (int o = 0; o < scene->num_objects; o++) {
         meso_object *object = &scene->objects[o];
@@ -90,6 +90,7 @@ static void set_options(meso_scene *scene, const char *technique) {
             if (strcmp(truth_options[i].technique, technique) != 0) continue;
             assert_true(object->num_options < MESO_OPTIONS_MAX);
             meso_option *option = &object->options[object->num_options++];
+            snprintf(option->technique, sizeof(option->technique), "%s", technique);
             snprintf(option->name, sizeof(option->name), "%s", truth_options[i].name);
             option->value = truth_options[i].value;
         }

@@ -119,21 +119,6 @@ static inline v8f relief_sample8(const relief_heights *m, v8f x, v8f y) {
     return top + (bottom - top) * ty;
 }
 
-/* ---- Options ------------------------------------------------------------------------------ */
-
-/* An integer option in [lo, hi] (booleans: 0..1); the message names the object and option. */
-static inline meso_result relief_read_option(meso_context *ctx, const meso_object *object,
-                                             const char *technique, const char *name, int fallback,
-                                             int lo, int hi, int *out_value) {
-    double v = meso_object_option(object, name, (double)fallback);
-    if (!(v >= (double)lo && v <= (double)hi) || v != floor(v))
-        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
-                              "%s: technique_options.%s: %g is not an integer in %d..%d (%s)",
-                              object->name, name, v, lo, hi, technique);
-    *out_value = (int)v;
-    return MESO_OK;
-}
-
 /* ---- The view ray in texture space -------------------------------------------------------- */
 
 /* Write a world direction D in the fragment's frame: D = cu T + cv B + cn N. False when the

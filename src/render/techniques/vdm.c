@@ -81,22 +81,53 @@ static inline float sum8(v8f v) {
     return ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]));
 }
 
-static const char *const known_options[] = {"compressed",
-                                            "eigenfunctions",
-                                            "mvm_eigenfunctions",
-                                            "shadows",
-                                            "silhouettes",
-                                            "curvature",
-                                            "resolution",
-                                            "num_theta",
-                                            "num_phi",
-                                            "num_curvatures",
-                                            "shadow_bias",
-                                            "silhouette_filter",
-                                            "mipmap",
-                                            "refine_steps",
-                                            "shadow_steps",
-                                            NULL};
+typedef struct vdm_options {
+    bool compressed, shadows, silhouettes, curvature, silhouette_filter, mipmap;
+    int eigenfunctions, mvm_eigenfunctions, resolution, num_theta, num_phi, num_curvatures;
+    int refine_steps, shadow_steps;
+    float shadow_bias;
+} vdm_options;
+
+static const meso_technique_option vdm_option_table[] = {
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, compressed, 0, 1, 1,
+                    "0: render from the raw 5D table (bakes and caches it)", vdm_options,
+                    compressed),
+    MESO_OPTION_ROW(MESO_OPTION_INT, eigenfunctions, 1, MESO_VDM_MAX_EIGEN, 8,
+                    "VDM eigenfunctions used (bakes at least 8)", vdm_options, eigenfunctions),
+    MESO_OPTION_ROW(MESO_OPTION_INT, mvm_eigenfunctions, 1, MESO_VDM_MAX_EIGEN, 4,
+                    "MVM eigenfunctions used (bakes at least 4)", vdm_options, mvm_eigenfunctions),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, shadows, 0, 1, 1, "shadows along each light (§3.2)",
+                    vdm_options, shadows),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, silhouettes, 0, 1, 1, "discard where theta_V > theta_MVM",
+                    vdm_options, silhouettes),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, curvature, 0, 1, 1,
+                    "0: curvature 0 everywhere (the paper's planar case)", vdm_options, curvature),
+    MESO_OPTION_ROW(MESO_OPTION_INT, resolution, 8, MESO_VDM_MAX_SIDE, 128,
+                    "bake: texels a side (128, 256, 512: issue 11's sizes; docs/techniques/vdm.md)",
+                    vdm_options, resolution),
+    MESO_OPTION_ROW(MESO_OPTION_INT, num_theta, 2, MESO_VDM_MAX_THETA, 32,
+                    "bake: polar view angles", vdm_options, num_theta),
+    MESO_OPTION_ROW(MESO_OPTION_INT, num_phi, 1, MESO_VDM_MAX_PHI, 8, "bake: azimuthal view angles",
+                    vdm_options, num_phi),
+    MESO_OPTION_ROW(MESO_OPTION_INT, num_curvatures, 1, MESO_VDM_MAX_CURVATURES, 16,
+                    "bake: curvatures", vdm_options, num_curvatures),
+    MESO_OPTION_ROW(MESO_OPTION_FLOAT, shadow_bias, -1.0, 10.0, -1.0,
+                    "lit when d_L >= h sec theta_L - bias (1 + h sec theta_L); -1: 0.05, or 0.2 "
+                    "with refine_steps 0",
+                    vdm_options, shadow_bias),
+    MESO_OPTION_ROW(MESO_OPTION_INT, refine_steps, 0, 16, 3,
+                    "regula-falsi steps of the hit refined on the height field; 0: the paper's "
+                    "interpolated d",
+                    vdm_options, refine_steps),
+    MESO_OPTION_ROW(MESO_OPTION_INT, shadow_steps, 1, 256, 16,
+                    "probes along the light ray where the table is ambiguous (an occluder's edge)",
+                    vdm_options, shadow_steps),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, silhouette_filter, 0, 1, 0,
+                    "0: theta_MVM of the nearest texel (paper); 1: interpolated", vdm_options,
+                    silhouette_filter),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, mipmap, 0, 1, 1,
+                    "mip level of W from the pixel's footprint in texels", vdm_options, mipmap),
+};
 
 static void vdm_release(void *state) {
     vdm_state *s = state;
@@ -107,18 +138,6 @@ static void vdm_release(void *state) {
     free(s->eigen_t);
     free(s->mvm_t);
     free(s);
-}
-
-/* An integer option in [lo, hi]. */
-static meso_result read_int(meso_context *ctx, const meso_object *object, const char *name,
-                            int fallback, int lo, int hi, int *out) {
-    double v = meso_object_option(object, name, fallback);
-    if (!(v >= lo && v <= hi) || v != floor(v))
-        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
-                              "%s: technique_options.%s: %g must be an integer in %d-%d",
-                              object->name, name, v, lo, hi);
-    *out = (int)v;
-    return MESO_OK;
 }
 
 /* World length of one tile: sqrt(world area / uv area) over the mesh (uv_scale applied). VDM
@@ -209,9 +228,10 @@ static meso_result relayout(meso_context *ctx, const meso_object *object, vdm_st
 
 static meso_result vdm_prepare(meso_context *ctx, const meso_scene *scene,
                                const meso_object *object, void **out_state) {
-    (void)scene;
     *out_state = NULL;
-    meso_result r = meso_technique_check_options(ctx, object, "vdm", known_options);
+    vdm_options options;
+    meso_result r =
+        meso_technique_options_read(ctx, scene, object, &meso_technique_vdm.info, &options);
     if (r != MESO_OK) return r;
     const meso_mesostructure *ms = &object->mesostructure;
     if (ms->kind != MESO_MESOSTRUCTURE_HEIGHT_FIELD || !ms->height_field)
@@ -222,28 +242,23 @@ static meso_result vdm_prepare(meso_context *ctx, const meso_scene *scene,
                               "%s: technique vdm needs texture coordinates", object->name);
     int compressed, eigen, mvm, shadows, silhouettes, curvature, resolution, num_theta, num_phi,
         num_curvatures, silhouette_filter, mipmap, refine_steps, shadow_steps;
-    if ((r = read_int(ctx, object, "compressed", 1, 0, 1, &compressed)) ||
-        (r = read_int(ctx, object, "eigenfunctions", 8, 1, MESO_VDM_MAX_EIGEN, &eigen)) ||
-        (r = read_int(ctx, object, "mvm_eigenfunctions", 4, 1, MESO_VDM_MAX_EIGEN, &mvm)) ||
-        (r = read_int(ctx, object, "shadows", 1, 0, 1, &shadows)) ||
-        (r = read_int(ctx, object, "silhouettes", 1, 0, 1, &silhouettes)) ||
-        (r = read_int(ctx, object, "curvature", 1, 0, 1, &curvature)) ||
-        (r = read_int(ctx, object, "silhouette_filter", 0, 0, 1, &silhouette_filter)) ||
-        (r = read_int(ctx, object, "mipmap", 1, 0, 1, &mipmap)) ||
-        (r = read_int(ctx, object, "refine_steps", 3, 0, 16, &refine_steps)) ||
-        (r = read_int(ctx, object, "shadow_steps", 16, 1, 256, &shadow_steps)) ||
-        (r = read_int(ctx, object, "resolution", 128, 8, MESO_VDM_MAX_SIDE, &resolution)) ||
-        (r = read_int(ctx, object, "num_theta", 32, 2, MESO_VDM_MAX_THETA, &num_theta)) ||
-        (r = read_int(ctx, object, "num_phi", 8, 1, MESO_VDM_MAX_PHI, &num_phi)) ||
-        (r = read_int(ctx, object, "num_curvatures", 16, 1, MESO_VDM_MAX_CURVATURES,
-                      &num_curvatures)))
-        return r;
+    compressed = options.compressed;
+    eigen = options.eigenfunctions;
+    mvm = options.mvm_eigenfunctions;
+    shadows = options.shadows;
+    silhouettes = options.silhouettes;
+    curvature = options.curvature;
+    silhouette_filter = options.silhouette_filter;
+    mipmap = options.mipmap;
+    resolution = options.resolution;
+    num_theta = options.num_theta;
+    num_phi = options.num_phi;
+    num_curvatures = options.num_curvatures;
+    refine_steps = options.refine_steps;
+    shadow_steps = options.shadow_steps;
     /* Interpolated d errs by a good part of a shell depth at jumps; refined, by far less. */
-    double bias = meso_object_option(object, "shadow_bias", refine_steps > 0 ? 0.05 : 0.2);
-    if (!(bias >= 0.0 && bias <= 10.0))
-        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
-                              "%s: technique_options.shadow_bias: %g must be in [0, 10]",
-                              object->name, bias);
+    double bias = options.shadow_bias >= 0.0f ? options.shadow_bias
+                                              : (refine_steps > 0 ? 0.05 : 0.2);
     float tile = tile_world_length(object->mesh);
     if (!(tile > 0.0f))
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
@@ -832,7 +847,9 @@ const meso_technique meso_technique_vdm = {
              .summary = "view-dependent displacement map: silhouettes, occlusion, shadows (SVD)",
              .paper = "Wang et al. 2003, View-Dependent Displacement Mapping, §3",
              .kind = MESO_TECHNIQUE_PER_PIXEL,
-             .accepts = MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD},
+             .accepts = MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD,
+             .options = vdm_option_table,
+             .num_options = MESO_OPTION_COUNT(vdm_option_table)},
     .prepare = vdm_prepare,
     .release = vdm_release,
     .shade = vdm_shade,
