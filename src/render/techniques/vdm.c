@@ -103,7 +103,7 @@ static const meso_technique_option vdm_option_table[] = {
     MESO_OPTION_ROW(MESO_OPTION_BOOL, curvature, 0, 1, 1,
                     "0: curvature 0 everywhere (the paper's planar case)", vdm_options, curvature),
     MESO_OPTION_ROW(MESO_OPTION_INT, resolution, 8, MESO_VDM_MAX_SIDE, 128,
-                    "bake: texels a side (128, 256, 512: issue 11's sizes; docs/techniques/vdm.md)",
+                    "bake: texels a side (256 and 512 measured in docs/techniques/vdm.md)",
                     vdm_options, resolution),
     MESO_OPTION_ROW(MESO_OPTION_INT, num_theta, 2, MESO_VDM_MAX_THETA, 32,
                     "bake: polar view angles", vdm_options, num_theta),
