@@ -364,6 +364,11 @@ typedef struct relief_tracer {
     /* Per batch: the bits of blocked lanes (batches may have no active lane). */
     void (*shadow)(const void *user, const relief_shadow_batch *batches, int count,
                    int *out_blocked);
+    /* Optional (NULL: the height field's gradient, relief_normal8): the unit world normal at
+     * the hits (hx, hy) in texel-centre coordinates, depth hd, ray parameter t, of one batch.
+     * relief_layers reads its baked layer normals here (Policarpo & Oliveira 2006 §3). */
+    void (*normal)(const void *user, const relief_lanes *lanes, const relief_batch *batch,
+                   v8f t, v8f hx, v8f hy, v8f hd, float depth, v8vec3 *out_normal);
 } relief_tracer;
 
 typedef struct relief_params {
@@ -416,7 +421,8 @@ static inline void relief_batch_setup(const relief_heights *m, const meso_object
     *out_dv = cv;
 }
 
-/* Shade `count` fragments with a tracer, sixteen at a time as two batches of eight: view
+/* Shade `count` fragments with a tracer, sixteen at a time (m: the map's size in texels for
+ * the texel-centre coordinates, and the heights unless the tracer has its own normal) as two batches of eight: view
  * rays, hits, depth correction, the displaced normal at the hit, self-shadows per light,
  * meso_shade_batch8. */
 static inline void relief_shade_fragments(const relief_heights *m, const relief_tracer *tracer,
@@ -448,13 +454,18 @@ static inline void relief_shade_fragments(const relief_heights *m, const relief_
             hx[g] = batch[g].x0 + batch[g].xd * t[g];
             hy[g] = batch[g].y0 + batch[g].yd * t[g];
             hd[g] = v8_max(t[g] * (batch[g].a - batch[g].b * t[g]), v8_splat(0.0f));
-            v8f gu, gv;
-            relief_gradient8(m, hx[g], hy[g], &gu, &gv);
             hit_pos[g] = v8_madd(l[g].position, l[g].view, t[g]);
             hit_u[g] = l[g].u + du[g] * t[g];
             hit_v[g] = l[g].v + dv[g] * t[g];
             out_depth[g] = l[g].depth * (1.0f + t[g]); /* dot(P + t V - eye, forward) */
-            normal[g] = relief_normal8(&l[g], depth, gu, gv);
+            if (tracer->normal) {
+                tracer->normal(tracer->user, &l[g], &batch[g], t[g], hx[g], hy[g], hd[g], depth,
+                               &normal[g]);
+            } else {
+                v8f gu, gv;
+                relief_gradient8(m, hx[g], hy[g], &gu, &gv);
+                normal[g] = relief_normal8(&l[g], depth, gu, gv);
+            }
         }
         meso_shade_batch in[2];
         for (int li = 0; li < num_lights; ++li) {
