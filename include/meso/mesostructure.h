@@ -147,12 +147,13 @@ typedef enum meso_solid_kind {
     MESO_SOLID_GRID,        /* a lattice of bars with holes */
     MESO_SOLID_SQUAMA,      /* overlapping scales */
     MESO_SOLID_HELIX,       /* a double helix of threads */
+    MESO_SOLID_SLAB,        /* solid below w = 1 - thickness: the height field h = thickness */
 } meso_solid_kind;
 
 typedef struct meso_solid_desc {
     meso_solid_kind kind;
     int count;       /* repeats per tile along u (and v where it applies): weave 2, chain 2,
-                        grid 4, squama 4, helix 2 */
+                        grid 4, squama 4, helix 2, slab 1 */
     float thickness; /* thread / bar / link radius as a fraction of a cell (kind's default) */
 } meso_solid_desc;
 
