@@ -122,6 +122,11 @@ meso_result meso_layers_load(meso_context *ctx, const char *path, meso_layers **
 meso_result meso_layers_from_bake_file(meso_context *ctx, const meso_bake_file *bake,
                                        const char *name, meso_layers **out_map);
 
+/* The map of the same solid seen from the bottom of the shell (w' = 1 - w: depths 1 - d in
+ * reverse order, entries and exits swapped), for back faces and the back views of relief
+ * impostors (§4). Height-field maps are refused (MESO_ERROR_INVALID_ARGUMENT): their floor is
+ * solid. out_map: a new map owned by the caller. */
+meso_result meso_layers_mirror(meso_context *ctx, const meso_layers *map, meso_layers **out_map);
 /* Unit normal of layer k of texel (i, j), z reconstructed with the layer's sign. Pure. */
 meso_vec3 meso_layers_normal(const meso_layers *map, int i, int j, int k);
 /* Bytes of the map as stored (1 or 4 per value, 3 values and a count per layer slot). */

@@ -289,6 +289,40 @@ meso_result meso_bake_layers(meso_context *ctx, const meso_layers_desc *desc,
     return r;
 }
 
+meso_result meso_layers_mirror(meso_context *ctx, const meso_layers *map, meso_layers **out_map) {
+    *out_map = NULL;
+    if (!map || map->from_heightfield)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "relief_layers: only a solid's map can be seen from below");
+    meso_layers *m = NULL;
+    meso_result r = allocate(ctx, map->width, map->height, map->num_layers, &m);
+    if (r != MESO_OK) return r;
+    int L = map->num_layers;
+    for (size_t t = 0; t < (size_t)map->width * (size_t)map->height; t++) {
+        int c = map->count[t];
+        const float *d = map->depth + t * (size_t)L;
+        const float *nx = map->normal_x + t * (size_t)L, *ny = map->normal_y + t * (size_t)L;
+        for (int k = 0; k < L; k++) {
+            size_t s = t * (size_t)L + (size_t)k;
+            /* layer c-1-k seen from below; (x, y) of the outward normal are unchanged and its
+             * z flips with the axis, as the parity of the layer does */
+            m->depth[s] = k < c ? 1.0f - d[c - 1 - k] : 1.0f;
+            m->normal_x[s] = k < c ? nx[c - 1 - k] : 0.0f;
+            m->normal_y[s] = k < c ? ny[c - 1 - k] : 0.0f;
+        }
+        m->count[t] = (uint8_t)c;
+    }
+    m->format = map->format;
+    m->wrap = map->wrap;
+    m->source_hash = map->source_hash ^ UINT64_C(0x9e3779b97f4a7c15);
+    m->max_count = map->max_count;
+    m->max_crossings = map->max_crossings;
+    m->clipped_texels = map->clipped_texels;
+    m->clipped_at_four = map->clipped_at_four;
+    *out_map = m;
+    return MESO_OK;
+}
+
 uint64_t meso_layers_cache_key(const meso_layers_desc *desc) {
     meso_layers_desc d = meso_layers_desc_defaults(desc);
     uint64_t source = d.solid         ? meso_solid_hash(d.solid)

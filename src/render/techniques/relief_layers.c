@@ -26,6 +26,8 @@ typedef struct layers_state {
     int linear_steps, binary_steps, shadow_steps;
     relief_params params;
     size_t bytes;
+    struct layers_state *below; /* solids: the map seen from the shell's bottom (back faces) */
+    bool enclosed;              /* the `below` state: hits lie inside a closed mesh, unlit */
 } layers_state;
 
 static const char *const known_options[] = {"linear_steps", "binary_steps", "shadows",
@@ -36,6 +38,7 @@ static const char *const known_options[] = {"linear_steps", "binary_steps", "sha
 static void release(void *state) {
     layers_state *s = state;
     if (!s) return;
+    release(s->below);
     free(s->planes);
     free(s);
 }
@@ -96,7 +99,7 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
     int shadows = 1, silhouettes = 1, missed = 0, filter = 1, layers = 4, side = 256, as_float = 0;
     layers_state *s = calloc(1, sizeof *s);
     if (!s) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
-    meso_layers *map = NULL;
+    meso_layers *map = NULL, *mirrored = NULL;
     if ((r = relief_read_option(ctx, object, name, "linear_steps", 32, 1, 1024,
                                 &s->linear_steps)) != MESO_OK ||
         (r = relief_read_option(ctx, object, name, "binary_steps", 6, 0, 32, &s->binary_steps)) !=
@@ -138,15 +141,35 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
     if (m->kind == MESO_MESOSTRUCTURE_SOLID && m->wrap == MESO_WRAP_CLAMP)
         map->wrap = MESO_WRAP_CLAMP;
     if ((r = fill_planes(ctx, object, map, s)) != MESO_OK) goto fail;
-    meso_layers_destroy(map);
     s->filter = filter != 0;
     s->missed_floor = missed != 0;
     s->params.shadows = shadows != 0;
     s->params.silhouettes = silhouettes != 0;
+    if (!map->from_heightfield) {
+        /* back faces: the far wall of a closed mesh seen through holes in the near one */
+        if (!(s->below = calloc(1, sizeof *s->below))) {
+            r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
+            goto fail;
+        }
+        if ((r = meso_layers_mirror(ctx, map, &mirrored)) != MESO_OK ||
+            (r = fill_planes(ctx, object, mirrored, s->below)) != MESO_OK)
+            goto fail;
+        layers_state *b = s->below;
+        b->filter = s->filter;
+        b->linear_steps = s->linear_steps;
+        b->binary_steps = s->binary_steps;
+        b->shadow_steps = s->shadow_steps;
+        b->params = (relief_params){.shadows = s->params.shadows, .silhouettes = false};
+        b->enclosed = true;
+        s->bytes += b->bytes;
+    }
+    meso_layers_destroy(map);
+    meso_layers_destroy(mirrored);
     *out_state = s;
     return MESO_OK;
 fail:
     meso_layers_destroy(map);
+    meso_layers_destroy(mirrored);
     release(s);
     return r;
 }
@@ -289,6 +312,11 @@ static void shadow(const void *user, const relief_shadow_batch *batches, int cou
     const layers_state *s = user;
     for (int g = 0; g < count; ++g) {
         const relief_shadow_batch *b = &batches[g];
+        if (s->enclosed) { /* light reaches the inside of a closed mesh only through its other
+                              walls, which this map does not hold: taken as blocked */
+            out_blocked[g] = b->active_bits;
+            continue;
+        }
         int blocked = 0, pending = b->active_bits;
         float inv = 1.0f / (float)s->shadow_steps;
         for (int k = 1; k < s->shadow_steps && pending; ++k) {
@@ -357,11 +385,84 @@ static void normal(const void *user, const relief_lanes *l, const relief_batch *
                     v8_select(ok, n.z * inv, l->normal.z)};
 }
 
+/* Whether the batch's triangle faces away from the eye (geometric normal, counter-clockwise
+ * from outside): every fragment of a batch is of one triangle. */
+static bool back_facing(const meso_frame *frame, const meso_object *object,
+                        const meso_fragment *f) {
+    const meso_mesh *mesh = object->mesh;
+    if (!mesh || f->triangle >= mesh->num_triangles)
+        return meso_vec3_dot(meso_vec3_sub(f->position, frame->eye), f->normal) > 0.0f;
+    const uint32_t *t = mesh->indices + 3 * (size_t)f->triangle;
+    meso_vec3 a = mesh->positions[t[0]], b = mesh->positions[t[1]], c = mesh->positions[t[2]];
+    meso_vec3 n = meso_vec3_cross(meso_vec3_sub(b, a), meso_vec3_sub(c, a));
+    return meso_vec3_dot(meso_vec3_sub(a, frame->eye), n) > 0.0f;
+}
+
 static void shade(const void *state, const meso_frame *frame, const meso_object *object,
                   meso_fragment *fragments, size_t count) {
     const layers_state *s = state;
-    relief_tracer tracer = {s, search, shadow, normal};
-    relief_shade_fragments(&s->size, &tracer, s->params, frame, object, fragments, count);
+    if (count == 0) return;
+    if (!back_facing(frame, object, &fragments[0])) {
+        relief_tracer tracer = {s, search, shadow, normal};
+        relief_shade_fragments(&s->size, &tracer, s->params, frame, object, fragments, count);
+        return;
+    }
+    if (!s->below) { /* a height field's floor is solid: nothing shows through it */
+        for (size_t i = 0; i < count; ++i) fragments[i].discard = true;
+        return;
+    }
+    /* A back face: the view ray left the mesh here, after crossing the shell from its bottom
+     * (w = 1) up to the mesh. Seen from below, the shell is the mirrored solid over the bottom
+     * surface with normal -N: the front-face search runs unchanged on the mirrored map (as §4
+     * turns the search around for an impostor's back), from the point where the ray crossed
+     * w = 1, and its hit lies nearer than the mesh. Going back along the ray by tau from the
+     * fragment, the depth below the curved surface is w = tau (a - b tau) (the quadric of
+     * relief_common.h); a ray that never reached w = 1 skimmed the shell and the front face's
+     * search already covered its whole path (a silhouette): discarded. */
+    float depth = object->mesostructure.depth;
+    for (size_t i = 0; i < count; ++i) {
+        meso_fragment *f = &fragments[i];
+        meso_vec3 view = meso_vec3_sub(f->position, frame->eye);
+        float a = meso_vec3_dot(view, f->normal) / depth, b = 0.0f;
+        if (s->params.silhouettes) {
+            meso_vec2 q = relief_fragment_quadric(object, f);
+            float tl = meso_vec3_length(f->tangent), bl = meso_vec3_length(f->bitangent);
+            float x = tl > 0.0f ? meso_vec3_dot(view, f->tangent) / tl : 0.0f;
+            float y = bl > 0.0f ? meso_vec3_dot(view, f->bitangent) / bl : 0.0f;
+            b = (q.x * x * x + q.y * y * y) / depth;
+        }
+        float disc = a * a - 4.0f * b;
+        float tau = disc >= 0.0f && a > 0.0f ? 2.0f / (a + sqrtf(disc)) : INFINITY;
+        if (!(tau < 1.0f)) { /* skimmed (or the bottom lies behind the eye) */
+            f->discard = true;
+            continue;
+        }
+        f->position = meso_vec3_madd(f->position, view, -tau);
+        f->normal = meso_vec3_negate(f->normal);
+        f->depth *= 1.0f - tau;
+        f->out_depth = f->depth;
+    }
+    /* the fragments still drawn, packed (batches are one triangle's, at most a tile) */
+    size_t kept = 0;
+    for (size_t i = 0; i < count; ++i)
+        if (!fragments[i].discard) kept++;
+    if (kept == count) {
+        relief_tracer tracer = {s->below, search, shadow, normal};
+        relief_shade_fragments(&s->below->size, &tracer, s->below->params, frame, object,
+                               fragments, count);
+        return;
+    }
+    for (size_t start = 0; start < count;) { /* runs of kept fragments */
+        while (start < count && fragments[start].discard) start++;
+        size_t end = start;
+        while (end < count && !fragments[end].discard) end++;
+        if (end > start) {
+            relief_tracer tracer = {s->below, search, shadow, normal};
+            relief_shade_fragments(&s->below->size, &tracer, s->below->params, frame, object,
+                                   fragments + start, end - start);
+        }
+        start = end;
+    }
 }
 
 static size_t memory(const void *state) { return state ? ((const layers_state *)state)->bytes : 0; }
@@ -376,4 +477,5 @@ const meso_technique meso_technique_relief_layers = {
     .release = release,
     .shade = shade,
     .memory = memory,
+    .both_faces = true,
 };
