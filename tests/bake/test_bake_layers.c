@@ -238,6 +238,28 @@ static void test_inconsistent_layers_with_valid_checksum_are_refused(void **stat
     meso_context_destroy(ctx);
 }
 
+/* Seen from below (back faces, impostors' backs): depths 1 - d in reverse order. */
+static void test_mirror_reverses_the_layers(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(1);
+    meso_layers *m = bake(ctx, bar_field, 4, MESO_LAYERS_FORMAT_F32), *back = NULL;
+    assert_int_equal(meso_layers_mirror(ctx, m, &back), MESO_OK);
+    for (int j = 0; j < 32; j++) {
+        const float *d = texel_depths(m, 5, j), *e = texel_depths(back, 5, j);
+        int c = m->count[j * 32 + 5];
+        assert_int_equal(back->count[j * 32 + 5], c);
+        for (int k = 0; k < c; k++) assert_true(e[k] == 1.0f - d[c - 1 - k]);
+        /* the floor's underside (an exit, facing down) is the first layer seen from below,
+         * facing up */
+        assert_true(meso_layers_normal(back, 5, j, 0).z > 0.99f);
+    }
+    meso_layers_destroy(back);
+    m->from_heightfield = true;
+    assert_int_equal(meso_layers_mirror(ctx, m, &back), MESO_ERROR_INVALID_ARGUMENT);
+    meso_layers_destroy(m);
+    meso_context_destroy(ctx);
+}
+
 static void test_bad_descs_name_the_field(void **state) {
     (void)state;
     meso_context *ctx = test_context(1);
@@ -279,6 +301,7 @@ int main(void) {
         cmocka_unit_test(test_save_load_round_trip_u8_and_float),
         cmocka_unit_test(test_corrupted_layer_bake_is_refused_naming_the_file),
         cmocka_unit_test(test_inconsistent_layers_with_valid_checksum_are_refused),
+        cmocka_unit_test(test_mirror_reverses_the_layers),
         cmocka_unit_test(test_bad_descs_name_the_field),
         cmocka_unit_test(test_cached_bake_is_reused),
     };
