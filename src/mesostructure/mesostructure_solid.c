@@ -16,18 +16,6 @@
 
 #include "mesostructure_internal.h"
 
-struct meso_solid {
-    meso_solid_desc desc;
-    float depth_cells; /* slab thickness in cell units */
-    float scale;       /* 1 / (lipschitz * max(count, depth_cells)) */
-    float cap;         /* bound on omitted repeats, cell units */
-    /* kind-specific shape parameters, cell units */
-    float amplitude;          /* weave: undulation of the thread centres */
-    float major;              /* chain: link half-width (stadium radius); helix: helix radius */
-    float half_length;        /* chain: half the straight part of a link */
-    float tilt_cos, tilt_sin; /* squama */
-    float radius;             /* squama: scale radius */
-};
 
 /* ---- Kinds and defaults ------------------------------------------------------------------- */
 
@@ -62,6 +50,7 @@ bool meso_solid_kind_from_name(const char *name, meso_solid_kind *out_kind) {
 
 const char *meso_solid_kind_name(meso_solid_kind kind) {
     if (kind == MESO_SOLID_DEFAULT) kind = MESO_SOLID_WEAVE;
+    if (kind == MESO_SOLID_MESH) return "mesh";
     if (kind < MESO_SOLID_WEAVE || kind > SOLID_LAST_KIND) return "unknown";
     return solid_kind_names[kind];
 }
@@ -272,11 +261,16 @@ meso_result meso_solid_create_procedural(meso_context *ctx, const meso_solid_des
     return MESO_OK;
 }
 
-void meso_solid_destroy(meso_solid *solid) { free(solid); }
+void meso_solid_destroy(meso_solid *solid) {
+    if (!solid) return;
+    free(solid->grid);
+    free(solid);
+}
 
 meso_solid_desc meso_solid_get_desc(const meso_solid *solid) { return solid->desc; }
 
 uint64_t meso_solid_hash(const meso_solid *solid) {
+    if (solid->desc.kind == MESO_SOLID_MESH) return solid->grid_hash;
     /* Version the shapes: a change to a generator must change every cached bake's key. */
     const uint32_t version = 1;
     uint64_t h = meso_hash64(&version, sizeof(version), MESO_HASH_SEED);
@@ -306,6 +300,8 @@ float meso_solid_distance(const meso_solid *solid, meso_vec3 uvw) {
     case MESO_SOLID_HELIX:
         f = helix_distance(solid, x, y, z);
         break;
+    case MESO_SOLID_MESH:
+        return meso_solid_grid_distance(solid, uvw);
     case MESO_SOLID_SLAB:
         /* exact: the plane w = 1 - thickness, solid below (the test of relief_layers against
          * relief on the height field h = thickness) */

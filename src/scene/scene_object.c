@@ -180,9 +180,23 @@ static meso_result parse_mesostructure(const scene_parser *p, const cJSON *item,
     m->kind = MESO_MESOSTRUCTURE_SOLID;
     scene_key k = scene_key_child(key, "solid");
     if (cJSON_IsObject(solid)) return parse_procedural_solid(p, solid, &k, object);
-    if (cJSON_IsString(solid))
-        return scene_error(p, MESO_ERROR_UNSUPPORTED, &k, "voxel files are not supported yet");
-    return scene_error(p, MESO_ERROR_FORMAT, &k, "must be {\"procedural\": NAME, ...}");
+    if (cJSON_IsString(solid)) { /* a tile mesh (DESIGN.md: x, y -> u, v; z -> 1 - w) */
+        char path[SCENE_PATH_MAX];
+        if ((r = scene_resolve_path(p, &k, solid->valuestring, path)) ||
+            (r = check_readable(p, &k, path)))
+            return r;
+        meso_mesh *tile = NULL;
+        if ((r = meso_mesh_load(p->ctx, path, &tile)) != MESO_OK) return r;
+        r = meso_solid_create_from_triangles(p->ctx, tile->positions, tile->num_vertices,
+                                             tile->indices, tile->num_triangles, path, 0,
+                                             &m->solid);
+        meso_mesh_destroy(tile);
+        if (r != MESO_OK) return r;
+        snprintf(m->source, sizeof(m->source), "%s", base_name(solid->valuestring));
+        return MESO_OK;
+    }
+    return scene_error(p, MESO_ERROR_FORMAT, &k,
+                       "must be a tile mesh path or {\"procedural\": NAME, ...}");
 }
 
 /* ---- Material ----------------------------------------------------------------------------- */

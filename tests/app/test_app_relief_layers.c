@@ -71,6 +71,30 @@ static void test_bad_technique_options_are_bad_input(void **state) {
     unsetenv("MESO_CACHE_DIR");
 }
 
+static void test_open_tile_mesh_is_bad_input_naming_it(void **state) {
+    (void)state;
+    /* one triangle: open */
+    write_text("open-tile.obj", "v 0.2 0.2 0.5\nv 0.8 0.2 0.5\nv 0.5 0.8 0.5\nf 1 2 3\n");
+    const char *scene = write_text(
+        "open-tile.json",
+        "{\"image\": {\"width\": 32, \"height\": 32},\n"
+        " \"camera\": {\"eye\": [0, 1.5, 1.5], \"target\": [0, 0, 0], \"up\": [0, 1, 0],"
+        " \"fov_y_deg\": 45},\n"
+        " \"objects\": [{\"shape\": \"plane\", \"mesostructure\": {\"solid\": \"open-tile.obj\","
+        " \"depth\": 0.05}, \"technique\": \"relief_layers\"}]}\n");
+    const char *out = test_path(test_temp_dir(), "open-tile.png");
+    char args[4096];
+    snprintf(args, sizeof args, "render %s -o %s", scene, out);
+    expect_bad_input(args, "open-tile.obj: the tile mesh is not closed", out);
+    /* a tile mesh that is not there */
+    scene = write_text(
+        "missing-tile.json",
+        "{\"objects\": [{\"shape\": \"plane\", \"mesostructure\": {\"solid\": \"none.obj\","
+        " \"depth\": 0.05}, \"technique\": \"relief_layers\"}]}\n");
+    snprintf(args, sizeof args, "render %s -o %s", scene, out);
+    expect_bad_input(args, "none.obj", out);
+}
+
 static void test_bad_layer_bakes_are_bad_input_and_good_ones_described(void **state) {
     (void)state;
     meso_context *ctx = test_context(1);
@@ -169,6 +193,7 @@ static void test_mixed_scene_renders_with_every_technique_asked(void **state) {
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_bad_technique_options_are_bad_input),
+        cmocka_unit_test(test_open_tile_mesh_is_bad_input_naming_it),
         cmocka_unit_test(test_bad_layer_bakes_are_bad_input_and_good_ones_described),
         cmocka_unit_test(test_info_reports_sizes_beside_the_paper),
         cmocka_unit_test(test_mixed_scene_renders_with_every_technique_asked),
