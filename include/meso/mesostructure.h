@@ -181,6 +181,17 @@ meso_result meso_solid_create_from_triangles(meso_context *ctx, const meso_vec3 
                                              size_t num_vertices, const uint32_t *indices,
                                              size_t num_triangles, const char *name,
                                              int resolution, meso_solid **out_solid);
+/* A solid from a whole model for a relief impostor (Policarpo & Oliveira 2006 §4): positions
+ * already in the unit box (the caller maps the model's bounds there), not periodic, clamped
+ * at the box, and not required to be closed: a node is inside when it lies behind the face
+ * nearest to it (the teapot's patches leave seams and holes that ray parity cannot cross).
+ * Same results otherwise as meso_solid_create_from_triangles. */
+meso_result meso_solid_create_from_model(meso_context *ctx, const meso_vec3 *positions,
+                                         size_t num_vertices, const uint32_t *indices,
+                                         size_t num_triangles, const char *name, int resolution,
+                                         meso_solid **out_solid);
+/* False for a model's solid (clamped at the box), true for tiles and procedural solids. */
+bool meso_solid_is_periodic(const meso_solid *solid);
 void meso_solid_destroy(meso_solid *solid);
 /* The parameters the solid was made with (defaults filled in). */
 meso_solid_desc meso_solid_get_desc(const meso_solid *solid);

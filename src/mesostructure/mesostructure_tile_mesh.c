@@ -116,6 +116,7 @@ typedef struct tile_scene {
     const meso_vec3 *positions;
     const uint32_t *indices;
     size_t nt;
+    unsigned copies; /* 9: a periodic tile and its neighbours; 1: a model (geometry 4) */
 } tile_scene;
 
 /* The closest point of triangle (a, b, c) to p (Ericson, Real-Time Collision Detection §5.1.5,
@@ -145,6 +146,7 @@ static meso_vec3 closest_on_triangle(meso_vec3 p, meso_vec3 a, meso_vec3 b, meso
 typedef struct closest_query {
     const tile_scene *ts;
     float best2;
+    float side; /* dot(p - closest, face normal) of the closest triangle: < 0 behind it */
 } closest_query;
 
 static bool closest_callback(struct RTCPointQueryFunctionArguments *args) {
@@ -154,13 +156,15 @@ static bool closest_callback(struct RTCPointQueryFunctionArguments *args) {
     meso_vec3 shift = {(float)(copy % 3) - 1.0f, (float)(copy / 3) - 1.0f, 0.0f};
     const uint32_t *t = ts->indices + 3 * (size_t)args->primID;
     meso_vec3 p = {args->query->x, args->query->y, args->query->z};
-    meso_vec3 c = closest_on_triangle(p, meso_vec3_add(ts->positions[t[0]], shift),
-                                      meso_vec3_add(ts->positions[t[1]], shift),
-                                      meso_vec3_add(ts->positions[t[2]], shift));
+    meso_vec3 a = meso_vec3_add(ts->positions[t[0]], shift);
+    meso_vec3 b = meso_vec3_add(ts->positions[t[1]], shift);
+    meso_vec3 e = meso_vec3_add(ts->positions[t[2]], shift);
+    meso_vec3 c = closest_on_triangle(p, a, b, e);
     meso_vec3 d = meso_vec3_sub(c, p);
     float d2 = meso_vec3_dot(d, d);
-    if (d2 < q->best2) {
+    if (d2 < q->best2 || (d2 == q->best2 && q->side == 0.0f)) {
         q->best2 = d2;
+        q->side = -meso_vec3_dot(d, meso_vec3_cross(meso_vec3_sub(b, a), meso_vec3_sub(e, a)));
         args->query->radius = sqrtf(d2);
         return true;
     }
@@ -179,6 +183,7 @@ static meso_result build_scene(meso_context *ctx, tile_scene *ts, size_t nv, con
         return meso_log_error(ctx, MESO_ERROR_INTERNAL, "%s: Embree could not start", name);
     ts->scene = rtcNewScene(ts->device);
     for (unsigned copy = 0; copy < 9; copy++) {
+        if (ts->copies == 1 && copy != 4) continue; /* a model: only the unshifted copy */
         RTCGeometry g = rtcNewGeometry(ts->device, RTC_GEOMETRY_TYPE_TRIANGLE);
         float *v = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                            3 * sizeof(float), nv);
@@ -219,7 +224,9 @@ static void grid_column(void *user, size_t job, int thread_index) {
     (void)thread_index;
     const grid_job *g = user;
     int n = g->n, i = (int)(job % (size_t)n), j = (int)(job / (size_t)n);
-    float x = (float)i / (float)n, y = (float)j / (float)n;
+    /* a periodic tile's node n is node 0 of the next tile; a model's grid spans the box */
+    float spacing = g->ts->copies == 9 ? 1.0f / (float)n : 1.0f / (float)(n - 1);
+    float x = (float)i * spacing, y = (float)j * spacing;
     float crossings[MAX_CROSSINGS];
     int count = 0;
     /* a ray a hair off the node, so it does not run along the mesh's own edges */
@@ -244,17 +251,19 @@ static void grid_column(void *user, size_t job, int thread_index) {
         struct RTCPointQueryContext context;
         rtcInitPointQueryContext(&context);
         struct RTCPointQuery q = {.x = x, .y = y, .z = z, .time = 0.0f, .radius = INFINITY};
-        closest_query cq = {g->ts, INFINITY};
+        closest_query cq = {g->ts, INFINITY, 0.0f};
         rtcPointQuery(g->ts->scene, &q, &context, closest_callback, &cq);
         float d = isfinite(cq.best2) ? sqrtf(cq.best2) : 1.0f;
-        g->grid[((size_t)k * (size_t)n + (size_t)j) * (size_t)n + (size_t)i] = below & 1 ? -d : d;
+        /* a closed tile: inside by parity; a model (maybe open): behind its closest face */
+        bool inside = g->ts->copies == 9 ? (below & 1) != 0 : cq.side < 0.0f;
+        g->grid[((size_t)k * (size_t)n + (size_t)j) * (size_t)n + (size_t)i] = inside ? -d : d;
     }
 }
 
-meso_result meso_solid_create_from_triangles(meso_context *ctx, const meso_vec3 *positions,
-                                             size_t num_vertices, const uint32_t *indices,
-                                             size_t num_triangles, const char *name,
-                                             int resolution, meso_solid **out_solid) {
+static meso_result create_solid(meso_context *ctx, const meso_vec3 *positions,
+                                size_t num_vertices, const uint32_t *indices, size_t num_triangles,
+                                const char *name, int resolution, bool periodic,
+                                meso_solid **out_solid) {
     *out_solid = NULL;
     name = name ? name : "tile mesh";
     int n = resolution ? resolution : DEFAULT_RESOLUTION;
@@ -277,10 +286,13 @@ meso_result meso_solid_create_from_triangles(meso_context *ctx, const meso_vec3 
                                   "%s: vertex %zu at z = %g is outside the tile's 0 <= z <= 1 "
                                   "(the tile's top, z = 1, lies on the mesh)",
                                   name, i, (double)positions[i].z);
-    meso_result r = check_closed(ctx, positions, num_vertices, indices, num_triangles, name);
+    meso_result r =
+        periodic ? check_closed(ctx, positions, num_vertices, indices, num_triangles, name)
+                 : MESO_OK;
     if (r != MESO_OK) return r;
     meso_solid *s = calloc(1, sizeof *s);
-    tile_scene ts = {.positions = positions, .indices = indices, .nt = num_triangles};
+    tile_scene ts = {.positions = positions, .indices = indices, .nt = num_triangles,
+                     .copies = periodic ? 9u : 1u};
     if (!s || !(s->grid = malloc((size_t)n * (size_t)n * (size_t)n * sizeof(float)))) {
         r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", name);
         goto fail;
@@ -291,10 +303,11 @@ meso_result meso_solid_create_from_triangles(meso_context *ctx, const meso_vec3 
     release_scene(&ts);
     s->desc = (meso_solid_desc){.kind = MESO_SOLID_MESH, .count = 1, .thickness = 1.0f};
     s->grid_side = n;
+    s->grid_clamped = !periodic;
     s->depth_cells = 1.0f;
     s->scale = 1.0f;
     snprintf(s->grid_name, sizeof s->grid_name, "%s", name);
-    uint64_t h = meso_hash64("tile mesh v1", 12, MESO_HASH_SEED);
+    uint64_t h = meso_hash64(periodic ? "tile mesh v1" : "model v1 ..", 12, MESO_HASH_SEED);
     h = meso_hash64(positions, num_vertices * sizeof *positions, h);
     h = meso_hash64(indices, 3 * num_triangles * sizeof *indices, h);
     s->grid_hash = meso_hash64(&n, sizeof n, h);
@@ -306,9 +319,34 @@ fail:
     return r;
 }
 
+meso_result meso_solid_create_from_triangles(meso_context *ctx, const meso_vec3 *positions,
+                                             size_t num_vertices, const uint32_t *indices,
+                                             size_t num_triangles, const char *name,
+                                             int resolution, meso_solid **out_solid) {
+    return create_solid(ctx, positions, num_vertices, indices, num_triangles, name, resolution,
+                        true, out_solid);
+}
+
+meso_result meso_solid_create_from_model(meso_context *ctx, const meso_vec3 *positions,
+                                         size_t num_vertices, const uint32_t *indices,
+                                         size_t num_triangles, const char *name, int resolution,
+                                         meso_solid **out_solid) {
+    return create_solid(ctx, positions, num_vertices, indices, num_triangles, name, resolution,
+                        false, out_solid);
+}
+
+bool meso_solid_is_periodic(const meso_solid *solid) { return !solid->grid_clamped; }
+
 float meso_solid_grid_distance(const meso_solid *solid, meso_vec3 uvw) {
     int n = solid->grid_side;
-    float x = fract_tile(uvw.x) * (float)n, y = fract_tile(uvw.y) * (float)n;
+    float x, y;
+    if (solid->grid_clamped) { /* a model: nodes at i / (n - 1), clamped at the box */
+        x = fminf(fmaxf(uvw.x, 0.0f), 0.99999f) * (float)(n - 1);
+        y = fminf(fmaxf(uvw.y, 0.0f), 0.99999f) * (float)(n - 1);
+    } else {
+        x = fract_tile(uvw.x) * (float)n;
+        y = fract_tile(uvw.y) * (float)n;
+    }
     float z = fminf(fmaxf(uvw.z, 0.0f), 1.0f) * (float)(n - 1);
     int i = (int)x, j = (int)y, k = (int)z;
     i = i >= n ? n - 1 : i;

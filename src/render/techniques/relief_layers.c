@@ -28,6 +28,7 @@ typedef struct layers_state {
     size_t bytes;
     struct layers_state *below; /* solids: the map seen from the shell's bottom (back faces) */
     bool enclosed;              /* the `below` state: hits lie inside a closed mesh, unlit */
+    bool impostor;              /* §4: the mesh lies at the middle of the shell */
 } layers_state;
 
 static const char *const known_options[] = {"linear_steps", "binary_steps", "shadows",
@@ -160,7 +161,10 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
         b->binary_steps = s->binary_steps;
         b->shadow_steps = s->shadow_steps;
         b->params = (relief_params){.shadows = s->params.shadows, .silhouettes = false};
-        b->enclosed = true;
+        /* a closed mesh's inside is unlit; an impostor's quad (§4) is seen from behind in the
+         * open, lit as from the front */
+        b->enclosed = meso_solid_is_periodic(m->solid);
+        s->impostor = b->impostor = !meso_solid_is_periodic(m->solid);
         s->bytes += b->bytes;
     }
     meso_layers_destroy(map);
@@ -398,11 +402,35 @@ static bool back_facing(const meso_frame *frame, const meso_object *object,
     return meso_vec3_dot(meso_vec3_sub(a, frame->eye), n) > 0.0f;
 }
 
+/* Move a fragment along its view ray by t (in units of position - eye): position, texture
+ * coordinates (by the ray's texture-space direction) and view depth. */
+static void move_along_ray(meso_fragment *f, const meso_frame *frame, float t) {
+    meso_vec3 view = meso_vec3_sub(f->position, frame->eye);
+    float cu, cv, cn;
+    if (relief_frame_solve(f, view, &cu, &cv, &cn)) {
+        f->uv.x += t * cu;
+        f->uv.y += t * cv;
+    }
+    f->position = meso_vec3_madd(f->position, view, t);
+    f->depth *= 1.0f + t;
+    f->out_depth = f->depth;
+}
+
 static void shade(const void *state, const meso_frame *frame, const meso_object *object,
                   meso_fragment *fragments, size_t count) {
     const layers_state *s = state;
     if (count == 0) return;
     if (!back_facing(frame, object, &fragments[0])) {
+        if (s->impostor) {
+            /* §4: the quad passes through the middle of the object (depth 0.5): the search
+             * starts where the ray crosses the shell's top, half the depth above the quad */
+            float half = 0.5f * object->mesostructure.depth;
+            for (size_t i = 0; i < count; ++i) {
+                meso_fragment *f = &fragments[i];
+                float vn = meso_vec3_dot(meso_vec3_sub(f->position, frame->eye), f->normal);
+                if (vn < 0.0f) move_along_ray(f, frame, half / vn);
+            }
+        }
         relief_tracer tracer = {s, search, shadow, normal};
         relief_shade_fragments(&s->size, &tracer, s->params, frame, object, fragments, count);
         return;
@@ -431,16 +459,15 @@ static void shade(const void *state, const meso_frame *frame, const meso_object 
             float y = bl > 0.0f ? meso_vec3_dot(view, f->bitangent) / bl : 0.0f;
             b = (q.x * x * x + q.y * y * y) / depth;
         }
+        if (s->impostor) a *= 2.0f; /* §4: the bottom lies half the depth below the quad */
         float disc = a * a - 4.0f * b;
         float tau = disc >= 0.0f && a > 0.0f ? 2.0f / (a + sqrtf(disc)) : INFINITY;
         if (!(tau < 1.0f)) { /* skimmed (or the bottom lies behind the eye) */
             f->discard = true;
             continue;
         }
-        f->position = meso_vec3_madd(f->position, view, -tau);
+        move_along_ray(f, frame, -tau);
         f->normal = meso_vec3_negate(f->normal);
-        f->depth *= 1.0f - tau;
-        f->out_depth = f->depth;
     }
     /* the fragments still drawn, packed (batches are one triangle's, at most a tile) */
     size_t kept = 0;
