@@ -177,6 +177,61 @@ static void test_missed_rays_are_discarded_or_drawn_on_the_floor(void **state) {
     fixture_deinit(&fx);
 }
 
+/* §4: an impostor of a model symmetric under y -> -y (a torus lying flat), seen from above
+ * (front faces) and from the mirrored point below (back faces, the search turned around), with
+ * a light in the mirror plane: the two images are each other's vertical mirror. */
+static meso_image *render_impostor(meso_context *ctx, float eye_y) {
+    char json[2048];
+    snprintf(json, sizeof json,
+             "{\"image\": {\"width\": 48, \"height\": 48},"
+             " \"camera\": {\"eye\": [0, %g, 3.2], \"target\": [0, 0, 0], \"up\": [0, 1, 0],"
+             " \"fov_y_deg\": 50},"
+             " \"lights\": [{\"type\": \"directional\", \"direction\": [0.3, 0, 1],"
+             " \"color\": [1, 1, 1]}],"
+             " \"objects\": [{\"shape\": \"plane\", \"size\": 3.1111,"
+             " \"mesostructure\": {\"solid\": {\"impostor\": \"torus\", \"resolution\": 48},"
+             " \"depth\": 0.8889}, \"technique\": \"relief_layers\"}]}",
+             (double)eye_y);
+    meso_scene *scene = NULL;
+    assert_int_equal(meso_scene_parse(ctx, json, "impostor.json", ".", &scene), MESO_OK);
+    meso_framebuffer *fb = NULL;
+    assert_int_equal(meso_render_scene(ctx, scene, NULL, &fb), MESO_OK);
+    meso_image *image = NULL;
+    assert_int_equal(meso_framebuffer_color_image(ctx, fb, &image), MESO_OK);
+    meso_framebuffer_destroy(fb);
+    meso_scene_destroy(scene);
+    return image;
+}
+
+static void test_impostor_front_and_back_views_of_a_symmetric_model_agree(void **state) {
+    (void)state;
+    setenv("MESO_CACHE_DIR", "off", 1);
+    meso_context *ctx = test_context(2);
+    meso_image *above = render_impostor(ctx, 2.0f), *below = render_impostor(ctx, -2.0f);
+    double sum = 0.0;
+    int covered = 0, agree = 0;
+    for (int j = 0; j < 48; j++)
+        for (int i = 0; i < 48; i++)
+            for (int c = 0; c < 3; c++) {
+                float a = above->pixels[(j * 48 + i) * 3 + c];
+                float b = below->pixels[((47 - j) * 48 + i) * 3 + c];
+                sum += fabs((double)a - (double)b);
+                if (c == 0) {
+                    covered += a > 0.0f;
+                    agree += (a > 0.0f) == (b > 0.0f);
+                }
+            }
+    print_message("impostor: %d covered, %d agree, mean difference %.4f\n", covered, agree,
+                  sum / (48.0 * 48.0 * 3.0));
+    assert_true(covered > 200); /* the torus is there */
+    assert_true(agree >= 48 * 48 - 60);  /* the same outline, up to a few edge pixels */
+    assert_true(sum / (48.0 * 48.0 * 3.0) < 0.02);
+    meso_image_destroy(above);
+    meso_image_destroy(below);
+    meso_context_destroy(ctx);
+    unsetenv("MESO_CACHE_DIR");
+}
+
 static void test_bad_options_name_the_option(void **state) {
     (void)state;
     setenv("MESO_CACHE_DIR", "off", 1);
@@ -203,6 +258,7 @@ int main(void) {
         cmocka_unit_test(test_slab_solid_equals_relief_on_the_height_field),
         cmocka_unit_test(test_ray_under_the_bar_hits_the_floor_below),
         cmocka_unit_test(test_missed_rays_are_discarded_or_drawn_on_the_floor),
+        cmocka_unit_test(test_impostor_front_and_back_views_of_a_symmetric_model_agree),
         cmocka_unit_test(test_bad_options_name_the_option),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
