@@ -67,9 +67,10 @@ static void note_fallbacks(const meso_renderer *renderer, const meso_scene *scen
         const char *drawn = meso_renderer_object_technique(renderer, i);
         if (!drawn || strcmp(drawn, technique) == 0) continue;
         const meso_object *o = &scene->objects[i];
-        const char *kind = o->mesostructure.kind == MESO_MESOSTRUCTURE_SOLID          ? "solid"
-                           : o->mesostructure.kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD ? "height field"
-                                                                                     : "none";
+        const char *kind = o->mesostructure.kind == MESO_MESOSTRUCTURE_SOLID ? "solid"
+                           : o->mesostructure.kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD
+                               ? "height field"
+                               : "none";
         int n = snprintf(run->note + used, sizeof(run->note) - used, "%s%s (%s) with %s",
                          used ? "; " : "mixed: ", o->name, kind, drawn);
         used += n > 0 ? (size_t)n : 0;

@@ -69,9 +69,9 @@ typedef struct meso_layers_desc {
     const meso_heightfield *heightfield;
     meso_scalar_field_fn field;
     void *field_user;
-    uint64_t field_hash;  /* identifies `field` in the cache key */
-    int width, height;    /* texels: 256 x 256; a height field's own size */
-    int num_layers;       /* 4 (the paper) or 8 */
+    uint64_t field_hash; /* identifies `field` in the cache key */
+    int width, height;   /* texels: 256 x 256; a height field's own size */
+    int num_layers;      /* 4 (the paper) or 8 */
     meso_layers_format format;
 } meso_layers_desc;
 
@@ -81,12 +81,12 @@ typedef struct meso_layers {
     meso_wrap wrap;
     bool from_heightfield; /* one layer over a solid floor (the shell's bottom is hit) */
     uint64_t source_hash;
-    int max_count;             /* most layers a texel holds */
-    int max_crossings;         /* most surface crossings found in a texel before clipping */
-    uint64_t clipped_texels;   /* texels with more crossings than num_layers (deeper dropped) */
-    uint64_t clipped_at_four;  /* texels with more than 4 crossings: what the paper's limit clips */
-    double bake_seconds;       /* 0 when loaded */
-    float *depth;              /* see Layout; unused = 1.0 */
+    int max_count;            /* most layers a texel holds */
+    int max_crossings;        /* most surface crossings found in a texel before clipping */
+    uint64_t clipped_texels;  /* texels with more crossings than num_layers (deeper dropped) */
+    uint64_t clipped_at_four; /* texels with more than 4 crossings: what the paper's limit clips */
+    double bake_seconds;      /* 0 when loaded */
+    float *depth;             /* see Layout; unused = 1.0 */
     float *normal_x, *normal_y;
     uint8_t *count;
 } meso_layers;

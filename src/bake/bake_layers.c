@@ -71,7 +71,9 @@ meso_vec3 meso_layers_normal(const meso_layers *map, int i, int j, int k) {
 
 /* ---- Quantisation ------------------------------------------------------------------------- */
 
-static uint8_t encode_depth(float d) { return (uint8_t)lrintf(meso_clampf(d, 0.0f, 1.0f) * 255.0f); }
+static uint8_t encode_depth(float d) {
+    return (uint8_t)lrintf(meso_clampf(d, 0.0f, 1.0f) * 255.0f);
+}
 static float decode_depth(uint8_t b) { return (float)b / 255.0f; }
 static uint8_t encode_normal(float n) {
     return (uint8_t)lrintf((meso_clampf(n, -1.0f, 1.0f) + 1.0f) * 127.5f);
@@ -98,8 +100,8 @@ static meso_result check_desc(meso_context *ctx, const meso_layers_desc *d) {
     if (d->format != MESO_LAYERS_FORMAT_U8 && d->format != MESO_LAYERS_FORMAT_F32)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "relief_layers: format: unknown format %d", (int)d->format);
-    if (d->heightfield && (d->width != d->heightfield->width ||
-                           d->height != d->heightfield->height))
+    if (d->heightfield &&
+        (d->width != d->heightfield->width || d->height != d->heightfield->height))
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "relief_layers: size: %d x %d differs from the height field's "
                               "%d x %d",
@@ -174,8 +176,10 @@ static int trace_column(const meso_layers_desc *d, float u, float v, float *out_
             float lo = w, hi = next; /* lo on the `inside` side, hi on the other */
             for (int b = 0; b < BISECTIONS; b++) {
                 float mid = 0.5f * (lo + hi);
-                if ((field_at(d, (meso_vec3){u, v, mid}) < 0.0f) == inside) lo = mid;
-                else hi = mid;
+                if ((field_at(d, (meso_vec3){u, v, mid}) < 0.0f) == inside)
+                    lo = mid;
+                else
+                    hi = mid;
             }
             if (n < MAX_CROSSINGS) out_w[n] = hi;
             n++;
@@ -263,10 +267,13 @@ meso_result meso_bake_layers(meso_context *ctx, const meso_layers_desc *desc,
     map->from_heightfield = d.heightfield != NULL;
     map->source_hash = meso_layers_cache_key(&d);
     size_t rows = (size_t)d.height;
-    bake_job job = {&d, map, calloc(rows, sizeof(int)), calloc(rows, sizeof(int)),
-                    calloc(rows, sizeof(uint64_t)), calloc(rows, sizeof(uint64_t))};
-    if (!job.row_max_count || !job.row_max_crossings || !job.row_clipped ||
-        !job.row_clipped_four) {
+    bake_job job = {&d,
+                    map,
+                    calloc(rows, sizeof(int)),
+                    calloc(rows, sizeof(int)),
+                    calloc(rows, sizeof(uint64_t)),
+                    calloc(rows, sizeof(uint64_t))};
+    if (!job.row_max_count || !job.row_max_crossings || !job.row_clipped || !job.row_clipped_four) {
         r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "relief_layers: out of memory");
         meso_layers_destroy(map);
         map = NULL;
@@ -328,8 +335,9 @@ uint64_t meso_layers_cache_key(const meso_layers_desc *desc) {
     uint64_t source = d.solid         ? meso_solid_hash(d.solid)
                       : d.heightfield ? d.heightfield->hash
                                       : d.field_hash;
-    int32_t ints[] = {d.solid ? 1 : d.heightfield ? 2 : 3, d.width, d.height, d.num_layers,
-                      (int32_t)d.format, (int32_t)MESO_LAYERS_KIND_VERSION};
+    int32_t ints[] = {
+        d.solid ? 1 : d.heightfield ? 2 : 3, d.width, d.height, d.num_layers, (int32_t)d.format,
+        (int32_t)MESO_LAYERS_KIND_VERSION};
     uint64_t h = meso_hash64(&source, sizeof source, MESO_HASH_SEED);
     return meso_hash64(ints, sizeof ints, h);
 }
@@ -385,11 +393,16 @@ static meso_result to_bake_file(meso_context *ctx, const meso_layers *map, file_
         arr->dims[2] = (uint64_t)map->num_layers;
         arr->data = u8 ? (void *)(buf->bytes + (size_t)a * n) : (void *)planes[a];
     }
-    out->arrays[3] = (meso_bake_array){.name = "count", .type = MESO_BAKE_U8, .num_dims = 2,
+    out->arrays[3] = (meso_bake_array){.name = "count",
+                                       .type = MESO_BAKE_U8,
+                                       .num_dims = 2,
                                        .dims = {(uint64_t)map->height, (uint64_t)map->width},
                                        .data = map->count};
-    out->arrays[4] = (meso_bake_array){.name = "report", .type = MESO_BAKE_F32, .num_dims = 1,
-                                       .dims = {REPORT_FLOATS}, .data = buf->report};
+    out->arrays[4] = (meso_bake_array){.name = "report",
+                                       .type = MESO_BAKE_F32,
+                                       .num_dims = 1,
+                                       .dims = {REPORT_FLOATS},
+                                       .data = buf->report};
     return MESO_OK;
 }
 
@@ -412,8 +425,7 @@ static bool params_flag(const char *json, const char *needle) {
 meso_result meso_layers_from_bake_file(meso_context *ctx, const meso_bake_file *bake,
                                        const char *name, meso_layers **out_map) {
     *out_map = NULL;
-    if (strcmp(bake->kind, MESO_LAYERS_KIND) != 0 ||
-        bake->kind_version != MESO_LAYERS_KIND_VERSION)
+    if (strcmp(bake->kind, MESO_LAYERS_KIND) != 0 || bake->kind_version != MESO_LAYERS_KIND_VERSION)
         return meso_log_error(ctx, MESO_ERROR_FORMAT,
                               "%s: kind '%s' version %u is not a relief_layers bake (version %u)",
                               name, bake->kind, bake->kind_version, MESO_LAYERS_KIND_VERSION);
@@ -434,8 +446,8 @@ meso_result meso_layers_from_bake_file(meso_context *ctx, const meso_bake_file *
          (depth->dims[2] == 4 || depth->dims[2] == 8);
     for (int a = 0; a < 2 && ok; a++) {
         const meso_bake_array *x = a ? ny : nx;
-        ok = x->type == depth->type && x->num_dims == 3 && !memcmp(x->dims, depth->dims,
-                                                                     3 * sizeof(uint64_t));
+        ok = x->type == depth->type && x->num_dims == 3 &&
+             !memcmp(x->dims, depth->dims, 3 * sizeof(uint64_t));
     }
     ok = ok && count->type == MESO_BAKE_U8 && count->num_dims == 2 &&
          count->dims[0] == depth->dims[0] && count->dims[1] == depth->dims[1];
@@ -452,8 +464,8 @@ meso_result meso_layers_from_bake_file(meso_context *ctx, const meso_bake_file *
     meso_result r = allocate(ctx, width, height, L, &map);
     if (r != MESO_OK) return r;
     map->format = u8 ? MESO_LAYERS_FORMAT_U8 : MESO_LAYERS_FORMAT_F32;
-    map->wrap = params_flag(bake->params_json, "\"wrap\": \"clamp\"") ? MESO_WRAP_CLAMP
-                                                                      : MESO_WRAP_REPEAT;
+    map->wrap =
+        params_flag(bake->params_json, "\"wrap\": \"clamp\"") ? MESO_WRAP_CLAMP : MESO_WRAP_REPEAT;
     map->from_heightfield = params_flag(bake->params_json, "\"heightfield\": true");
     map->source_hash = bake->source_hash;
     size_t n = slots(map);
@@ -484,8 +496,7 @@ meso_result meso_layers_from_bake_file(meso_context *ctx, const meso_bake_file *
     }
     if (what) {
         meso_layers_destroy(map);
-        return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: texel %zu: invalid %s", name, bad,
-                              what);
+        return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: texel %zu: invalid %s", name, bad, what);
     }
     const float *rep = report->data;
     map->max_crossings = (int)rep[1];
@@ -510,8 +521,8 @@ meso_result meso_layers_bake_cached(meso_context *ctx, const meso_layers_desc *d
     *out_map = NULL;
     uint64_t key = meso_layers_cache_key(desc);
     meso_bake_file *cached = NULL;
-    meso_result r = meso_bake_cache_load(ctx, MESO_LAYERS_KIND, MESO_LAYERS_KIND_VERSION, key,
-                                         &cached);
+    meso_result r =
+        meso_bake_cache_load(ctx, MESO_LAYERS_KIND, MESO_LAYERS_KIND_VERSION, key, &cached);
     if (r != MESO_OK) return r;
     if (cached) {
         r = meso_layers_from_bake_file(ctx, cached, "relief_layers cache entry", out_map);

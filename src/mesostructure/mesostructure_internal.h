@@ -24,8 +24,8 @@ struct meso_solid {
     float tilt_cos, tilt_sin; /* squama */
     float radius;             /* squama: scale radius */
     /* MESO_SOLID_MESH: signed distance samples of a tile mesh (mesostructure_tile_mesh.c) */
-    float *grid;      /* n^3 nodes, index (k n + j) n + i at (i/n, j/n, k/(n-1)) in (u, v, w) */
-    int grid_side;    /* n */
+    float *grid;       /* n^3 nodes, index (k n + j) n + i at (i/n, j/n, k/(n-1)) in (u, v, w) */
+    int grid_side;     /* n */
     bool grid_clamped; /* a model (impostor): not periodic, nodes at i / (n - 1) in u and v */
     uint64_t grid_hash;
     char grid_name[256];

@@ -16,7 +16,6 @@
 
 #include "mesostructure_internal.h"
 
-
 /* ---- Kinds and defaults ------------------------------------------------------------------- */
 
 #define SOLID_LAST_KIND MESO_SOLID_SLAB
@@ -36,7 +35,7 @@ static const struct {
 } solid_kinds[] = {
     [MESO_SOLID_WEAVE] = {2, 0.3f, 0.45f, true},   [MESO_SOLID_CHAIN] = {2, 0.08f, 0.14f, true},
     [MESO_SOLID_GRID] = {4, 0.12f, 0.4f, false},   [MESO_SOLID_SQUAMA] = {4, 0.08f, 0.2f, true},
-    [MESO_SOLID_HELIX] = {2, 0.08f, 0.16f, false},  [MESO_SOLID_SLAB] = {1, 0.5f, 1.0f, false},
+    [MESO_SOLID_HELIX] = {2, 0.08f, 0.16f, false}, [MESO_SOLID_SLAB] = {1, 0.5f, 1.0f, false},
 };
 
 bool meso_solid_kind_from_name(const char *name, meso_solid_kind *out_kind) {

@@ -68,7 +68,8 @@ static meso_result check_closed(meso_context *ctx, const meso_vec3 *positions, s
     }
     for (size_t t = 0; t < nt; t++)
         for (int k = 0; k < 3; k++) {
-            uint32_t a = weld[indices[3 * t + (size_t)k]], b = weld[indices[3 * t + (size_t)(k + 1) % 3]];
+            uint32_t a = weld[indices[3 * t + (size_t)k]],
+                     b = weld[indices[3 * t + (size_t)(k + 1) % 3]];
             edges[3 * t + (size_t)k] = a < b ? (edge_use){a, b, 1} : (edge_use){b, a, -1};
         }
     qsort(edges, 3 * nt, sizeof *edges, compare_edges);
@@ -139,8 +140,8 @@ static meso_vec3 closest_on_triangle(meso_vec3 p, meso_vec3 a, meso_vec3 b, meso
     if (va <= 0.0f && (d4 - d3) >= 0.0f && (d5 - d6) >= 0.0f)
         return meso_vec3_madd(b, meso_vec3_sub(c, b), (d4 - d3) / ((d4 - d3) + (d5 - d6)));
     float denom = 1.0f / (va + vb + vc);
-    return meso_vec3_add(a, meso_vec3_add(meso_vec3_scale(ab, vb * denom),
-                                          meso_vec3_scale(ac, vc * denom)));
+    return meso_vec3_add(
+        a, meso_vec3_add(meso_vec3_scale(ab, vb * denom), meso_vec3_scale(ac, vc * denom)));
 }
 
 typedef struct closest_query {
@@ -260,10 +261,9 @@ static void grid_column(void *user, size_t job, int thread_index) {
     }
 }
 
-static meso_result create_solid(meso_context *ctx, const meso_vec3 *positions,
-                                size_t num_vertices, const uint32_t *indices, size_t num_triangles,
-                                const char *name, int resolution, bool periodic,
-                                meso_solid **out_solid) {
+static meso_result create_solid(meso_context *ctx, const meso_vec3 *positions, size_t num_vertices,
+                                const uint32_t *indices, size_t num_triangles, const char *name,
+                                int resolution, bool periodic, meso_solid **out_solid) {
     *out_solid = NULL;
     name = name ? name : "tile mesh";
     int n = resolution ? resolution : DEFAULT_RESOLUTION;
@@ -273,25 +273,29 @@ static meso_result create_solid(meso_context *ctx, const meso_vec3 *positions,
     if (!positions || !indices || num_triangles == 0 || num_vertices < 3)
         return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: the tile mesh has no triangles", name);
     if (num_triangles > (size_t)1 << 26 || num_vertices > (size_t)UINT32_MAX)
-        return meso_log_error(ctx, MESO_ERROR_LIMIT, "%s: %zu triangles exceed the limit %zu",
-                              name, num_triangles, (size_t)1 << 26);
+        return meso_log_error(ctx, MESO_ERROR_LIMIT, "%s: %zu triangles exceed the limit %zu", name,
+                              num_triangles, (size_t)1 << 26);
     for (size_t i = 0; i < 3 * num_triangles; i++)
         if (indices[i] >= num_vertices)
-            return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: triangle %zu: vertex %u is out of "
-                                  "range", name, i / 3, indices[i]);
+            return meso_log_error(ctx, MESO_ERROR_FORMAT,
+                                  "%s: triangle %zu: vertex %u is out of "
+                                  "range",
+                                  name, i / 3, indices[i]);
     for (size_t i = 0; i < num_vertices; i++)
-        if (!(positions[i].z >= -1e-4f && positions[i].z <= 1.0001f) ||
-            !isfinite(positions[i].x) || !isfinite(positions[i].y))
+        if (!(positions[i].z >= -1e-4f && positions[i].z <= 1.0001f) || !isfinite(positions[i].x) ||
+            !isfinite(positions[i].y))
             return meso_log_error(ctx, MESO_ERROR_FORMAT,
                                   "%s: vertex %zu at z = %g is outside the tile's 0 <= z <= 1 "
                                   "(the tile's top, z = 1, lies on the mesh)",
                                   name, i, (double)positions[i].z);
-    meso_result r =
-        periodic ? check_closed(ctx, positions, num_vertices, indices, num_triangles, name)
-                 : MESO_OK;
+    meso_result r = periodic
+                        ? check_closed(ctx, positions, num_vertices, indices, num_triangles, name)
+                        : MESO_OK;
     if (r != MESO_OK) return r;
     meso_solid *s = calloc(1, sizeof *s);
-    tile_scene ts = {.positions = positions, .indices = indices, .nt = num_triangles,
+    tile_scene ts = {.positions = positions,
+                     .indices = indices,
+                     .nt = num_triangles,
                      .copies = periodic ? 9u : 1u};
     if (!s || !(s->grid = malloc((size_t)n * (size_t)n * (size_t)n * sizeof(float)))) {
         r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", name);
@@ -321,8 +325,8 @@ fail:
 
 meso_result meso_solid_create_from_triangles(meso_context *ctx, const meso_vec3 *positions,
                                              size_t num_vertices, const uint32_t *indices,
-                                             size_t num_triangles, const char *name,
-                                             int resolution, meso_solid **out_solid) {
+                                             size_t num_triangles, const char *name, int resolution,
+                                             meso_solid **out_solid) {
     return create_solid(ctx, positions, num_vertices, indices, num_triangles, name, resolution,
                         true, out_solid);
 }

@@ -75,8 +75,8 @@ static inline int32_t ceil_div_subpixel(int64_t n) {
 static inline int32_t floor_div_subpixel(int64_t n) { return (int32_t)(n >> RASTER_SUBPIXEL_BITS); }
 
 /* Set up one (possibly clipped) triangle; returns false when it covers nothing. */
-static bool setup_triangle(const raster_setup_desc *desc, bool cull_back,
-                           const clip_vertex *vin[3], uint32_t triangle, raster_triangle *out) {
+static bool setup_triangle(const raster_setup_desc *desc, bool cull_back, const clip_vertex *vin[3],
+                           uint32_t triangle, raster_triangle *out) {
     const clip_vertex *v[3] = {vin[0], vin[1], vin[2]};
     int64_t X[3], Y[3];
     double W = (double)desc->width, H = (double)desc->height;

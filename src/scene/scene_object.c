@@ -113,9 +113,9 @@ static meso_result parse_procedural_solid(const scene_parser *p, const cJSON *it
     meso_solid_desc desc = {0};
     if (!meso_solid_kind_from_name(name, &desc.kind)) {
         scene_key k = scene_key_child(key, "procedural");
-        return scene_error(p, MESO_ERROR_FORMAT, &k,
-                           "unknown procedural solid \"%s\" (weave, chain, grid, squama, helix, slab)",
-                           name);
+        return scene_error(
+            p, MESO_ERROR_FORMAT, &k,
+            "unknown procedural solid \"%s\" (weave, chain, grid, squama, helix, slab)", name);
     }
     long count = 0;
     float thickness = 0.0f;

@@ -33,8 +33,8 @@ static float bar_field(void *user, meso_vec3 p) {
 static meso_layers *bake(meso_context *ctx, meso_scalar_field_fn fn, int layers,
                          meso_layers_format format) {
     meso_layers *map = NULL;
-    meso_layers_desc desc = {.field = fn, .width = 32, .height = 32, .num_layers = layers,
-                             .format = format};
+    meso_layers_desc desc = {
+        .field = fn, .width = 32, .height = 32, .num_layers = layers, .format = format};
     assert_int_equal(meso_bake_layers(ctx, &desc, &map), MESO_OK);
     return map;
 }
@@ -136,9 +136,9 @@ static void test_bake_is_identical_for_any_thread_count(void **state) {
     (void)state;
     meso_context *one = test_context(1), *two = test_context(2);
     meso_solid *solid = NULL;
-    assert_int_equal(meso_solid_create_procedural(one, &(meso_solid_desc){.kind = MESO_SOLID_CHAIN},
-                                                  &solid),
-                     MESO_OK);
+    assert_int_equal(
+        meso_solid_create_procedural(one, &(meso_solid_desc){.kind = MESO_SOLID_CHAIN}, &solid),
+        MESO_OK);
     meso_layers_desc desc = {.solid = solid, .width = 48, .height = 48, .num_layers = 8};
     meso_layers *a = NULL, *b = NULL;
     assert_int_equal(meso_bake_layers(one, &desc, &a), MESO_OK);
@@ -170,8 +170,8 @@ static void test_save_load_round_trip_u8_and_float(void **state) {
         assert_memory_equal(m->normal_x, back->normal_x, n * sizeof(float));
         assert_memory_equal(m->normal_y, back->normal_y, n * sizeof(float));
         assert_memory_equal(m->count, back->count, 32u * 32u);
-        assert_int_equal(meso_layers_file_bytes(m), f ? 32 * 32 * (4 * 3 * 4 + 1)
-                                                      : 32 * 32 * (4 * 3 + 1));
+        assert_int_equal(meso_layers_file_bytes(m),
+                         f ? 32 * 32 * (4 * 3 * 4 + 1) : 32 * 32 * (4 * 3 + 1));
         meso_layers_destroy(m);
         meso_layers_destroy(back);
     }
@@ -229,8 +229,8 @@ static void test_inconsistent_layers_with_valid_checksum_are_refused(void **stat
     /* a bake of another kind */
     float x = 1.0f;
     meso_bake_file other = {.kind = "horizon", .kind_version = 1, .num_arrays = 1};
-    other.arrays[0] = (meso_bake_array){.name = "x", .type = MESO_BAKE_F32, .num_dims = 1,
-                                        .dims = {1}, .data = &x};
+    other.arrays[0] = (meso_bake_array){
+        .name = "x", .type = MESO_BAKE_F32, .num_dims = 1, .dims = {1}, .data = &x};
     assert_int_equal(meso_bake_file_save(ctx, &other, path), MESO_OK);
     assert_int_equal(meso_layers_load(ctx, path, &back), MESO_ERROR_FORMAT);
     assert_non_null(strstr(meso_context_last_error(ctx), "relief_layers"));

@@ -37,8 +37,8 @@ static void test_cube_has_signed_distances_and_two_layers(void **state) {
     /* the distance bound never exceeds the true distance (0.25 to the side x = 0.25) */
     assert_true(meso_solid_distance(s, (meso_vec3){0.0f, 0.5f, 0.45f}) <= 0.25f + 1e-4f);
     meso_layers *m = NULL;
-    meso_layers_desc desc = {.solid = s, .width = 16, .height = 16,
-                             .format = MESO_LAYERS_FORMAT_F32};
+    meso_layers_desc desc = {
+        .solid = s, .width = 16, .height = 16, .format = MESO_LAYERS_FORMAT_F32};
     assert_int_equal(meso_bake_layers(ctx, &desc, &m), MESO_OK);
     /* texel (8, 8) is over the cube: entry at w = 1 - 0.8, exit at w = 1 - 0.3 */
     const float *d = m->depth + (8 * 16 + 8) * 4;

@@ -41,10 +41,10 @@ static void test_slab_solid_equals_relief_on_the_height_field(void **state) {
     shade_with(&fx, "relief", expect, n);
     /* the same object as a solid: the slab below w = 0.5 */
     meso_solid *slab = NULL;
-    assert_int_equal(meso_solid_create_procedural(
-                         fx.ctx, &(meso_solid_desc){.kind = MESO_SOLID_SLAB, .thickness = 0.5f},
-                         &slab),
-                     MESO_OK);
+    assert_int_equal(
+        meso_solid_create_procedural(
+            fx.ctx, &(meso_solid_desc){.kind = MESO_SOLID_SLAB, .thickness = 0.5f}, &slab),
+        MESO_OK);
     fx.object.mesostructure.kind = MESO_MESOSTRUCTURE_SOLID;
     fx.object.mesostructure.solid = slab;
     set_option(&fx, "float", 1);
@@ -81,8 +81,8 @@ static float bar_field(void *user, meso_vec3 p) {
 /* A state for the bar, as prepare makes it from a map. */
 static layers_state *bar_state(meso_context *ctx, const meso_object *object) {
     meso_layers *map = NULL;
-    meso_layers_desc desc = {.field = bar_field, .width = 256, .height = 256,
-                             .format = MESO_LAYERS_FORMAT_F32};
+    meso_layers_desc desc = {
+        .field = bar_field, .width = 256, .height = 256, .format = MESO_LAYERS_FORMAT_F32};
     assert_int_equal(meso_bake_layers(ctx, &desc, &map), MESO_OK);
     layers_state *s = calloc(1, sizeof *s);
     assert_int_equal(fill_planes(ctx, object, map, s), MESO_OK);
@@ -223,8 +223,8 @@ static void test_impostor_front_and_back_views_of_a_symmetric_model_agree(void *
             }
     print_message("impostor: %d covered, %d agree, mean difference %.4f\n", covered, agree,
                   sum / (48.0 * 48.0 * 3.0));
-    assert_true(covered > 200); /* the torus is there */
-    assert_true(agree >= 48 * 48 - 60);  /* the same outline, up to a few edge pixels */
+    assert_true(covered > 200);         /* the torus is there */
+    assert_true(agree >= 48 * 48 - 60); /* the same outline, up to a few edge pixels */
     assert_true(sum / (48.0 * 48.0 * 3.0) < 0.02);
     meso_image_destroy(above);
     meso_image_destroy(below);

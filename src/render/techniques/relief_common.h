@@ -367,8 +367,8 @@ typedef struct relief_tracer {
     /* Optional (NULL: the height field's gradient, relief_normal8): the unit world normal at
      * the hits (hx, hy) in texel-centre coordinates, depth hd, ray parameter t, of one batch.
      * relief_layers reads its baked layer normals here (Policarpo & Oliveira 2006 §3). */
-    void (*normal)(const void *user, const relief_lanes *lanes, const relief_batch *batch,
-                   v8f t, v8f hx, v8f hy, v8f hd, float depth, v8vec3 *out_normal);
+    void (*normal)(const void *user, const relief_lanes *lanes, const relief_batch *batch, v8f t,
+                   v8f hx, v8f hy, v8f hd, float depth, v8vec3 *out_normal);
 } relief_tracer;
 
 typedef struct relief_params {
@@ -422,9 +422,9 @@ static inline void relief_batch_setup(const relief_heights *m, const meso_object
 }
 
 /* Shade `count` fragments with a tracer, sixteen at a time (m: the map's size in texels for
- * the texel-centre coordinates, and the heights unless the tracer has its own normal) as two batches of eight: view
- * rays, hits, depth correction, the displaced normal at the hit, self-shadows per light,
- * meso_shade_batch8. */
+ * the texel-centre coordinates, and the heights unless the tracer has its own normal) as two
+ * batches of eight: view rays, hits, depth correction, the displaced normal at the hit,
+ * self-shadows per light, meso_shade_batch8. */
 static inline void relief_shade_fragments(const relief_heights *m, const relief_tracer *tracer,
                                           relief_params params, const meso_frame *frame,
                                           const meso_object *object, meso_fragment *fragments,
@@ -505,8 +505,8 @@ static inline void relief_shade_fragments(const relief_heights *m, const relief_
                 for (int g = 0; g < groups; ++g) dark[g] |= blocked[g] & sb[g].active_bits;
             }
             for (int g = 0; g < groups; ++g)
-                in[g].visibility[li] = v8_select(v8_mask_from_bits(dark[g]), v8_splat(0.0f),
-                                                 v8_splat(1.0f));
+                in[g].visibility[li] =
+                    v8_select(v8_mask_from_bits(dark[g]), v8_splat(0.0f), v8_splat(1.0f));
         }
         for (int g = 0; g < groups; ++g) {
             meso_fragment *f = fragments + start + (size_t)g * RELIEF_LANES;

@@ -16,7 +16,7 @@
 /* The map as padded planes: plane k of a quantity is (W + 1) x (H + 1) floats whose last row
  * and column repeat the wrapped first ones (or the clamped last ones), as relief_heights. */
 typedef struct layers_state {
-    relief_heights size; /* width, height, clamp only (no heights) */
+    relief_heights size;    /* width, height, clamp only (no heights) */
     int stride, num_layers; /* layers searched: the most any texel holds */
     bool heightfield;       /* one layer over a floor that is hit (relief's floor rule) */
     bool filter;            /* bilinear where the four texels hold the layer, else nearest */
@@ -31,10 +31,9 @@ typedef struct layers_state {
     bool impostor;              /* §4: the mesh lies at the middle of the shell */
 } layers_state;
 
-static const char *const known_options[] = {"linear_steps", "binary_steps", "shadows",
-                                            "shadow_steps", "silhouettes",  "missed",
-                                            "filter",       "layers",       "size",
-                                            "float",        NULL};
+static const char *const known_options[] = {
+    "linear_steps", "binary_steps", "shadows", "shadow_steps", "silhouettes", "missed",
+    "filter",       "layers",       "size",    "float",        NULL};
 
 static void release(void *state) {
     layers_state *s = state;
@@ -48,8 +47,8 @@ static void release(void *state) {
 static meso_result fill_planes(meso_context *ctx, const meso_object *object, const meso_layers *map,
                                layers_state *s) {
     int W = map->width, H = map->height, L = map->num_layers;
-    s->size = (relief_heights){.width = W, .height = H, .stride = W + 1,
-                               .clamp = map->wrap == MESO_WRAP_CLAMP};
+    s->size = (relief_heights){
+        .width = W, .height = H, .stride = W + 1, .clamp = map->wrap == MESO_WRAP_CLAMP};
     s->stride = W + 1;
     s->num_layers = map->max_count > 0 ? map->max_count : 1;
     s->heightfield = map->from_heightfield;
@@ -115,8 +114,8 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
         (r = relief_read_option(ctx, object, name, "layers", 4, 4, 8, &layers)) != MESO_OK ||
         (r = relief_read_option(ctx, object, name, "size", 256, 16, 4096, &side)) != MESO_OK ||
         (r = relief_read_option(ctx, object, name, "float",
-                                object->mesostructure.kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD, 0,
-                                1, &as_float)) != MESO_OK)
+                                object->mesostructure.kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD, 0, 1,
+                                &as_float)) != MESO_OK)
         goto fail;
     if (layers != 4 && layers != 8) {
         r = meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
@@ -475,8 +474,8 @@ static void shade(const void *state, const meso_frame *frame, const meso_object 
         if (!fragments[i].discard) kept++;
     if (kept == count) {
         relief_tracer tracer = {s->below, search, shadow, normal};
-        relief_shade_fragments(&s->below->size, &tracer, s->below->params, frame, object,
-                               fragments, count);
+        relief_shade_fragments(&s->below->size, &tracer, s->below->params, frame, object, fragments,
+                               count);
         return;
     }
     for (size_t start = 0; start < count;) { /* runs of kept fragments */
