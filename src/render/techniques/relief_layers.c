@@ -33,7 +33,7 @@ typedef struct layers_state {
 
 static const char *const known_options[] = {
     "linear_steps", "binary_steps", "shadows", "shadow_steps", "silhouettes", "missed",
-    "filter",       "layers",       "size",    "float",        NULL};
+    "filter",       "layers",       "size",    "float",        "curved",      NULL};
 
 static void release(void *state) {
     layers_state *s = state;
@@ -96,11 +96,17 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
     if (r != MESO_OK) return r;
     /* "float" defaults to 1 on height fields: their 8-bit normals cost ~3 dB against relief
      * on smooth fields (docs/techniques/relief_layers.md); solids keep the paper's 8 bits. */
-    int shadows = 1, silhouettes = 1, missed = 0, filter = 1, layers = 4, side = 256, as_float = 0;
+    int shadows = 1, silhouettes = 1, missed = 0, filter = 1, layers = 4, side = 256, as_float = 0,
+        curved = 1, steps = 32;
+    /* an impostor (§4) is a whole model on one quad: finer map and search by default */
+    bool impostor = object->mesostructure.kind == MESO_MESOSTRUCTURE_SOLID &&
+                    object->mesostructure.solid &&
+                    !meso_solid_is_periodic(object->mesostructure.solid);
+    if (impostor) side = 512, steps = 64;
     layers_state *s = calloc(1, sizeof *s);
     if (!s) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
     meso_layers *map = NULL, *mirrored = NULL;
-    if ((r = relief_read_option(ctx, object, name, "linear_steps", 32, 1, 1024,
+    if ((r = relief_read_option(ctx, object, name, "linear_steps", steps, 1, 1024,
                                 &s->linear_steps)) != MESO_OK ||
         (r = relief_read_option(ctx, object, name, "binary_steps", 6, 0, 32, &s->binary_steps)) !=
             MESO_OK ||
@@ -111,8 +117,9 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
             MESO_OK ||
         (r = relief_read_option(ctx, object, name, "missed", 0, 0, 1, &missed)) != MESO_OK ||
         (r = relief_read_option(ctx, object, name, "filter", 1, 0, 1, &filter)) != MESO_OK ||
+        (r = relief_read_option(ctx, object, name, "curved", 1, 0, 1, &curved)) != MESO_OK ||
         (r = relief_read_option(ctx, object, name, "layers", 4, 4, 8, &layers)) != MESO_OK ||
-        (r = relief_read_option(ctx, object, name, "size", 256, 16, 4096, &side)) != MESO_OK ||
+        (r = relief_read_option(ctx, object, name, "size", side, 16, 4096, &side)) != MESO_OK ||
         (r = relief_read_option(ctx, object, name, "float",
                                 object->mesostructure.kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD, 0, 1,
                                 &as_float)) != MESO_OK)
@@ -145,6 +152,7 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
     s->missed_floor = missed != 0;
     s->params.shadows = shadows != 0;
     s->params.silhouettes = silhouettes != 0;
+    s->params.curved_uv = curved != 0;
     if (!map->from_heightfield) {
         /* back faces: the far wall of a closed mesh seen through holes in the near one */
         if (!(s->below = calloc(1, sizeof *s->below))) {
@@ -274,7 +282,8 @@ static int layers_search8(const layers_state *s, const relief_batch *batch, v8f 
     for (int k = 1; k <= s->linear_steps && v8_mask_bits(found) != all; ++k) {
         v8f t = batch->t_end * ((float)k * inv_n);
         v8f d = t * (batch->a - batch->b * t);
-        v8i in = layers_inside8(s, batch->x0 + batch->xd * t, batch->y0 + batch->yd * t, d, &f);
+        v8f tt = t * relief_lateral_scale(batch, d);
+        v8i in = layers_inside8(s, batch->x0 + batch->xd * tt, batch->y0 + batch->yd * tt, d, &f);
         if (k == s->linear_steps) in |= floor_mask; /* a height field's floor is solid */
         v8i fresh = in & ~found & lanes;
         t_lo = v8_select(fresh, t_prev, t_lo);
@@ -289,7 +298,8 @@ static int layers_search8(const layers_state *s, const relief_batch *batch, v8f 
     for (int k = 0; k < s->binary_steps; ++k) {
         v8f t = (t_lo + t_hi) * 0.5f;
         v8f d = t * (batch->a - batch->b * t);
-        v8i in = layers_inside8(s, batch->x0 + batch->xd * t, batch->y0 + batch->yd * t, d, &f);
+        v8f tt = t * relief_lateral_scale(batch, d);
+        v8i in = layers_inside8(s, batch->x0 + batch->xd * tt, batch->y0 + batch->yd * tt, d, &f);
         t_hi = v8_select(in, t, t_hi);
         f_hi = v8_select(in, f, f_hi);
         t_lo = v8_select(in, t_lo, t);
