@@ -95,6 +95,31 @@ static void test_open_tile_mesh_is_bad_input_naming_it(void **state) {
     expect_bad_input(args, "none.obj", out);
 }
 
+static void test_bad_impostors_are_bad_input(void **state) {
+    (void)state;
+    const char *out = test_path(test_temp_dir(), "impostor.png");
+    char args[4096];
+    const char *scene = write_text(
+        "impostor-missing.json",
+        "{\"objects\": [{\"shape\": \"plane\", \"mesostructure\": {\"solid\": {\"impostor\":"
+        " \"no-such-model.obj\"}, \"depth\": 1}, \"technique\": \"relief_layers\"}]}\n");
+    snprintf(args, sizeof args, "render %s -o %s", scene, out);
+    expect_bad_input(args, "no-such-model.obj", out);
+    scene = write_text(
+        "impostor-resolution.json",
+        "{\"objects\": [{\"shape\": \"plane\", \"mesostructure\": {\"solid\": {\"impostor\":"
+        " \"teapot\", \"resolution\": 100000}, \"depth\": 1}, \"technique\": "
+        "\"relief_layers\"}]}\n");
+    snprintf(args, sizeof args, "render %s -o %s", scene, out);
+    expect_bad_input(args, "resolution", out);
+    scene = write_text(
+        "impostor-key.json",
+        "{\"objects\": [{\"shape\": \"plane\", \"mesostructure\": {\"solid\": {\"impostor\":"
+        " \"teapot\", \"axis\": 1}, \"depth\": 1}, \"technique\": \"relief_layers\"}]}\n");
+    snprintf(args, sizeof args, "render %s -o %s", scene, out);
+    expect_bad_input(args, "axis", out);
+}
+
 static void test_bad_layer_bakes_are_bad_input_and_good_ones_described(void **state) {
     (void)state;
     meso_context *ctx = test_context(1);
@@ -194,6 +219,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_bad_technique_options_are_bad_input),
         cmocka_unit_test(test_open_tile_mesh_is_bad_input_naming_it),
+        cmocka_unit_test(test_bad_impostors_are_bad_input),
         cmocka_unit_test(test_bad_layer_bakes_are_bad_input_and_good_ones_described),
         cmocka_unit_test(test_info_reports_sizes_beside_the_paper),
         cmocka_unit_test(test_mixed_scene_renders_with_every_technique_asked),

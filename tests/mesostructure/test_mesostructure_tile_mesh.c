@@ -66,6 +66,30 @@ static void test_tile_mesh_continues_across_the_border(void **state) {
     meso_context_destroy(ctx);
 }
 
+static void test_grid_is_identical_for_any_thread_count(void **state) {
+    (void)state;
+    meso_context *one = test_context(1), *two = test_context(2);
+    meso_vec3 p[8];
+    uint32_t idx[36];
+    box(0.8f, 1.2f, 0.4f, 0.6f, 0.2f, 0.8f, p, idx);
+    meso_solid *a = NULL, *b = NULL;
+    assert_int_equal(meso_solid_create_from_triangles(one, p, 8, idx, 12, "a.obj", 24, &a),
+                     MESO_OK);
+    assert_int_equal(meso_solid_create_from_triangles(two, p, 8, idx, 12, "a.obj", 24, &b),
+                     MESO_OK);
+    for (int k = 0; k < 1000; k++) {
+        meso_vec3 q = {(float)(k % 10) / 10.0f + 0.013f, (float)(k / 10 % 10) / 10.0f + 0.021f,
+                       (float)(k / 100) / 10.0f + 0.017f};
+        float da = meso_solid_distance(a, q), db = meso_solid_distance(b, q);
+        assert_memory_equal(&da, &db, sizeof da);
+    }
+    assert_true(meso_solid_hash(a) == meso_solid_hash(b));
+    meso_solid_destroy(a);
+    meso_solid_destroy(b);
+    meso_context_destroy(one);
+    meso_context_destroy(two);
+}
+
 static void test_bad_tile_meshes_are_refused_naming_the_file(void **state) {
     (void)state;
     meso_context *ctx = test_context(1);
@@ -105,6 +129,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cube_has_signed_distances_and_two_layers),
         cmocka_unit_test(test_tile_mesh_continues_across_the_border),
+        cmocka_unit_test(test_grid_is_identical_for_any_thread_count),
         cmocka_unit_test(test_bad_tile_meshes_are_refused_naming_the_file),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
