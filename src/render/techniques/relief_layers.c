@@ -96,7 +96,7 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
     if (r != MESO_OK) return r;
     /* "float" defaults to 1 on height fields: their 8-bit normals cost ~3 dB against relief
      * on smooth fields (docs/techniques/relief_layers.md); solids keep the paper's 8 bits. */
-    int shadows = 1, silhouettes = 1, missed = 0, filter = 1, layers = 4, side = 256, as_float = 0,
+    int shadows = 1, silhouettes = 1, missed = 0, filter = 0, layers = 4, side = 256, as_float = 0,
         curved = 1, steps = 32;
     /* an impostor (§4) is a whole model on one quad: finer map and search by default */
     bool impostor = object->mesostructure.kind == MESO_MESOSTRUCTURE_SOLID &&
@@ -116,7 +116,7 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
         (r = relief_read_option(ctx, object, name, "silhouettes", 1, 0, 1, &silhouettes)) !=
             MESO_OK ||
         (r = relief_read_option(ctx, object, name, "missed", 0, 0, 1, &missed)) != MESO_OK ||
-        (r = relief_read_option(ctx, object, name, "filter", 1, 0, 1, &filter)) != MESO_OK ||
+        (r = relief_read_option(ctx, object, name, "filter", 0, 0, 1, &filter)) != MESO_OK ||
         (r = relief_read_option(ctx, object, name, "curved", 1, 0, 1, &curved)) != MESO_OK ||
         (r = relief_read_option(ctx, object, name, "layers", 4, 4, 8, &layers)) != MESO_OK ||
         (r = relief_read_option(ctx, object, name, "size", side, 16, 4096, &side)) != MESO_OK ||
@@ -215,13 +215,14 @@ static inline layers_cell layers_locate8(const layers_state *s, v8f x, v8f y) {
     return c;
 }
 
-/* A plane at the cell: bilinear where the layer exists in all four texels (its depth < 1: a
- * bilinear mix of a surface with the unused 1.0 of a texel without it would be a surface
- * that is not there), else the nearest texel (§3.2's interfaces); height fields always
- * bilinear, like relief. */
+/* A plane at the cell. Solids: the nearest texel (filter 0, the default: the paper's maps are
+ * read without mixing layers, §3.2's interfaces), or with filter 1 bilinear where the layer
+ * exists in all four texels (its depth < 1: a bilinear mix of a surface with the unused 1.0 of
+ * a texel without it would be a surface that is not there) and nearest elsewhere. Height
+ * fields: always bilinear, like relief. */
 static inline v8f layers_plane8(const layers_state *s, const float *plane, const float *depth,
                                 layers_cell c) {
-    if (!s->filter) return v8_gather(plane, c.nearest);
+    if (!s->filter && !s->heightfield) return v8_gather(plane, c.nearest);
     v8f p00 = v8_gather(plane, c.index), p10 = v8_gather(plane + 1, c.index);
     v8f p01 = v8_gather(plane + s->stride, c.index);
     v8f p11 = v8_gather(plane + s->stride + 1, c.index);
@@ -372,7 +373,7 @@ static void normal(const void *user, const relief_lanes *l, const relief_batch *
         v8i closer = (gap < best) & present;
         if (!v8_any(closer)) continue;
         v8f lx, ly;
-        if (s->filter && s->heightfield) { /* one smooth layer: bilinear, like relief */
+        if (s->heightfield) { /* one smooth layer: bilinear, like relief */
             lx = layers_plane8(s, s->nx[k], s->depth[k], here);
             ly = layers_plane8(s, s->ny[k], s->depth[k], here);
         } else {
