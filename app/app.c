@@ -494,6 +494,11 @@ void app_text_free(app_text *text) {
 /* ---- Techniques and the machine ----------------------------------------------------------- */
 
 bool app_technique_applies(const meso_technique_info *info, const meso_scene *scene) {
+    return app_technique_draws(info, scene) == scene->num_objects;
+}
+
+int app_technique_draws(const meso_technique_info *info, const meso_scene *scene) {
+    int count = 0;
     for (int i = 0; i < scene->num_objects; i++) {
         unsigned need = MESO_TECHNIQUE_ACCEPTS_NONE;
         switch (scene->objects[i].mesostructure.kind) {
@@ -507,9 +512,9 @@ bool app_technique_applies(const meso_technique_info *info, const meso_scene *sc
             need = MESO_TECHNIQUE_ACCEPTS_SOLID;
             break;
         }
-        if (!(info->accepts & need)) return false;
+        count += (info->accepts & need) != 0;
     }
-    return true;
+    return count;
 }
 
 static void list_known_techniques(char *out, size_t out_size) {

@@ -156,6 +156,8 @@ void app_text_free(app_text *text);
 /* Whether technique `info` can draw every object of the scene (its accepts vs each object's
  * mesostructure kind). */
 bool app_technique_applies(const meso_technique_info *info, const meso_scene *scene);
+/* How many objects of the scene technique `info` can draw. */
+int app_technique_draws(const meso_technique_info *info, const meso_scene *scene);
 
 /* Whether `name` is a registered technique or "reference". */
 bool app_technique_known(const char *name);
@@ -183,7 +185,8 @@ typedef struct app_run {
     char technique[MESO_NAME_MAX];
     bool rendered;  /* false: skipped or failed, see note */
     bool skipped;   /* the technique cannot draw the scene's kind of mesostructure */
-    char note[256]; /* why it was skipped or failed ("" when rendered) */
+    char note[256]; /* why it was skipped or failed; when rendered, "" or which objects of a
+                       mixed scene were drawn with their own scene technique */
     double prepare_ms;
     double frame_ms; /* median over the timed frames */
     int frames_timed;

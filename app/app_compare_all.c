@@ -58,6 +58,26 @@ static void time_frames(meso_renderer *renderer, meso_framebuffer *fb, double fi
     run->frame_ms = 1000.0 * app_median(times, (size_t)count);
 }
 
+/* The objects a renderer drew with another technique than `technique`, into run->note:
+ * "mixed: objects[1] (solid) with relief_layers". */
+static void note_fallbacks(const meso_renderer *renderer, const meso_scene *scene,
+                           const char *technique, app_run *run) {
+    size_t used = 0;
+    run->note[0] = 0;
+    for (int i = 0; i < scene->num_objects && used < sizeof(run->note); i++) {
+        const char *drawn = meso_renderer_object_technique(renderer, i);
+        if (!drawn || strcmp(drawn, technique) == 0) continue;
+        const meso_object *o = &scene->objects[i];
+        const char *kind = o->mesostructure.kind == MESO_MESOSTRUCTURE_SOLID ? "solid"
+                           : o->mesostructure.kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD
+                               ? "height field"
+                               : "none";
+        int n = snprintf(run->note + used, sizeof(run->note) - used, "%s%s (%s) with %s",
+                         used ? "; " : "mixed: ", o->name, kind, drawn);
+        used += n > 0 ? (size_t)n : 0;
+    }
+}
+
 /* One technique (or the reference) of the scene into run. A failure, whatever its cause (an
  * exhausted memory included: a technique may ask for more than the machine has), is noted in
  * the run and does not stop the others. */
@@ -65,7 +85,7 @@ static void render_run(meso_context *ctx, const app_compare_all_desc *desc, cons
                        int samples, app_run *run) {
     snprintf(run->technique, sizeof(run->technique), "%s", technique);
     const meso_technique_info *info = meso_technique_find(technique);
-    if (info && !app_technique_applies(info, desc->scene)) {
+    if (info && app_technique_draws(info, desc->scene) == 0) {
         run->skipped = true;
         snprintf(run->note, sizeof(run->note),
                  "%s: skipped: it does not draw this scene's kind of mesostructure", technique);
@@ -73,7 +93,9 @@ static void render_run(meso_context *ctx, const app_compare_all_desc *desc, cons
     }
     meso_renderer *renderer = NULL;
     meso_framebuffer *fb = NULL;
-    meso_render_desc render_desc = {.technique = technique, .samples = samples};
+    /* Mixed scenes (issue 9 item 5): the objects this technique cannot draw are drawn with
+     * their own scene technique, and the note says which. */
+    meso_render_desc render_desc = {.technique = technique, .samples = samples, .fallback = true};
     if (desc->settings) {
         render_desc.options = desc->settings->items;
         render_desc.num_options = desc->settings->count;
@@ -97,6 +119,7 @@ static void render_run(meso_context *ctx, const app_compare_all_desc *desc, cons
         run->prepare_ms = 1000.0 * stats.prepare_seconds;
         run->triangles = stats.triangles;
         run->rendered = true;
+        note_fallbacks(renderer, desc->scene, technique, run);
     } else {
         snprintf(run->note, sizeof(run->note), "%s", meso_context_last_error(ctx));
         meso_image_destroy(run->color);
@@ -156,7 +179,11 @@ void app_compare_all_print_notes(const app_compare_all *all, const char *scene_n
     size_t used = 0;
     for (size_t i = 0; i < all->num_runs; i++) {
         const app_run *r = &all->runs[i];
-        if (r->rendered) continue;
+        if (r->rendered) {
+            if (show_skipped && r->note[0])
+                fprintf(stderr, "meso: note: %s%s: %s\n", where, r->technique, r->note);
+            continue;
+        }
         if ((int)i == all->reference)
             fprintf(stderr,
                     "meso: warning: %sreference not available (%s): images and sheet are "
@@ -198,6 +225,8 @@ void app_run_label(const app_run *run, const char *prefix, int cell_width, char 
         snprintf(head, sizeof(head), "%s\n%s", prefix, run->technique);
     else
         snprintf(head, sizeof(head), "%s", run->technique);
+    if (run->rendered && run->note[0]) /* a mixed scene: say so under the name */
+        snprintf(head + strlen(head), sizeof(head) - strlen(head), " (+own)");
     if (!run->rendered) {
         snprintf(out, out_size, "%s\n%s", head, run->skipped ? "not applicable" : "failed");
     } else if (run->has_metrics) {

@@ -222,6 +222,17 @@ static meso_result info_bake(meso_context *ctx, const char *path) {
     meso_bake_file *bake = NULL;
     meso_result result = meso_bake_file_load(ctx, path, &bake);
     if (result != MESO_OK) return result;
+    if (!strcmp(bake->kind, MESO_LAYERS_KIND)) {
+        /* Multilayer relief maps (Policarpo & Oliveira 2006 §3): checked as a renderer reads
+         * them before anything is printed, so a bad file is one error line. */
+        meso_layers *map = NULL;
+        result = meso_layers_from_bake_file(ctx, bake, path, &map);
+        meso_layers_destroy(map);
+        if (result != MESO_OK) {
+            meso_bake_file_destroy(bake);
+            return result;
+        }
+    }
     printf("bake: %s\n", path);
     printf("kind: %s (version %u), source hash %016llx\n", bake->kind, bake->kind_version,
            (unsigned long long)bake->source_hash);
@@ -253,8 +264,13 @@ static meso_result info_bake(meso_context *ctx, const char *path) {
             free(report);
         }
     }
+    if (!strcmp(bake->kind, MESO_LAYERS_KIND)) {
+        /* sizes beside the paper's three 256x256 RGBA8 maps, and what the layer limit clips */
+        char report[1024];
+        if (meso_layers_describe(bake, report, sizeof(report))) fputs(report, stdout);
+    }
     meso_bake_file_destroy(bake);
-    return MESO_OK;
+    return result;
 }
 
 int meso_cmd_info(int argc, char **argv) {

@@ -150,12 +150,14 @@ typedef enum meso_solid_kind {
     MESO_SOLID_GRID,        /* a lattice of bars with holes */
     MESO_SOLID_SQUAMA,      /* overlapping scales */
     MESO_SOLID_HELIX,       /* a double helix of threads */
+    MESO_SOLID_SLAB,        /* solid below w = 1 - thickness: the height field h = thickness */
+    MESO_SOLID_MESH,        /* a closed tile mesh (meso_solid_create_from_triangles) */
 } meso_solid_kind;
 
 typedef struct meso_solid_desc {
     meso_solid_kind kind;
     int count;       /* repeats per tile along u (and v where it applies): weave 2, chain 2,
-                        grid 4, squama 4, helix 2 */
+                        grid 4, squama 4, helix 2, slab 1 */
     float thickness; /* thread / bar / link radius as a fraction of a cell (kind's default) */
 } meso_solid_desc;
 
@@ -167,6 +169,32 @@ const char *meso_solid_kind_name(meso_solid_kind kind);
 
 meso_result meso_solid_create_procedural(meso_context *ctx, const meso_solid_desc *desc,
                                          meso_solid **out_solid);
+/* A solid from a closed triangle mesh of one tile (DESIGN.md: x, y -> u, v, periodic: the
+ * mesh may cross the tile's border and continues in the neighbouring tiles; z -> 1 - w, its
+ * top at z = 1 on the mesh), converted once to signed distances on a grid of `resolution`^3
+ * nodes (0: 96) with Embree: the sign by ray parity along z, the magnitude by closest-point
+ * queries. meso_solid_distance then interpolates the grid trilinearly (scaled so it stays a
+ * distance bound). `name` (the file) names the mesh in messages.
+ * Returns MESO_OK; MESO_ERROR_FORMAT naming `name` when the mesh is empty, not closed (an edge
+ * with one triangle), not manifold (an edge with three or more), inconsistently oriented, or
+ * has vertices outside 0 <= z <= 1; MESO_ERROR_LIMIT (resolution outside 8..256);
+ * MESO_ERROR_OUT_OF_MEMORY; MESO_ERROR_INTERNAL (Embree failed).
+ * Threads: uses every worker of ctx; the grid is independent of the thread count. */
+meso_result meso_solid_create_from_triangles(meso_context *ctx, const meso_vec3 *positions,
+                                             size_t num_vertices, const uint32_t *indices,
+                                             size_t num_triangles, const char *name,
+                                             int resolution, meso_solid **out_solid);
+/* A solid from a whole model for a relief impostor (Policarpo & Oliveira 2006 §4): positions
+ * already in the unit box (the caller maps the model's bounds there), not periodic, clamped
+ * at the box, and not required to be closed: a node is inside when it lies behind the face
+ * nearest to it (the teapot's patches leave seams and holes that ray parity cannot cross).
+ * Same results otherwise as meso_solid_create_from_triangles. */
+meso_result meso_solid_create_from_model(meso_context *ctx, const meso_vec3 *positions,
+                                         size_t num_vertices, const uint32_t *indices,
+                                         size_t num_triangles, const char *name, int resolution,
+                                         meso_solid **out_solid);
+/* False for a model's solid (clamped at the box), true for tiles and procedural solids. */
+bool meso_solid_is_periodic(const meso_solid *solid);
 void meso_solid_destroy(meso_solid *solid);
 /* The parameters the solid was made with (defaults filled in). */
 meso_solid_desc meso_solid_get_desc(const meso_solid *solid);

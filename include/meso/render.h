@@ -128,6 +128,10 @@ typedef struct meso_render_desc {
     /* Report progress (the context's bar and callback, docs/cli.md --progress) of the
      * reference's build and of every frame: for one long render, not for loops of frames. */
     bool progress;
+    bool fallback;         /* with `technique`: an object it cannot draw (its mesostructure is
+                              not one it accepts) is drawn with the object's own scene technique
+                              (or `flat` when that is `reference` or cannot draw it either)
+                              instead of failing; see meso_renderer_object_technique */
 } meso_render_desc;
 
 typedef struct meso_render_stats {
@@ -149,6 +153,9 @@ meso_result meso_renderer_create(meso_context *ctx, const meso_scene *scene,
  * renderer; uses every worker of the context. */
 meso_result meso_renderer_render(meso_renderer *renderer, meso_framebuffer *fb);
 meso_render_stats meso_renderer_get_stats(const meso_renderer *renderer);
+/* The name of the technique drawing object `object` ("reference" for every object of a
+ * reference renderer; NULL for an index out of range). Valid as long as the program runs. */
+const char *meso_renderer_object_technique(const meso_renderer *renderer, int object);
 void meso_renderer_destroy(meso_renderer *renderer);
 
 /* Create a renderer, draw one frame of the scene's size, destroy: the one-call form. */

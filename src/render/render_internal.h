@@ -55,7 +55,8 @@ typedef struct meso_fragment {
     /* outputs, preset by the rasterizer */
     meso_vec3 color;              /* linear RGB (preset 0) */
     float out_depth;              /* preset to depth; a technique may replace it (depth
-                                     correction); it must not be smaller than `depth` */
+                                     correction); it must not be smaller than `depth` except
+                                     on back faces of a both_faces technique */
     bool discard;                 /* preset false; true: nothing is drawn (silhouettes) */
 } meso_fragment;
 
@@ -81,6 +82,13 @@ typedef struct meso_technique {
                   meso_fragment *fragments, size_t count);
     /* Bytes of baked data held by the state (NULL: 0). */
     size_t (*memory)(const void *state);
+    /* Per-pixel techniques that draw back faces too (relief_layers: a closed mesh's far wall
+     * seen through holes in the near one, and impostors seen from behind, Policarpo &
+     * Oliveira 2006 §4). Their back-face fragments have dot(position - eye, normal) > 0 and
+     * may write an out_depth smaller than `depth` (the hit lies between the shell's bottom and
+     * the mesh, toward the eye); early depth rejection stays valid since nothing else lies
+     * inside the shell. */
+    bool both_faces;
 } meso_technique;
 
 /* Every technique's entry (techniques/<name>.c), so a file can name its own info. */

@@ -93,13 +93,24 @@ void meso_renderer_destroy(meso_renderer *renderer) {
     free(renderer);
 }
 
-/* The technique of object i, checked against its mesostructure. */
+/* The technique of object i, checked against its mesostructure. With `fallback`, an override
+ * that cannot draw the object gives way to the object's own technique (issue 9 item 5: mixed
+ * scenes), or to `flat` when that is the reference or cannot draw it either. */
 static meso_result resolve_technique(meso_context *ctx, const meso_object *object,
-                                     const char *override, const meso_technique **out) {
+                                     const char *override, bool fallback,
+                                     const meso_technique **out) {
     char list[512];
-    const char *name = override ? override : (object->technique[0] ? object->technique : "flat");
+    const char *own = object->technique[0] ? object->technique : "flat";
+    const char *name = override ? override : own;
     const meso_technique *t = meso_technique_lookup(name);
     *out = NULL;
+    if (fallback && override && t && !(t->info.accepts & kind_bit(object->mesostructure.kind))) {
+        const meso_technique *mine = meso_technique_lookup(own);
+        bool usable = mine && mine->info.kind != MESO_TECHNIQUE_REFERENCE &&
+                      (mine->info.accepts & kind_bit(object->mesostructure.kind));
+        name = usable ? own : "flat";
+        t = meso_technique_lookup(name);
+    }
     if (!t) {
         list_names(list, sizeof(list), true, 0);
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
@@ -213,7 +224,9 @@ meso_result meso_renderer_create(meso_context *ctx, const meso_scene *scene,
     int first_reference = -1, first_other = -1;
     for (int i = 0; i < count; i++) {
         const meso_technique *t = NULL;
-        if ((r = resolve_technique(ctx, &scene->objects[i], d.technique, &t)) != MESO_OK) goto fail;
+        if ((r = resolve_technique(ctx, &scene->objects[i], d.technique, d.fallback, &t)) !=
+            MESO_OK)
+            goto fail;
         if (t->info.kind == MESO_TECHNIQUE_REFERENCE) {
             if (first_reference < 0) first_reference = i;
         } else if (first_other < 0) {
@@ -240,7 +253,7 @@ meso_result meso_renderer_create(meso_context *ctx, const meso_scene *scene,
         for (int i = 0; i < count; i++) {
             const meso_object *object = &scene->objects[i];
             const meso_technique *t = NULL;
-            resolve_technique(ctx, object, d.technique, &t);
+            resolve_technique(ctx, object, d.technique, d.fallback, &t);
             rd->techniques[i] = t;
             if (t->prepare && (r = t->prepare(ctx, scene, object, &rd->states[i])) != MESO_OK)
                 goto fail;
@@ -357,6 +370,12 @@ meso_result meso_renderer_render(meso_renderer *renderer, meso_framebuffer *fb) 
     if (r != MESO_OK) return r;
     rd->stats.last_frame_seconds = meso_time_seconds() - start;
     return MESO_OK;
+}
+
+const char *meso_renderer_object_technique(const meso_renderer *renderer, int object) {
+    if (!renderer || object < 0 || object >= renderer->scene->num_objects) return NULL;
+    if (renderer->use_reference) return "reference";
+    return renderer->techniques[object] ? renderer->techniques[object]->info.name : NULL;
 }
 
 meso_render_stats meso_renderer_get_stats(const meso_renderer *renderer) {

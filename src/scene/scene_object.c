@@ -113,9 +113,9 @@ static meso_result parse_procedural_solid(const scene_parser *p, const cJSON *it
     meso_solid_desc desc = {0};
     if (!meso_solid_kind_from_name(name, &desc.kind)) {
         scene_key k = scene_key_child(key, "procedural");
-        return scene_error(p, MESO_ERROR_FORMAT, &k,
-                           "unknown procedural solid \"%s\" (weave, chain, grid, squama, helix)",
-                           name);
+        return scene_error(
+            p, MESO_ERROR_FORMAT, &k,
+            "unknown procedural solid \"%s\" (weave, chain, grid, squama, helix, slab)", name);
     }
     long count = 0;
     float thickness = 0.0f;
@@ -189,6 +189,62 @@ static meso_result parse_height_convention(const scene_parser *p, const cJSON *i
     return MESO_OK;
 }
 
+/* A relief impostor's solid (Policarpo & Oliveira 2006 §4): a whole model (a built-in shape or
+ * a mesh file) seen from above along -y, its bounds mapped into the unit box with a margin of
+ * 0.05: x -> u, -z -> v (the built-in plane's axes, so the impostor on a plane of the model's
+ * x-z size shows it unturned), y -> 1 - w. The plane's `size` should be the larger of the
+ * model's x and z extents / 0.9 and `depth` its y extent / 0.9 (docs/techniques/
+ * relief_layers.md), with the plane at y = the model's top + 0.05 depth. */
+static meso_result parse_impostor_solid(const scene_parser *p, const cJSON *item,
+                                        const scene_key *key, meso_object *object) {
+    static const char *const keys[] = {"impostor", "resolution", NULL};
+    meso_result r = scene_check_object(p, item, key, keys);
+    if (r != MESO_OK) return r;
+    const char *model = NULL;
+    long resolution = 96;
+    if ((r = scene_get_string(p, item, key, "impostor", true, &model)) ||
+        (r = scene_get_int(p, item, key, "resolution", 8, 256, false, &resolution)))
+        return r;
+    scene_key k = scene_key_child(key, "impostor");
+    meso_mesh *mesh = NULL;
+    meso_shape_desc shape = {0};
+    char path[SCENE_PATH_MAX];
+    snprintf(path, sizeof path, "%s", model);
+    if (meso_shape_kind_from_name(model, &shape.kind)) {
+        r = meso_mesh_create_shape(p->ctx, &shape, &mesh);
+    } else {
+        if ((r = scene_resolve_path(p, &k, model, path)) || (r = check_readable(p, &k, path)))
+            return r;
+        r = meso_mesh_load(p->ctx, path, &mesh);
+    }
+    if (r != MESO_OK) return r;
+    meso_vec3 lo = mesh->positions[0], hi = lo;
+    for (size_t i = 0; i < mesh->num_vertices; i++) {
+        meso_vec3 q = mesh->positions[i];
+        lo = (meso_vec3){fminf(lo.x, q.x), fminf(lo.y, q.y), fminf(lo.z, q.z)};
+        hi = (meso_vec3){fmaxf(hi.x, q.x), fmaxf(hi.y, q.y), fmaxf(hi.z, q.z)};
+    }
+    float lateral = fmaxf(hi.x - lo.x, hi.z - lo.z), height = hi.y - lo.y;
+    if (!(lateral > 0.0f) || !(height > 0.0f)) {
+        meso_mesh_destroy(mesh);
+        return scene_error(p, MESO_ERROR_FORMAT, &k, "%s: the model is flat", path);
+    }
+    for (size_t i = 0; i < mesh->num_vertices; i++) {
+        meso_vec3 q = mesh->positions[i];
+        mesh->positions[i] = (meso_vec3){0.5f + 0.9f * (q.x - 0.5f * (lo.x + hi.x)) / lateral,
+                                         0.5f - 0.9f * (q.z - 0.5f * (lo.z + hi.z)) / lateral,
+                                         0.05f + 0.9f * (q.y - lo.y) / height};
+    }
+    meso_mesostructure *m = &object->mesostructure;
+    r = meso_solid_create_from_model(p->ctx, mesh->positions, mesh->num_vertices, mesh->indices,
+                                     mesh->num_triangles, path, (int)resolution, &m->solid);
+    meso_mesh_destroy(mesh);
+    if (r != MESO_OK) return r;
+    m->wrap = MESO_WRAP_CLAMP; /* one model, not a tiling */
+    snprintf(m->source, sizeof(m->source), "%s impostor", base_name(model));
+    return MESO_OK;
+}
+
 static meso_result parse_mesostructure(const scene_parser *p, const cJSON *item,
                                        const scene_key *key, bool want_color, meso_object *object,
                                        meso_image **out_color) {
@@ -250,10 +306,27 @@ static meso_result parse_height_map_or_solid(const scene_parser *p, const cJSON 
     }
     m->kind = MESO_MESOSTRUCTURE_SOLID;
     scene_key k = scene_key_child(key, "solid");
-    if (cJSON_IsObject(solid)) return parse_procedural_solid(p, solid, &k, object);
-    if (cJSON_IsString(solid))
-        return scene_error(p, MESO_ERROR_UNSUPPORTED, &k, "voxel files are not supported yet");
-    return scene_error(p, MESO_ERROR_FORMAT, &k, "must be {\"procedural\": NAME, ...}");
+    if (cJSON_IsObject(solid))
+        return cJSON_GetObjectItemCaseSensitive(solid, "impostor")
+                   ? parse_impostor_solid(p, solid, &k, object)
+                   : parse_procedural_solid(p, solid, &k, object);
+    if (cJSON_IsString(solid)) { /* a tile mesh (DESIGN.md: x, y -> u, v; z -> 1 - w) */
+        char path[SCENE_PATH_MAX];
+        if ((r = scene_resolve_path(p, &k, solid->valuestring, path)) ||
+            (r = check_readable(p, &k, path)))
+            return r;
+        meso_mesh *tile = NULL;
+        if ((r = meso_mesh_load(p->ctx, path, &tile)) != MESO_OK) return r;
+        r = meso_solid_create_from_triangles(p->ctx, tile->positions, tile->num_vertices,
+                                             tile->indices, tile->num_triangles, path, 0,
+                                             &m->solid);
+        meso_mesh_destroy(tile);
+        if (r != MESO_OK) return r;
+        snprintf(m->source, sizeof(m->source), "%s", base_name(solid->valuestring));
+        return MESO_OK;
+    }
+    return scene_error(p, MESO_ERROR_FORMAT, &k,
+                       "must be a tile mesh path or {\"procedural\": NAME, ...}");
 }
 
 /* ---- Material ----------------------------------------------------------------------------- */

@@ -152,6 +152,9 @@ typedef struct relief_batch {
     int count;
     v8f x0, y0, xd, yd, a, b, t_end;
     v8f qa, qb; /* the quadric at each fragment (0 without silhouettes): shadows use it too */
+    /* curved_uv only (else 0): at depth d the texture coordinates advance 1 / (1 - lateral d)
+     * times faster than on the mesh (relief_lateral_scale) */
+    v8f lateral;
     int flat_bits;  /* lanes whose hit is t = 0 without a search */
     int floor_bits; /* lanes whose search ends on the floor */
 } relief_batch;
@@ -377,17 +380,33 @@ typedef struct relief_tracer {
     /* Per batch: the bits of blocked lanes (batches may have no active lane). */
     void (*shadow)(const void *user, const relief_shadow_batch *batches, int count,
                    int *out_blocked);
+    /* Optional (NULL: the height field's gradient, relief_normal8): the unit world normal at
+     * the hits (hx, hy) in texel-centre coordinates, depth hd, ray parameter t, of one batch.
+     * relief_layers reads its baked layer normals here (Policarpo & Oliveira 2006 §3). */
+    void (*normal)(const void *user, const relief_lanes *lanes, const relief_batch *batch, v8f t,
+                   v8f hx, v8f hy, v8f hd, float depth, v8vec3 *out_normal);
 } relief_tracer;
 
 typedef struct relief_params {
     bool shadows, silhouettes;
+    /* Beyond the papers (relief_layers): on a curved mesh the shell at depth w is a smaller
+     * (convex) or larger copy of the surface, so a ray's texture coordinates advance faster
+     * there than the tangent-plane walk says: by 1 / (1 - kappa w depth) with kappa the
+     * curvature along the ray (twice the quadric, Oliveira & Policarpo 2005), averaged from 0
+     * to the ray's depth d as 1 / (1 - kappa d depth / 2). */
+    bool curved_uv;
 } relief_params;
+
+/* The factor on the tangent-plane texture offset of a ray point at depth d (curved_uv). */
+static inline v8f relief_lateral_scale(const relief_batch *b, v8f d) {
+    return 1.0f / (1.0f - b->lateral * v8_max(d, v8_splat(0.0f)));
+}
 
 /* The view rays of eight fragments (see the top of this file). */
 static inline void relief_batch_setup(const relief_heights *m, const meso_object *object,
                                       const meso_fragment *f, const relief_lanes *l,
-                                      bool silhouettes, relief_batch *batch, v8f *out_du,
-                                      v8f *out_dv) {
+                                      bool silhouettes, bool curved_uv, relief_batch *batch,
+                                      v8f *out_du, v8f *out_dv) {
     float depth = object->mesostructure.depth;
     int all = (1 << l->count) - 1;
     v8f cu = v8_dot(l->view, l->bn), cv = v8_dot(l->view, l->nt), cn = v8_dot(l->view, l->tb);
@@ -417,6 +436,12 @@ static inline void relief_batch_setup(const relief_heights *m, const meso_object
         v8f x = v8_select(tl > 0.0f, v8_dot(l->view, l->tangent) / tl, zero);
         v8f y = v8_select(bl > 0.0f, v8_dot(l->view, l->bitangent) / bl, zero);
         batch->b = v8_select(on, (qa * x * x + qb * y * y) * inv_depth, zero);
+        if (curved_uv) { /* kappa depth / 2 along the ray, kept below 0.9 (relief_params) */
+            v8f r2 = x * x + y * y;
+            v8f lateral = (qa * x * x + qb * y * y) * depth / v8_max(r2, v8_splat(1e-30f));
+            lateral = v8_min(v8_max(lateral, v8_splat(-0.9f)), v8_splat(0.9f));
+            batch->lateral = v8_select(on & (r2 > 0.0f), lateral, zero);
+        }
     }
     /* d(t) = 1 at the smaller root of b t^2 - a t + 1 = 0 (stable for b -> 0); without a real
      * root the convex shell is left at t = a / b. */
@@ -431,9 +456,10 @@ static inline void relief_batch_setup(const relief_heights *m, const meso_object
     *out_dv = cv;
 }
 
-/* Shade `count` fragments with a tracer, sixteen at a time as two batches of eight: view
- * rays, hits, depth correction, the displaced normal at the hit, self-shadows per light,
- * meso_shade_batch8. */
+/* Shade `count` fragments with a tracer, sixteen at a time (m: the map's size in texels for
+ * the texel-centre coordinates, and the heights unless the tracer has its own normal) as two
+ * batches of eight: view rays, hits, depth correction, the displaced normal at the hit,
+ * self-shadows per light, meso_shade_batch8. */
 static inline void relief_shade_fragments(const relief_heights *m, const relief_tracer *tracer,
                                           relief_params params, const meso_frame *frame,
                                           const meso_object *object, meso_fragment *fragments,
@@ -453,25 +479,31 @@ static inline void relief_shade_fragments(const relief_heights *m, const relief_
             if (first >= count) break;
             n[g] = count - first < RELIEF_LANES ? (int)(count - first) : RELIEF_LANES;
             relief_lanes_load(&l[g], frame, fragments + first, n[g]);
-            relief_batch_setup(m, object, fragments + first, &l[g], params.silhouettes, &batch[g],
-                               &du[g], &dv[g]);
+            relief_batch_setup(m, object, fragments + first, &l[g], params.silhouettes,
+                               params.curved_uv, &batch[g], &du[g], &dv[g]);
             groups = g + 1;
         }
         tracer->search(tracer->user, batch, groups, t, hit);
         for (int g = 0; g < groups; ++g) {
             /* The hits in texel space, their depth d and the gradient there. */
-            hx[g] = batch[g].x0 + batch[g].xd * t[g];
-            hy[g] = batch[g].y0 + batch[g].yd * t[g];
             hd[g] = v8_max(t[g] * (batch[g].a - batch[g].b * t[g]), v8_splat(0.0f));
-            v8f gu, gv;
-            relief_gradient8(m, hx[g], hy[g], &gu, &gv);
+            v8f tt = params.curved_uv ? t[g] * relief_lateral_scale(&batch[g], hd[g]) : t[g];
+            hx[g] = batch[g].x0 + batch[g].xd * tt;
+            hy[g] = batch[g].y0 + batch[g].yd * tt;
             hit_pos[g] = v8_madd(l[g].position, l[g].view, t[g]);
-            hit_u[g] = l[g].u + du[g] * t[g];
-            hit_v[g] = l[g].v + dv[g] * t[g];
+            hit_u[g] = l[g].u + du[g] * tt;
+            hit_v[g] = l[g].v + dv[g] * tt;
             out_depth[g] = l[g].depth * (1.0f + t[g]); /* dot(P + t V - eye, forward) */
-            normal[g] = relief_normal8(&l[g], depth, gu, gv);
-            if (params.silhouettes) normal[g] = relief_curve_normal8(&l[g], &batch[g], t[g],
-                                                                     normal[g]);
+            if (tracer->normal) {
+                tracer->normal(tracer->user, &l[g], &batch[g], t[g], hx[g], hy[g], hd[g], depth,
+                               &normal[g]);
+            } else {
+                v8f gu, gv;
+                relief_gradient8(m, hx[g], hy[g], &gu, &gv);
+                normal[g] = relief_normal8(&l[g], depth, gu, gv);
+            }
+            if (params.silhouettes)
+                normal[g] = relief_curve_normal8(&l[g], &batch[g], t[g], normal[g]);
         }
         meso_shade_batch in[2];
         for (int li = 0; li < num_lights; ++li) {
@@ -535,8 +567,8 @@ static inline void relief_shade_fragments(const relief_heights *m, const relief_
                 for (int g = 0; g < groups; ++g) dark[g] |= blocked[g] & sb[g].active_bits;
             }
             for (int g = 0; g < groups; ++g)
-                in[g].visibility[li] = v8_select(v8_mask_from_bits(dark[g]), v8_splat(0.0f),
-                                                 v8_splat(1.0f));
+                in[g].visibility[li] =
+                    v8_select(v8_mask_from_bits(dark[g]), v8_splat(0.0f), v8_splat(1.0f));
         }
         for (int g = 0; g < groups; ++g) {
             meso_fragment *f = fragments + start + (size_t)g * RELIEF_LANES;

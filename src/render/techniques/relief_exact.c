@@ -545,7 +545,7 @@ fail:
 static void shade(const void *state, const meso_frame *frame, const meso_object *object,
                   meso_fragment *fragments, size_t count) {
     const exact_state *s = state;
-    relief_tracer tracer = {s, search, shadow};
+    relief_tracer tracer = {s, search, shadow, NULL};
     relief_shade_fragments(&s->heights, &tracer, s->params, frame, object, fragments, count);
 }
 
