@@ -39,7 +39,7 @@ extern "C" {
 #endif
 
 #define MESO_VDM_KIND "vdm"
-#define MESO_VDM_KIND_VERSION 3u
+#define MESO_VDM_KIND_VERSION 4u
 /* Limits, checked before allocating. */
 #define MESO_VDM_MAX_SIDE 1024
 #define MESO_VDM_MAX_THETA 128
