@@ -136,6 +136,47 @@ static void test_heightfield_normals_equal_relief_on_a_steep_cone(void **state) 
     unsetenv("MESO_CACHE_DIR");
 }
 
+/* The shadow search of a height field is relief's, the curved mesh's bulge included (on a
+ * sphere a light ray from a hit runs deeper below the surface than the straight line from the
+ * hit to where it leaves the shell): light rays of every kind, blocked for both or neither. */
+static void test_heightfield_shadows_equal_relief_with_a_bulge(void **state) {
+    (void)state;
+    setenv("MESO_CACHE_DIR", "off", 1);
+    fixture fx;
+    fixture_init(&fx, field(NULL, 64, 64, h_cone), 0.1f, (meso_vec3){0.3f, 1.2f, 2.2f},
+                 (meso_vec3){0, 0, 0}, (meso_vec3){0.5f, 0.7f, 0.3f});
+    void *st = NULL;
+    assert_int_equal(test_copy_of_relief_layers.prepare(fx.ctx, &fx.scene, &fx.object, &st),
+                     MESO_OK);
+    layers_state *s = st;
+    srand(7);
+    int differ = 0, blocked = 0;
+    for (int n = 0; n < 400; ++n) {
+        relief_shadow_batch b = {.count = 8, .active_bits = 0xff};
+        for (int k = 0; k < 8; ++k) {
+            /* around the cone (texels 24..40), where light rays can be blocked */
+            b.x[k] = 24.0f + 16.0f * (float)rand() / (float)RAND_MAX;
+            b.y[k] = 24.0f + 16.0f * (float)rand() / (float)RAND_MAX;
+            b.d[k] = (float)rand() / (float)RAND_MAX;
+            b.xd[k] = 40.0f * (2.0f * (float)rand() / (float)RAND_MAX - 1.0f);
+            b.yd[k] = 40.0f * (2.0f * (float)rand() / (float)RAND_MAX - 1.0f);
+            b.bulge[k] = 2.0f * (float)rand() / (float)RAND_MAX;
+        }
+        int got = 0;
+        shadow(s, &b, 1, &got);
+        int expect = relief_shadow_search8(&s->size, &b, s->shadow_steps);
+        differ += __builtin_popcount((unsigned)(got ^ expect));
+        blocked += __builtin_popcount((unsigned)expect);
+    }
+    print_message("shadows: %d of 3200 light rays blocked, %d differ from relief\n", blocked,
+                  differ);
+    assert_true(blocked > 400 && blocked < 2800); /* both kinds are tested */
+    assert_int_equal(differ, 0);
+    release(s);
+    fixture_deinit(&fx);
+    unsetenv("MESO_CACHE_DIR");
+}
+
 static float interval(float x, float lo, float hi) { return fmaxf(lo - x, x - hi); }
 
 /* A bar along u at v in [0.4, 0.6], w in [0.2, 0.4], over a floor w >= 0.8. */
@@ -324,6 +365,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_slab_solid_equals_relief_on_the_height_field),
         cmocka_unit_test(test_heightfield_normals_equal_relief_on_a_steep_cone),
+        cmocka_unit_test(test_heightfield_shadows_equal_relief_with_a_bulge),
         cmocka_unit_test(test_ray_under_the_bar_hits_the_floor_below),
         cmocka_unit_test(test_missed_rays_are_discarded_or_drawn_on_the_floor),
         cmocka_unit_test(test_impostor_front_and_back_views_of_a_symmetric_model_agree),
