@@ -157,8 +157,10 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
     meso_result r = meso_technique_options_read(ctx, scene, object,
                                                 &meso_technique_relief_layers.info, &options);
     if (r != MESO_OK) return r;
-    /* "float" defaults to 1 on height fields: their 8-bit normals cost ~3 dB against relief
-     * on smooth fields (docs/techniques/relief_layers.md); solids keep the paper's 8 bits. */
+    /* "float" defaults to 1 on height fields: the search then meets the field's own heights,
+     * as relief does (their normals come from the field, not the map, so 8 bits now costs
+     * only the depths' rounding: 0.0-0.1 dB, docs/techniques/relief_layers.md); solids keep
+     * the paper's 8 bits. */
     /* an impostor (§4) is a whole model on one quad: finer map and search by default */
     bool impostor = object->mesostructure.kind == MESO_MESOSTRUCTURE_SOLID &&
                     object->mesostructure.solid &&
