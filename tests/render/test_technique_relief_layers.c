@@ -69,6 +69,114 @@ static void test_slab_solid_equals_relief_on_the_height_field(void **state) {
     unsetenv("MESO_CACHE_DIR");
 }
 
+/* One steep cone, its tip between texel centres: 1 at the centre, 0 eight texels away. Its
+ * normal in texture space (u, v, -w) is nearly horizontal (slope 8 per u: z = 0.12), where z
+ * rebuilt from an interpolated (x, y) is far off (docs/techniques/relief_layers.md, "Height
+ * fields' normals"). */
+static float h_cone(int i, int j) {
+    float r = hypotf((float)i - 31.5f, (float)j - 31.5f);
+    return fmaxf(0.0f, 1.0f - r / 8.0f);
+}
+
+/* A fragment of the plane with uv_scale s: the point of plane_fragment at uv / s, texture
+ * coordinates uv, tangents shorter by s (the truth suite's cones-plane tiles 2.5 times). */
+static meso_fragment tiled_fragment(const fixture *fx, float s, float u, float v) {
+    meso_fragment f = plane_fragment(fx, u / s, v / s);
+    f.uv = (meso_vec2){u, v};
+    f.tangent = meso_vec3_scale(f.tangent, 1.0f / s);
+    f.bitangent = meso_vec3_scale(f.bitangent, 1.0f / s);
+    return f;
+}
+
+/* A height field through relief_layers shades like relief: the same hits, and the normal of
+ * the field's gradient there (DESIGN.md), also on a cone's flanks and tip and on tiled UVs. */
+static void test_heightfield_normals_equal_relief_on_a_steep_cone(void **state) {
+    (void)state;
+    setenv("MESO_CACHE_DIR", "off", 1);
+    fixture fx;
+    fixture_init(&fx, field(NULL, 64, 64, h_cone), 0.1f, (meso_vec3){0.3f, 1.2f, 2.2f},
+                 (meso_vec3){0, 0, 0}, (meso_vec3){0.5f, 0.7f, 0.3f});
+    enum { SIDE = 16, N = SIDE * SIDE };
+    const float scales[] = {1.0f, 2.5f};
+    for (size_t sc = 0; sc < sizeof scales / sizeof scales[0]; sc++) {
+        float s = scales[sc];
+        meso_fragment expect[N], got[N];
+        /* a grid over the cone's footprint (texture u, v in 0.5 +- 0.14) of the tile that
+         * holds the middle of the plane */
+        float tile = floorf(0.5f * s);
+        for (int j = 0; j < SIDE; ++j)
+            for (int i = 0; i < SIDE; ++i) {
+                float u = tile + 0.36f + 0.28f * ((float)i + 0.5f) / SIDE;
+                float v = tile + 0.36f + 0.28f * ((float)j + 0.5f) / SIDE;
+                expect[j * SIDE + i] = got[j * SIDE + i] = tiled_fragment(&fx, s, u, v);
+            }
+        shade_with(&fx, "relief", expect, N);
+        shade_with(&fx, "relief_layers", got, N);
+        int same_hit = 0;
+        float worst = 0.0f;
+        for (int k = 0; k < N; ++k) {
+            assert_false(expect[k].discard);
+            assert_false(got[k].discard);
+            /* the searches differ in their last steps (secant on another f); compare the
+             * shading where they found the same point */
+            if (fabsf(got[k].out_depth - expect[k].out_depth) > 1e-4f * expect[k].out_depth)
+                continue;
+            same_hit++;
+            worst = fmaxf(worst, fabsf(got[k].color.x - expect[k].color.x));
+            worst = fmaxf(worst, fabsf(got[k].color.y - expect[k].color.y));
+            worst = fmaxf(worst, fabsf(got[k].color.z - expect[k].color.z));
+        }
+        print_message("uv_scale %.1f: %d of %d fragments hit the same point, largest colour "
+                      "difference there %.4f\n",
+                      (double)s, same_hit, N, (double)worst);
+        assert_true(same_hit >= N * 9 / 10);
+        assert_true(worst < 2e-3f);
+    }
+    fixture_deinit(&fx);
+    unsetenv("MESO_CACHE_DIR");
+}
+
+/* The shadow search of a height field is relief's, the curved mesh's bulge included (on a
+ * sphere a light ray from a hit runs deeper below the surface than the straight line from the
+ * hit to where it leaves the shell): light rays of every kind, blocked for both or neither. */
+static void test_heightfield_shadows_equal_relief_with_a_bulge(void **state) {
+    (void)state;
+    setenv("MESO_CACHE_DIR", "off", 1);
+    fixture fx;
+    fixture_init(&fx, field(NULL, 64, 64, h_cone), 0.1f, (meso_vec3){0.3f, 1.2f, 2.2f},
+                 (meso_vec3){0, 0, 0}, (meso_vec3){0.5f, 0.7f, 0.3f});
+    void *st = NULL;
+    assert_int_equal(test_copy_of_relief_layers.prepare(fx.ctx, &fx.scene, &fx.object, &st),
+                     MESO_OK);
+    layers_state *s = st;
+    srand(7);
+    int differ = 0, blocked = 0;
+    for (int n = 0; n < 400; ++n) {
+        relief_shadow_batch b = {.count = 8, .active_bits = 0xff};
+        for (int k = 0; k < 8; ++k) {
+            /* around the cone (texels 24..40), where light rays can be blocked */
+            b.x[k] = 24.0f + 16.0f * (float)rand() / (float)RAND_MAX;
+            b.y[k] = 24.0f + 16.0f * (float)rand() / (float)RAND_MAX;
+            b.d[k] = (float)rand() / (float)RAND_MAX;
+            b.xd[k] = 40.0f * (2.0f * (float)rand() / (float)RAND_MAX - 1.0f);
+            b.yd[k] = 40.0f * (2.0f * (float)rand() / (float)RAND_MAX - 1.0f);
+            b.bulge[k] = 2.0f * (float)rand() / (float)RAND_MAX;
+        }
+        int got = 0;
+        shadow(s, &b, 1, &got);
+        int expect = relief_shadow_search8(&s->size, &b, s->shadow_steps);
+        differ += __builtin_popcount((unsigned)(got ^ expect));
+        blocked += __builtin_popcount((unsigned)expect);
+    }
+    print_message("shadows: %d of 3200 light rays blocked, %d differ from relief\n", blocked,
+                  differ);
+    assert_true(blocked > 400 && blocked < 2800); /* both kinds are tested */
+    assert_int_equal(differ, 0);
+    release(s);
+    fixture_deinit(&fx);
+    unsetenv("MESO_CACHE_DIR");
+}
+
 static float interval(float x, float lo, float hi) { return fmaxf(lo - x, x - hi); }
 
 /* A bar along u at v in [0.4, 0.6], w in [0.2, 0.4], over a floor w >= 0.8. */
@@ -256,6 +364,8 @@ static void test_bad_options_name_the_option(void **state) {
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_slab_solid_equals_relief_on_the_height_field),
+        cmocka_unit_test(test_heightfield_normals_equal_relief_on_a_steep_cone),
+        cmocka_unit_test(test_heightfield_shadows_equal_relief_with_a_bulge),
         cmocka_unit_test(test_ray_under_the_bar_hits_the_floor_below),
         cmocka_unit_test(test_missed_rays_are_discarded_or_drawn_on_the_floor),
         cmocka_unit_test(test_impostor_front_and_back_views_of_a_symmetric_model_agree),

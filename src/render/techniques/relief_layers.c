@@ -4,9 +4,11 @@
  * Algorithm 1's linear search and Algorithm 2's binary search, then a secant step; the
  * interface rule of §3.2 for the texel whose normals shade the hit; self-shadows by a search
  * toward each light (§3.1, last paragraphs); silhouettes, depth correction and shading shared
- * with `relief` (relief_common.h). Height fields are one layer (§3, Fig. 10). Missed rays are
- * discarded (§3.1, "the fragment can be discarded") or, with "missed": 1, drawn on the shell's
- * floor with the mesh's normal (§3.1's base texture). docs/techniques/relief_layers.md. */
+ * with `relief` (relief_common.h). Height fields are one layer (§3, Fig. 10) and shade with
+ * the field's own gradient, as relief (DESIGN.md; why not the baked normals: normal()). Missed
+ * rays are discarded (§3.1, "the fragment can be discarded") or, with "missed": 1, drawn on the
+ * shell's floor with the mesh's normal (§3.1's base texture). docs/techniques/relief_layers.md.
+ */
 #include "meso/bake_layers.h"
 #include "relief_common.h"
 
@@ -16,15 +18,19 @@
 /* The map as padded planes: plane k of a quantity is (W + 1) x (H + 1) floats whose last row
  * and column repeat the wrapped first ones (or the clamped last ones), as relief_heights. */
 typedef struct layers_state {
-    relief_heights size;    /* width, height, clamp only (no heights) */
+    /* width, height, clamp; for a height field also the field's heights, which give its
+     * shading normal (relief_gradient8); solids: no heights */
+    relief_heights size;
     int stride, num_layers; /* layers searched: the most any texel holds */
     bool heightfield;       /* one layer over a floor that is hit (relief's floor rule) */
     bool filter;            /* bilinear where the four texels hold the layer, else nearest */
     bool missed_floor;      /* draw missed rays on the shell's floor */
+    /* nx, ny: solids only (a height field shades with its gradient) */
     float *depth[MESO_LAYERS_MAX], *nx[MESO_LAYERS_MAX], *ny[MESO_LAYERS_MAX], *count;
     float *planes;
     /* the depths again with a texel's layers consecutive in groups of four, as the paper's RGBA
-     * texels: nearest lookups load a texel's four depths at once instead of four gathers */
+     * texels: nearest lookups load a texel's four depths at once instead of four gathers
+     * (solids only: a height field is read bilinearly) */
     float *quads;
     int groups;
     int linear_steps, binary_steps, shadow_steps;
@@ -76,6 +82,7 @@ static void release(void *state) {
     layers_state *s = state;
     if (!s) return;
     release(s->below);
+    relief_heights_deinit(&s->size);
     free(s->quads);
     free(s->planes);
     free(s);
@@ -91,22 +98,26 @@ static meso_result fill_planes(meso_context *ctx, const meso_object *object, con
     s->num_layers = map->max_count > 0 ? map->max_count : 1;
     s->heightfield = map->from_heightfield;
     size_t plane = (size_t)(W + 1) * (size_t)(H + 1);
-    size_t planes = (size_t)s->num_layers * 3u + 1u;
+    size_t per_layer = s->heightfield ? 1u : 3u; /* depth, and nx, ny for solids */
+    size_t planes = (size_t)s->num_layers * per_layer + 1u;
     s->planes = malloc(plane * planes * sizeof(float));
     if (!s->planes)
         return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
     s->bytes = plane * planes * sizeof(float);
     for (int k = 0; k < s->num_layers; k++) {
-        s->depth[k] = s->planes + plane * (size_t)(3 * k);
-        s->nx[k] = s->depth[k] + plane;
-        s->ny[k] = s->nx[k] + plane;
+        s->depth[k] = s->planes + plane * per_layer * (size_t)k;
+        s->nx[k] = s->heightfield ? NULL : s->depth[k] + plane;
+        s->ny[k] = s->heightfield ? NULL : s->nx[k] + plane;
     }
-    s->count = s->planes + plane * (size_t)(3 * s->num_layers);
-    s->groups = (s->num_layers + 3) / 4;
-    s->quads = malloc(plane * (size_t)s->groups * 4u * sizeof(float));
-    if (!s->quads)
-        return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
-    s->bytes += plane * (size_t)s->groups * 4u * sizeof(float);
+    s->count = s->planes + plane * per_layer * (size_t)s->num_layers;
+    s->groups = s->heightfield ? 0 : (s->num_layers + 3) / 4;
+    if (s->groups > 0) {
+        s->quads = malloc(plane * (size_t)s->groups * 4u * sizeof(float));
+        if (!s->quads)
+            return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory",
+                                  object->name);
+        s->bytes += plane * (size_t)s->groups * 4u * sizeof(float);
+    }
     for (int j = 0; j <= H; j++)
         for (int i = 0; i <= W; i++) {
             int si = i, sj = j;
@@ -125,6 +136,7 @@ static meso_result fill_planes(meso_context *ctx, const meso_object *object, con
             for (int k = 0; k < s->num_layers; k++) {
                 size_t slot = texel * (size_t)L + (size_t)k;
                 s->depth[k][p] = map->depth[slot];
+                if (s->heightfield) continue;
                 s->nx[k][p] = map->normal_x[slot];
                 s->ny[k][p] = map->normal_y[slot];
             }
@@ -145,8 +157,10 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
     meso_result r = meso_technique_options_read(ctx, scene, object,
                                                 &meso_technique_relief_layers.info, &options);
     if (r != MESO_OK) return r;
-    /* "float" defaults to 1 on height fields: their 8-bit normals cost ~3 dB against relief
-     * on smooth fields (docs/techniques/relief_layers.md); solids keep the paper's 8 bits. */
+    /* "float" defaults to 1 on height fields: the search then meets the field's own heights,
+     * as relief does (their normals come from the field, not the map, so 8 bits now costs
+     * only the depths' rounding: 0.0-0.1 dB, docs/techniques/relief_layers.md); solids keep
+     * the paper's 8 bits. */
     /* an impostor (§4) is a whole model on one quad: finer map and search by default */
     bool impostor = object->mesostructure.kind == MESO_MESOSTRUCTURE_SOLID &&
                     object->mesostructure.solid &&
@@ -192,6 +206,12 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
     if (m->kind == MESO_MESOSTRUCTURE_SOLID && m->wrap == MESO_WRAP_CLAMP)
         map->wrap = MESO_WRAP_CLAMP;
     if ((r = fill_planes(ctx, object, map, s)) != MESO_OK) goto fail;
+    if (map->from_heightfield) {
+        /* the field itself, for its gradient at the hit (normal()); the map is baked at the
+         * field's resolution and wrap, so the texel coordinates are the same */
+        if ((r = relief_heights_init(ctx, object, &s->size)) != MESO_OK) goto fail;
+        s->bytes += relief_heights_memory(&s->size);
+    }
     s->filter = filter != 0;
     s->missed_floor = missed != 0;
     s->params.shadows = shadows != 0;
@@ -394,7 +414,10 @@ static void search(const void *user, const relief_batch *batches, int count, v8f
 }
 
 /* Self-shadows (§3.1): blocked where a sample of the light ray lies inside by more than the
- * bias. */
+ * bias. The sample's depth is relief's, d (1 - s) + bulge s (1 - s) (relief_shadow_batch): on
+ * a curved mesh the surface falls away from the light ray, which so runs deeper than the
+ * straight line; without the bulge a sphere's bumps lost shadows that relief and the reference
+ * draw (1 dB on bumps-sphere). */
 static void shadow(const void *user, const relief_shadow_batch *batches, int count,
                    int *out_blocked) {
     const layers_state *s = user;
@@ -410,7 +433,8 @@ static void shadow(const void *user, const relief_shadow_batch *batches, int cou
         for (int k = 1; k < s->shadow_steps && pending; ++k) {
             float frac = (float)k * inv;
             v8f f;
-            layers_inside8(s, b->x + b->xd * frac, b->y + b->yd * frac, b->d * (1.0f - frac), &f);
+            layers_inside8(s, b->x + b->xd * frac, b->y + b->yd * frac,
+                           (b->d + b->bulge * frac) * (1.0f - frac), &f);
             int bits = v8_mask_bits(f > LAYERS_SHADOW_BIAS) & pending;
             blocked |= bits;
             pending &= ~bits;
@@ -421,12 +445,23 @@ static void shadow(const void *user, const relief_shadow_batch *batches, int cou
 
 /* ---- Normals (§3, Fig. 5; §3.2) ---------------------------------------------------------- */
 
-/* The layer normals at the hit. §3.2: the last outside and inside points of the binary search
- * lie one bracket (t_end / (linear_steps 2^binary_steps)) either side of the hit; of their
- * nearest texels the one with more layers is read, so a ray that entered a four-layer texel
- * is not shaded with a two-layer neighbour's normals. Its entry layer nearest in depth gives
- * (x, y), z = sqrt(max(0, 1 - x^2 - y^2)) (§3), and the texture-space normal goes to world
- * space through the gradients of u, v and -w: x grad u + y grad v + z N / depth. */
+/* The layer normals at the hit, for solids. §3.2: the last outside and inside points of the
+ * binary search lie one bracket (t_end / (linear_steps 2^binary_steps)) either side of the hit;
+ * of their nearest texels the one with more layers is read, so a ray that entered a four-layer
+ * texel is not shaded with a two-layer neighbour's normals. Its entry layer nearest in depth
+ * gives (x, y), z = sqrt(max(0, 1 - x^2 - y^2)) (§3), and the texture-space normal goes to
+ * world space through the gradients of u, v and -w: x grad u + y grad v + z N / depth (the
+ * same normal as relief_normal8's cross product for a height field's (-h_u, -h_v, 1)).
+ *
+ * Height fields do not come here (shade passes no callback: relief's gradient normal). Their
+ * baked normals are right at texel centres, but texture space is anisotropic (u spans a tile,
+ * w only the shell's depth), so a field's normal there is nearly horizontal: a cone one shell
+ * deep over 8 texels of 256 has slope 32 per u, z = 0.03. Bilinear (x, y) of unit normals
+ * whose directions differ (around a cone's tip, across a ridge) is shorter than 1, and the z
+ * rebuilt from it is too large, by 2.4 times at the 90th percentile of points on the truth
+ * suite's cones (world normals off by 20 degrees there): they drew 10 dB below relief
+ * (docs/techniques/relief_layers.md). Solids read the nearest texel's normal, not a mix, so
+ * they do not meet it. */
 static void normal(const void *user, const relief_lanes *l, const relief_batch *batch, v8f t,
                    v8f hx, v8f hy, v8f hd, float depth, v8vec3 *out) {
     const layers_state *s = user;
@@ -436,26 +471,16 @@ static void normal(const void *user, const relief_lanes *l, const relief_batch *
     layers_cell b = layers_locate8(s, hx + batch->xd * delta, hy + batch->yd * delta);
     v8f ca = v8_gather(s->count, a.nearest), cb = v8_gather(s->count, b.nearest);
     v8i index = (v8i)v8_select(cb > ca, (v8f)b.nearest, (v8f)a.nearest);
-    layers_cell here = layers_locate8(s, hx, hy);
     (void)t;
     v8f x = v8_splat(0.0f), y = v8_splat(0.0f), best = v8_splat(3.0f);
     for (int k = 0; k < s->num_layers; k += 2) { /* entries: the even layers */
         v8f D = v8_gather(s->depth[k], index);
         v8f gap = hd - D;
         gap = v8_select(gap < 0.0f, -gap, gap);
-        v8i present = s->heightfield ? v8i_splat(-1) : D < 1.0f;
-        v8i closer = (gap < best) & present;
+        v8i closer = (gap < best) & (D < 1.0f);
         if (!v8_any(closer)) continue;
-        v8f lx, ly;
-        if (s->heightfield) { /* one smooth layer: bilinear, like relief */
-            lx = layers_plane8(s, s->nx[k], s->depth[k], here);
-            ly = layers_plane8(s, s->ny[k], s->depth[k], here);
-        } else {
-            lx = v8_gather(s->nx[k], index);
-            ly = v8_gather(s->ny[k], index);
-        }
-        x = v8_select(closer, lx, x);
-        y = v8_select(closer, ly, y);
+        x = v8_select(closer, v8_gather(s->nx[k], index), x);
+        y = v8_select(closer, v8_gather(s->ny[k], index), y);
         best = v8_select(closer, gap, best);
     }
     v8f z = v8_sqrt(v8_max(v8_splat(0.0f), 1.0f - (x * x + y * y)));
@@ -466,7 +491,7 @@ static void normal(const void *user, const relief_lanes *l, const relief_batch *
     v8f len2 = v8_dot(n, n);
     v8i ok = (len2 > 1e-30f) & (len2 < 1e30f) & (best < 2.0f);
     /* a ray that missed and is drawn on the floor (missed = 1) keeps the mesh's normal */
-    if (s->missed_floor && !s->heightfield) ok &= (best < 0.02f) | (hd < 0.999f);
+    if (s->missed_floor) ok &= (best < 0.02f) | (hd < 0.999f);
     v8f inv = 1.0f / v8_sqrt(v8_select(ok, len2, v8_splat(1.0f)));
     inv = v8_select(v8_dot(n, l->normal) < 0.0f, -inv, inv);
     *out = (v8vec3){v8_select(ok, n.x * inv, l->normal.x), v8_select(ok, n.y * inv, l->normal.y),
@@ -515,7 +540,9 @@ static void shade(const void *state, const meso_frame *frame, const meso_object 
                 if (vn < 0.0f) move_along_ray(f, frame, half / vn);
             }
         }
-        relief_tracer tracer = {s, search, shadow, normal};
+        /* a height field: no normal callback, so relief_shade_fragments takes the field's
+         * gradient from s->size's heights (normal() says why not the baked normals) */
+        relief_tracer tracer = {s, search, shadow, s->heightfield ? NULL : normal};
         relief_shade_fragments(&s->size, &tracer, s->params, frame, object, fragments, count);
         return;
     }
