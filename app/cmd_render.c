@@ -227,6 +227,17 @@ int meso_cmd_render(int argc, char **argv) {
 
     meso_context *ctx = app_context_create(&globals);
     if (!ctx) return APP_EXIT_FAILURE;
+    /* Every output is checked before any work, so a bad one fails at once and nothing is
+     * written (with --techniques, OUT is a folder, made later with its parents). */
+    const char *outputs[2] = {o.techniques ? NULL : o.output, o.coverage};
+    for (int i = 0; i < 2; i++) {
+        meso_result checked = outputs[i] ? meso_file_check_output(ctx, outputs[i]) : MESO_OK;
+        if (checked != MESO_OK) {
+            status = app_fail(ctx, checked);
+            meso_context_destroy(ctx);
+            return status;
+        }
+    }
     meso_scene *scene = NULL;
     meso_result result = meso_scene_load(ctx, scene_path, &scene);
     if (result != MESO_OK)

@@ -45,7 +45,8 @@ meso_result meso_framebuffer_color_image(meso_context *ctx, const meso_framebuff
 meso_result meso_framebuffer_coverage_image(meso_context *ctx, const meso_framebuffer *fb,
                                             meso_image **out_image);
 /* Save the colour with the scene's encoding (sRGB unless the scene says linear). When
- * coverage_path is not NULL the coverage mask is written there as a grey PNG too. */
+ * coverage_path is not NULL the coverage mask is written there as a grey PNG too: both files
+ * or neither (meso_image_save_png_all). */
 meso_result meso_framebuffer_save_png(meso_context *ctx, const meso_framebuffer *fb,
                                       meso_encoding encoding, const char *path,
                                       const char *coverage_path);

@@ -85,16 +85,18 @@ meso_result meso_framebuffer_save_png(meso_context *ctx, const meso_framebuffer 
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "framebuffer: NULL %s",
                               fb ? "path" : "framebuffer");
     }
-    meso_image *image = NULL;
-    meso_result r = meso_framebuffer_color_image(ctx, fb, &image);
-    if (r != MESO_OK) return r;
-    r = meso_image_save_png(ctx, image, path, &(meso_png_desc){.encoding = encoding});
-    meso_image_destroy(image);
-    if (r != MESO_OK || !coverage_path) return r;
-    if ((r = meso_framebuffer_coverage_image(ctx, fb, &image)) != MESO_OK) return r;
-    /* the mask is a fraction, not a colour: written linearly */
-    r = meso_image_save_png(ctx, image, coverage_path,
-                            &(meso_png_desc){.encoding = MESO_ENCODING_LINEAR});
-    meso_image_destroy(image);
+    meso_image *color = NULL, *coverage = NULL;
+    meso_result r = meso_framebuffer_color_image(ctx, fb, &color);
+    if (r == MESO_OK && coverage_path) r = meso_framebuffer_coverage_image(ctx, fb, &coverage);
+    if (r == MESO_OK) {
+        const meso_image *images[2] = {color, coverage};
+        const char *paths[2] = {path, coverage_path};
+        /* the mask is a fraction, not a colour: written linearly */
+        const meso_png_desc descs[2] = {{.encoding = encoding},
+                                        {.encoding = MESO_ENCODING_LINEAR}};
+        r = meso_image_save_png_all(ctx, coverage_path ? 2 : 1, images, paths, descs);
+    }
+    meso_image_destroy(color);
+    meso_image_destroy(coverage);
     return r;
 }

@@ -22,9 +22,13 @@ static meso_result copy_name(const scene_parser *p, const scene_key *key, const 
 /* A missing referenced file is reported with the scene, the key and the resolved path, which
  * the loaders' own messages (naming only the file) would not say. */
 static meso_result check_readable(const scene_parser *p, const scene_key *key, const char *path) {
-    FILE *file = fopen(path, "rb");
-    if (!file)
-        return scene_error(p, MESO_ERROR_IO, key, "%s: cannot open: %s", path, strerror(errno));
+    FILE *file = NULL;
+    if (meso_file_open_read(p->ctx, path, &file) != MESO_OK) {
+        /* the loader's reason ("path: is a FIFO, ..."), said at the scene's key */
+        char reason[1024];
+        snprintf(reason, sizeof(reason), "%s", meso_context_last_error(p->ctx));
+        return scene_error(p, MESO_ERROR_IO, key, "%s", reason);
+    }
     fclose(file);
     return MESO_OK;
 }
