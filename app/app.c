@@ -24,6 +24,9 @@ static size_t global_options(app_globals *g, app_option *out) {
         {"--verbose", "-v", APP_OPTION_FLAG, &g->verbose, NULL,
          "also print the library's information lines (triangle counts, memory, bake times)",
          NULL, 0, 0},
+        {"--memory-limit", NULL, APP_OPTION_STRING, &g->memory_limit, "SIZE",
+         "refuse work estimated to need more memory (bytes, or with K, M, G, T)", "3/4 of RAM", 0,
+         0},
         {"--help", "-h", APP_OPTION_FLAG, &g->help, NULL, "print this help and exit", NULL, 0, 0},
     };
     memcpy(out, options, sizeof(options));
@@ -174,6 +177,19 @@ static int set_option(const char *command, const app_option *o, const char *valu
     return -1;
 }
 
+/* "4G", "512M", "1.5G" or bytes -> bytes; 0 when malformed. */
+static uint64_t parse_memory_size(const char *text) {
+    char *end = NULL;
+    double value = strtod(text, &end);
+    if (end == text || !isfinite(value) || value <= 0.0) return 0;
+    static const char units[] = "KMGT";
+    const char *unit = *end ? strchr(units, *end == 'k' ? 'K' : *end) : NULL;
+    if (*end && (!unit || end[1])) return 0;
+    if (unit)
+        for (const char *u = units; u <= unit; u++) value *= 1024.0;
+    return value >= 1.0 && value < 1.8e19 ? (uint64_t)value : 0;
+}
+
 int app_parse_options(const app_command_help *help, const app_option *options, size_t count,
                       int argc, char **argv, app_globals *globals, const char **positionals,
                       int max_positionals, int *out_num_positionals) {
@@ -219,6 +235,9 @@ int app_parse_options(const app_command_help *help, const app_option *options, s
         app_print_help(help, options, count);
         return APP_EXIT_OK;
     }
+    if (globals->memory_limit && parse_memory_size(globals->memory_limit) == 0)
+        return app_usage_error(command, "--memory-limit: '%s' is not a size (4G, 512M, bytes)",
+                               globals->memory_limit);
     return -1;
 }
 
@@ -243,6 +262,9 @@ meso_context *app_context_create(const app_globals *globals) {
                     : globals->progress ? MESO_PROGRESS_ALWAYS
                                         : MESO_PROGRESS_DEFAULT,
     };
+    if (globals->memory_limit) {
+        desc.memory_limit = parse_memory_size(globals->memory_limit);
+    }
     meso_context *ctx = NULL;
     if (meso_context_create(&desc, &ctx) != MESO_OK) {
         fprintf(stderr, "meso: out of memory\n");

@@ -61,6 +61,7 @@ typedef struct app_globals {
     bool quiet;    /* --quiet: only errors */
     bool verbose;  /* --verbose: the library's info lines too */
     bool help;     /* --help */
+    const char *memory_limit; /* --memory-limit SIZE: "4G", "512M", bytes; NULL: the default */
 } app_globals;
 
 /* What --help prints about a command, besides its options. */

@@ -59,7 +59,10 @@ static int render_one(meso_context *ctx, const meso_scene *scene, const render_o
     int height = o->size.height ? o->size.height : scene->height;
     meso_encoding encoding = o->linear ? MESO_ENCODING_LINEAR : scene->encoding;
 
-    meso_result result = meso_renderer_create(ctx, scene, &desc, &renderer);
+    /* the frame's memory is checked before the renderer prepares (and bakes) anything */
+    meso_result result =
+        meso_memory_check(ctx, scene->path, meso_render_memory_estimate(&desc, width, height));
+    if (result == MESO_OK) result = meso_renderer_create(ctx, scene, &desc, &renderer);
     if (result == MESO_OK) result = meso_framebuffer_create(ctx, width, height, &fb);
     if (result == MESO_OK) result = meso_renderer_render(renderer, fb);
     if (result == MESO_OK)

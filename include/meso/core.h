@@ -88,6 +88,7 @@ typedef struct meso_context_desc {
     meso_progress_mode progress;
     meso_progress_fn on_progress; /* NULL: none; called in addition to the bar */
     void *progress_user;
+    uint64_t memory_limit; /* bytes a job may need; 0: meso_memory_default_limit() */
 } meso_context_desc;
 
 typedef struct meso_context meso_context;
@@ -114,6 +115,21 @@ void meso_log_warning(meso_context *ctx, const char *format, ...)
     __attribute__((format(printf, 2, 3)));
 void meso_log_info(meso_context *ctx, const char *format, ...)
     __attribute__((format(printf, 2, 3)));
+
+/* ---- Memory budget ------------------------------------------------------------------------
+ * Jobs estimate the memory they will need (meshes after subdivision with their derived
+ * arrays, height fields, colour maps, framebuffers times samples) before allocating it, and
+ * refuse with MESO_ERROR_LIMIT when the estimate is over the context's limit, rather than
+ * running out of memory (or being killed) after minutes of work. */
+
+/* Three quarters of the physical memory (8 GiB when it cannot be read). Thread-safe. */
+uint64_t meso_memory_default_limit(void);
+/* The context's limit in bytes. Thread-safe. */
+uint64_t meso_context_memory_limit(const meso_context *ctx);
+/* MESO_OK when estimate_bytes is within the context's limit, else MESO_ERROR_LIMIT logged as
+ * "<name>: needs about 18.50 GiB of memory, more than the limit of 17.25 GiB (--memory-limit)".
+ * Thread-safe. */
+meso_result meso_memory_check(meso_context *ctx, const char *name, uint64_t estimate_bytes);
 
 /* ---- Parallel loops ----------------------------------------------------------------------- */
 

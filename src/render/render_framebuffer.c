@@ -10,6 +10,16 @@ float *meso_render_alloc_floats(size_t count) {
     return aligned_alloc(64, bytes ? bytes : 64);
 }
 
+/* colour (3 floats), coverage and depth a sample */
+#define BYTES_PER_SAMPLE (5 * sizeof(float))
+
+uint64_t meso_render_memory_estimate(const meso_render_desc *desc, int width, int height) {
+    uint64_t pixels = (uint64_t)(width > 0 ? width : 0) * (uint64_t)(height > 0 ? height : 0);
+    int samples = desc && desc->samples > 1 ? desc->samples : 1;
+    uint64_t n = samples > 1 ? (uint64_t)ceil(sqrt((double)samples) - 1e-9) : 1;
+    return pixels * BYTES_PER_SAMPLE * (1 + (n > 1 ? n * n : 0));
+}
+
 meso_result meso_framebuffer_create(meso_context *ctx, int width, int height,
                                     meso_framebuffer **out_framebuffer) {
     *out_framebuffer = NULL;
@@ -23,6 +33,8 @@ meso_result meso_framebuffer_create(meso_context *ctx, int width, int height,
                               "framebuffer: size %d x %d exceeds the limit %d a side, %u pixels",
                               width, height, MESO_IMAGE_MAX_SIDE, (unsigned)MESO_IMAGE_MAX_PIXELS);
     }
+    meso_result r = meso_memory_check(ctx, "framebuffer", meso_render_memory_estimate(NULL, width, height));
+    if (r != MESO_OK) return r;
     size_t n = (size_t)width * (size_t)height;
     meso_framebuffer *fb = calloc(1, sizeof(*fb));
     if (!fb) goto oom;

@@ -69,7 +69,7 @@ static meso_result parse_procedural_heightfield(const scene_parser *p, const cJS
     }
     long resolution = 0, rows = 0, columns = 0, seed = 0;
     float gap = 0.0f, bevel = 0.0f, roughness = 0.0f;
-    if ((r = scene_get_int(p, item, key, "resolution", 1, MESO_IMAGE_MAX_SIDE, true,
+    if ((r = scene_get_int(p, item, key, "resolution", 1, MESO_HEIGHTFIELD_MAX_RESOLUTION, true,
                            &resolution)) ||
         (r = scene_get_int(p, item, key, "rows", 1, 1024, false, &rows)) ||
         (r = scene_get_int(p, item, key, "columns", 1, 1024, false, &columns)) ||
@@ -92,6 +92,9 @@ static meso_result parse_procedural_heightfield(const scene_parser *p, const cJS
                            (double)roughness);
     }
     desc.resolution = (int)resolution;
+    /* heights (float) and the generated colour (3 floats) a texel */
+    uint64_t texels = (uint64_t)(resolution ? resolution : 512) * (uint64_t)(resolution ? resolution : 512);
+    if ((r = scene_account_memory(p, key, texels * (want_color ? 16 : 4))) != MESO_OK) return r;
     desc.rows = (int)rows;
     desc.columns = (int)columns;
     desc.seed = (uint32_t)seed;
@@ -289,7 +292,10 @@ static meso_result create_mesh(const scene_parser *p, const cJSON *obj, const sc
         if ((r = scene_resolve_path(p, &file_key, file, path)) ||
             (r = check_readable(p, &file_key, path)))
             return r;
-        return meso_mesh_load(p->ctx, path, out_mesh);
+        r = meso_mesh_load(p->ctx, path, out_mesh);
+        if (r != MESO_OK) return r;
+        return scene_account_memory(p, key, meso_mesh_memory_estimate((*out_mesh)->num_vertices,
+                                                                      (*out_mesh)->num_triangles));
     }
     if (shape && !cJSON_IsString(shape))
         return scene_error(p, MESO_ERROR_FORMAT, &shape_key,
@@ -307,6 +313,8 @@ static meso_result create_mesh(const scene_parser *p, const cJSON *obj, const sc
         (r = scene_get_int(p, obj, key, "segments", 1, 4096, true, &segments)))
         return r;
     desc.segments = (int)segments;
+    /* accounted before it is built: a mesh over the budget is never allocated */
+    if ((r = scene_account_memory(p, key, meso_shape_memory_estimate(&desc))) != MESO_OK) return r;
     r = meso_mesh_create_shape(p->ctx, &desc, out_mesh);
     return r == MESO_OK ? r : relog_as_format(p, key, r);
 }
@@ -422,6 +430,40 @@ meso_result scene_parse_object(const scene_parser *p, const cJSON *item, int ind
 fail:
     meso_image_destroy(generated_color);
     return r;
+}
+
+/* A number member in [lo, hi], else 0 (the default): the estimate reads the scene before
+ * it is validated, and leaves the refusing of bad values to the parse. */
+static double number_or_default(const cJSON *object, const char *name, double lo, double hi) {
+    const cJSON *item = cJSON_GetObjectItemCaseSensitive(object, name);
+    return cJSON_IsNumber(item) && item->valuedouble >= lo && item->valuedouble <= hi
+               ? item->valuedouble
+               : 0.0;
+}
+
+uint64_t scene_objects_memory_estimate(const cJSON *objects) {
+    uint64_t total = 0;
+    for (const cJSON *obj = objects ? objects->child : NULL; obj; obj = obj->next) {
+        const cJSON *shape = cJSON_GetObjectItemCaseSensitive(obj, "shape");
+        meso_shape_desc desc = {0};
+        if ((!shape || cJSON_IsString(shape)) &&
+            meso_shape_kind_from_name(shape ? shape->valuestring : "plane", &desc.kind)) {
+            desc.size = (float)number_or_default(obj, "size", 1e-30, 1e30);
+            desc.minor_radius = (float)number_or_default(obj, "minor_radius", 1e-30, 1e30);
+            desc.height = (float)number_or_default(obj, "height", 1e-30, 1e30);
+            desc.segments = (int)number_or_default(obj, "segments", 1, 4096);
+            total += meso_shape_memory_estimate(&desc);
+        }
+        const cJSON *m = cJSON_GetObjectItemCaseSensitive(obj, "mesostructure");
+        const cJSON *source = cJSON_GetObjectItemCaseSensitive(m, "height_map");
+        if (cJSON_IsObject(source)) {
+            double side = number_or_default(source, "resolution", 1,
+                                            MESO_HEIGHTFIELD_MAX_RESOLUTION);
+            if (side == 0.0) side = 512.0;
+            total += (uint64_t)(side * side) * 16; /* heights and generated colour */
+        }
+    }
+    return total;
 }
 
 void scene_object_deinit(meso_object *object) {

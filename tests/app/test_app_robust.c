@@ -201,6 +201,48 @@ static void test_killed_renders_leave_no_temporary_and_no_partial_file(void **st
     }
 }
 
+static void test_jobs_over_the_memory_budget_are_refused_before_allocating(void **state) {
+    (void)state;
+    /* eight 4096-segment planes: ~36 GiB estimated, refused before the first is built */
+    char objects[1024] = "";
+    for (int i = 0; i < 8; i++)
+        strcat(objects, i ? ", {\"shape\": \"plane\", \"segments\": 4096}"
+                          : "{\"shape\": \"plane\", \"segments\": 4096}");
+    char text[2048];
+    snprintf(text, sizeof text,
+             "{\"camera\": {\"eye\": [0, 2, 2], \"target\": [0, 0, 0], \"up\": [0, 1, 0],"
+             " \"fov_y_deg\": 45}, \"objects\": [%s]}",
+             objects);
+    const char *scene = test_path(test_temp_dir(), "eight_planes.json");
+    test_write_file(scene, text, strlen(text));
+    char arguments[4096];
+    double start = meso_time_seconds();
+    snprintf(arguments, sizeof arguments, "info %s --memory-limit 16G", scene);
+    expect_refused(arguments, "eight_planes.json: objects: needs about");
+    expect_refused(arguments, "more than the limit of 16.00 GiB (--memory-limit)");
+    /* a frame of 16384 x 4096 with 16 samples: ~21 GiB, refused before the framebuffer */
+    snprintf(arguments, sizeof arguments,
+             "render " SCENE " -o %s --technique flat --size 16384x4096 --samples 16 "
+             "--memory-limit 16G",
+             test_path(test_temp_dir(), "huge.png"));
+    expect_refused(arguments, "bricks-plane.json: needs about 21.25 GiB of memory");
+    assert_true(meso_time_seconds() - start < 10.0);
+    /* a small limit refuses even the example; a malformed one is a usage error */
+    snprintf(arguments, sizeof arguments, "render " SCENE " -o %s --memory-limit 1M",
+             test_path(test_temp_dir(), "small.png"));
+    expect_refused(arguments, "needs about");
+    expect_refused("render " SCENE " -o x.png --memory-limit 1Q", "--memory-limit: '1Q'");
+    /* the documented procedural limit is the one enforced */
+    snprintf(text, sizeof text,
+             "{\"camera\": {\"eye\": [0, 2, 2], \"target\": [0, 0, 0], \"up\": [0, 1, 0],"
+             " \"fov_y_deg\": 45}, \"objects\": [{\"mesostructure\": {\"height_map\":"
+             " {\"procedural\": \"bricks\", \"resolution\": 16384}, \"depth\": 0.1}}]}");
+    scene = test_path(test_temp_dir(), "resolution.json");
+    test_write_file(scene, text, strlen(text));
+    snprintf(arguments, sizeof arguments, "info %s", scene);
+    expect_refused(arguments, "objects[0].mesostructure.height_map.resolution");
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_meshes_declaring_more_than_they_hold_are_refused),
@@ -209,6 +251,7 @@ int main(void) {
         cmocka_unit_test(test_outputs_are_regular_files_that_keep_their_mode),
         cmocka_unit_test(test_a_fifo_as_input_is_refused_without_blocking),
         cmocka_unit_test(test_killed_renders_leave_no_temporary_and_no_partial_file),
+        cmocka_unit_test(test_jobs_over_the_memory_budget_are_refused_before_allocating),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
