@@ -1,0 +1,188 @@
+/* Bake files that pass the container's checks but must still not be trusted (issue 15): values
+ * that are not finite, entries made from another source; and every truncation and single-bit
+ * flip of a real VDM file refused. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "test_util.h"
+
+static meso_heightfield *make_bumps(int side) {
+    meso_heightfield *hf = calloc(1, sizeof(*hf));
+    assert_non_null(hf);
+    hf->width = hf->height = side;
+    hf->heights = calloc((size_t)side * (size_t)side, sizeof(float));
+    assert_non_null(hf->heights);
+    for (int y = 0; y < side; y++)
+        for (int x = 0; x < side; x++)
+            hf->heights[y * side + x] =
+                0.5f + 0.4f * sinf(6.2831853f * (float)x / (float)side) *
+                           sinf(6.2831853f * (float)y / (float)side);
+    hf->hash = meso_hash64(hf->heights, sizeof(float) * (size_t)side * (size_t)side,
+                           MESO_HASH_SEED);
+    return hf;
+}
+
+static void free_heightfield(meso_heightfield *hf) {
+    free(hf->heights);
+    free(hf);
+}
+
+/* A tiny VDM baked through the cache (a folder under the test's temporary folder); its cache
+ * file's path into out_path. */
+static meso_vdm_desc tiny_desc(meso_heightfield *hf) {
+    return (meso_vdm_desc){.heightfield = hf,
+                           .width = 8,
+                           .num_theta = 4,
+                           .num_phi = 2,
+                           .num_curvatures = 2,
+                           .depth = 0.08f,
+                           .vdm_eigenfunctions = 2,
+                           .mvm_eigenfunctions = 1};
+}
+
+static void bake_into_cache(meso_context *ctx, const meso_vdm_desc *desc, char *out_path,
+                            size_t size) {
+    meso_vdm *vdm = NULL;
+    assert_int_equal(meso_vdm_bake_cached(ctx, desc, &vdm), MESO_OK);
+    meso_vdm_destroy(vdm);
+    assert_int_equal(
+        meso_bake_cache_path(ctx, MESO_VDM_KIND, meso_vdm_cache_key(desc), out_path, size),
+        MESO_OK);
+}
+
+/* Load `path`, let `edit` change it, save it back (so its checksum is valid again). */
+static void rewrite(meso_context *ctx, const char *path,
+                    void (*edit)(meso_bake_file *bake)) {
+    meso_bake_file *bake = NULL;
+    assert_int_equal(meso_bake_file_load(ctx, path, &bake), MESO_OK);
+    edit(bake);
+    assert_int_equal(meso_bake_file_save(ctx, bake, path), MESO_OK);
+    meso_bake_file_destroy(bake);
+}
+
+static void put_nan_in_eigen_vdm(meso_bake_file *bake) {
+    const meso_bake_array *a = meso_bake_file_find(bake, "eigen_vdm");
+    assert_non_null(a);
+    float nan_value = NAN;
+    memcpy((void *)((const float *)a->data + 3), &nan_value, sizeof(float));
+}
+
+static void put_huge_eigen_mvm(meso_bake_file *bake) {
+    const meso_bake_array *a = meso_bake_file_find(bake, "eigen_mvm");
+    assert_non_null(a);
+    float huge = 1e30f;
+    memcpy((void *)a->data, &huge, sizeof(float));
+}
+
+static void change_source(meso_bake_file *bake) { bake->source_hash ^= 1; }
+
+static void test_non_finite_values_with_a_valid_checksum_are_refused_and_rebaked(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    setenv("MESO_CACHE_DIR", test_path(test_temp_dir(), "robust_cache"), 1);
+    meso_heightfield *hf = make_bumps(16);
+    meso_vdm_desc desc = tiny_desc(hf);
+    char path[1200];
+    bake_into_cache(ctx, &desc, path, sizeof(path));
+
+    rewrite(ctx, path, put_nan_in_eigen_vdm);
+    meso_vdm *vdm = NULL;
+    assert_int_equal(meso_vdm_load(ctx, path, &vdm), MESO_ERROR_FORMAT);
+    assert_null(vdm);
+    assert_non_null(strstr(meso_context_last_error(ctx), "array \"eigen_vdm\": element 3 is nan"));
+    /* through the cache: a warning, and baked again */
+    assert_int_equal(meso_vdm_bake_cached(ctx, &desc, &vdm), MESO_OK);
+    assert_non_null(strstr(test_last_warning(), "eigen_vdm"));
+    assert_true(meso_vdm_get_compression(vdm).bake_seconds > 0.0);
+    meso_vdm_destroy(vdm);
+
+    rewrite(ctx, path, put_huge_eigen_mvm); /* finite, but out of range */
+    assert_int_equal(meso_vdm_load(ctx, path, &vdm), MESO_ERROR_FORMAT);
+    assert_non_null(strstr(meso_context_last_error(ctx), "array \"eigen_mvm\": element 0"));
+
+    unsetenv("MESO_CACHE_DIR");
+    free_heightfield(hf);
+    meso_context_destroy(ctx);
+}
+
+static void test_a_cache_entry_of_another_source_is_not_used(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    setenv("MESO_CACHE_DIR", test_path(test_temp_dir(), "robust_cache_source"), 1);
+    meso_heightfield *hf = make_bumps(16);
+    meso_vdm_desc desc = tiny_desc(hf);
+    char path[1200];
+    bake_into_cache(ctx, &desc, path, sizeof(path));
+    rewrite(ctx, path, change_source);
+    meso_vdm *vdm = NULL;
+    assert_int_equal(meso_vdm_bake_cached(ctx, &desc, &vdm), MESO_OK);
+    assert_non_null(strstr(test_last_warning(), "made from another source"));
+    assert_true(meso_vdm_get_compression(vdm).bake_seconds > 0.0); /* baked, not loaded */
+    meso_vdm_destroy(vdm);
+    unsetenv("MESO_CACHE_DIR");
+    free_heightfield(hf);
+    meso_context_destroy(ctx);
+}
+
+static char *read_file(const char *path, size_t *out_size) {
+    meso_context *ctx = test_context(1);
+    char *data = NULL;
+    assert_int_equal(meso_file_read(ctx, path, 1u << 30, &data, out_size), MESO_OK);
+    meso_context_destroy(ctx);
+    return data;
+}
+
+/* The VDM file truncated at every byte of its header and table and at 1,000 random lengths,
+ * and with 1,000 single bits flipped: every one refused by meso_vdm_load (the checksum and the
+ * container's checks), none crashing. */
+static void test_every_truncation_and_bit_flip_of_a_vdm_file_is_refused(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    setenv("MESO_CACHE_DIR", test_path(test_temp_dir(), "robust_cache_flips"), 1);
+    meso_heightfield *hf = make_bumps(16);
+    meso_vdm_desc desc = tiny_desc(hf);
+    char path[1200];
+    bake_into_cache(ctx, &desc, path, sizeof(path));
+    size_t size = 0;
+    char *original = read_file(path, &size);
+    const char *mutated = test_path(test_temp_dir(), "mutated.mesobake");
+    meso_vdm *vdm = NULL;
+    srand(15);
+    size_t header_and_table = size < 2048 ? size : 2048;
+    int refused = 0, tried = 0;
+    for (size_t k = 0; k < header_and_table + 1000; k++) {
+        size_t length = k < header_and_table ? k : (size_t)rand() % size;
+        test_write_file(mutated, original, length);
+        tried++;
+        refused += meso_vdm_load(ctx, mutated, &vdm) != MESO_OK;
+        assert_null(vdm);
+    }
+    for (int k = 0; k < 1000; k++) {
+        size_t bit = (size_t)rand() % (size * 8);
+        original[bit / 8] ^= (char)(1u << (bit % 8));
+        test_write_file(mutated, original, size);
+        original[bit / 8] ^= (char)(1u << (bit % 8));
+        tried++;
+        refused += meso_vdm_load(ctx, mutated, &vdm) != MESO_OK;
+        assert_null(vdm);
+    }
+    assert_int_equal(refused, tried);
+    /* the unmutated file still loads */
+    test_write_file(mutated, original, size);
+    assert_int_equal(meso_vdm_load(ctx, mutated, &vdm), MESO_OK);
+    meso_vdm_destroy(vdm);
+    free(original);
+    unsetenv("MESO_CACHE_DIR");
+    free_heightfield(hf);
+    meso_context_destroy(ctx);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_non_finite_values_with_a_valid_checksum_are_refused_and_rebaked),
+        cmocka_unit_test(test_a_cache_entry_of_another_source_is_not_used),
+        cmocka_unit_test(test_every_truncation_and_bit_flip_of_a_vdm_file_is_refused),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
