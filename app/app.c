@@ -40,9 +40,9 @@ int app_usage_error(const char *command, const char *format, ...) {
     vsnprintf(message, sizeof(message), format, args);
     va_end(args);
     if (command && command[0])
-        fprintf(stderr, "meso: %s: %s (see meso %s --help)\n", command, message, command);
+        app_error("%s: %s (see meso %s --help)", command, message, command);
     else
-        fprintf(stderr, "meso: %s (see meso --help)\n", message);
+        app_error("%s (see meso --help)", message);
     return APP_EXIT_BAD_INPUT;
 }
 
@@ -278,12 +278,49 @@ int app_exit_status(meso_result result) {
     return meso_result_is_bad_input(result) ? APP_EXIT_BAD_INPUT : APP_EXIT_FAILURE;
 }
 
-int app_fail(meso_context *ctx, meso_result result) {
+void app_error(const char *format, ...) {
+    char message[2048], escaped[4 * sizeof(message)];
+    va_list args;
+    va_start(args, format);
+    vsnprintf(message, sizeof(message), format, args);
+    va_end(args);
+    /* One line whatever the arguments hold: control characters (a newline in a file name, a
+     * terminal escape) are written as \n, \t, \xNN. */
+    size_t used = 0;
+    for (const unsigned char *p = (const unsigned char *)message; *p; p++) {
+        if (*p >= 0x20 && *p != 0x7f)
+            escaped[used++] = (char)*p;
+        else if (*p == '\n' || *p == '\t')
+            used += (size_t)snprintf(escaped + used, sizeof(escaped) - used, "\\%c",
+                                     *p == '\n' ? 'n' : 't');
+        else
+            used += (size_t)snprintf(escaped + used, sizeof(escaped) - used, "\\x%02x", *p);
+    }
+    escaped[used] = 0;
+    fprintf(stderr, "meso: %s\n", escaped);
+}
+
+/* Whether a message begins with a file name: its first field (up to ": ") has a '.' or a '/',
+ * which the names of objects, keys and modules ("objects[0]", "torus", "render") do not. */
+static bool names_a_file(const char *message) {
+    size_t field = strcspn(message, ":");
+    if (message[field] != ':') return false;
+    for (size_t i = 0; i < field; i++)
+        if (message[i] == '.' || message[i] == '/') return true;
+    return false;
+}
+
+int app_fail_in(meso_context *ctx, meso_result result, const char *file) {
     const char *message = ctx ? meso_context_last_error(ctx) : "";
     if (!message || !message[0]) message = meso_result_string(result);
-    fprintf(stderr, "meso: %s\n", message);
+    if (file && !names_a_file(message))
+        app_error("%s: %s", file, message);
+    else
+        app_error("%s", message);
     return result == MESO_OK ? APP_EXIT_FAILURE : app_exit_status(result);
 }
+
+int app_fail(meso_context *ctx, meso_result result) { return app_fail_in(ctx, result, NULL); }
 
 /* ---- Paths -------------------------------------------------------------------------------- */
 

@@ -133,8 +133,8 @@ int meso_cmd_compare(int argc, char **argv) {
         goto done;
     }
     if (a->width != b->width || a->height != b->height) {
-        fprintf(stderr, "meso: compare: %s is %dx%d but %s is %dx%d\n", path_a, a->width, a->height,
-                path_b, b->width, b->height);
+        app_error("%s: is %dx%d but %s is %dx%d", path_a, a->width, a->height, path_b, b->width,
+                  b->height);
         status = APP_EXIT_BAD_INPUT;
         goto done;
     }
@@ -142,8 +142,8 @@ int meso_cmd_compare(int argc, char **argv) {
     const char *mask_paths[2] = {mask_a_path, mask_b_path};
     for (int m = 0; m < 2; m++)
         if (masks[m] && (masks[m]->width != a->width || masks[m]->height != a->height)) {
-            fprintf(stderr, "meso: compare: %s is %dx%d but the images are %dx%d\n", mask_paths[m],
-                    masks[m]->width, masks[m]->height, a->width, a->height);
+            app_error("%s: is %dx%d but the images are %dx%d", mask_paths[m], masks[m]->width,
+                      masks[m]->height, a->width, a->height);
             status = APP_EXIT_BAD_INPUT;
             goto done;
         }

@@ -74,7 +74,7 @@ static int render_one(meso_context *ctx, const meso_scene *scene, const render_o
                 scene_technique(scene, o->technique), width, height, 1000.0 * stats.prepare_seconds,
                 1000.0 * stats.last_frame_seconds, (unsigned long long)stats.triangles, o->output);
     }
-    int status = result == MESO_OK ? APP_EXIT_OK : app_fail(ctx, result);
+    int status = result == MESO_OK ? APP_EXIT_OK : app_fail_in(ctx, result, scene->path);
     meso_framebuffer_destroy(fb);
     meso_renderer_destroy(renderer);
     return status;
@@ -155,13 +155,13 @@ static int render_all(meso_context *ctx, const meso_scene *scene, const render_o
     app_compare_all all;
     result = app_compare_all_render(ctx, &desc, &all);
     meso_progress_end(desc.progress);
-    if (result != MESO_OK) return app_fail(ctx, result);
+    if (result != MESO_OK) return app_fail_in(ctx, result, scene->path);
 
     size_t rendered = 0;
     for (size_t i = 0; i < all.num_runs; i++) rendered += all.runs[i].rendered;
     if (rendered == 0) { /* one line: the last failure */
         app_compare_all_free(&all);
-        return app_fail(ctx, MESO_ERROR_UNSUPPORTED);
+        return app_fail_in(ctx, MESO_ERROR_UNSUPPORTED, scene->path);
     }
     if (!quiet) app_compare_all_print_notes(&all, NULL, true);
     result = app_compare_all_write_images(ctx, &all, o->output, NULL, true);
@@ -215,8 +215,8 @@ int meso_cmd_render(int argc, char **argv) {
     if (o.technique && !app_technique_known(o.technique)) {
         char known[1024];
         app_known_techniques(known, sizeof(known));
-        fprintf(stderr, "meso: %s: --technique: unknown technique '%s' (known: %s)\n", scene_path,
-                o.technique, known);
+        app_error("%s: --technique: unknown technique '%s' (known: %s)", scene_path, o.technique,
+                  known);
         return APP_EXIT_BAD_INPUT;
     }
     const char *names[64];

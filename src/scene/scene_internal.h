@@ -32,6 +32,13 @@ scene_key scene_key_index(const scene_key *parent, int index);
  * at the second, not after 18 GB. */
 meso_result scene_account_memory(const scene_parser *p, const scene_key *key, uint64_t bytes);
 
+/* Containers nested deeper than this are refused (cJSON's own limit is 1000). */
+#define SCENE_MAX_DEPTH 64
+
+/* Refuse numbers cJSON accepts but JSON does not ("01", "64.", "1.e5", "+1"), naming the key
+ * path: the text of a scene cJSON has parsed. */
+meso_result scene_check_numbers(const scene_parser *p, const char *json);
+
 meso_result scene_error(const scene_parser *p, meso_result code, const scene_key *key,
                         const char *format, ...) __attribute__((format(printf, 4, 5)));
 

@@ -179,6 +179,7 @@ static meso_result parse_document(const scene_parser *p, const char *json, meso_
         r = scene_error(p, MESO_ERROR_FORMAT, NULL, "the top level must be a JSON object");
         goto done;
     }
+    if ((r = scene_check_numbers(p, json))) goto done;
     if ((r = scene_check_object(p, root, &top, keys))) goto done;
     const cJSON *description = cJSON_GetObjectItemCaseSensitive(root, "description");
     if (description && !cJSON_IsString(description)) {

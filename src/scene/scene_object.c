@@ -42,6 +42,15 @@ static meso_result relog_as_format(const scene_parser *p, const scene_key *key, 
     return scene_error(p, MESO_ERROR_FORMAT, key, "%s", reason);
 }
 
+/* A loader's error (naming only its own file) said again at the scene's key, so that the
+ * one line names the scene, the key and the loaded file's reason. */
+static meso_result relog_at_key(const scene_parser *p, const scene_key *key, meso_result r) {
+    if (r == MESO_ERROR_OUT_OF_MEMORY) return r;
+    char reason[1024];
+    snprintf(reason, sizeof(reason), "%s", meso_context_last_error(p->ctx));
+    return scene_error(p, r, key, "%s", reason);
+}
+
 static const char *base_name(const char *path) {
     const char *slash = strrchr(path, '/');
     return slash ? slash + 1 : path;
@@ -293,7 +302,7 @@ static meso_result create_mesh(const scene_parser *p, const cJSON *obj, const sc
             (r = check_readable(p, &file_key, path)))
             return r;
         r = meso_mesh_load(p->ctx, path, out_mesh);
-        if (r != MESO_OK) return r;
+        if (r != MESO_OK) return relog_at_key(p, &file_key, r);
         return scene_account_memory(p, key, meso_mesh_memory_estimate((*out_mesh)->num_vertices,
                                                                       (*out_mesh)->num_triangles));
     }
@@ -319,6 +328,27 @@ static meso_result create_mesh(const scene_parser *p, const cJSON *obj, const sc
     return r == MESO_OK ? r : relog_as_format(p, key, r);
 }
 
+/* Scaled texture coordinates are limited so that u times the largest texture side (16384 =
+ * 2^14) stays within 2^30: samplers and techniques convert texel positions to int, and a
+ * uv_scale of 1e10 would overflow them (undefined behaviour). 65536 tiles is far beyond what
+ * can be seen. */
+#define MAX_TEXTURE_COORDINATE 65536.0f
+
+static meso_result check_texture_coordinates(const scene_parser *p, const scene_key *key,
+                                             const meso_mesh *mesh) {
+    float largest = 0.0f;
+    for (size_t i = 0; i < mesh->num_vertices; i++) {
+        float u = fabsf(mesh->uvs[i].x), v = fabsf(mesh->uvs[i].y);
+        largest = u > largest ? u : largest;
+        largest = v > largest ? v : largest;
+    }
+    if (largest <= MAX_TEXTURE_COORDINATE) return MESO_OK; /* NaN is refused by validation */
+    scene_key k = scene_key_child(key, "uv_scale");
+    return scene_error(p, MESO_ERROR_LIMIT, &k,
+                       "scaled texture coordinates reach %g, beyond the limit %g",
+                       (double)largest, (double)MAX_TEXTURE_COORDINATE);
+}
+
 /* World-space mesh, scaled UVs, validated, with tangents, curvature and quadrics. */
 static meso_result build_mesh(const scene_parser *p, const cJSON *obj, const scene_key *key,
                               meso_object *object) {
@@ -333,7 +363,10 @@ static meso_result build_mesh(const scene_parser *p, const cJSON *obj, const sce
         return r;
     meso_mesh *mesh = object->mesh;
     meso_mesh_transform(mesh, transform);
-    if (mesh->uvs) meso_mesh_scale_uvs(mesh, uv_scale);
+    if (mesh->uvs) {
+        meso_mesh_scale_uvs(mesh, uv_scale);
+        if ((r = check_texture_coordinates(p, key, mesh)) != MESO_OK) return r;
+    }
     bool require_uvs =
         object->mesostructure.kind != MESO_MESOSTRUCTURE_NONE || object->material.color_map != NULL;
     char label[SCENE_KEY_MAX + 1100];

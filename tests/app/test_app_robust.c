@@ -243,6 +243,79 @@ static void test_jobs_over_the_memory_budget_are_refused_before_allocating(void 
     expect_refused(arguments, "objects[0].mesostructure.height_map.resolution");
 }
 
+/* A scene with `object` (JSON text) as its one object. */
+static const char *write_scene(const char *name, const char *object) {
+    char text[2048];
+    snprintf(text, sizeof text,
+             "{\"image\": {\"width\": 16, \"height\": 16}, \"camera\": {\"eye\": [0, 2, 2],"
+             " \"target\": [0, 0, 0], \"up\": [0, 1, 0], \"fov_y_deg\": 45},"
+             " \"objects\": [%s]}",
+             object);
+    const char *path = test_path(test_temp_dir(), name);
+    test_write_file(path, text, strlen(text));
+    return path;
+}
+
+static void test_errors_are_one_escaped_line_naming_the_file(void **state) {
+    (void)state;
+    char arguments[4096];
+    /* a newline and an escape sequence in a key cannot forge a second line or reach the
+     * terminal raw */
+    const char *scene =
+        write_scene("control.json", "{\"shape\": \"plane\", \"x\\nmeso: forged\\u001b[31m\": 1}");
+    snprintf(arguments, sizeof arguments, "info %s", scene);
+    expect_refused(arguments, "control.json: objects[0].x\\nmeso: forged\\x1b[31m: unknown key");
+    /* an error of the renderer names an object: the scene is named first */
+    snprintf(arguments, sizeof arguments,
+             "render " MESO_SOURCE_DIR "/examples/weave-torus.json -o %s --technique bump",
+             test_path(test_temp_dir(), "never.png"));
+    expect_refused(arguments, "weave-torus.json: torus: technique 'bump' does not accept");
+}
+
+static void test_non_standard_json_numbers_are_refused_with_the_key_path(void **state) {
+    (void)state;
+    const char *numbers[] = {"01", "64.", "1.e5", "-.5"};
+    char arguments[4096], object[256];
+    for (size_t i = 0; i < sizeof numbers / sizeof numbers[0]; i++) {
+        snprintf(object, sizeof object, "{\"shape\": \"plane\", \"size\": %s}", numbers[i]);
+        snprintf(arguments, sizeof arguments, "info %s", write_scene("numbers.json", object));
+        expect_refused(arguments, "numbers.json: objects[0].size:");
+    }
+    snprintf(arguments, sizeof arguments, "info %s",
+             write_scene("numbers.json", "{\"shape\": \"plane\", \"size\": 0.5e1}"));
+    assert_int_equal(test_run_meso(arguments, NULL), 0);
+}
+
+static void test_uv_scale_beyond_int_range_of_texels_is_refused(void **state) {
+    (void)state;
+    char arguments[4096];
+    const char *scene = write_scene(
+        "uv_scale.json", "{\"shape\": \"plane\", \"uv_scale\": [1e10, 1], \"technique\":"
+                         " \"horizon\", \"mesostructure\": {\"height_map\": {\"procedural\":"
+                         " \"bricks\", \"resolution\": 64}, \"depth\": 0.1}}");
+    snprintf(arguments, sizeof arguments, "render %s -o %s", scene,
+             test_path(test_temp_dir(), "never.png"));
+    expect_refused(arguments, "uv_scale.json: objects[0].uv_scale: scaled texture coordinates");
+}
+
+/* Every input kept under tests/data/bad/ refused by `meso info`: status 2, one line naming it.
+ * (--memory-limit fixes the budget, so the result does not depend on the machine's memory.) */
+static void test_every_kept_bad_input_is_refused(void **state) {
+    (void)state;
+    DIR *d = opendir(BAD);
+    assert_non_null(d);
+    int count = 0;
+    for (struct dirent *e; (e = readdir(d));) {
+        if (e->d_name[0] == '.') continue;
+        char arguments[4096];
+        snprintf(arguments, sizeof arguments, "info " BAD "%s --memory-limit 16G", e->d_name);
+        expect_refused(arguments, e->d_name);
+        count++;
+    }
+    closedir(d);
+    assert_true(count >= 16);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_meshes_declaring_more_than_they_hold_are_refused),
@@ -252,6 +325,10 @@ int main(void) {
         cmocka_unit_test(test_a_fifo_as_input_is_refused_without_blocking),
         cmocka_unit_test(test_killed_renders_leave_no_temporary_and_no_partial_file),
         cmocka_unit_test(test_jobs_over_the_memory_budget_are_refused_before_allocating),
+        cmocka_unit_test(test_errors_are_one_escaped_line_naming_the_file),
+        cmocka_unit_test(test_non_standard_json_numbers_are_refused_with_the_key_path),
+        cmocka_unit_test(test_uv_scale_beyond_int_range_of_texels_is_refused),
+        cmocka_unit_test(test_every_kept_bad_input_is_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
