@@ -91,7 +91,8 @@ typedef struct meso_render_desc {
 
 /* The memory a frame of width x height with desc's samples needs besides the scene (the
  * framebuffer and, with supersampling, the n x n-times larger sample targets: colour,
- * coverage and depth, 20 bytes a sample). Callers check it with meso_memory_check before
+ * coverage and depth, 20 bytes a sample; and the images it is saved from, 16 bytes a pixel).
+ * desc may be NULL (one sample). Callers check it with meso_memory_check before
  * meso_framebuffer_create; meso_renderer_render checks it too. Pure. */
 uint64_t meso_render_memory_estimate(const meso_render_desc *desc, int width, int height);
 

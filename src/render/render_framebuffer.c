@@ -17,7 +17,8 @@ uint64_t meso_render_memory_estimate(const meso_render_desc *desc, int width, in
     uint64_t pixels = (uint64_t)(width > 0 ? width : 0) * (uint64_t)(height > 0 ? height : 0);
     int samples = desc && desc->samples > 1 ? desc->samples : 1;
     uint64_t n = samples > 1 ? (uint64_t)ceil(sqrt((double)samples) - 1e-9) : 1;
-    return pixels * BYTES_PER_SAMPLE * (1 + (n > 1 ? n * n : 0));
+    /* + the colour and coverage images a save converts the framebuffer to (16 bytes a pixel) */
+    return pixels * (BYTES_PER_SAMPLE * (1 + (n > 1 ? n * n : 0)) + 16);
 }
 
 meso_result meso_framebuffer_create(meso_context *ctx, int width, int height,
