@@ -153,6 +153,9 @@ static mode_t process_umask(void) {
 /* An unnamed file in `folder` (Linux 3.11+, on file systems that support it), or -1. */
 static int open_unnamed(const char *folder) {
 #ifdef O_TMPFILE
+    /* The file is named at commit through /proc/self/fd (linkat); without /proc it could not
+     * be, so the named temporary is used instead. */
+    if (access("/proc/self/fd", X_OK) != 0) return -1;
     return open(folder, O_TMPFILE | O_WRONLY | O_CLOEXEC, 0666);
 #else
     (void)folder;

@@ -33,15 +33,6 @@ static meso_result check_readable(const scene_parser *p, const scene_key *key, c
     return MESO_OK;
 }
 
-/* A library call refused parameters the parser let through (e.g. an odd weave count): report
- * it as a bad value of the scene, at the key, with the library's reason. */
-static meso_result relog_as_format(const scene_parser *p, const scene_key *key, meso_result r) {
-    if (r != MESO_ERROR_INVALID_ARGUMENT) return r;
-    char reason[1024];
-    snprintf(reason, sizeof(reason), "%s", meso_context_last_error(p->ctx));
-    return scene_error(p, MESO_ERROR_FORMAT, key, "%s", reason);
-}
-
 /* A loader's error (naming only its own file) said again at the scene's key, so that the
  * one line names the scene, the key and the loaded file's reason. */
 static meso_result relog_at_key(const scene_parser *p, const scene_key *key, meso_result r) {
@@ -49,6 +40,15 @@ static meso_result relog_at_key(const scene_parser *p, const scene_key *key, mes
     char reason[1024];
     snprintf(reason, sizeof(reason), "%s", meso_context_last_error(p->ctx));
     return scene_error(p, r, key, "%s", reason);
+}
+
+/* A library call refused parameters the parser let through (e.g. an odd weave count): report
+ * it as a bad value of the scene, at the key, with the library's reason. */
+static meso_result relog_as_format(const scene_parser *p, const scene_key *key, meso_result r) {
+    if (r != MESO_ERROR_INVALID_ARGUMENT) return r;
+    char reason[1024];
+    snprintf(reason, sizeof(reason), "%s", meso_context_last_error(p->ctx));
+    return scene_error(p, MESO_ERROR_FORMAT, key, "%s", reason);
 }
 
 static const char *base_name(const char *path) {
@@ -189,7 +189,9 @@ static meso_result parse_mesostructure(const scene_parser *p, const cJSON *item,
             (r = check_readable(p, &k, path)))
             return r;
         r = meso_heightfield_load_png(p->ctx, path, m->wrap, &m->height_field);
-        if (r != MESO_OK) return r;
+        if (r != MESO_OK) return relog_at_key(p, &k, r);
+        uint64_t texels = (uint64_t)m->height_field->width * (uint64_t)m->height_field->height;
+        if ((r = scene_account_memory(p, &k, 4 * texels)) != MESO_OK) return r;
         snprintf(m->source, sizeof(m->source), "%s", base_name(height_map->valuestring));
         return MESO_OK;
     }
@@ -211,7 +213,14 @@ static meso_result load_color_map(const scene_parser *p, const scene_key *key, c
         return r;
     meso_image *image = NULL;
     r = meso_image_load_png(p->ctx, path, &image);
-    if (r != MESO_OK) return r;
+    if (r != MESO_OK) return relog_at_key(p, key, r);
+    /* the image and the texture made from it with its mip levels (a third more) */
+    uint64_t image_bytes = (uint64_t)image->width * (uint64_t)image->height *
+                           (uint64_t)image->channels * sizeof(float);
+    if ((r = scene_account_memory(p, key, image_bytes + image_bytes / 3 * 4)) != MESO_OK) {
+        meso_image_destroy(image);
+        return r;
+    }
     /* Colour maps are authored in sRGB; shading is linear (DESIGN.md). Alpha stays linear. */
     int colour_channels = image->channels >= 3 ? 3 : 1;
     size_t n = (size_t)image->width * (size_t)image->height;
