@@ -11,8 +11,9 @@
  *         glTF (no absolute paths, no "..", no URI schemes, regular files only); each buffer's
  *         byteLength must fit in its data, each bufferView in its buffer, each accessor in its
  *         bufferView; accessors without data are bounded by the mesh limits.
- *   OBJ   (and other formats) have no declared counts: what assimp builds grows with the file,
- *         whose size the caller bounds.
+ *   OBJ   has no declared counts (what assimp builds grows with the file); the material
+ *         libraries it names (mtllib), which assimp opens, must be regular files when they
+ *         exist: a FIFO there would block the import forever.
  */
 #include <ctype.h>
 #include <errno.h>
@@ -144,6 +145,37 @@ static meso_result screen_ply(meso_context *ctx, const char *path, char *buffer,
     return MESO_OK;
 }
 
+/* ---- OBJ ---------------------------------------------------------------------------------- */
+
+/* `name` resolved against the folder of `path` (absolute names as they are) into out. */
+static bool resolve_beside(const char *path, const char *name, char *out, size_t out_size) {
+    const char *slash = strrchr(path, '/');
+    int folder = name[0] == '/' || !slash ? 0 : (int)(slash - path) + 1;
+    int written = snprintf(out, out_size, "%.*s%s", folder, path, name);
+    return written >= 0 && (size_t)written < out_size;
+}
+
+static meso_result screen_obj(meso_context *ctx, const char *path, FILE *file) {
+    rewind(file);
+    char line[4096];
+    meso_result r = MESO_OK;
+    while (r == MESO_OK && fgets(line, sizeof(line), file)) {
+        if (strncmp(line, "mtllib", 6) != 0 || (line[6] != ' ' && line[6] != '\t')) continue;
+        char *save = NULL;
+        for (char *name = strtok_r(line + 7, " \t\r\n", &save); name && r == MESO_OK;
+             name = strtok_r(NULL, " \t\r\n", &save)) {
+            char full[PATH_MAX];
+            struct stat st;
+            if (!resolve_beside(path, name, full, sizeof(full)) || stat(full, &st) != 0)
+                continue; /* missing: assimp goes on without the materials */
+            if (!S_ISREG(st.st_mode))
+                r = meso_log_error(ctx, MESO_ERROR_FORMAT,
+                                   "%s: mtllib %s is not a regular file", path, full);
+        }
+    }
+    return r;
+}
+
 /* ---- glTF --------------------------------------------------------------------------------- */
 
 static uint32_t read_le32(const unsigned char *p) {
@@ -199,14 +231,10 @@ static meso_result gltf_buffer_data_size(meso_context *ctx, const char *path, co
                               "%s: buffers[%d].uri: must name a file beside the glTF (no "
                               "absolute path, no '..', no scheme)",
                               path, index);
-    const char *slash = strrchr(path, '/');
-    size_t folder = slash ? (size_t)(slash - path) + 1 : 0;
     char full[PATH_MAX];
-    if (folder + strlen(text) + 1 > sizeof(full))
+    if (!resolve_beside(path, text, full, sizeof(full)))
         return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: buffers[%d].uri: too long", path,
                               index);
-    memcpy(full, path, folder);
-    memcpy(full + folder, text, strlen(text) + 1);
     struct stat st;
     if (stat(full, &st) != 0)
         return meso_log_error(ctx, MESO_ERROR_IO, "%s: buffers[%d].uri: %s: %s", path, index, full,
@@ -360,6 +388,8 @@ meso_result geom_screen_mesh_file(meso_context *ctx, const char *path, FILE *fil
         r = screen_ply(ctx, path, buffer, file_size);
     } else if (size >= 4 && !memcmp(buffer, "glTF", 4)) {
         r = screen_glb(ctx, path, file, file_size);
+    } else if (ends_with_ignoring_case(path, ".obj")) {
+        r = screen_obj(ctx, path, file);
     } else if (ends_with_ignoring_case(path, ".gltf")) {
         if (file_size > GLTF_JSON_MAX) {
             r = meso_log_error(ctx, MESO_ERROR_LIMIT, "%s: glTF JSON over %u bytes", path,

@@ -161,6 +161,12 @@ static void test_a_fifo_as_input_is_refused_without_blocking(void **state) {
     snprintf(arguments, sizeof arguments, "render %s -o %s", scene,
              test_path(test_temp_dir(), "never.png"));
     expect_refused(arguments, "in.fifo: is a FIFO");
+    /* a material library an OBJ names, which assimp would open */
+    const char *obj = test_path(test_temp_dir(), "fifo_mtllib.obj");
+    const char *obj_text = "mtllib in.fifo\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    test_write_file(obj, obj_text, strlen(obj_text));
+    snprintf(arguments, sizeof arguments, "info %s", obj);
+    expect_refused(arguments, "fifo_mtllib.obj: mtllib");
 }
 
 /* Start `meso render` at a size that takes a while, kill it after `delay` seconds. */
