@@ -233,6 +233,12 @@ static void test_jobs_over_the_memory_budget_are_refused_before_allocating(void 
              test_path(test_temp_dir(), "huge.png"));
     expect_refused(arguments, "bricks-plane.json: needs about 22.25 GiB of memory");
     assert_true(meso_time_seconds() - start < 10.0);
+    /* the reference's ray-tracing structure is held to the budget while Embree builds it */
+    snprintf(arguments, sizeof arguments,
+             "render " SCENE " -o %s --technique reference --size 32x32 --memory-limit 20M",
+             test_path(test_temp_dir(), "reference.png"));
+    expect_refused(arguments, "bricks-plane.json: reference: the ray-tracing structure needs more "
+                              "memory than the limit of 20.0 MiB");
     /* a small limit refuses even the example; a malformed one is a usage error */
     snprintf(arguments, sizeof arguments, "render " SCENE " -o %s --memory-limit 1M",
              test_path(test_temp_dir(), "small.png"));
