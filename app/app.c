@@ -284,19 +284,8 @@ void app_error(const char *format, ...) {
     va_start(args, format);
     vsnprintf(message, sizeof(message), format, args);
     va_end(args);
-    /* One line whatever the arguments hold: control characters (a newline in a file name, a
-     * terminal escape) are written as \n, \t, \xNN. */
-    size_t used = 0;
-    for (const unsigned char *p = (const unsigned char *)message; *p; p++) {
-        if (*p >= 0x20 && *p != 0x7f)
-            escaped[used++] = (char)*p;
-        else if (*p == '\n' || *p == '\t')
-            used += (size_t)snprintf(escaped + used, sizeof(escaped) - used, "\\%c",
-                                     *p == '\n' ? 'n' : 't');
-        else
-            used += (size_t)snprintf(escaped + used, sizeof(escaped) - used, "\\x%02x", *p);
-    }
-    escaped[used] = 0;
+    /* One line whatever the arguments hold (a newline in a file name, a terminal escape). */
+    meso_text_escape_controls(message, escaped, sizeof(escaped));
     fprintf(stderr, "meso: %s\n", escaped);
 }
 

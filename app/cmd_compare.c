@@ -178,11 +178,9 @@ int meso_cmd_compare(int argc, char **argv) {
         /* linear: the difference's colours as designed, the sheet's values as the files give */
         const meso_png_desc linear[2] = {{.encoding = MESO_ENCODING_LINEAR},
                                          {.encoding = MESO_ENCODING_LINEAR}};
-        const meso_image *images[2];
-        const char *paths[2];
-        size_t count = 0;
-        if (diff_path) images[count] = diff, paths[count++] = diff_path;
-        if (sheet_path) images[count] = sheet, paths[count++] = sheet_path;
+        const meso_image *images[2] = {diff_path ? diff : sheet, sheet};
+        const char *paths[2] = {diff_path ? diff_path : sheet_path, sheet_path};
+        size_t count = diff_path && sheet_path ? 2 : 1;
         result = meso_image_save_png_all(ctx, count, images, paths, linear);
     }
     if (result != MESO_OK) {

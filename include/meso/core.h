@@ -106,6 +106,12 @@ void meso_context_set_num_threads(meso_context *ctx, int num_threads);
 /* The message of the last error logged on ctx ("" if none). Valid until the next error. */
 const char *meso_context_last_error(const meso_context *ctx);
 
+/* Copy text into out (out_size bytes, always NUL-terminated, cut when it does not fit) with
+ * control characters written as \n, \t or \xNN, so that it prints as one line and sends no
+ * terminal escapes. Every logged message goes through it. Returns the length written.
+ * Thread-safe. */
+size_t meso_text_escape_controls(const char *text, char *out, size_t out_size);
+
 /* Log an error and return `code`, so that a failing path reads
  *     return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: truncated PNG", path);
  * The message names the file/object/field first, then the reason, without a trailing period. */

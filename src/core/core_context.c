@@ -55,28 +55,29 @@ void meso_context_set_num_threads(meso_context *ctx, int num_threads) {
 
 const char *meso_context_last_error(const meso_context *ctx) { return ctx->last_error; }
 
-/* Control characters from file names and scene text (a newline in a JSON key, an escape
- * sequence) would forge a second "meso:" line or drive the terminal: they are written as
- * \n, \t or \xNN so that every message stays one printable line. */
-static void escape_controls(const char *in, char *out, size_t out_size) {
+size_t meso_text_escape_controls(const char *text, char *out, size_t out_size) {
+    if (out_size == 0) return 0;
     size_t used = 0;
-    for (const unsigned char *p = (const unsigned char *)in; *p && used + 5 < out_size; p++) {
-        if (*p >= 0x20 && *p != 0x7f) {
+    /* up to 4 bytes an input byte (\xNN), and the NUL */
+    for (const unsigned char *p = (const unsigned char *)text; *p && used + 5 <= out_size; p++) {
+        if (*p >= 0x20 && *p != 0x7f)
             out[used++] = (char)*p;
-        } else if (*p == '\n' || *p == '\t') {
-            out[used++] = '\\';
-            out[used++] = *p == '\n' ? 'n' : 't';
-        } else {
+        else if (*p == '\n' || *p == '\t')
+            used += (size_t)snprintf(out + used, out_size - used, "\\%c", *p == '\n' ? 'n' : 't');
+        else
             used += (size_t)snprintf(out + used, out_size - used, "\\x%02x", *p);
-        }
     }
     out[used] = 0;
+    return used;
 }
 
 static void log_message(meso_context *ctx, meso_log_level level, const char *format, va_list args) {
     char raw[MESO_MESSAGE_MAX], message[MESO_MESSAGE_MAX];
     vsnprintf(raw, sizeof(raw), format, args);
-    escape_controls(raw, message, sizeof(message));
+    /* Control characters from file names and scene text (a newline in a JSON key, a terminal
+     * escape) would forge a second "meso:" line or drive the terminal: every message stays one
+     * printable line. */
+    meso_text_escape_controls(raw, message, sizeof(message));
     pthread_mutex_lock(&ctx->lock);
     if (level == MESO_LOG_ERROR) memcpy(ctx->last_error, message, sizeof(message));
     if (ctx->log) ctx->log(ctx->log_user, level, message);
