@@ -4,6 +4,8 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "test_util.h"
 
@@ -125,6 +127,29 @@ static void test_a_cache_entry_of_another_source_is_not_used(void **state) {
     meso_context_destroy(ctx);
 }
 
+static void test_a_fifo_in_the_cache_is_skipped_without_blocking(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    setenv("MESO_CACHE_DIR", test_path(test_temp_dir(), "robust_cache_fifo"), 1);
+    meso_heightfield *hf = make_bumps(16);
+    meso_vdm_desc desc = tiny_desc(hf);
+    char path[1200];
+    bake_into_cache(ctx, &desc, path, sizeof(path));
+    unlink(path);
+    assert_int_equal(mkfifo(path, 0644), 0);
+    meso_vdm *vdm = NULL;
+    assert_int_equal(meso_vdm_bake_cached(ctx, &desc, &vdm), MESO_OK); /* baked, not blocked */
+    assert_true(meso_vdm_get_compression(vdm).bake_seconds > 0.0);
+    meso_vdm_destroy(vdm);
+    struct stat st;
+    assert_int_equal(lstat(path, &st), 0);
+    assert_true(S_ISFIFO(st.st_mode)); /* not replaced either: only regular files are written */
+    unlink(path);
+    unsetenv("MESO_CACHE_DIR");
+    free_heightfield(hf);
+    meso_context_destroy(ctx);
+}
+
 static char *read_file(const char *path, size_t *out_size) {
     meso_context *ctx = test_context(1);
     char *data = NULL;
@@ -182,6 +207,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_non_finite_values_with_a_valid_checksum_are_refused_and_rebaked),
         cmocka_unit_test(test_a_cache_entry_of_another_source_is_not_used),
+        cmocka_unit_test(test_a_fifo_in_the_cache_is_skipped_without_blocking),
         cmocka_unit_test(test_every_truncation_and_bit_flip_of_a_vdm_file_is_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
