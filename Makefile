@@ -33,8 +33,9 @@ test-asan: deps
 bench: build
 	$(BUILD)/meso bench
 
+# make install PREFIX=/opt/meso (default: the build's CMAKE_INSTALL_PREFIX, /usr/local)
 install: build
-	cmake --install $(BUILD)
+	cmake --install $(BUILD) $(if $(PREFIX),--prefix $(PREFIX))
 
 format:
 	clang-format -i $$(git ls-files '*.c' '*.h')

@@ -104,6 +104,43 @@ void app_print_help(const app_command_help *help, const app_option *options, siz
     printf("\nExit status: 0 success, 2 bad input or usage, 1 other failures.\n");
 }
 
+void app_print_technique_help(const meso_technique_info *t) {
+    static const char *const type_names[] = {"integer", "boolean", "number"};
+    printf("%s: %s\nPaper: %s\nDraws: ", t->name, t->summary, t->paper);
+    const char *separator = "";
+    const char *kinds[] = {"plain meshes", "height fields", "solids"};
+    const unsigned bits[] = {MESO_TECHNIQUE_ACCEPTS_NONE, MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD,
+                             MESO_TECHNIQUE_ACCEPTS_SOLID};
+    for (int k = 0; k < 3; k++) {
+        if (!(t->accepts & bits[k])) continue;
+        printf("%s%s", separator, kinds[k]);
+        separator = ", ";
+    }
+    printf("\n\n");
+    if (t->num_options == 0) {
+        printf("It has no options.\n");
+        return;
+    }
+    printf("Options (scene: \"technique_options\": {\"%s\": {\"NAME\": V}}; command line:\n"
+           "--set %s.NAME=V on render, bench and demo):\n\n",
+           t->name, t->name);
+    printf("  %-20s %-8s %-14s %-8s %s\n", "name", "type", "range", "default", "meaning");
+    for (size_t i = 0; i < t->num_options; i++) {
+        const meso_technique_option *o = &t->options[i];
+        char range[48], fallback[24];
+        if (o->type == MESO_OPTION_BOOL) {
+            snprintf(range, sizeof range, "true, false");
+            snprintf(fallback, sizeof fallback, "%s", o->default_value != 0.0 ? "true" : "false");
+        } else {
+            snprintf(range, sizeof range, o->type == MESO_OPTION_INT ? "%g..%g" : "[%g, %g]",
+                     o->min, o->max);
+            snprintf(fallback, sizeof fallback, "%g", o->default_value);
+        }
+        printf("  %-20s %-8s %-14s %-8s ", o->name, type_names[o->type], range, fallback);
+        print_wrapped(o->doc, 56, 100);
+    }
+}
+
 static const app_option *find_option(const app_option *options, size_t count, const char *arg,
                                      size_t arg_length) {
     for (size_t i = 0; i < count; i++) {
@@ -139,6 +176,57 @@ static bool parse_size(const char *text, app_size *out) {
     return true;
 }
 
+/* "relief.linear_steps=64" (the value a number, true or false) into the settings, checked
+ * against the technique's option table; a usage error when it does not fit. */
+static int add_setting(const char *command, const app_option *o, const char *text) {
+    app_settings *settings = o->target;
+    const char *dot = strchr(text, '.'), *equals = strchr(text, '=');
+    if (!dot || !equals || dot > equals || dot == text || equals == dot + 1)
+        return app_usage_error(command, "%s: '%s' is not TECHNIQUE.OPTION=VALUE", o->name, text);
+    if (settings->count >= MESO_OPTIONS_MAX)
+        return app_usage_error(command, "%s: more than %d settings", o->name, MESO_OPTIONS_MAX);
+    meso_option setting = {0};
+    if ((size_t)(dot - text) >= sizeof setting.technique ||
+        (size_t)(equals - dot - 1) >= sizeof setting.name)
+        return app_usage_error(command, "%s: '%s': name too long", o->name, text);
+    memcpy(setting.technique, text, (size_t)(dot - text));
+    memcpy(setting.name, dot + 1, (size_t)(equals - dot - 1));
+    const char *value = equals + 1;
+    char *end = NULL;
+    if (!strcmp(value, "true")) {
+        setting.value = 1.0;
+    } else if (!strcmp(value, "false")) {
+        setting.value = 0.0;
+    } else {
+        setting.value = strtod(value, &end);
+        if (end == value || *end || !isfinite(setting.value))
+            return app_usage_error(command, "%s %s: '%s' is not a number, true or false", o->name,
+                                   text, value);
+    }
+    /* The library checks it against the table; a scratch context carries the message. */
+    meso_context *scratch = NULL;
+    if (meso_context_create(NULL, &scratch) != MESO_OK) {
+        fprintf(stderr, "meso: out of memory\n");
+        return APP_EXIT_FAILURE;
+    }
+    char where[192];
+    snprintf(where, sizeof where, "%s %s.%s", o->name, setting.technique, setting.name);
+    meso_result r =
+        meso_technique_check_option(scratch, setting.technique, setting.name, setting.value, where);
+    int status =
+        r == MESO_OK ? -1 : app_usage_error(command, "%s", meso_context_last_error(scratch));
+    meso_context_destroy(scratch);
+    if (status >= 0) return status;
+    int slot = 0; /* a later --set of the same option replaces the earlier */
+    while (slot < settings->count &&
+           !(strcmp(settings->items[slot].technique, setting.technique) == 0 &&
+             strcmp(settings->items[slot].name, setting.name) == 0))
+        slot++;
+    settings->items[slot] = setting;
+    if (slot == settings->count) settings->count++;
+    return -1;
+}
+
 /* Store `value` into the option's target; a usage error (status 2) when it does not parse. */
 static int set_option(const char *command, const app_option *o, const char *value) {
     bool bounded = o->min != 0.0 || o->max != 0.0;
@@ -146,6 +234,8 @@ static int set_option(const char *command, const app_option *o, const char *valu
     case APP_OPTION_FLAG:
         *(bool *)o->target = true;
         return -1;
+    case APP_OPTION_SETTING:
+        return add_setting(command, o, value);
     case APP_OPTION_STRING:
         *(const char **)o->target = value;
         return -1;
@@ -214,7 +304,10 @@ int app_parse_options(const app_command_help *help, const app_option *options, s
             only_positionals = true;
             continue;
         }
-        const char *equals = strncmp(arg, "--", 2) == 0 ? strchr(arg, '=') : NULL;
+        /* --name=value, and -o=value for a one-letter alias (-o=x is -o x, not -o "=x"). */
+        const char *equals = strncmp(arg, "--", 2) == 0 ? strchr(arg, '=')
+                             : arg[2] == '='            ? arg + 2
+                                                        : NULL;
         size_t name_length = equals ? (size_t)(equals - arg) : strlen(arg);
         const app_option *o = find_option(all, num_all, arg, name_length);
         if (!o) return app_usage_error(command, "unknown option '%.*s'", (int)name_length, arg);
@@ -409,8 +502,27 @@ void app_text_json_string(app_text *text, const char *s) {
     app_text_printf(text, "\"");
 }
 
+void app_text_xml(app_text *text, const char *s) {
+    for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
+        if (*p == '<')
+            app_text_printf(text, "&lt;");
+        else if (*p == '>')
+            app_text_printf(text, "&gt;");
+        else if (*p == '&')
+            app_text_printf(text, "&amp;");
+        else if (*p == '"')
+            app_text_printf(text, "&quot;");
+        else if (*p >= 0x20 || *p == '\t')
+            app_text_printf(text, "%c", *p);
+    }
+}
+
 void app_text_json_number(app_text *text, double value) {
-    if (isfinite(value))
+    /* Whole numbers (counts such as triangles) as integers, never 2.09715e+06: exact up to
+     * 2^53, where doubles stop holding every integer. */
+    if (isfinite(value) && value == floor(value) && fabs(value) < 9007199254740992.0)
+        app_text_printf(text, "%.0f", value);
+    else if (isfinite(value))
         app_text_printf(text, "%.6g", value);
     else
         app_text_printf(text, "null");
@@ -430,6 +542,11 @@ void app_text_free(app_text *text) {
 /* ---- Techniques and the machine ----------------------------------------------------------- */
 
 bool app_technique_applies(const meso_technique_info *info, const meso_scene *scene) {
+    return app_technique_draws(info, scene) == scene->num_objects;
+}
+
+int app_technique_draws(const meso_technique_info *info, const meso_scene *scene) {
+    int count = 0;
     for (int i = 0; i < scene->num_objects; i++) {
         unsigned need = MESO_TECHNIQUE_ACCEPTS_NONE;
         switch (scene->objects[i].mesostructure.kind) {
@@ -443,9 +560,9 @@ bool app_technique_applies(const meso_technique_info *info, const meso_scene *sc
             need = MESO_TECHNIQUE_ACCEPTS_SOLID;
             break;
         }
-        if (!(info->accepts & need)) return false;
+        count += (info->accepts & need) != 0;
     }
-    return true;
+    return count;
 }
 
 static void list_known_techniques(char *out, size_t out_size) {
@@ -488,6 +605,9 @@ int app_parse_technique_list(const char *command, const char *list, char *storag
                             known);
             return -1;
         }
+        bool repeated = false; /* relief,relief renders once */
+        for (int k = 0; k < count && !repeated; k++) repeated = strcmp(names[k], name) == 0;
+        if (repeated) continue;
         if (count >= max_names) {
             app_usage_error(command, "--techniques: more than %d techniques", max_names);
             return -1;

@@ -25,17 +25,34 @@ int meso_cmd_render(int argc, char **argv);
 int meso_cmd_info(int argc, char **argv);
 int meso_cmd_demo(int argc, char **argv);
 int meso_cmd_bench(int argc, char **argv);
+int meso_cmd_cache(int argc, char **argv);
 int meso_cmd_compare(int argc, char **argv); /* app/cmd_compare.c (the compare helper's) */
 
 /* ---- Command-line options ----------------------------------------------------------------- */
 
 typedef enum app_option_type {
-    APP_OPTION_FLAG,   /* bool: present or not */
-    APP_OPTION_INT,    /* int, within [min, max] */
-    APP_OPTION_DOUBLE, /* double, within [min, max] */
-    APP_OPTION_STRING, /* const char * (points into argv) */
-    APP_OPTION_SIZE,   /* app_size: "WxH" */
+    APP_OPTION_FLAG,    /* bool: present or not */
+    APP_OPTION_INT,     /* int, within [min, max] */
+    APP_OPTION_DOUBLE,  /* double, within [min, max] */
+    APP_OPTION_STRING,  /* const char * (points into argv) */
+    APP_OPTION_SIZE,    /* app_size: "WxH" */
+    APP_OPTION_SETTING, /* app_settings: "technique.option=value", repeatable (--set) */
 } app_option_type;
+
+/* Technique options from the command line (--set relief.linear_steps=64), each checked against
+ * its technique's option table while parsing; passed on in meso_render_desc.options. */
+typedef struct app_settings {
+    meso_option items[MESO_OPTIONS_MAX];
+    int count;
+} app_settings;
+
+/* The --set row of a command's option table, writing into `settings`. */
+#define APP_SET_OPTION(settings)                                                                   \
+    {                                                                                              \
+        "--set", NULL, APP_OPTION_SETTING, (settings), "T.NAME=V",                                 \
+            "set technique T's option NAME for every object (repeatable; meso help T lists them)", \
+            NULL, 0, 0                                                                             \
+    }
 
 typedef struct app_size {
     int width, height; /* 0 x 0: not given */
@@ -47,7 +64,7 @@ typedef struct app_option {
     const char *name;  /* "--size" */
     const char *alias; /* "-o", or NULL */
     app_option_type type;
-    void *target;             /* bool *, int *, double *, const char **, app_size * */
+    void *target; /* bool *, int *, double *, const char **, app_size *, app_settings * */
     const char *metavar;      /* "WxH" (not for flags) */
     const char *help;         /* one line */
     const char *default_text; /* "the scene's", or NULL for none */
@@ -83,6 +100,9 @@ int app_parse_options(const app_command_help *help, const app_option *options, s
 
 /* Print the command's help (usage, options with defaults, examples) to stdout. */
 void app_print_help(const app_command_help *help, const app_option *options, size_t count);
+
+/* Print a technique's summary, paper, what it draws and its option table (meso help T). */
+void app_print_technique_help(const meso_technique_info *technique);
 
 /* Print "meso: <command>: <message> (see meso <command> --help)" and return 2. */
 int app_usage_error(const char *command, const char *format, ...)
@@ -131,6 +151,8 @@ typedef struct app_text {
 void app_text_printf(app_text *text, const char *format, ...) __attribute__((format(printf, 2, 3)));
 /* Append s as a JSON string literal (quotes and escapes included). */
 void app_text_json_string(app_text *text, const char *s);
+/* Append s as XML character data (<, >, & and " escaped; control characters dropped). */
+void app_text_xml(app_text *text, const char *s);
 /* Append a number as JSON (null for NaN and infinities). */
 void app_text_json_number(app_text *text, double value);
 /* Write the text atomically to path. */
@@ -140,6 +162,8 @@ void app_text_free(app_text *text);
 /* Whether technique `info` can draw every object of the scene (its accepts vs each object's
  * mesostructure kind). */
 bool app_technique_applies(const meso_technique_info *info, const meso_scene *scene);
+/* How many objects of the scene technique `info` can draw. */
+int app_technique_draws(const meso_technique_info *info, const meso_scene *scene);
 
 /* Whether `name` is a registered technique or "reference". */
 bool app_technique_known(const char *name);
@@ -149,7 +173,8 @@ void app_known_techniques(char *out, size_t out_size);
 /* Parse a technique list: "all" (every registered per-pixel and geometry technique, in the
  * registry's order) or names separated by commas. Names must be registered techniques or
  * "reference". Fills names (pointers to static strings or into `list`'s copy in storage, of
- * storage_size bytes) and returns the count, or -1 after printing a usage error for `command`. */
+ * storage_size bytes) and returns the count, or -1 after printing a usage error for `command`.
+ * A name given twice counts once. */
 int app_parse_technique_list(const char *command, const char *list, char *storage,
                              size_t storage_size, const char **names, int max_names);
 
@@ -166,7 +191,8 @@ typedef struct app_run {
     char technique[MESO_NAME_MAX];
     bool rendered;  /* false: skipped or failed, see note */
     bool skipped;   /* the technique cannot draw the scene's kind of mesostructure */
-    char note[256]; /* why it was skipped or failed ("" when rendered) */
+    char note[256]; /* why it was skipped or failed; when rendered, "" or which objects of a
+                       mixed scene were drawn with their own scene technique */
     double prepare_ms;
     double frame_ms; /* median over the timed frames */
     int frames_timed;
@@ -188,6 +214,7 @@ typedef struct app_compare_all_desc {
     int timing_frames;            /* frames timed after the prepare, median taken (0: 5) */
     double timing_budget_seconds; /* stop timing a technique after this long (0: 2 s) */
     meso_progress *progress;      /* advanced by 1 per technique run (may be NULL) */
+    const app_settings *settings; /* --set: technique options for every run (may be NULL) */
 } app_compare_all_desc;
 
 typedef struct app_compare_all {
@@ -221,7 +248,8 @@ void app_run_label(const app_run *run, const char *prefix, int cell_width, char 
                    size_t out_size);
 
 /* Write DIR/<prefix><technique>.png (sRGB) for every rendered run, and with coverage also
- * DIR/<prefix><technique>.coverage.png. */
+ * DIR/<prefix><technique>.coverage.png; remove those two files of every other technique (an
+ * earlier run's), so the folder holds what the sheet shows. */
 meso_result app_compare_all_write_images(meso_context *ctx, const app_compare_all *all,
                                          const char *dir, const char *prefix, bool coverage);
 
@@ -230,6 +258,14 @@ meso_result app_compare_all_write_images(meso_context *ctx, const app_compare_al
 void app_compare_all_csv(const app_compare_all *all, const char *scene_name, app_text *csv);
 void app_compare_all_json(const app_compare_all *all, const char *scene_name, app_text *json,
                           bool *first);
+
+/* Write the plot of a run (app_plot.c) as SVG and PNG: each technique with metrics a labelled
+ * point, median frame time (log axis) against covered PSNR, the reference's time a dashed line.
+ * Writes nothing, and removes an earlier run's plot, when no technique has metrics (the
+ * reference did not render). */
+meso_result app_plot_error_vs_time(meso_context *ctx, const app_compare_all *all,
+                                   const char *scene_name, const char *path,
+                                   const char *png_path);
 
 /* A sheet of labelled cells saved as sRGB PNG: images are linear RGB, NULL cells are drawn as
  * empty (background grey). */

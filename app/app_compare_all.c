@@ -5,6 +5,7 @@
  * truth"): PSNR over the whole image and over the pixels both cover, SSIM and coverage IoU. */
 #include "app.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -57,6 +58,26 @@ static void time_frames(meso_renderer *renderer, meso_framebuffer *fb, double fi
     run->frame_ms = 1000.0 * app_median(times, (size_t)count);
 }
 
+/* The objects a renderer drew with another technique than `technique`, into run->note:
+ * "mixed: objects[1] (solid) with relief_layers". */
+static void note_fallbacks(const meso_renderer *renderer, const meso_scene *scene,
+                           const char *technique, app_run *run) {
+    size_t used = 0;
+    run->note[0] = 0;
+    for (int i = 0; i < scene->num_objects && used < sizeof(run->note); i++) {
+        const char *drawn = meso_renderer_object_technique(renderer, i);
+        if (!drawn || strcmp(drawn, technique) == 0) continue;
+        const meso_object *o = &scene->objects[i];
+        const char *kind = o->mesostructure.kind == MESO_MESOSTRUCTURE_SOLID ? "solid"
+                           : o->mesostructure.kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD
+                               ? "height field"
+                               : "none";
+        int n = snprintf(run->note + used, sizeof(run->note) - used, "%s%s (%s) with %s",
+                         used ? "; " : "mixed: ", o->name, kind, drawn);
+        used += n > 0 ? (size_t)n : 0;
+    }
+}
+
 /* One technique (or the reference) of the scene into run. A failure, whatever its cause (an
  * exhausted memory included: a technique may ask for more than the machine has), is noted in
  * the run and does not stop the others. */
@@ -64,7 +85,7 @@ static void render_run(meso_context *ctx, const app_compare_all_desc *desc, cons
                        int samples, app_run *run) {
     snprintf(run->technique, sizeof(run->technique), "%s", technique);
     const meso_technique_info *info = meso_technique_find(technique);
-    if (info && !app_technique_applies(info, desc->scene)) {
+    if (info && app_technique_draws(info, desc->scene) == 0) {
         run->skipped = true;
         snprintf(run->note, sizeof(run->note),
                  "%s: skipped: it does not draw this scene's kind of mesostructure", technique);
@@ -72,7 +93,13 @@ static void render_run(meso_context *ctx, const app_compare_all_desc *desc, cons
     }
     meso_renderer *renderer = NULL;
     meso_framebuffer *fb = NULL;
-    meso_render_desc render_desc = {.technique = technique, .samples = samples};
+    /* Mixed scenes (issue 9 item 5): the objects this technique cannot draw are drawn with
+     * their own scene technique, and the note says which. */
+    meso_render_desc render_desc = {.technique = technique, .samples = samples, .fallback = true};
+    if (desc->settings) {
+        render_desc.options = desc->settings->items;
+        render_desc.num_options = desc->settings->count;
+    }
     meso_result result = meso_renderer_create(ctx, desc->scene, &render_desc, &renderer);
     if (result == MESO_OK) result = meso_framebuffer_create(ctx, desc->width, desc->height, &fb);
     double start = meso_time_seconds();
@@ -92,6 +119,7 @@ static void render_run(meso_context *ctx, const app_compare_all_desc *desc, cons
         run->prepare_ms = 1000.0 * stats.prepare_seconds;
         run->triangles = stats.triangles;
         run->rendered = true;
+        note_fallbacks(renderer, desc->scene, technique, run);
     } else {
         snprintf(run->note, sizeof(run->note), "%s", meso_context_last_error(ctx));
         meso_image_destroy(run->color);
@@ -151,7 +179,11 @@ void app_compare_all_print_notes(const app_compare_all *all, const char *scene_n
     size_t used = 0;
     for (size_t i = 0; i < all->num_runs; i++) {
         const app_run *r = &all->runs[i];
-        if (r->rendered) continue;
+        if (r->rendered) {
+            if (show_skipped && r->note[0])
+                fprintf(stderr, "meso: note: %s%s: %s\n", where, r->technique, r->note);
+            continue;
+        }
         if ((int)i == all->reference)
             fprintf(stderr,
                     "meso: warning: %sreference not available (%s): images and sheet are "
@@ -193,6 +225,8 @@ void app_run_label(const app_run *run, const char *prefix, int cell_width, char 
         snprintf(head, sizeof(head), "%s\n%s", prefix, run->technique);
     else
         snprintf(head, sizeof(head), "%s", run->technique);
+    if (run->rendered && run->note[0]) /* a mixed scene: say so under the name */
+        snprintf(head + strlen(head), sizeof(head) - strlen(head), " (+own)");
     if (!run->rendered) {
         snprintf(out, out_size, "%s\n%s", head, run->skipped ? "not applicable" : "failed");
     } else if (run->has_metrics) {
@@ -208,6 +242,30 @@ void app_run_label(const app_run *run, const char *prefix, int cell_width, char 
     } else {
         snprintf(out, out_size, "%s\n%.1f ms", head, run->frame_ms);
     }
+}
+
+/* Remove DIR/<prefix><technique>.png and .coverage.png of every technique this run did not
+ * render: an earlier run's images would otherwise sit beside a sheet that no longer shows
+ * them. Only names meso itself writes are touched. */
+static meso_result remove_stale_images(meso_context *ctx, const app_compare_all *all,
+                                       const char *dir, const char *prefix) {
+    for (size_t t = 0; t < meso_technique_count(); t++) {
+        const char *technique = meso_technique_get(t)->name;
+        bool rendered = false;
+        for (size_t i = 0; i < all->num_runs && !rendered; i++)
+            rendered = all->runs[i].rendered && strcmp(all->runs[i].technique, technique) == 0;
+        if (rendered) continue;
+        static const char *const suffixes[] = {".png", ".coverage.png"};
+        for (int s = 0; s < 2; s++) {
+            char name[256], path[4096];
+            snprintf(name, sizeof(name), "%s%s%s", prefix ? prefix : "", technique, suffixes[s]);
+            if (!app_path_join(path, sizeof(path), dir, name)) continue;
+            if (remove(path) != 0 && errno != ENOENT)
+                return meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot remove the stale image: %s",
+                                      path, strerror(errno));
+        }
+    }
+    return MESO_OK;
 }
 
 meso_result app_compare_all_write_images(meso_context *ctx, const app_compare_all *all,
@@ -230,7 +288,7 @@ meso_result app_compare_all_write_images(meso_context *ctx, const app_compare_al
         result = meso_image_save_png(ctx, run->coverage, path, &linear);
         if (result != MESO_OK) return result;
     }
-    return MESO_OK;
+    return remove_stale_images(ctx, all, dir, prefix);
 }
 
 void app_compare_all_csv(const app_compare_all *all, const char *scene_name, app_text *csv) {

@@ -38,6 +38,7 @@ typedef struct bench_options {
     double seconds; /* 0: not given */
     app_size size;
     const char *json;
+    app_settings settings; /* --set */
 } bench_options;
 
 typedef struct bench_row {
@@ -89,7 +90,8 @@ static meso_result bench_one(meso_context *ctx, const bench_scene *s, const char
     int threads = meso_context_num_threads(ctx);
     meso_renderer *renderer = NULL;
     meso_framebuffer *fb = NULL;
-    meso_render_desc desc = {.technique = technique};
+    meso_render_desc desc = {
+        .technique = technique, .options = o->settings.items, .num_options = o->settings.count};
     meso_result result = meso_renderer_create(ctx, s->scene, &desc, &renderer);
     if (result == MESO_OK)
         result = meso_framebuffer_create(ctx, o->size.width, o->size.height, &fb);
@@ -200,6 +202,7 @@ int meso_cmd_bench(int argc, char **argv) {
         {"--size", NULL, APP_OPTION_SIZE, &o.size, "WxH", "frame size", "512x512", 0, 0},
         {"--json", NULL, APP_OPTION_STRING, &o.json, "OUT.json", "also write the numbers as JSON",
          NULL, 0, 0},
+        APP_SET_OPTION(&o.settings),
     };
     app_globals globals;
     const char *paths[MAX_SCENES];

@@ -62,12 +62,14 @@ static meso_result write_sheet(meso_context *ctx, const demo_example *examples, 
 }
 
 static meso_result render_examples(meso_context *ctx, demo_example *examples, size_t count,
-                                   app_size size, int frames, const char *dir, bool quiet) {
+                                   app_size size, int frames, const app_settings *settings,
+                                   const char *dir, bool quiet) {
     app_compare_all_desc desc = {.width = size.width,
                                  .height = size.height,
                                  .with_reference = true,
                                  .timing_frames = frames,
-                                 .timing_budget_seconds = 1.0};
+                                 .timing_budget_seconds = 1.0,
+                                 .settings = settings};
     size_t total = count * app_compare_all_count(&desc);
     desc.progress = meso_progress_begin(ctx, "demo", total);
     meso_result result = MESO_OK;
@@ -101,11 +103,13 @@ int meso_cmd_demo(int argc, char **argv) {
     const char *dir = "demo";
     app_size size = {256, 256};
     int frames = 3;
+    app_settings settings = {0};
     const app_option options[] = {
         {"--output", "-o", APP_OPTION_STRING, &dir, "DIR", "the folder to write", "./demo", 0, 0},
         {"--size", NULL, APP_OPTION_SIZE, &size, "WxH", "size of each image", "256x256", 0, 0},
         {"--frames", NULL, APP_OPTION_INT, &frames, "N",
          "frames timed per image after the first (median; at most 1 s each)", "3", 1, 1000},
+        APP_SET_OPTION(&settings),
     };
     app_globals globals;
     int num_positionals = 0;
@@ -135,7 +139,7 @@ int meso_cmd_demo(int argc, char **argv) {
     }
     if (result == MESO_OK && count == 0) result = MESO_ERROR_FORMAT;
     if (result == MESO_OK)
-        result = render_examples(ctx, examples, count, size, frames, dir, globals.quiet);
+        result = render_examples(ctx, examples, count, size, frames, &settings, dir, globals.quiet);
     char path[4096];
     if (result == MESO_OK && !app_path_join(path, sizeof(path), dir, "sheet.png"))
         result = meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: path too long", dir);

@@ -124,7 +124,9 @@ static void print_mesostructure(const meso_mesostructure *m) {
         printf("      mesostructure: height field '%s'", m->source);
         if (m->height_field)
             printf(", %dx%d texels", m->height_field->width, m->height_field->height);
-        printf(", depth %g, wrap %s\n", m->depth, wrap);
+        printf(", depth %g, wrap %s", m->depth, wrap);
+        if (m->offset != 0.0f) printf(", mesh moved %g along its normals (\"height\")", m->offset);
+        printf("\n");
         break;
     case MESO_MESOSTRUCTURE_SOLID:
         printf("      mesostructure: solid '%s'", m->source);
@@ -141,6 +143,12 @@ static void print_mesostructure(const meso_mesostructure *m) {
 static meso_result info_scene(meso_context *ctx, const char *path) {
     meso_scene *scene = NULL;
     meso_result result = meso_scene_load(ctx, path, &scene);
+    /* What the renderer would refuse (a misspelt technique, an unknown option) is refused here
+     * too, before anything is printed. */
+    if (result == MESO_OK && (result = meso_technique_check_scene(ctx, scene)) != MESO_OK) {
+        meso_scene_destroy(scene);
+        return result;
+    }
     if (result != MESO_OK) return result;
     printf("scene: %s\n", scene->path);
     printf("image: %dx%d, background ", scene->width, scene->height);
@@ -179,7 +187,9 @@ static meso_result info_scene(meso_context *ctx, const char *path) {
         printf("      technique: %s", o->technique);
         if (t) printf(" (%s)", t->paper);
         for (int k = 0; k < o->num_options; k++)
-            printf("%s%s=%g", k ? ", " : "; options: ", o->options[k].name, o->options[k].value);
+            printf("%s%s%s%s=%g", k ? ", " : "; options: ",
+                   o->options[k].technique[0] ? o->options[k].technique : "",
+                   o->options[k].technique[0] ? "." : "", o->options[k].name, o->options[k].value);
         printf("\n");
     }
     meso_scene_destroy(scene);
@@ -212,6 +222,17 @@ static meso_result info_bake(meso_context *ctx, const char *path) {
     meso_bake_file *bake = NULL;
     meso_result result = meso_bake_file_load(ctx, path, &bake);
     if (result != MESO_OK) return result;
+    if (!strcmp(bake->kind, MESO_LAYERS_KIND)) {
+        /* Multilayer relief maps (Policarpo & Oliveira 2006 §3): checked as a renderer reads
+         * them before anything is printed, so a bad file is one error line. */
+        meso_layers *map = NULL;
+        result = meso_layers_from_bake_file(ctx, bake, path, &map);
+        meso_layers_destroy(map);
+        if (result != MESO_OK) {
+            meso_bake_file_destroy(bake);
+            return result;
+        }
+    }
     printf("bake: %s\n", path);
     printf("kind: %s (version %u), source hash %016llx\n", bake->kind, bake->kind_version,
            (unsigned long long)bake->source_hash);
@@ -243,8 +264,13 @@ static meso_result info_bake(meso_context *ctx, const char *path) {
             free(report);
         }
     }
+    if (!strcmp(bake->kind, MESO_LAYERS_KIND)) {
+        /* sizes beside the paper's three 256x256 RGBA8 maps, and what the layer limit clips */
+        char report[1024];
+        if (meso_layers_describe(bake, report, sizeof(report))) fputs(report, stdout);
+    }
     meso_bake_file_destroy(bake);
-    return MESO_OK;
+    return result;
 }
 
 int meso_cmd_info(int argc, char **argv) {

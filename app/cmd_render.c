@@ -6,6 +6,7 @@
 #include <string.h>
 
 #define SHEET_COLUMNS 4
+#define MAX_BATCH_SCENES 256
 
 typedef struct render_options {
     const char *output;
@@ -18,12 +19,13 @@ typedef struct render_options {
     bool wireframe;
     const char *coverage;
     bool linear;
+    app_settings settings; /* --set */
 } render_options;
 
 static const app_command_help render_help = {
     .name = "render",
     .usage = "SCENE -o OUT.png [options]\n       meso render SCENE --techniques all -o DIR "
-             "[options]",
+             "[options]\n       meso render SCENE1 SCENE2 ... -o DIR [options]",
     .summary =
         "Render a scene file (docs/scene-format.md) to a PNG, with each object's technique or\n"
         "the one given by --technique. A one-line summary (technique, size, prepare and frame\n"
@@ -33,11 +35,15 @@ static const app_command_help render_help = {
         "folder receiving <technique>.png (sRGB), <technique>.coverage.png, sheet.png (the\n"
         "images side by side, labelled with the median frame time of a few frames, PSNR over\n"
         "the whole image and over the covered pixels, SSIM and coverage IoU against the\n"
-        "reference, measured on linear colour), results.csv and results.json.",
+        "reference, measured on linear colour), results.csv and results.json.\n\n"
+        "With several scenes OUT is a folder: each scene is rendered in turn, in one process\n"
+        "(bakes are shared through the cache), into OUT/<scene name>.png, or with --techniques\n"
+        "into the folder OUT/<scene name>/. The first scene that fails stops the batch.",
     .examples = "  meso render examples/bricks-plane.json -o bricks.png\n"
                 "  meso render examples/bricks-plane.json -o relief.png --technique relief "
                 "--size 256x256\n"
-                "  meso render examples/bricks-plane.json --techniques all -o out/bricks\n",
+                "  meso render examples/bricks-plane.json --techniques all -o out/bricks\n"
+                "  meso render examples/*.json -o out --size 256x256\n",
 };
 
 /* "relief", or "mixed" when the objects use different techniques. */
@@ -53,8 +59,12 @@ static int render_one(meso_context *ctx, const meso_scene *scene, const render_o
                       bool quiet) {
     meso_renderer *renderer = NULL;
     meso_framebuffer *fb = NULL;
-    meso_render_desc desc = {
-        .technique = o->technique, .samples = o->samples, .wireframe = o->wireframe};
+    meso_render_desc desc = {.technique = o->technique,
+                             .samples = o->samples,
+                             .wireframe = o->wireframe,
+                             .options = o->settings.items,
+                             .num_options = o->settings.count,
+                             .progress = true};
     int width = o->size.width ? o->size.width : scene->width;
     int height = o->size.height ? o->size.height : scene->height;
     meso_encoding encoding = o->linear ? MESO_ENCODING_LINEAR : scene->encoding;
@@ -98,7 +108,7 @@ static void print_results(const app_compare_all *all) {
     }
 }
 
-/* Write sheet.png, results.csv and results.json of `all` into dir. */
+/* Write sheet.png, results.csv, results.json and error-vs-time.svg of `all` into dir. */
 static meso_result write_reports(meso_context *ctx, const app_compare_all *all,
                                  const meso_scene *scene, const char *dir) {
     const meso_image *images[256];
@@ -131,6 +141,10 @@ static meso_result write_reports(meso_context *ctx, const app_compare_all *all,
         result = app_text_write(ctx, &csv, path);
     if (result == MESO_OK && app_path_join(path, sizeof(path), dir, "results.json"))
         result = app_text_write(ctx, &json, path);
+    char png_path[4096];
+    if (result == MESO_OK && app_path_join(path, sizeof(path), dir, "error-vs-time.svg") &&
+        app_path_join(png_path, sizeof(png_path), dir, "error-vs-time.png"))
+        result = app_plot_error_vs_time(ctx, all, scene->path, path, png_path);
     app_text_free(&csv);
     app_text_free(&json);
     return result;
@@ -150,6 +164,7 @@ static int render_all(meso_context *ctx, const meso_scene *scene, const render_o
         .samples = o->samples,
         .reference_samples = o->reference_samples,
         .timing_frames = o->frames,
+        .settings = &o->settings,
     };
     desc.progress = meso_progress_begin(ctx, "render techniques", app_compare_all_count(&desc));
     app_compare_all all;
@@ -168,11 +183,35 @@ static int render_all(meso_context *ctx, const meso_scene *scene, const render_o
     if (result == MESO_OK) result = write_reports(ctx, &all, scene, o->output);
     if (result == MESO_OK) print_results(&all);
     if (result == MESO_OK && !quiet)
-        fprintf(stderr, "meso: render: %zu images, sheet.png, results.csv and results.json in %s\n",
+        fprintf(stderr, "meso: render: %zu images, sheet.png, results.csv, results.json and "
+                "error-vs-time.svg/.png in %s\n",
                 rendered, o->output);
     int status = result == MESO_OK ? APP_EXIT_OK : app_fail(ctx, result);
     app_compare_all_free(&all);
     return status;
+}
+
+/* A scene's name in a batch: its file name without folder and extension. */
+static void scene_name(const char *path, char *out, size_t size) {
+    const char *slash = strrchr(path, '/');
+    const char *base = slash ? slash + 1 : path;
+    const char *dot = strrchr(base, '.');
+    size_t length = dot && dot != base ? (size_t)(dot - base) : strlen(base);
+    snprintf(out, size, "%.*s", (int)length, base);
+}
+
+/* Two scenes of a batch with one name would write one file: refused before any work. */
+static int check_batch_names(const char *const *paths, int count) {
+    for (int a = 0; a < count; a++)
+        for (int b = a + 1; b < count; b++) {
+            char name_a[256], name_b[256];
+            scene_name(paths[a], name_a, sizeof name_a);
+            scene_name(paths[b], name_b, sizeof name_b);
+            if (strcmp(name_a, name_b) == 0)
+                return app_usage_error("render", "%s and %s would both write '%s' into the folder",
+                                       paths[a], paths[b], name_a);
+        }
+    return -1;
 }
 
 int meso_cmd_render(int argc, char **argv) {
@@ -200,17 +239,23 @@ int meso_cmd_render(int argc, char **argv) {
          "frames timed per technique after the first, median reported (with --techniques; "
          "at most 2 s each)",
          "5", 1, 1000},
+        APP_SET_OPTION(&o.settings),
     };
     app_globals globals;
-    const char *positionals[1];
+    const char *positionals[MAX_BATCH_SCENES];
     int num_positionals = 0;
-    int status = app_parse_options(&render_help, options, sizeof(options) / sizeof(options[0]),
-                                   argc, argv, &globals, positionals, 1, &num_positionals);
+    int status =
+        app_parse_options(&render_help, options, sizeof(options) / sizeof(options[0]), argc, argv,
+                          &globals, positionals, MAX_BATCH_SCENES, &num_positionals);
     if (status >= 0) return status;
     if (num_positionals < 1) return app_usage_error("render", "missing the SCENE file");
     if (!o.output) return app_usage_error("render", "missing -o OUT");
     if (o.technique && o.techniques)
         return app_usage_error("render", "--technique and --techniques exclude each other");
+    if (num_positionals > 1 && o.coverage)
+        return app_usage_error("render", "--coverage takes one file: it needs one scene");
+    if (num_positionals > 1 && (status = check_batch_names(positionals, num_positionals)) >= 0)
+        return status;
     const char *scene_path = positionals[0];
     if (o.technique && !app_technique_known(o.technique)) {
         char known[1024];
@@ -231,8 +276,10 @@ int meso_cmd_render(int argc, char **argv) {
     meso_context *ctx = app_context_create(&globals);
     if (!ctx) return APP_EXIT_FAILURE;
     /* Every output is checked before any work, so a bad one fails at once and nothing is
-     * written (with --techniques, OUT is a folder, made later with its parents). */
-    const char *outputs[2] = {o.techniques ? NULL : o.output, o.coverage};
+     * written (with --techniques or several scenes, OUT is a folder, made below with its
+     * parents; the files in it are checked as they are written). */
+    bool output_is_file = !o.techniques && num_positionals == 1;
+    const char *outputs[2] = {output_is_file ? o.output : NULL, o.coverage};
     for (int i = 0; i < 2; i++) {
         meso_result checked = outputs[i] ? meso_file_check_output(ctx, outputs[i]) : MESO_OK;
         if (checked != MESO_OK) {
@@ -241,15 +288,39 @@ int meso_cmd_render(int argc, char **argv) {
             return status;
         }
     }
-    meso_scene *scene = NULL;
-    meso_result result = meso_scene_load(ctx, scene_path, &scene);
-    if (result != MESO_OK)
-        status = app_fail(ctx, result);
-    else if (o.techniques)
-        status = render_all(ctx, scene, &o, names, num_names, globals.quiet);
-    else
-        status = render_one(ctx, scene, &o, globals.quiet);
-    meso_scene_destroy(scene);
+    const char *batch_dir = num_positionals > 1 ? o.output : NULL;
+    if (batch_dir) {
+        meso_result made = app_make_dir(ctx, batch_dir);
+        if (made != MESO_OK) {
+            status = app_fail(ctx, made);
+            meso_context_destroy(ctx);
+            return status;
+        }
+    }
+    status = APP_EXIT_OK;
+    for (int s = 0; s < num_positionals && status == APP_EXIT_OK; s++) {
+        char output[4096];
+        render_options scene_options = o;
+        if (batch_dir) { /* OUT/<name>.png, or the folder OUT/<name> with --techniques */
+            char name[256];
+            scene_name(positionals[s], name, sizeof name);
+            if (!o.techniques) strncat(name, ".png", sizeof name - strlen(name) - 1);
+            if (!app_path_join(output, sizeof output, batch_dir, name)) {
+                status = app_usage_error("render", "%s: output path too long", batch_dir);
+                break;
+            }
+            scene_options.output = output;
+        }
+        meso_scene *scene = NULL;
+        meso_result result = meso_scene_load(ctx, positionals[s], &scene);
+        if (result != MESO_OK)
+            status = app_fail(ctx, result);
+        else if (o.techniques)
+            status = render_all(ctx, scene, &scene_options, names, num_names, globals.quiet);
+        else
+            status = render_one(ctx, scene, &scene_options, globals.quiet);
+        meso_scene_destroy(scene);
+    }
     meso_context_destroy(ctx);
     return status;
 }

@@ -16,6 +16,7 @@ static const command commands[] = {
     {"info", meso_cmd_info, "describe a PNG, scene, mesh or bake file"},
     {"demo", meso_cmd_demo, "render the built-in examples with every technique"},
     {"bench", meso_cmd_bench, "time techniques per frame, and their thread scaling"},
+    {"cache", meso_cmd_cache, "list, size or clear the bake cache"},
 };
 #define NUM_COMMANDS (sizeof(commands) / sizeof(commands[0]))
 
@@ -25,7 +26,9 @@ static void print_help(void) {
            MESO_VERSION_STRING);
     for (size_t i = 0; i < NUM_COMMANDS; i++)
         printf("  %-10s %s\n", commands[i].name, commands[i].summary);
-    printf("  %-10s %s\n", "help", "the help of a command (meso help render)");
+    printf("  %-10s %s\n", "help",
+           "the help of a command or a technique (meso help render, "
+           "meso help relief)");
     printf("\nGlobal options (every command): --threads N, --progress, --quiet, --verbose, --help\n"
            "Options: meso --help, meso --version\n\n"
            "Examples:\n"
@@ -77,7 +80,14 @@ int main(int argc, char **argv) {
             return APP_EXIT_OK;
         }
         const command *c = find_command(argv[2]);
-        if (!c) return app_usage_error(NULL, "help: unknown command '%s'", argv[2]);
+        const meso_technique_info *technique = meso_technique_find(argv[2]);
+        if (!c && technique) {
+            app_print_technique_help(technique);
+            return APP_EXIT_OK;
+        }
+        if (!c)
+            return app_usage_error(NULL, "help: '%s' is neither a command nor a technique",
+                                   argv[2]);
         char *help_argv[] = {argv[2], "--help", NULL};
         return c->run(2, help_argv);
     }

@@ -12,6 +12,7 @@
  *   bake_minmax.h      min-max mip pyramids of height fields (hierarchical ray tracing)
  *   bake_sat.h         summed-area tables of height fields (Crow 1984)
  *   bake_isosurface.h  isosurfaces of solid mesostructure, extracted in texture space
+ *   bake_layers.h      multilayer relief maps of solids and height fields (Policarpo & Oliveira §3)
  */
 #ifndef MESO_BAKE_H
 #define MESO_BAKE_H
@@ -22,5 +23,6 @@
 #include "meso/bake_horizon.h"
 #include "meso/bake_minmax.h"
 #include "meso/bake_sat.h"
+#include "meso/bake_layers.h"
 
 #endif

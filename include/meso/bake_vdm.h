@@ -39,14 +39,17 @@ extern "C" {
 #endif
 
 #define MESO_VDM_KIND "vdm"
-#define MESO_VDM_KIND_VERSION 3u
+#define MESO_VDM_KIND_VERSION 4u
 /* Limits, checked before allocating. */
 #define MESO_VDM_MAX_SIDE 1024
 #define MESO_VDM_MAX_THETA 128
 #define MESO_VDM_MAX_PHI 128
 #define MESO_VDM_MAX_CURVATURES 64
 #define MESO_VDM_MAX_EIGEN 64
-#define MESO_VDM_MAX_TABLE_FLOATS (UINT64_C(1) << 28) /* raw matrix A: 1 GiB of floats */
+/* The table A is streamed through the SVD, never held whole: its size bounds the bake's time
+ * (512 x 512 texels x 8 azimuths x 528 columns = 2^30). Kept whole only with keep_raw. */
+#define MESO_VDM_MAX_TABLE_ENTRIES (UINT64_C(1) << 31)
+#define MESO_VDM_MAX_RAW_FLOATS (UINT64_C(1) << 28) /* keep_raw: 1 GiB of floats */
 #define MESO_VDM_RMSE_COUNT 16
 
 /* Zero fields take the defaults of meso_query_vdm_defaults(). */

@@ -17,7 +17,8 @@
  *
  * Threads
  *   A context may be used from several threads at once: logging is serialised, and worker
- *   loops started from different threads run independently. Library calls never exit or print
+ *   loops started from different threads run independently (the context's pool runs one at a
+ *   time; another runs on its caller's thread). Library calls never exit or print
  *   (but for the progress bar, which writes to stderr only when enabled).
  */
 #ifndef MESO_CORE_H
@@ -82,7 +83,7 @@ typedef enum meso_progress_mode {
 } meso_progress_mode;
 
 typedef struct meso_context_desc {
-    int num_threads;            /* 0: every core (OpenMP's default) */
+    int num_threads;            /* 0: every core (omp_get_max_threads(): OMP_NUM_THREADS) */
     meso_log_fn log;            /* NULL: warnings and errors are only kept, not printed */
     void *log_user;
     meso_progress_mode progress;
@@ -143,9 +144,12 @@ meso_result meso_memory_check(meso_context *ctx, const char *name, uint64_t esti
  * a job use per-thread scratch allocated once by the caller. */
 typedef void (*meso_job_fn)(void *user, size_t job, int thread_index);
 
-/* Run fn for every job in [0, num_jobs) on the context's threads (OpenMP, dynamic schedule).
+/* Run fn for every job in [0, num_jobs) on the context's threads (the calling thread and a pool
+ * of helpers that sleep between loops; jobs are handed out one at a time, in order).
  * For byte-identical output whatever the thread count, split work into jobs that do not depend
- * on the thread count and write disjoint memory. Returns when every job has run. */
+ * on the thread count and write disjoint memory. Returns when every job has run. A loop started
+ * from inside a job, or while another loop of the same context runs on another thread, runs
+ * on its caller's thread alone (thread_index 0). */
 void meso_parallel_for(meso_context *ctx, size_t num_jobs, meso_job_fn fn, void *user);
 
 /* ---- Progress ----------------------------------------------------------------------------- */

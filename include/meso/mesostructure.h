@@ -68,13 +68,16 @@ const char *meso_heightfield_kind_name(meso_heightfield_kind kind);
 meso_result meso_heightfield_create_procedural(meso_context *ctx, const meso_heightfield_desc *desc,
                                                meso_heightfield **out_heightfield,
                                                meso_image **out_color);
-/* A height field from an image's first channel (PNG values as loaded, in [0,1]). */
+/* A height field from an image (values as loaded, in [0,1], clamped): a grey image's grey, an
+ * RGB or RGBA image's luminance 0.2126 R + 0.7152 G + 0.0722 B of the stored values (no sRGB
+ * decoding); alpha is ignored. */
 meso_result meso_heightfield_create_from_image(meso_context *ctx, const meso_image *image,
                                                meso_wrap wrap, meso_heightfield **out_heightfield);
 /* A constant height field (tests and degenerate cases). */
 meso_result meso_heightfield_create_constant(meso_context *ctx, int width, int height, float value,
                                              meso_heightfield **out_heightfield);
-/* Loads a PNG and takes its first channel. Errors name the file. */
+/* Loads a PNG as meso_heightfield_create_from_image reads it. Errors name the file; a constant
+ * map loads, with a warning naming the file ("the height map is constant"). */
 meso_result meso_heightfield_load_png(meso_context *ctx, const char *path, meso_wrap wrap,
                                       meso_heightfield **out_heightfield);
 void meso_heightfield_destroy(meso_heightfield *heightfield);
@@ -150,12 +153,14 @@ typedef enum meso_solid_kind {
     MESO_SOLID_GRID,        /* a lattice of bars with holes */
     MESO_SOLID_SQUAMA,      /* overlapping scales */
     MESO_SOLID_HELIX,       /* a double helix of threads */
+    MESO_SOLID_SLAB,        /* solid below w = 1 - thickness: the height field h = thickness */
+    MESO_SOLID_MESH,        /* a closed tile mesh (meso_solid_create_from_triangles) */
 } meso_solid_kind;
 
 typedef struct meso_solid_desc {
     meso_solid_kind kind;
     int count;       /* repeats per tile along u (and v where it applies): weave 2, chain 2,
-                        grid 4, squama 4, helix 2 */
+                        grid 4, squama 4, helix 2, slab 1 */
     float thickness; /* thread / bar / link radius as a fraction of a cell (kind's default) */
 } meso_solid_desc;
 
@@ -167,6 +172,32 @@ const char *meso_solid_kind_name(meso_solid_kind kind);
 
 meso_result meso_solid_create_procedural(meso_context *ctx, const meso_solid_desc *desc,
                                          meso_solid **out_solid);
+/* A solid from a closed triangle mesh of one tile (DESIGN.md: x, y -> u, v, periodic: the
+ * mesh may cross the tile's border and continues in the neighbouring tiles; z -> 1 - w, its
+ * top at z = 1 on the mesh), converted once to signed distances on a grid of `resolution`^3
+ * nodes (0: 96) with Embree: the sign by ray parity along z, the magnitude by closest-point
+ * queries. meso_solid_distance then interpolates the grid trilinearly (scaled so it stays a
+ * distance bound). `name` (the file) names the mesh in messages.
+ * Returns MESO_OK; MESO_ERROR_FORMAT naming `name` when the mesh is empty, not closed (an edge
+ * with one triangle), not manifold (an edge with three or more), inconsistently oriented, or
+ * has vertices outside 0 <= z <= 1; MESO_ERROR_LIMIT (resolution outside 8..256);
+ * MESO_ERROR_OUT_OF_MEMORY; MESO_ERROR_INTERNAL (Embree failed).
+ * Threads: uses every worker of ctx; the grid is independent of the thread count. */
+meso_result meso_solid_create_from_triangles(meso_context *ctx, const meso_vec3 *positions,
+                                             size_t num_vertices, const uint32_t *indices,
+                                             size_t num_triangles, const char *name,
+                                             int resolution, meso_solid **out_solid);
+/* A solid from a whole model for a relief impostor (Policarpo & Oliveira 2006 §4): positions
+ * already in the unit box (the caller maps the model's bounds there), not periodic, clamped
+ * at the box, and not required to be closed: a node is inside when it lies behind the face
+ * nearest to it (the teapot's patches leave seams and holes that ray parity cannot cross).
+ * Same results otherwise as meso_solid_create_from_triangles. */
+meso_result meso_solid_create_from_model(meso_context *ctx, const meso_vec3 *positions,
+                                         size_t num_vertices, const uint32_t *indices,
+                                         size_t num_triangles, const char *name, int resolution,
+                                         meso_solid **out_solid);
+/* False for a model's solid (clamped at the box), true for tiles and procedural solids. */
+bool meso_solid_is_periodic(const meso_solid *solid);
 void meso_solid_destroy(meso_solid *solid);
 /* The parameters the solid was made with (defaults filled in). */
 meso_solid_desc meso_solid_get_desc(const meso_solid *solid);

@@ -66,12 +66,31 @@ enum {
     MESO_TECHNIQUE_ACCEPTS_SOLID = 1u << 2,
 };
 
+typedef enum meso_option_type {
+    MESO_OPTION_INT = 0, /* a whole number in [min, max]; kept as int */
+    MESO_OPTION_BOOL,    /* true / false (1 / 0); kept as bool */
+    MESO_OPTION_FLOAT,   /* a finite number in [min, max]; kept as float */
+} meso_option_type;
+
+/* One row of a technique's option table: what `meso help TECHNIQUE` prints, and what the one
+ * option reader (meso_technique_check_option and the render module's reader) checks. */
+typedef struct meso_technique_option {
+    const char *name; /* "linear_steps" */
+    meso_option_type type;
+    double min, max; /* inclusive (BOOL: 0, 1) */
+    double default_value;
+    const char *doc; /* one line */
+    size_t offset;   /* where the technique keeps the value in its own option struct */
+} meso_technique_option;
+
 typedef struct meso_technique_info {
     const char *name;    /* "relief" */
     const char *summary; /* one line */
     const char *paper;   /* "Policarpo & Oliveira 2006, §2.1" */
     meso_technique_kind kind;
     unsigned accepts;    /* MESO_TECHNIQUE_ACCEPTS_* */
+    const meso_technique_option *options; /* the option table (NULL when it has none) */
+    size_t num_options;
 } meso_technique_info;
 
 /* The registered techniques, in a fixed order (flat, bump, ...). Thread-safe. */
@@ -79,6 +98,21 @@ size_t meso_technique_count(void);
 const meso_technique_info *meso_technique_get(size_t index);
 /* NULL when no technique has that name. */
 const meso_technique_info *meso_technique_find(const char *name);
+/* The row of the technique's option table called `name`; NULL when it has none. */
+const meso_technique_option *meso_technique_find_option(const meso_technique_info *technique,
+                                                        const char *name);
+/* Check one option setting against its technique's table: the technique exists, it has the
+ * option, the value has the option's type and lies in its range. `where` starts the message
+ * ("scene.json: objects[0].technique_options.relief.linear_steps", "--set relief.x"):
+ * "<where>: 2000 is not an integer in 1..1024". Returns MESO_OK or
+ * MESO_ERROR_INVALID_ARGUMENT. Thread-safe. */
+meso_result meso_technique_check_option(meso_context *ctx, const char *technique, const char *name,
+                                        double value, const char *where);
+/* Check what a scene says about techniques before any work: every object's technique name
+ * exists, and every technique option (both forms) passes meso_technique_check_option. The
+ * message names the file and the key path: "scene.json: objects[0].technique: unknown technique
+ * 'relif' (known: ...)". meso_renderer_create runs it too. Thread-safe. */
+meso_result meso_technique_check_scene(meso_context *ctx, const meso_scene *scene);
 
 /* ---- Renderers ---------------------------------------------------------------------------- */
 
@@ -87,6 +121,18 @@ typedef struct meso_render_desc {
     int samples;           /* 0 or 1: one sample at each pixel centre; S: an n x n ordered grid
                               with n = ceil(sqrt(S)) */
     bool wireframe;        /* overlay the rasterized triangles' edges */
+    /* Technique options for every object, each keyed by technique (meso_option.technique must
+     * be set), over the scene's own: what `meso render --set relief.linear_steps=64` passes.
+     * Read during meso_renderer_create only. */
+    const meso_option *options;
+    int num_options;
+    /* Report progress (the context's bar and callback, docs/cli.md --progress) of the
+     * reference's build and of every frame: for one long render, not for loops of frames. */
+    bool progress;
+    bool fallback;         /* with `technique`: an object it cannot draw (its mesostructure is
+                              not one it accepts) is drawn with the object's own scene technique
+                              (or `flat` when that is `reference` or cannot draw it either)
+                              instead of failing; see meso_renderer_object_technique */
 } meso_render_desc;
 
 /* The memory a frame of width x height with desc's samples needs besides the scene (the
@@ -115,6 +161,9 @@ meso_result meso_renderer_create(meso_context *ctx, const meso_scene *scene,
  * renderer; uses every worker of the context. */
 meso_result meso_renderer_render(meso_renderer *renderer, meso_framebuffer *fb);
 meso_render_stats meso_renderer_get_stats(const meso_renderer *renderer);
+/* The name of the technique drawing object `object` ("reference" for every object of a
+ * reference renderer; NULL for an index out of range). Valid as long as the program runs. */
+const char *meso_renderer_object_technique(const meso_renderer *renderer, int object);
 void meso_renderer_destroy(meso_renderer *renderer);
 
 /* Create a renderer, draw one frame of the scene's size, destroy: the one-call form. */

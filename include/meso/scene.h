@@ -64,13 +64,20 @@ typedef struct meso_mesostructure {
     meso_heightfield *height_field; /* HEIGHT_FIELD: owned by the scene */
     meso_solid *solid;              /* SOLID: owned by the scene */
     float depth;                    /* shell thickness, world units */
+    float offset; /* how far the mesh was moved along its normals to make the scene's "height"
+                     convention inward (0 for inward; docs/scene-format.md) */
     meso_wrap wrap;
     char source[MESO_NAME_MAX];     /* "bricks" or the file name, for labels and logs */
 } meso_mesostructure;
 
-/* A technique parameter from the scene ("technique_options": {"linear_steps": 16}); numbers
- * and booleans (true = 1). Each technique validates the names it reads. */
+/* A technique parameter: numbers and booleans (true = 1). From the scene, keyed by technique
+ * ("technique_options": {"relief": {"linear_steps": 64}}: technique "relief") or in the flat
+ * form of one technique ("technique_options": {"linear_steps": 64}: technique "", meaning the
+ * object's own technique; for an object built by hand without a technique name, whichever
+ * technique draws it). Every technique reads its options through its option table
+ * (meso_technique_info.options); meso_technique_check_scene checks them all. */
 typedef struct meso_option {
+    char technique[MESO_NAME_MAX]; /* "" = the object's own technique (the flat form) */
     char name[MESO_NAME_MAX];
     double value;
 } meso_option;
@@ -106,16 +113,6 @@ meso_result meso_scene_load(meso_context *ctx, const char *path, meso_scene **ou
 meso_result meso_scene_parse(meso_context *ctx, const char *json, const char *name,
                              const char *base_dir, meso_scene **out_scene);
 void meso_scene_destroy(meso_scene *scene);
-
-/* The option's value, or `fallback` when the object does not set it. Inline: renderers read
- * options of scene structs without linking the scene parser. Pure, thread-safe. */
-static inline double meso_object_option(const meso_object *object, const char *name,
-                                        double fallback) {
-    if (!object || !name) return fallback;
-    for (int i = 0; i < object->num_options; i++)
-        if (strcmp(object->options[i].name, name) == 0) return object->options[i].value;
-    return fallback;
-}
 
 #ifdef __cplusplus
 }

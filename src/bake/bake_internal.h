@@ -4,13 +4,33 @@
 
 #include "meso/bake.h"
 
-/* Economical SVD (LAPACK gesdd, jobz = 'S') of the m x n column-major matrix `a` (destroyed):
- * a = U diag(s) VT with U m x r (column-major, leading dimension m), s r values descending,
- * VT r x n (column-major, leading dimension r), r = min(m, n). Computed in double precision
- * (the table's d reach tens of shell depths; float gesdd left 1e-4 reconstruction errors) and
- * returned as float. Returns MESO_OK, MESO_ERROR_OUT_OF_MEMORY or MESO_ERROR_INTERNAL (LAPACK
- * did not converge), logged naming `name`. */
-meso_result meso_bake_svd(meso_context *ctx, const char *name, const float *a, size_t m, size_t n,
-                          float *out_u, float *out_s, float *out_vt);
+/* A tall table streamed by rows: fill(user, first, count, out) writes rows [first, first +
+ * count) row-major (count x columns floats) into out. Called from worker threads on disjoint
+ * ranges, twice per row (once per pass) unless the caller keeps the raw table. */
+typedef struct meso_bake_rows {
+    size_t rows;
+    int columns;
+    void (*fill)(void *user, size_t first, size_t count, float *out);
+    void *user;
+    /* NULL, or columns factors: the SVD is of A diag(column_scale). When choose_scale is set
+     * it fills column_scale between the passes from the energy (sum of squares) of every
+     * column of A, so a caller can weight parts of the table by their energy. */
+    float *column_scale;
+    void (*choose_scale)(void *user, const double *column_energy, float *column_scale);
+    meso_progress *progress; /* one unit per row filled: rows with out_raw, else 2 x rows */
+} meso_bake_rows;
+
+/* SVD of the tall matrix A D (D = diag(column_scale)) = U S E^T without holding A: its Gram
+ * matrix (BLAS dsyrk in double, fixed blocks) and LAPACK's symmetric eigensolver (dsyevd).
+ * Outputs: out_singular[columns] descending; out_vectors[column * columns + i] = E[column][i]
+ * (eigenfunction i); out_weights[row * keep + i] = (A D E)[row][i] = U S, for i < keep;
+ * out_raw (NULL or rows x columns, row-major) receives A itself and saves the second fill.
+ * The singular values come from the squared problem: exact for the leading ones this module
+ * keeps, relative precision ~1e-8 of s_1 for the smallest. Same result for any thread count.
+ * Returns MESO_OK, MESO_ERROR_OUT_OF_MEMORY, MESO_ERROR_CANCELLED (progress) or
+ * MESO_ERROR_INTERNAL (LAPACK did not converge), logged naming `name`. */
+meso_result meso_bake_svd_streamed(meso_context *ctx, const char *name,
+                                   const meso_bake_rows *source, int keep, float *out_singular,
+                                   float *out_vectors, float *out_weights, float *out_raw);
 
 #endif

@@ -2,7 +2,6 @@
  * compression (§3.3), lookups, bake files. Conventions in include/meso/bake_vdm.h. */
 #include <float.h>
 #include <math.h>
-#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -96,9 +95,12 @@ static meso_result check_desc(meso_context *ctx, const char *name, const meso_vd
               d->mvm_eigenfunctions <= rank,
           MESO_ERROR_INVALID_ARGUMENT, "%s: mvm_eigenfunctions: %d is outside 1-%d", name,
           d->mvm_eigenfunctions, rank < MESO_VDM_MAX_EIGEN ? rank : MESO_VDM_MAX_EIGEN);
-    CHECK((uint64_t)rows * (uint64_t)columns <= MESO_VDM_MAX_TABLE_FLOATS, MESO_ERROR_LIMIT,
+    CHECK((uint64_t)rows * (uint64_t)columns <= MESO_VDM_MAX_TABLE_ENTRIES, MESO_ERROR_LIMIT,
           "%s: the table of %zu x %d values exceeds the limit %llu", name, rows, columns,
-          (unsigned long long)MESO_VDM_MAX_TABLE_FLOATS);
+          (unsigned long long)MESO_VDM_MAX_TABLE_ENTRIES);
+    CHECK(!d->keep_raw || (uint64_t)rows * (uint64_t)columns <= MESO_VDM_MAX_RAW_FLOATS,
+          MESO_ERROR_LIMIT, "%s: keeping the raw table of %zu x %d values exceeds the limit %llu",
+          name, rows, columns, (unsigned long long)MESO_VDM_MAX_RAW_FLOATS);
 #undef CHECK
     return MESO_OK;
 }
@@ -130,10 +132,6 @@ typedef struct bake_job {
     meso_vdm_desc desc;
     const float *grid; /* the height field resampled to width x height */
     bool clamp;
-    float *a; /* column-major rows x columns */
-    size_t rows;
-    meso_progress *progress;
-    atomic_bool cancelled;
 } bake_job;
 
 /* h at texture (u, v) on the resampled grid: bilinear between texel centres, as
@@ -206,6 +204,23 @@ static void cast_rays(const bake_job *job, float u0, float v0, float phi, float 
     }
 }
 
+/* atan(y / x) for y >= 0, x > 0 (the bent hits' view angles) to 2e-8 rad: the minimax
+ * polynomial of Abramowitz & Stegun 4.4.49 on [0, 1], mirrored through pi/2 - atan(1/t) above.
+ * glibc's atan2f was a third of the bake, and the table's theta spacing is 0.05 rad. */
+static float polar_angle(float y, float x) {
+    bool swap = y > x;
+    float t = swap ? x / y : y / x, t2 = t * t;
+    float p = -0.0161657367f + t2 * 0.0028662257f;
+    p = 0.0429096138f + t2 * p;
+    p = -0.0752896400f + t2 * p;
+    p = 0.1065626393f + t2 * p;
+    p = -0.1420889944f + t2 * p;
+    p = 0.1999355085f + t2 * p;
+    p = -0.3333314528f + t2 * p;
+    float a = t + t * t2 * p;
+    return swap ? (float)HALF_PI - a : a;
+}
+
 /* The Appendix: bend the zero-curvature hits (s, z) onto a reference surface of curvature c
  * along the view plane, find their new view angles theta', drop the reordered (occluded)
  * ones, resample linearly at the uniform thetas; -1 where no intersection exists. d is the
@@ -216,29 +231,33 @@ static void bend_and_resample(const meso_vdm_desc *d, float c, const float *s, c
     int n = d->num_theta;
     float kept_theta[MESO_VDM_MAX_THETA], kept_d[MESO_VDM_MAX_THETA];
     int count = 0;
+    /* Single precision throughout: s, z and 1/c are at least 1e-3 tile apart from round-off
+     * trouble and the table is stored as float; double trig made this loop most of the bake. */
     for (int t = 0; t < n; t++) {
         if (s[t] == 0.0f && z[t] == 0.0f) { /* the hit is P itself, whatever the bend */
             kept_theta[count] = theta_of(d, t);
             kept_d[count++] = 0.0f;
             continue;
         }
-        double alpha = (double)s[t] * c, q = 1.0 - (double)z[t] * c;
-        if (fabs(alpha) >= HALF_PI) break; /* past a quarter turn the bend is meaningless */
-        double horizontal, vertical;       /* of the bent hit relative to P, vertical up */
-        if (fabs(alpha) < 1e-7) {
-            horizontal = s[t];
-            vertical = -(double)z[t] - 0.5 * (double)s[t] * s[t] * c;
+        float alpha = s[t] * c, q = 1.0f - z[t] * c;
+        if (fabsf(alpha) >= (float)HALF_PI) break; /* past a quarter turn the bend is meaningless */
+        float horizontal, vertical;                /* of the bent hit relative to P, vertical up */
+        if (fabsf(alpha) < 1e-3f) { /* second order in alpha: the third is below float precision */
+            horizontal = s[t] * q;
+            vertical = -z[t] - 0.5f * s[t] * s[t] * c * q;
         } else {
-            horizontal = q * sin(alpha) / c;
-            vertical = (q * cos(alpha) - 1.0) / c;
+            float sin_a = sinf(alpha), cos_a = cosf(alpha); /* GCC fuses them into sincosf */
+            horizontal = q * sin_a / c;
+            vertical = (q * cos_a - 1.0f) / c;
         }
-        if (horizontal < 0.0 || -vertical <= 1e-12) continue; /* above P's tangent plane */
-        double theta = atan2(horizontal, -vertical);
+        if (horizontal < 0.0f || -vertical <= 1e-9f) continue; /* above P's tangent plane */
+        float theta = polar_angle(horizontal, -vertical);
         if (count > 0 && theta <= kept_theta[count - 1]) continue; /* reordered: occluded */
-        double dist = s[t] > 1e-9f ? (double)s[t] / sin(theta)
-                                   : sqrt(horizontal * horizontal + vertical * vertical);
-        kept_theta[count] = (float)theta;
-        kept_d[count] = (float)(dist / d->depth);
+        float length = sqrtf(horizontal * horizontal + vertical * vertical);
+        /* l / sin(theta') with sin(theta') = horizontal / length */
+        float dist = s[t] > 1e-9f && horizontal > 0.0f ? s[t] * length / horizontal : length;
+        kept_theta[count] = theta;
+        kept_d[count] = dist / d->depth;
         count++;
     }
     int k = 0;
@@ -260,46 +279,43 @@ static void bend_and_resample(const meso_vdm_desc *d, float c, const float *s, c
     }
 }
 
-static void bake_row(void *user, size_t row_index, int thread_index) {
-    bake_job *job = user;
-    if (atomic_load(&job->cancelled)) return;
+/* Rows [first, first + count) of A (rows (y, x, phi), row-major): for each curvature the d of
+ * every theta, then theta_MVM per curvature (§3.3). The streamed SVD calls this twice. */
+static void fill_rows(void *user, size_t first, size_t count, float *out) {
+    const bake_job *job = user;
     const meso_vdm_desc *d = &job->desc;
-    int j = (int)row_index, n = d->num_theta, nc = d->num_curvatures;
+    int n = d->num_theta, nc = d->num_curvatures, columns = columns_of(d);
     float s[MESO_VDM_MAX_THETA], z[MESO_VDM_MAX_THETA], flat_d[MESO_VDM_MAX_THETA];
     float dd[MESO_VDM_MAX_THETA];
-    for (int i = 0; i < d->width; i++) {
+    for (size_t r = 0; r < count; r++) {
+        size_t row = first + r;
+        int p = (int)(row % (size_t)d->num_phi);
+        size_t texel = row / (size_t)d->num_phi;
+        int i = (int)(texel % (size_t)d->width), j = (int)(texel / (size_t)d->width);
         float u0 = ((float)i + 0.5f) / (float)d->width;
         float v0 = 1.0f - ((float)j + 0.5f) / (float)d->height;
-        for (int p = 0; p < d->num_phi; p++) {
-            float phi = (float)(TWO_PI * p / d->num_phi);
-            size_t row = ((size_t)j * d->width + i) * d->num_phi + p;
-            cast_rays(job, u0, v0, phi, s, z);
-            for (int t = 0; t < n; t++) flat_d[t] = sqrtf(s[t] * s[t] + z[t] * z[t]) / d->depth;
-            for (int k = 0; k < nc; k++) {
-                float c = curvature_of(d, k);
-                if (c == 0.0f) {
-                    memcpy(dd, flat_d, sizeof(float) * (size_t)n);
-                } else {
-                    bend_and_resample(d, c, s, z, dd);
-                }
-                /* §3.3: theta_MVM = the largest theta with a valid d; the -1 entries above it
-                 * get the d of theta_MVM (constant extension: keeps the rows of A smooth for
-                 * the SVD; the renderer never reads them, it discards above theta_MVM). */
-                int last = -1;
-                for (int t = 0; t < n; t++)
-                    if (dd[t] >= 0.0f) last = t;
-                float fill = last >= 0 ? dd[last] : 0.0f;
-                for (int t = 0; t < n; t++) {
-                    float value = (t > last || dd[t] < 0.0f) ? fill : dd[t];
-                    job->a[((size_t)k * n + t) * job->rows + row] = value;
-                }
-                job->a[((size_t)n * nc + k) * job->rows + row] =
-                    last >= 0 ? theta_of(d, last) : 0.0f;
+        float phi = (float)(TWO_PI * p / d->num_phi);
+        float *a = out + r * (size_t)columns;
+        cast_rays(job, u0, v0, phi, s, z);
+        for (int t = 0; t < n; t++) flat_d[t] = sqrtf(s[t] * s[t] + z[t] * z[t]) / d->depth;
+        for (int k = 0; k < nc; k++) {
+            float c = curvature_of(d, k);
+            if (c == 0.0f) {
+                memcpy(dd, flat_d, sizeof(float) * (size_t)n);
+            } else {
+                bend_and_resample(d, c, s, z, dd);
             }
+            /* §3.3: theta_MVM = the largest theta with a valid d; the -1 entries above it get
+             * the d of theta_MVM (constant extension: keeps the rows of A smooth for the SVD;
+             * the renderer never reads them, it discards above theta_MVM). */
+            int last = -1;
+            for (int t = 0; t < n; t++)
+                if (dd[t] >= 0.0f) last = t;
+            float fill = last >= 0 ? dd[last] : 0.0f;
+            for (int t = 0; t < n; t++) a[k * n + t] = (t > last || dd[t] < 0.0f) ? fill : dd[t];
+            a[n * nc + k] = last >= 0 ? theta_of(d, last) : 0.0f;
         }
     }
-    if (meso_progress_advance(job->progress, (uint64_t)d->width))
-        atomic_store(&job->cancelled, true);
 }
 
 /* Box-filter the height field to width x height (supersampled bilinear samples). */
@@ -389,6 +405,21 @@ static void fill_compression(meso_vdm *vdm, const float *vt, int rank, float mvm
     c->mvm_rmse = (float)(sqrt(sum / ((double)rows * d->num_curvatures)) / mvm_scale);
 }
 
+/* The MVM columns hold angles below pi/2 while d reaches tens of shell depths: unweighted, the
+ * SVD would spend its first eigenfunctions on d alone and theta_MVM, which decides the
+ * silhouettes, would be poor with m = 4. Scale A_MVM so both parts carry the same energy; E_MVM
+ * is divided by the same factor afterwards, so W E_MVM^T is theta_MVM again. */
+static void balance_mvm(void *user, const double *column_energy, float *column_scale) {
+    const bake_job *job = user;
+    int vdm_columns = job->desc.num_theta * job->desc.num_curvatures;
+    int columns = columns_of(&job->desc);
+    double energy_vdm = 0.0, energy_mvm = 0.0;
+    for (int c = 0; c < columns; c++) *(c < vdm_columns ? &energy_vdm : &energy_mvm) += column_energy[c];
+    float mvm_scale =
+        energy_mvm > 0.0 && energy_vdm > 0.0 ? (float)sqrt(energy_vdm / energy_mvm) : 1.0f;
+    for (int c = 0; c < columns; c++) column_scale[c] = c < vdm_columns ? 1.0f : mvm_scale;
+}
+
 meso_result meso_bake_vdm(meso_context *ctx, const meso_vdm_desc *desc, meso_vdm **out_vdm) {
     if (out_vdm) *out_vdm = NULL;
     if (!out_vdm) return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "vdm: out_vdm is NULL");
@@ -401,110 +432,74 @@ meso_result meso_bake_vdm(meso_context *ctx, const meso_vdm_desc *desc, meso_vdm
 
     double start = meso_time_seconds();
     size_t rows = rows_of(&d);
-    int columns = columns_of(&d);
-    int rank = (size_t)columns < rows ? columns : (int)rows;
+    int columns = columns_of(&d), vdm_columns = d.num_theta * d.num_curvatures;
     int k = d.vdm_eigenfunctions, m = d.mvm_eigenfunctions, kw = k > m ? k : m;
-    float *grid = NULL, *a = NULL, *u = NULL, *vt = NULL;
+    float *grid = NULL, *vectors = NULL, *scale = NULL;
     meso_vdm *vdm = calloc(1, sizeof(*vdm));
-    bake_job *job = calloc(1, sizeof(*job));
-    if (!vdm || !job) goto out_of_memory;
+    if (!vdm) goto out_of_memory;
     vdm->desc = d;
     vdm->desc.heightfield = NULL;
     vdm->source_hash = d.heightfield->hash;
     vdm->wrap = d.heightfield->wrap;
     vdm->num_weights = kw;
+    vdm->num_sv = columns;
     grid = malloc(sizeof(float) * (size_t)d.width * (size_t)d.height);
-    a = malloc(sizeof(float) * rows * (size_t)columns);
-    u = malloc(sizeof(float) * rows * (size_t)rank);
-    vt = malloc(sizeof(float) * (size_t)rank * (size_t)columns);
-    vdm->singular = malloc(sizeof(float) * (size_t)rank);
+    vectors = malloc(sizeof(float) * (size_t)columns * (size_t)columns);
+    scale = malloc(sizeof(float) * (size_t)columns);
+    vdm->singular = malloc(sizeof(float) * (size_t)columns);
     vdm->weights = malloc(sizeof(float) * rows * (size_t)kw);
-    vdm->eigen_vdm = malloc(sizeof(float) * (size_t)k * (size_t)(d.num_theta * d.num_curvatures));
+    vdm->eigen_vdm = malloc(sizeof(float) * (size_t)k * (size_t)vdm_columns);
     vdm->eigen_mvm = malloc(sizeof(float) * (size_t)m * (size_t)d.num_curvatures);
-    if (!grid || !a || !u || !vt || !vdm->singular || !vdm->weights || !vdm->eigen_vdm ||
-        !vdm->eigen_mvm)
+    if (d.keep_raw) vdm->raw = malloc(sizeof(float) * rows * (size_t)columns);
+    if (!grid || !vectors || !scale || !vdm->singular || !vdm->weights || !vdm->eigen_vdm ||
+        !vdm->eigen_mvm || (d.keep_raw && !vdm->raw))
         goto out_of_memory;
-    vdm->num_sv = rank;
 
     resample_heightfield(d.heightfield, d.width, d.height, grid);
-    job->desc = d;
-    job->grid = grid;
-    job->clamp = d.heightfield->wrap == MESO_WRAP_CLAMP;
-    job->a = a;
-    job->rows = rows;
-    /* progress units: texels of the ray casting, then as many again for the SVD */
-    job->progress = meso_progress_begin(ctx, "vdm bake", 2u * (uint64_t)d.width * d.height);
-    atomic_init(&job->cancelled, false);
-    meso_parallel_for(ctx, (size_t)d.height, bake_row, job);
-    if (atomic_load(&job->cancelled)) {
-        meso_progress_end(job->progress);
-        result = meso_log_error(ctx, MESO_ERROR_CANCELLED, "vdm: bake cancelled");
-        goto fail;
-    }
-    if (d.keep_raw) {
-        /* the raw table in row order [row][column], for lookups */
-        vdm->raw = malloc(sizeof(float) * rows * (size_t)columns);
-        if (!vdm->raw) {
-            meso_progress_end(job->progress);
-            goto out_of_memory;
-        }
-        for (int col = 0; col < columns; col++)
-            for (size_t r = 0; r < rows; r++)
-                vdm->raw[r * columns + col] = a[(size_t)col * rows + r];
-    }
-    /* The MVM columns hold angles below pi/2 while d reaches tens of shell depths: unweighted,
-     * the SVD would spend its first eigenfunctions on d alone and theta_MVM, which decides the
-     * silhouettes, would be poor with m = 4. Scale A_MVM so both parts carry the same energy;
-     * E_MVM is divided by the same factor afterwards, so W E_MVM^T is theta_MVM again. */
-    int vdm_columns = d.num_theta * d.num_curvatures;
-    double energy_vdm = 0.0, energy_mvm = 0.0;
-    for (size_t i = 0; i < rows * (size_t)vdm_columns; i++) energy_vdm += (double)a[i] * a[i];
-    for (size_t i = rows * (size_t)vdm_columns; i < rows * (size_t)columns; i++)
-        energy_mvm += (double)a[i] * a[i];
-    float mvm_scale =
-        energy_mvm > 0.0 && energy_vdm > 0.0 ? (float)sqrt(energy_vdm / energy_mvm) : 1.0f;
-    for (size_t i = rows * (size_t)vdm_columns; i < rows * (size_t)columns; i++) a[i] *= mvm_scale;
-    /* §3.3: A = U lambda E^T = W E^T */
-    result = meso_bake_svd(ctx, "vdm", a, rows, (size_t)columns, u, vdm->singular, vt);
-    bool cancelled = meso_progress_advance(job->progress, (uint64_t)d.width * d.height);
-    meso_progress_end(job->progress);
+    bake_job job = {.desc = d, .grid = grid, .clamp = d.heightfield->wrap == MESO_WRAP_CLAMP};
+    /* A table of up to 2 GiB (128^2: 277 MB, 256^2: 1.1 GB) is held between the passes
+     * instead of cast again: half the bake. Larger ones (512^2: 4.4 GB), or no memory for
+     * it, stream twice. */
+    float *table = vdm->raw;
+    if (!table && (uint64_t)rows * (uint64_t)columns <= (UINT64_C(1) << 29))
+        table = malloc(sizeof(float) * rows * (size_t)columns);
+    meso_bake_rows source = {
+        .rows = rows,
+        .columns = columns,
+        .fill = fill_rows,
+        .user = &job,
+        .column_scale = scale,
+        .choose_scale = balance_mvm,
+        .progress = meso_progress_begin(ctx, "vdm bake", (table ? 1u : 2u) * (uint64_t)rows)};
+    /* §3.3: A = U lambda E^T = W E^T, the MVM part weighted (balance_mvm) */
+    result = meso_bake_svd_streamed(ctx, "vdm", &source, kw, vdm->singular, vectors,
+                                    vdm->weights, table);
+    if (table != vdm->raw) free(table);
+    meso_progress_end(source.progress);
     if (result != MESO_OK) goto fail;
-    if (cancelled) {
-        result = meso_log_error(ctx, MESO_ERROR_CANCELLED, "vdm: bake cancelled");
-        goto fail;
-    }
-    for (size_t r = 0; r < rows; r++)
-        for (int i = 0; i < kw; i++)
-            vdm->weights[r * kw + i] = u[(size_t)i * rows + r] * vdm->singular[i];
-    if (!d.float_weights && !make_half_weights(vdm)) {
-        result = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "vdm: out of memory");
-        goto fail;
-    }
+    if (!d.float_weights && !make_half_weights(vdm)) goto out_of_memory;
+    float mvm_scale = scale[columns - 1];
     for (int i = 0; i < k; i++)
         for (int col = 0; col < vdm_columns; col++)
-            vdm->eigen_vdm[(size_t)i * vdm_columns + col] = vt[(size_t)col * rank + i];
+            vdm->eigen_vdm[(size_t)i * vdm_columns + col] = vectors[(size_t)col * columns + i];
     for (int i = 0; i < m; i++)
         for (int c = 0; c < d.num_curvatures; c++)
             vdm->eigen_mvm[(size_t)i * d.num_curvatures + c] =
-                vt[(size_t)(vdm_columns + c) * rank + i] / mvm_scale;
-    fill_compression(vdm, vt, rank, mvm_scale);
+                vectors[(size_t)(vdm_columns + c) * columns + i] / mvm_scale;
+    fill_compression(vdm, vectors, columns, mvm_scale);
     vdm->compression.bake_seconds = meso_time_seconds() - start;
-    free(vt);
-    free(u);
-    free(a);
+    free(scale);
+    free(vectors);
     free(grid);
-    free(job);
     *out_vdm = vdm;
     return MESO_OK;
 out_of_memory:
     result = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "vdm: out of memory for %zu x %d table",
                             rows, columns);
 fail:
-    free(vt);
-    free(u);
-    free(a);
+    free(scale);
+    free(vectors);
     free(grid);
-    free(job);
     meso_vdm_destroy(vdm);
     return result;
 }

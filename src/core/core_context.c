@@ -35,6 +35,7 @@ meso_result meso_context_create(const meso_context_desc *desc, meso_context **ou
     ctx->progress_user = d.progress_user;
     ctx->memory_limit = d.memory_limit ? d.memory_limit : meso_memory_default_limit();
     pthread_mutex_init(&ctx->lock, NULL);
+    pthread_mutex_init(&ctx->pool_lock, NULL);
     meso_context_set_num_threads(ctx, d.num_threads);
     *out_ctx = ctx;
     return MESO_OK;
@@ -42,6 +43,8 @@ meso_result meso_context_create(const meso_context_desc *desc, meso_context **ou
 
 void meso_context_destroy(meso_context *ctx) {
     if (!ctx) return;
+    meso_pool_destroy(ctx->pool);
+    pthread_mutex_destroy(&ctx->pool_lock);
     pthread_mutex_destroy(&ctx->lock);
     free(ctx);
 }
@@ -49,8 +52,13 @@ void meso_context_destroy(meso_context *ctx) {
 int meso_context_num_threads(const meso_context *ctx) { return ctx->num_threads; }
 
 void meso_context_set_num_threads(meso_context *ctx, int num_threads) {
-    ctx->num_threads = num_threads > 0 ? num_threads : omp_get_max_threads();
-    if (ctx->num_threads < 1) ctx->num_threads = 1;
+    int count = num_threads > 0 ? num_threads : omp_get_max_threads();
+    if (count < 1) count = 1;
+    if (count != ctx->num_threads) { /* the next loop makes a pool of the new size */
+        meso_pool_destroy(ctx->pool);
+        ctx->pool = NULL;
+    }
+    ctx->num_threads = count;
 }
 
 const char *meso_context_last_error(const meso_context *ctx) { return ctx->last_error; }

@@ -8,8 +8,14 @@
 
 #define MESO_MESSAGE_MAX 1024
 
+/* The worker threads of a context (core_parallel.c). */
+typedef struct meso_pool meso_pool;
+void meso_pool_destroy(meso_pool *pool);
+
 struct meso_context {
     int num_threads;
+    meso_pool *pool;           /* made by the first parallel loop; NULL until then */
+    pthread_mutex_t pool_lock; /* guards the pool's creation */
     meso_log_fn log;
     void *log_user;
     meso_progress_mode progress_mode;

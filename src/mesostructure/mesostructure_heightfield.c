@@ -78,9 +78,16 @@ meso_result meso_heightfield_create_from_image(meso_context *ctx, const meso_ima
         meso_heightfield_alloc(ctx, "height field", image->width, image->height, wrap, &hf);
     if (r != MESO_OK) return r;
     size_t n = (size_t)image->width * (size_t)image->height;
+    size_t channels = (size_t)image->channels;
     for (size_t k = 0; k < n; k++) {
+        const float *pixel = image->pixels + k * channels;
+        /* Grey (+ alpha): the grey value. RGB (+ alpha): its luminance with the Rec. 709
+         * weights, on the values as stored (a height map is data, not colour: no sRGB
+         * decoding), so a map painted in colour is not read from its red channel alone.
+         * Alpha is ignored. */
+        float value =
+            channels >= 3 ? 0.2126f * pixel[0] + 0.7152f * pixel[1] + 0.0722f * pixel[2] : pixel[0];
         /* Heights live in [0, 1] (DESIGN.md); a float image may hold anything, NaN included. */
-        float value = image->pixels[k * (size_t)image->channels];
         hf->heights[k] = isfinite(value) ? meso_clampf(value, 0.0f, 1.0f) : 0.0f;
     }
     meso_heightfield_update_hash(hf);
@@ -96,6 +103,18 @@ meso_result meso_heightfield_load_png(meso_context *ctx, const char *path, meso_
     if (r != MESO_OK) return r;
     r = meso_heightfield_create_from_image(ctx, image, wrap, out_heightfield);
     meso_image_destroy(image);
+    if (r == MESO_OK) {
+        /* A constant map renders exactly like `flat`: almost always a wrong file or channel. */
+        const meso_heightfield *hf = *out_heightfield;
+        size_t n = (size_t)hf->width * (size_t)hf->height;
+        size_t k = 1;
+        while (k < n && hf->heights[k] == hf->heights[0]) k++;
+        if (k == n)
+            meso_log_warning(ctx,
+                             "%s: the height map is constant (every texel %g): the mesostructure "
+                             "is flat",
+                             path, (double)hf->heights[0]);
+    }
     return r;
 }
 

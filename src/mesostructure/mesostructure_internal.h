@@ -11,6 +11,29 @@
 
 #include "meso/mesostructure.h"
 
+/* A solid: a procedural kind's parameters, or a tile mesh's distance grid. */
+struct meso_solid {
+    meso_solid_desc desc;
+    float depth_cells; /* slab thickness in cell units */
+    float scale;       /* 1 / (lipschitz * max(count, depth_cells)) */
+    float cap;         /* bound on omitted repeats, cell units */
+    /* kind-specific shape parameters, cell units */
+    float amplitude;          /* weave: undulation of the thread centres */
+    float major;              /* chain: link half-width (stadium radius); helix: helix radius */
+    float half_length;        /* chain: half the straight part of a link */
+    float tilt_cos, tilt_sin; /* squama */
+    float radius;             /* squama: scale radius */
+    /* MESO_SOLID_MESH: signed distance samples of a tile mesh (mesostructure_tile_mesh.c) */
+    float *grid;       /* n^3 nodes, index (k n + j) n + i at (i/n, j/n, k/(n-1)) in (u, v, w) */
+    int grid_side;     /* n */
+    bool grid_clamped; /* a model (impostor): not periodic, nodes at i / (n - 1) in u and v */
+    uint64_t grid_hash;
+    char grid_name[256];
+};
+
+/* The distance of a tile-mesh solid at (u, v, w): trilinear in the grid (u, v periodic). */
+float meso_solid_grid_distance(const meso_solid *solid, meso_vec3 uvw);
+
 /* A 32-bit avalanche mix (the MurmurHash3 finaliser's shift-multiply rounds). */
 static inline uint32_t mix32(uint32_t x) {
     x ^= x >> 16;

@@ -16,24 +16,13 @@
 
 #include "mesostructure_internal.h"
 
-struct meso_solid {
-    meso_solid_desc desc;
-    float depth_cells; /* slab thickness in cell units */
-    float scale;       /* 1 / (lipschitz * max(count, depth_cells)) */
-    float cap;         /* bound on omitted repeats, cell units */
-    /* kind-specific shape parameters, cell units */
-    float amplitude;          /* weave: undulation of the thread centres */
-    float major;              /* chain: link half-width (stadium radius); helix: helix radius */
-    float half_length;        /* chain: half the straight part of a link */
-    float tilt_cos, tilt_sin; /* squama */
-    float radius;             /* squama: scale radius */
-};
-
 /* ---- Kinds and defaults ------------------------------------------------------------------- */
+
+#define SOLID_LAST_KIND MESO_SOLID_SLAB
 
 static const char *const solid_kind_names[] = {
     [MESO_SOLID_WEAVE] = "weave",   [MESO_SOLID_CHAIN] = "chain", [MESO_SOLID_GRID] = "grid",
-    [MESO_SOLID_SQUAMA] = "squama", [MESO_SOLID_HELIX] = "helix",
+    [MESO_SOLID_SQUAMA] = "squama", [MESO_SOLID_HELIX] = "helix", [MESO_SOLID_SLAB] = "slab",
 };
 
 /* Per kind: default count, default thickness, largest thickness that keeps the shape valid
@@ -46,11 +35,11 @@ static const struct {
 } solid_kinds[] = {
     [MESO_SOLID_WEAVE] = {2, 0.3f, 0.45f, true},   [MESO_SOLID_CHAIN] = {2, 0.08f, 0.14f, true},
     [MESO_SOLID_GRID] = {4, 0.12f, 0.4f, false},   [MESO_SOLID_SQUAMA] = {4, 0.08f, 0.2f, true},
-    [MESO_SOLID_HELIX] = {2, 0.08f, 0.16f, false},
+    [MESO_SOLID_HELIX] = {2, 0.08f, 0.16f, false}, [MESO_SOLID_SLAB] = {1, 0.5f, 1.0f, false},
 };
 
 bool meso_solid_kind_from_name(const char *name, meso_solid_kind *out_kind) {
-    for (int k = MESO_SOLID_WEAVE; k <= MESO_SOLID_HELIX; k++)
+    for (int k = MESO_SOLID_WEAVE; k <= SOLID_LAST_KIND; k++)
         if (name && strcmp(name, solid_kind_names[k]) == 0) {
             *out_kind = (meso_solid_kind)k;
             return true;
@@ -60,14 +49,15 @@ bool meso_solid_kind_from_name(const char *name, meso_solid_kind *out_kind) {
 
 const char *meso_solid_kind_name(meso_solid_kind kind) {
     if (kind == MESO_SOLID_DEFAULT) kind = MESO_SOLID_WEAVE;
-    if (kind < MESO_SOLID_WEAVE || kind > MESO_SOLID_HELIX) return "unknown";
+    if (kind == MESO_SOLID_MESH) return "mesh";
+    if (kind < MESO_SOLID_WEAVE || kind > SOLID_LAST_KIND) return "unknown";
     return solid_kind_names[kind];
 }
 
 meso_solid_desc meso_solid_desc_defaults(const meso_solid_desc *desc) {
     meso_solid_desc d = desc ? *desc : (meso_solid_desc){0};
     if (d.kind == MESO_SOLID_DEFAULT) d.kind = MESO_SOLID_WEAVE;
-    if (d.kind < MESO_SOLID_WEAVE || d.kind > MESO_SOLID_HELIX) return d;
+    if (d.kind < MESO_SOLID_WEAVE || d.kind > SOLID_LAST_KIND) return d;
     if (d.count == 0) d.count = solid_kinds[d.kind].count;
     if (d.thickness == 0.0f) d.thickness = solid_kinds[d.kind].thickness;
     return d;
@@ -200,7 +190,7 @@ meso_result meso_solid_create_procedural(meso_context *ctx, const meso_solid_des
                                          meso_solid **out_solid) {
     *out_solid = NULL;
     meso_solid_desc d = meso_solid_desc_defaults(desc);
-    if (d.kind < MESO_SOLID_WEAVE || d.kind > MESO_SOLID_HELIX)
+    if (d.kind < MESO_SOLID_WEAVE || d.kind > SOLID_LAST_KIND)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "procedural solid: kind: unknown kind %d", (int)d.kind);
     const char *name = meso_solid_kind_name(d.kind);
@@ -258,6 +248,10 @@ meso_result meso_solid_create_procedural(meso_context *ctx, const meso_solid_des
         lipschitz = sqrtf(1.0f + (2.0f * MESO_PI * s->major) * (2.0f * MESO_PI * s->major));
         s->cap = 1.0f - (s->major + r);
         break;
+    case MESO_SOLID_SLAB:
+        s->depth_cells = 1.0f;
+        s->cap = 1e30f;
+        break;
     default:
         break;
     }
@@ -266,11 +260,16 @@ meso_result meso_solid_create_procedural(meso_context *ctx, const meso_solid_des
     return MESO_OK;
 }
 
-void meso_solid_destroy(meso_solid *solid) { free(solid); }
+void meso_solid_destroy(meso_solid *solid) {
+    if (!solid) return;
+    free(solid->grid);
+    free(solid);
+}
 
 meso_solid_desc meso_solid_get_desc(const meso_solid *solid) { return solid->desc; }
 
 uint64_t meso_solid_hash(const meso_solid *solid) {
+    if (solid->desc.kind == MESO_SOLID_MESH) return solid->grid_hash;
     /* Version the shapes: a change to a generator must change every cached bake's key. */
     const uint32_t version = 1;
     uint64_t h = meso_hash64(&version, sizeof(version), MESO_HASH_SEED);
@@ -299,6 +298,13 @@ float meso_solid_distance(const meso_solid *solid, meso_vec3 uvw) {
         break;
     case MESO_SOLID_HELIX:
         f = helix_distance(solid, x, y, z);
+        break;
+    case MESO_SOLID_MESH:
+        return meso_solid_grid_distance(solid, uvw);
+    case MESO_SOLID_SLAB:
+        /* exact: the plane w = 1 - thickness, solid below (the test of relief_layers against
+         * relief on the height field h = thickness) */
+        f = (1.0f - solid->desc.thickness) * solid->depth_cells - z;
         break;
     default:
         f = 1.0f;

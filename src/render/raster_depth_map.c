@@ -75,7 +75,7 @@ meso_result meso_raster_depth_map(meso_context *ctx, const meso_mesh *mesh,
                               .cull_back = false,
                               .depth_plane = true};
     const meso_mesh *meshes[1] = {mesh};
-    meso_result r = raster_bins_build(ctx, &bins, meshes, 1, &desc);
+    meso_result r = raster_bins_build(ctx, &bins, meshes, NULL, 1, &desc);
     if (r == MESO_OK) {
         depth_job dj = {&bins, depth};
         meso_parallel_for(ctx, (size_t)bins.tiles_x * (size_t)bins.tiles_y, depth_tile, &dj);

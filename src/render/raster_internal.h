@@ -45,6 +45,7 @@ typedef struct raster_triangle {
 /* The geometry of one object for the binning pass. */
 typedef struct raster_mesh {
     const meso_mesh *mesh;
+    bool both_faces; /* drawn from both sides even when the pass culls back faces */
 } raster_mesh;
 
 typedef struct raster_chunk {
@@ -79,10 +80,12 @@ typedef struct raster_bins {
     float guard; /* |x|, |y| <= guard * w keeps screen coordinates bounded */
 } raster_bins;
 
-/* Transform, clip, set up and bin `num_meshes` meshes. Returns MESO_OK or
+/* Transform, clip, set up and bin `num_meshes` meshes; both_faces (NULL: none) marks meshes
+ * whose back faces are kept although desc culls them. Returns MESO_OK or
  * MESO_ERROR_OUT_OF_MEMORY / MESO_ERROR_LIMIT (logged). */
 meso_result raster_bins_build(meso_context *ctx, raster_bins *bins, const meso_mesh *const *meshes,
-                              int num_meshes, const raster_setup_desc *desc);
+                              const bool *both_faces, int num_meshes,
+                              const raster_setup_desc *desc);
 void raster_bins_release(raster_bins *bins);
 
 /* The triangles (as indices into chunk->triangles) of `tile` in chunk `chunk`. */
@@ -112,6 +115,8 @@ typedef struct raster_pass {
     raster_thread_scratch *threads;
     int num_threads;
     uint64_t *tile_fragments; /* per tile */
+    bool *both_faces;         /* per object: its technique draws back faces */
+    int both_faces_capacity;
     /* one tile of background, coverage 0 and depth +inf, to clear from */
     float clear_color[3 * RASTER_TILE_SIZE * RASTER_TILE_SIZE];
     float clear_coverage[RASTER_TILE_SIZE * RASTER_TILE_SIZE];

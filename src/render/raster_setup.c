@@ -75,7 +75,7 @@ static inline int32_t ceil_div_subpixel(int64_t n) {
 static inline int32_t floor_div_subpixel(int64_t n) { return (int32_t)(n >> RASTER_SUBPIXEL_BITS); }
 
 /* Set up one (possibly clipped) triangle; returns false when it covers nothing. */
-static bool setup_triangle(const raster_setup_desc *desc, const clip_vertex *vin[3],
+static bool setup_triangle(const raster_setup_desc *desc, bool cull_back, const clip_vertex *vin[3],
                            uint32_t triangle, raster_triangle *out) {
     const clip_vertex *v[3] = {vin[0], vin[1], vin[2]};
     int64_t X[3], Y[3];
@@ -91,7 +91,7 @@ static bool setup_triangle(const raster_setup_desc *desc, const clip_vertex *vin
     int64_t area = (X[1] - X[0]) * (Y[2] - Y[0]) - (Y[1] - Y[0]) * (X[2] - X[0]);
     if (area == 0) return false;
     /* Counter-clockwise from outside in the world is clockwise on screen (y down): area < 0. */
-    if (area > 0 && desc->cull_back) return false;
+    if (area > 0 && cull_back) return false;
     if (area < 0) { /* make the edge functions positive inside */
         const clip_vertex *tv = v[1];
         v[1] = v[2];
@@ -248,7 +248,8 @@ static void setup_source_triangle(const raster_bins *bins, const raster_mesh *rm
     }
     for (int k = 1; k + 1 < n; k++) {
         const clip_vertex *tri[3] = {&poly[cur][0], &poly[cur][k], &poly[cur][k + 1]};
-        if (setup_triangle(desc, tri, t, &chunk->triangles[chunk->num_triangles]))
+        if (setup_triangle(desc, desc->cull_back && !rm->both_faces, tri, t,
+                           &chunk->triangles[chunk->num_triangles]))
             chunk->num_triangles++;
     }
 }
@@ -313,7 +314,8 @@ static void setup_chunk(void *user, size_t job, int thread_index) {
 }
 
 meso_result raster_bins_build(meso_context *ctx, raster_bins *bins, const meso_mesh *const *meshes,
-                              int num_meshes, const raster_setup_desc *desc) {
+                              const bool *both_faces, int num_meshes,
+                              const raster_setup_desc *desc) {
     if (desc->width <= 0 || desc->height <= 0 || desc->width > RASTER_MAX_TARGET_SIDE ||
         desc->height > RASTER_MAX_TARGET_SIDE) {
         return meso_log_error(ctx, MESO_ERROR_LIMIT,
@@ -342,6 +344,7 @@ meso_result raster_bins_build(meso_context *ctx, raster_bins *bins, const meso_m
     size_t chunks = 0;
     for (int m = 0; m < num_meshes; m++) {
         bins->meshes[m].mesh = meshes[m];
+        bins->meshes[m].both_faces = both_faces && both_faces[m];
         size_t nt = meshes[m] ? meshes[m]->num_triangles : 0;
         chunks += (nt + chunk_size - 1) / chunk_size;
     }

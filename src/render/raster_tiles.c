@@ -270,6 +270,7 @@ static void draw_tile(void *user, size_t job, int thread_index) {
     ty1 = ty1 > frame->height - 1 ? frame->height - 1 : ty1;
     const size_t width = (size_t)frame->width;
     size_t tw = (size_t)(tx1 - tx0 + 1);
+    meso_progress_advance(frame->progress, tw * (size_t)(ty1 - ty0 + 1));
     bool empty = true;
     for (size_t c = 0; c < bins->num_chunks && empty; c++) {
         size_t count;
@@ -401,7 +402,16 @@ meso_result raster_draw(meso_context *ctx, raster_pass *pass, const meso_frame *
                               .height = frame->height,
                               .z_near = frame->z_near,
                               .cull_back = true};
-    meso_result r = raster_bins_build(ctx, &pass->bins, meshes, num_objects, &desc);
+    if (num_objects > pass->both_faces_capacity) {
+        bool *b = realloc(pass->both_faces, (size_t)num_objects * sizeof(*b));
+        if (!b) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "render: out of memory");
+        pass->both_faces = b;
+        pass->both_faces_capacity = num_objects;
+    }
+    for (int i = 0; i < num_objects; i++)
+        pass->both_faces[i] = objects[i].technique && objects[i].technique->both_faces;
+    meso_result r =
+        raster_bins_build(ctx, &pass->bins, meshes, pass->both_faces, num_objects, &desc);
     if (r != MESO_OK) return r;
     if ((r = reserve_threads(ctx, pass)) != MESO_OK) return r;
     size_t num_tiles = (size_t)pass->bins.tiles_x * (size_t)pass->bins.tiles_y;
@@ -441,6 +451,7 @@ void raster_pass_release(raster_pass *pass) {
     }
     free(pass->threads);
     free(pass->tile_fragments);
+    free(pass->both_faces);
     memset(pass, 0, sizeof(*pass));
 }
 

@@ -71,10 +71,29 @@ bool reference_uv_barycentrics(const meso_vec2 uv[3], meso_vec2 point, float out
     return true;
 }
 
-double reference_option(const meso_object *object, const char *name, double fallback) {
-    for (int i = 0; i < object->num_options && i < MESO_OPTIONS_MAX; i++)
-        if (!strncmp(object->options[i].name, name, MESO_NAME_MAX)) return object->options[i].value;
-    return fallback;
+const meso_technique_option meso_reference_options[MESO_REFERENCE_NUM_OPTIONS] = {
+    MESO_OPTION_ROW(MESO_OPTION_FLOAT, subdivision, 0.125, 64.0, 1.0,
+                    "height fields: micro-triangle edges per texel of the tiled map",
+                    reference_options, subdivision),
+    MESO_OPTION_ROW(MESO_OPTION_FLOAT, view_adaptive, -1.0, 64.0, 2.0,
+                    "height fields: at most this many micro-edges per pixel of the scene's image; "
+                    "<= 0 keeps the texel rule alone",
+                    reference_options, view_adaptive),
+    MESO_OPTION_ROW(MESO_OPTION_INT, resolution, 2, MESO_ISOSURFACE_MAX_RESOLUTION, 128,
+                    "solids: extraction grid cells a tile side in u and v (w: a quarter)",
+                    reference_options, resolution),
+};
+
+meso_result reference_read_options(meso_context *ctx, const meso_scene *scene,
+                                   const meso_object *object, const meso_reference_desc *desc,
+                                   reference_options *out_options) {
+    const meso_technique_info *info = meso_technique_find("reference");
+    meso_technique_options_defaults(info, out_options);
+    /* The desc (tests and tools) replaces the defaults; the scene still has the last word. */
+    if (desc->subdivision > 0) out_options->subdivision = (float)desc->subdivision;
+    if (desc->view_adaptive != 0.0f) out_options->view_adaptive = desc->view_adaptive;
+    if (desc->isosurface.resolution_u > 0) out_options->resolution = desc->isosurface.resolution_u;
+    return meso_technique_options_apply(ctx, scene, object, info, out_options);
 }
 
 size_t reference_base_triangle(const reference_object *ref, uint64_t triangle) {
@@ -132,6 +151,23 @@ static meso_result build_plain(meso_context *ctx, RTCGeometry geometry, referenc
     ref->num_vertices = mesh->num_vertices;
     *total += mesh->num_triangles;
     return MESO_OK;
+}
+
+/* Embree's build progress, n in [0, 1], as thousandths of the bar. Embree may call from several
+ * threads: each advances by what it alone moved `reported` forward. Never cancels. */
+typedef struct build_progress {
+    meso_progress *progress;
+    _Atomic uint64_t reported;
+} build_progress;
+
+static bool report_build(void *user, double n) {
+    build_progress *b = user;
+    uint64_t target = n >= 1.0 ? 1000 : n > 0.0 ? (uint64_t)(n * 1000.0) : 0;
+    uint64_t seen = atomic_load(&b->reported);
+    while (target > seen && !atomic_compare_exchange_weak(&b->reported, &seen, target)) {
+    }
+    if (target > seen) meso_progress_advance(b->progress, target - seen);
+    return true;
 }
 
 meso_result meso_reference_create_with(meso_context *ctx, const meso_scene *scene,
@@ -199,12 +235,17 @@ meso_result meso_reference_create_with(meso_context *ctx, const meso_scene *scen
                                               : kind == MESO_MESOSTRUCTURE_SOLID
                                                   ? RTC_GEOMETRY_TYPE_QUAD
                                                   : RTC_GEOMETRY_TYPE_TRIANGLE);
+        reference_options options;
         if (kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD) {
             ref->kind = REFERENCE_HEIGHT_FIELD;
-            result = reference_build_heightfield(ctx, scene, &desc, geometry, ref, &total);
+            result = reference_read_options(ctx, scene, object, &desc, &options);
+            if (result == MESO_OK)
+                result = reference_build_heightfield(ctx, scene, &options, geometry, ref, &total);
         } else if (kind == MESO_MESOSTRUCTURE_SOLID) {
             ref->kind = REFERENCE_SOLID;
-            result = reference_build_solid(ctx, &desc, geometry, ref, &total);
+            result = reference_read_options(ctx, scene, object, &desc, &options);
+            if (result == MESO_OK)
+                result = reference_build_solid(ctx, &desc, &options, geometry, ref, &total);
         } else {
             ref->kind = REFERENCE_PLAIN;
             result = build_plain(ctx, geometry, ref, &total);
@@ -225,7 +266,11 @@ meso_result meso_reference_create_with(meso_context *ctx, const meso_scene *scen
     bool low = total > REFERENCE_LOW_QUALITY_TRIANGLES;
     rtcSetSceneBuildQuality(reference->scene, low ? RTC_BUILD_QUALITY_LOW
                                                   : RTC_BUILD_QUALITY_MEDIUM);
+    build_progress build = {desc.progress ? meso_progress_begin(ctx, "reference BVH", 1000) : NULL,
+                            0};
+    if (build.progress) rtcSetSceneProgressMonitorFunction(reference->scene, report_build, &build);
     rtcCommitScene(reference->scene);
+    meso_progress_end(build.progress);
     enum RTCError error = rtcGetDeviceError(reference->device);
     if (error != RTC_ERROR_NONE && atomic_load(&reference->over_budget)) {
         result = meso_log_error(ctx, MESO_ERROR_LIMIT,
@@ -397,6 +442,7 @@ static void render_tile(void *user, size_t job, int thread_index) {
     int x0 = (int)(job % (size_t)rj->tiles_x) * TILE, y0 = (int)(job / (size_t)rj->tiles_x) * TILE;
     int x1 = x0 + TILE < frame->width ? x0 + TILE : frame->width;
     int y1 = y0 + TILE < frame->height ? y0 + TILE : frame->height;
+    meso_progress_advance(frame->progress, (uint64_t)(x1 - x0) * (uint64_t)(y1 - y0));
     struct RTCIntersectContext primary, shadow;
     rtcInitIntersectContext(&primary);
     primary.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;

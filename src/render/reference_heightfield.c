@@ -226,20 +226,17 @@ static size_t pair_triangles(const hf_build *b, const hf_edge *edges, reference_
 }
 
 meso_result reference_build_heightfield(meso_context *ctx, const meso_scene *scene,
-                                        const meso_reference_desc *desc, RTCGeometry geometry,
+                                        const reference_options *options, RTCGeometry geometry,
                                         reference_object *ref, uint64_t *total) {
     const meso_object *object = ref->object;
     const meso_mesh *mesh = object->mesh;
     meso_result result = MESO_OK;
     hf_build b = {.mesh = mesh, .hf = object->mesostructure.height_field,
                   .depth = object->mesostructure.depth};
-    double option = reference_option(object, "subdivision", desc->subdivision);
-    b.subdivision = (float)(option > 0.0 ? option : 1.0);
-    double adaptive = reference_option(object, "view_adaptive",
-                                       desc->view_adaptive == 0.0f ? 2.0 : desc->view_adaptive);
+    b.subdivision = options->subdivision;
     float fov = scene->camera.fov_y_deg > 0.0f && scene->camera.fov_y_deg < 179.0f
                     ? scene->camera.fov_y_deg : 40.0f;
-    b.view_adaptive = adaptive > 0.0 ? (float)adaptive : 0.0f;
+    b.view_adaptive = options->view_adaptive > 0.0f ? options->view_adaptive : 0.0f;
     b.eye = scene->camera.eye;
     b.pixel_angle = 2.0f * tanf(0.5f * fov * MESO_PI / 180.0f) /
                     (float)(scene->height > 0 ? scene->height : 512);

@@ -28,7 +28,13 @@ typedef struct meso_reference_desc {
      * the object's solid); shading then uses central differences of this field. */
     meso_scalar_field_fn solid_field;
     void *solid_field_user;
+    /* Report the acceleration structure's build as progress ("reference BVH"). */
+    bool progress;
 } meso_reference_desc;
+
+/* The reference's option table, for the registry's entry. */
+extern const meso_technique_option meso_reference_options[];
+#define MESO_REFERENCE_NUM_OPTIONS 3
 
 meso_result meso_reference_create_with(meso_context *ctx, const meso_scene *scene,
                                        const meso_reference_desc *desc,
@@ -84,19 +90,29 @@ typedef struct reference_object {
     size_t side_bytes;       /* uvws, base_offsets, grids */
 } reference_object;
 
+/* The options an object gives the reference ("technique_options": {"reference": {...}}),
+ * read by meso_technique_options_read with the table meso_reference_options (reference.c). */
+typedef struct reference_options {
+    float subdivision;   /* height fields: micro-edges per texel */
+    float view_adaptive; /* height fields: micro-edges per pixel at most; <= 0: no cap */
+    int resolution;      /* solids: extraction grid cells a tile side (u and v; w a quarter) */
+} reference_options;
+
+/* The object's options: the table's defaults replaced by desc's, then the object's own. */
+meso_result reference_read_options(meso_context *ctx, const meso_scene *scene,
+                                   const meso_object *object, const meso_reference_desc *desc,
+                                   reference_options *out_options);
+
 /* Build the geometry of one object into `geometry` (a new RTC_GEOMETRY_TYPE_GRID for height
  * fields, RTC_GEOMETRY_TYPE_QUAD for solids):
  * counts first, adds the count to *total and checks MESO_REFERENCE_MAX_TRIANGLES before
  * allocating the buffers. */
 meso_result reference_build_heightfield(meso_context *ctx, const meso_scene *scene,
-                                        const meso_reference_desc *desc, RTCGeometry geometry,
+                                        const reference_options *options, RTCGeometry geometry,
                                         reference_object *ref, uint64_t *total);
 meso_result reference_build_solid(meso_context *ctx, const meso_reference_desc *desc,
-                                  RTCGeometry geometry, reference_object *ref, uint64_t *total);
-
-/* The object's technique option `name`, or `fallback` (plain data of scene.h; render does not
- * link the scene module). */
-double reference_option(const meso_object *object, const char *name, double fallback);
+                                  const reference_options *options, RTCGeometry geometry,
+                                  reference_object *ref, uint64_t *total);
 
 /* The base triangle of a traced solid quad (binary search in base_offsets). */
 size_t reference_base_triangle(const reference_object *ref, uint64_t triangle);

@@ -358,19 +358,15 @@ static float solid_distance_field(void *user, meso_vec3 uvw) {
 }
 
 meso_result reference_build_solid(meso_context *ctx, const meso_reference_desc *desc,
-                                  RTCGeometry geometry, reference_object *ref, uint64_t *total) {
+                                  const reference_options *options, RTCGeometry geometry,
+                                  reference_object *ref, uint64_t *total) {
     const meso_object *object = ref->object;
     const meso_mesh *mesh = object->mesh;
     meso_result result = MESO_OK;
     meso_isosurface_desc idesc = desc->isosurface;
-    double resolution = reference_option(object, "resolution", 0.0);
-    if (resolution != 0.0) {
-        if (!(resolution >= 2.0 && resolution <= MESO_ISOSURFACE_MAX_RESOLUTION))
-            return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
-                                  "%s: technique_options.resolution: %g is outside [2, %d]",
-                                  object->name, resolution, MESO_ISOSURFACE_MAX_RESOLUTION);
-        idesc.resolution_u = idesc.resolution_v = (int)resolution;
-        idesc.resolution_w = (int)resolution / 4 > 2 ? (int)resolution / 4 : 2;
+    if (options->resolution != idesc.resolution_u) { /* the object asks for its own grid */
+        idesc.resolution_u = idesc.resolution_v = options->resolution;
+        idesc.resolution_w = options->resolution / 4 > 2 ? options->resolution / 4 : 2;
     }
     ref->field = desc->solid_field ? desc->solid_field : solid_distance_field;
     ref->field_user = desc->solid_field ? desc->solid_field_user

@@ -10,6 +10,8 @@
 #ifndef MESO_RENDER_INTERNAL_H
 #define MESO_RENDER_INTERNAL_H
 
+#include <stddef.h>
+
 #include "meso/render.h"
 
 /* ---- The frame ---------------------------------------------------------------------------- */
@@ -24,6 +26,7 @@ typedef struct meso_frame {
     meso_vec3 corner;        /* eye-relative direction to the top-left corner (0,0) at depth 1 */
     meso_mat4 view, projection, view_projection;
     float z_near, z_far;
+    meso_progress *progress; /* NULL, or advanced by each tile's samples (width x height in all) */
 } meso_frame;
 
 /* Fill a frame for the scene's camera and a target of width x height samples. */
@@ -52,7 +55,8 @@ typedef struct meso_fragment {
     /* outputs, preset by the rasterizer */
     meso_vec3 color;              /* linear RGB (preset 0) */
     float out_depth;              /* preset to depth; a technique may replace it (depth
-                                     correction); it must not be smaller than `depth` */
+                                     correction); it must not be smaller than `depth` except
+                                     on back faces of a both_faces technique */
     bool discard;                 /* preset false; true: nothing is drawn (silhouettes) */
 } meso_fragment;
 
@@ -61,8 +65,8 @@ typedef struct meso_fragment {
 typedef struct meso_technique {
     meso_technique_info info;
     /* Per-object preparation: bake maps, per-vertex data. *out_state may be left NULL.
-     * Reads the object's technique_options through meso_object_option and rejects unknown
-     * names (MESO_ERROR_INVALID_ARGUMENT naming the object and the option). */
+     * Reads the object's options with meso_technique_options_read and the technique's table
+     * (info.options), which rejects unknown names and values out of range. */
     meso_result (*prepare)(meso_context *ctx, const meso_scene *scene, const meso_object *object,
                            void **out_state);
     /* Free the state; called with NULL too. */
@@ -78,15 +82,45 @@ typedef struct meso_technique {
                   meso_fragment *fragments, size_t count);
     /* Bytes of baked data held by the state (NULL: 0). */
     size_t (*memory)(const void *state);
+    /* Per-pixel techniques that draw back faces too (relief_layers: a closed mesh's far wall
+     * seen through holes in the near one, and impostors seen from behind, Policarpo &
+     * Oliveira 2006 §4). Their back-face fragments have dot(position - eye, normal) > 0 and
+     * may write an out_depth smaller than `depth` (the hit lies between the shell's bottom and
+     * the mesh, toward the eye); early depth rejection stays valid since nothing else lies
+     * inside the shell. */
+    bool both_faces;
 } meso_technique;
+
+/* Every technique's entry (techniques/<name>.c), so a file can name its own info. */
+#define MESO_TECHNIQUE(name) extern const meso_technique meso_technique_##name;
+#include "technique_list.h"
+#undef MESO_TECHNIQUE
 
 /* The registry (technique_registry.c, list in techniques/technique_list.h). NULL if unknown. */
 const meso_technique *meso_technique_lookup(const char *name);
+/* "flat, bump, ..." into buffer (truncated to fit), for messages. */
+void meso_technique_list_names(char *buffer, size_t size);
 
-/* Reject options the technique does not know: `known` is a NULL-terminated list of names.
- * Returns MESO_ERROR_INVALID_ARGUMENT naming the object, the option and the known ones. */
-meso_result meso_technique_check_options(meso_context *ctx, const meso_object *object,
-                                         const char *technique, const char *const *known);
+/* ---- Technique options -------------------------------------------------------------------- */
+
+/* A row of an option table: the value lives at offsetof(struct, member) of the technique's own
+ * option struct, with the type and range given. */
+#define MESO_OPTION_ROW(type, name, min, max, default_value, doc, struct_type, member)             \
+    { #name, type, min, max, default_value, doc, offsetof(struct_type, member) }
+#define MESO_OPTION_COUNT(table) (sizeof(table) / sizeof((table)[0]))
+
+/* Write the table's defaults into `values` (the technique's option struct). */
+void meso_technique_options_defaults(const meso_technique_info *technique, void *values);
+/* The one option reader: write over `values` the object's options for this technique (the
+ * flat form, then the keyed form, so the keyed one wins), each checked by
+ * meso_technique_check_option; the message names the scene file and the key path. */
+meso_result meso_technique_options_apply(meso_context *ctx, const meso_scene *scene,
+                                         const meso_object *object,
+                                         const meso_technique_info *technique, void *values);
+/* Defaults, then the object's options: what a technique's prepare calls. */
+meso_result meso_technique_options_read(meso_context *ctx, const meso_scene *scene,
+                                        const meso_object *object,
+                                        const meso_technique_info *technique, void *values);
 
 /* ---- Shading (shared by every technique and the reference) -------------------------------- */
 

@@ -6,14 +6,20 @@
 #include <string.h>
 
 #include "raster_internal.h"
+#include "reference_internal.h"
 
 #define RENDER_MAX_SAMPLES 256 /* samples a pixel (n = 16 a side) */
 
 struct meso_renderer {
     meso_context *ctx;
+    /* What is drawn: the caller's scene, or, when the desc sets options, a shallow copy whose
+     * objects carry them too (view and objects are owned here; what they point to is not). */
     const meso_scene *scene;
+    meso_scene *scene_view;
+    meso_object *view_objects;
     int n; /* supersampling: n x n samples a pixel */
     bool wireframe;
+    bool progress; /* report each frame's progress */
     bool use_reference;
     meso_reference *reference;
     const meso_technique **techniques; /* per object */
@@ -52,12 +58,7 @@ static void list_names(char *buffer, size_t size, bool techniques_list, unsigned
     size_t used = 0;
     buffer[0] = 0;
     if (techniques_list) {
-        for (size_t i = 0; i < meso_technique_count(); i++) {
-            int w = snprintf(buffer + used, size - used, "%s%s", i ? ", " : "",
-                             meso_technique_get(i)->name);
-            if (w < 0 || (size_t)w >= size - used) return;
-            used += (size_t)w;
-        }
+        meso_technique_list_names(buffer, size);
         return;
     }
     const meso_mesostructure_kind kinds[] = {
@@ -80,6 +81,8 @@ void meso_renderer_destroy(meso_renderer *renderer) {
     }
     meso_reference_destroy(renderer->reference);
     raster_pass_release(&renderer->pass);
+    free(renderer->view_objects);
+    free(renderer->scene_view);
     free(renderer->techniques);
     free(renderer->states);
     free(renderer->objects);
@@ -90,13 +93,24 @@ void meso_renderer_destroy(meso_renderer *renderer) {
     free(renderer);
 }
 
-/* The technique of object i, checked against its mesostructure. */
+/* The technique of object i, checked against its mesostructure. With `fallback`, an override
+ * that cannot draw the object gives way to the object's own technique (issue 9 item 5: mixed
+ * scenes), or to `flat` when that is the reference or cannot draw it either. */
 static meso_result resolve_technique(meso_context *ctx, const meso_object *object,
-                                     const char *override, const meso_technique **out) {
+                                     const char *override, bool fallback,
+                                     const meso_technique **out) {
     char list[512];
-    const char *name = override ? override : (object->technique[0] ? object->technique : "flat");
+    const char *own = object->technique[0] ? object->technique : "flat";
+    const char *name = override ? override : own;
     const meso_technique *t = meso_technique_lookup(name);
     *out = NULL;
+    if (fallback && override && t && !(t->info.accepts & kind_bit(object->mesostructure.kind))) {
+        const meso_technique *mine = meso_technique_lookup(own);
+        bool usable = mine && mine->info.kind != MESO_TECHNIQUE_REFERENCE &&
+                      (mine->info.accepts & kind_bit(object->mesostructure.kind));
+        name = usable ? own : "flat";
+        t = meso_technique_lookup(name);
+    }
     if (!t) {
         list_names(list, sizeof(list), true, 0);
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
@@ -122,6 +136,38 @@ static meso_result resolve_technique(meso_context *ctx, const meso_object *objec
     return MESO_OK;
 }
 
+/* The scene with the desc's options added to every object (replacing the object's own setting
+ * of the same technique and name): the techniques read them like the scene's. */
+static meso_result make_scene_view(meso_context *ctx, const meso_scene *scene,
+                                   const meso_render_desc *desc, meso_renderer *rd) {
+    int count = scene->num_objects > 0 ? scene->num_objects : 0;
+    rd->scene_view = malloc(sizeof *rd->scene_view);
+    rd->view_objects = calloc(count > 0 ? (size_t)count : 1, sizeof *rd->view_objects);
+    if (!rd->scene_view || !rd->view_objects)
+        return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", scene->path);
+    *rd->scene_view = *scene;
+    rd->scene_view->objects = rd->view_objects;
+    for (int o = 0; o < count; o++) {
+        meso_object *object = &rd->view_objects[o];
+        *object = scene->objects[o];
+        for (int i = 0; i < desc->num_options; i++) {
+            const meso_option *setting = &desc->options[i];
+            int slot = 0;
+            while (slot < object->num_options &&
+                   !(strcmp(object->options[slot].technique, setting->technique) == 0 &&
+                     strcmp(object->options[slot].name, setting->name) == 0))
+                slot++;
+            if (slot == MESO_OPTIONS_MAX)
+                return meso_log_error(ctx, MESO_ERROR_LIMIT,
+                                      "%s: %s: more than %d technique options with the render's",
+                                      scene->path, object->name, MESO_OPTIONS_MAX);
+            object->options[slot] = *setting;
+            if (slot == object->num_options) object->num_options++;
+        }
+    }
+    return MESO_OK;
+}
+
 meso_result meso_renderer_create(meso_context *ctx, const meso_scene *scene,
                                  const meso_render_desc *desc, meso_renderer **out_renderer) {
     *out_renderer = NULL;
@@ -142,15 +188,32 @@ meso_result meso_renderer_create(meso_context *ctx, const meso_scene *scene,
             ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: unknown technique '%s' (known: %s)",
             scene->num_objects > 0 ? scene->objects[0].name : scene->path, d.technique, list);
     }
+    meso_result r = meso_technique_check_scene(ctx, scene);
+    if (r != MESO_OK) return r;
+    for (int i = 0; i < d.num_options; i++) {
+        char where[160];
+        snprintf(where, sizeof where, "render options: %s.%s", d.options[i].technique,
+                 d.options[i].name);
+        if (!d.options[i].technique[0])
+            return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                                  "%s: an option of the render desc needs its technique", where);
+        if ((r = meso_technique_check_option(ctx, d.options[i].technique, d.options[i].name,
+                                             d.options[i].value, where)) != MESO_OK)
+            return r;
+    }
     double start = meso_time_seconds();
-    meso_result r = MESO_OK;
     meso_renderer *rd = calloc(1, sizeof(*rd));
     int count = scene->num_objects > 0 ? scene->num_objects : 0;
     size_t slots = count > 0 ? (size_t)count : 1;
     if (!rd) goto oom;
     rd->ctx = ctx;
+    if (d.num_options > 0) {
+        if ((r = make_scene_view(ctx, scene, &d, rd)) != MESO_OK) goto fail;
+        scene = rd->scene_view;
+    }
     rd->scene = scene;
     rd->wireframe = d.wireframe;
+    rd->progress = d.progress;
     rd->n = d.samples <= 1 ? 1 : (int)ceil(sqrt((double)d.samples) - 1e-9);
     rd->techniques = calloc(slots, sizeof(*rd->techniques));
     rd->states = calloc(slots, sizeof(*rd->states));
@@ -161,7 +224,9 @@ meso_result meso_renderer_create(meso_context *ctx, const meso_scene *scene,
     int first_reference = -1, first_other = -1;
     for (int i = 0; i < count; i++) {
         const meso_technique *t = NULL;
-        if ((r = resolve_technique(ctx, &scene->objects[i], d.technique, &t)) != MESO_OK) goto fail;
+        if ((r = resolve_technique(ctx, &scene->objects[i], d.technique, d.fallback, &t)) !=
+            MESO_OK)
+            goto fail;
         if (t->info.kind == MESO_TECHNIQUE_REFERENCE) {
             if (first_reference < 0) first_reference = i;
         } else if (first_other < 0) {
@@ -179,13 +244,16 @@ meso_result meso_renderer_create(meso_context *ctx, const meso_scene *scene,
     }
     rd->use_reference = first_reference >= 0;
     if (rd->use_reference) {
-        if ((r = meso_reference_create(ctx, scene, &rd->reference)) != MESO_OK) goto fail;
+        meso_reference_desc reference_desc = {.progress = d.progress};
+        if ((r = meso_reference_create_with(ctx, scene, &reference_desc, &rd->reference)) !=
+            MESO_OK)
+            goto fail;
         rd->stats.memory_bytes = meso_reference_memory(rd->reference);
     } else {
         for (int i = 0; i < count; i++) {
             const meso_object *object = &scene->objects[i];
             const meso_technique *t = NULL;
-            resolve_technique(ctx, object, d.technique, &t);
+            resolve_technique(ctx, object, d.technique, d.fallback, &t);
             rd->techniques[i] = t;
             if (t->prepare && (r = t->prepare(ctx, scene, object, &rd->states[i])) != MESO_OK)
                 goto fail;
@@ -232,25 +300,12 @@ static void clear_target(const meso_scene *scene, size_t samples, float *color, 
     }
 }
 
-meso_result meso_renderer_render(meso_renderer *renderer, meso_framebuffer *fb) {
-    meso_renderer *rd = renderer;
-    if (!rd) return MESO_ERROR_INVALID_ARGUMENT;
+/* The frame's work: the reference or the rasterizer, then the supersampling resolve. */
+static meso_result draw_frame(meso_renderer *rd, meso_framebuffer *fb, const meso_frame *f,
+                              size_t samples) {
     meso_context *ctx = rd->ctx;
-    if (!fb || fb->width <= 0 || fb->height <= 0 || !fb->color || !fb->coverage || !fb->depth)
-        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "render: invalid framebuffer");
+    meso_frame frame = *f;
     int n = rd->n;
-    if ((int64_t)fb->width * n > RASTER_MAX_TARGET_SIDE ||
-        (int64_t)fb->height * n > RASTER_MAX_TARGET_SIDE ||
-        (uint64_t)fb->width * (uint64_t)fb->height * (uint64_t)(n * n) > ((uint64_t)1 << 30)) {
-        return meso_log_error(ctx, MESO_ERROR_LIMIT,
-                              "render: %d x %d pixels with %d x %d samples exceed the limit of "
-                              "%d samples a side, 2^30 in all",
-                              fb->width, fb->height, n, n, RASTER_MAX_TARGET_SIDE);
-    }
-    double start = meso_time_seconds();
-    meso_frame frame;
-    meso_frame_init(&frame, rd->scene, fb->width * n, fb->height * n);
-    size_t samples = (size_t)frame.width * (size_t)frame.height;
     float *color = fb->color, *coverage = fb->coverage, *depth = fb->depth;
     meso_result r;
     if (n > 1) {
@@ -288,10 +343,44 @@ meso_result meso_renderer_render(meso_renderer *renderer, meso_framebuffer *fb) 
         raster_resolve(ctx, n, fb->width, fb->height, color, coverage, depth, fb->color,
                        fb->coverage, fb->depth);
     }
-    rd->stats.last_frame_seconds = meso_time_seconds() - start;
     rd->stats.triangles = triangles;
     rd->stats.fragments = fragments;
     return MESO_OK;
+}
+
+meso_result meso_renderer_render(meso_renderer *renderer, meso_framebuffer *fb) {
+    meso_renderer *rd = renderer;
+    if (!rd) return MESO_ERROR_INVALID_ARGUMENT;
+    meso_context *ctx = rd->ctx;
+    if (!fb || fb->width <= 0 || fb->height <= 0 || !fb->color || !fb->coverage || !fb->depth)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "render: invalid framebuffer");
+    int n = rd->n;
+    if ((int64_t)fb->width * n > RASTER_MAX_TARGET_SIDE ||
+        (int64_t)fb->height * n > RASTER_MAX_TARGET_SIDE ||
+        (uint64_t)fb->width * (uint64_t)fb->height * (uint64_t)(n * n) > ((uint64_t)1 << 30)) {
+        return meso_log_error(ctx, MESO_ERROR_LIMIT,
+                              "render: %d x %d pixels with %d x %d samples exceed the limit of "
+                              "%d samples a side, 2^30 in all",
+                              fb->width, fb->height, n, n, RASTER_MAX_TARGET_SIDE);
+    }
+    double start = meso_time_seconds();
+    meso_frame frame;
+    meso_frame_init(&frame, rd->scene, fb->width * n, fb->height * n);
+    size_t samples = (size_t)frame.width * (size_t)frame.height;
+    if (rd->progress)
+        frame.progress =
+            meso_progress_begin(ctx, rd->use_reference ? "reference" : "render", (uint64_t)samples);
+    meso_result r = draw_frame(rd, fb, &frame, samples);
+    meso_progress_end(frame.progress);
+    if (r != MESO_OK) return r;
+    rd->stats.last_frame_seconds = meso_time_seconds() - start;
+    return MESO_OK;
+}
+
+const char *meso_renderer_object_technique(const meso_renderer *renderer, int object) {
+    if (!renderer || object < 0 || object >= renderer->scene->num_objects) return NULL;
+    if (renderer->use_reference) return "reference";
+    return renderer->techniques[object] ? renderer->techniques[object]->info.name : NULL;
 }
 
 meso_render_stats meso_renderer_get_stats(const meso_renderer *renderer) {

@@ -2,11 +2,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "render_internal.h"
-
-#define MESO_TECHNIQUE(name) extern const meso_technique meso_technique_##name;
-#include "technique_list.h"
-#undef MESO_TECHNIQUE
+#include "reference_internal.h"
 
 /* The reference tracer is a back end (reference.c), not a fragment function: its entry only
  * names it and says what it accepts. */
@@ -16,7 +12,9 @@ static const meso_technique technique_reference = {
              .paper = "ground truth: the displaced / mapped mesostructure as real geometry",
              .kind = MESO_TECHNIQUE_REFERENCE,
              .accepts = MESO_TECHNIQUE_ACCEPTS_NONE | MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD |
-                        MESO_TECHNIQUE_ACCEPTS_SOLID},
+                        MESO_TECHNIQUE_ACCEPTS_SOLID,
+             .options = meso_reference_options,
+             .num_options = MESO_REFERENCE_NUM_OPTIONS},
 };
 
 static const meso_technique *const techniques[] = {
@@ -46,24 +44,13 @@ const meso_technique_info *meso_technique_find(const char *name) {
     return t ? &t->info : NULL;
 }
 
-meso_result meso_technique_check_options(meso_context *ctx, const meso_object *object,
-                                         const char *technique, const char *const *known) {
-    for (int i = 0; i < object->num_options; i++) {
-        const char *name = object->options[i].name;
-        bool found = false;
-        for (size_t k = 0; known && known[k] && !found; k++) found = strcmp(known[k], name) == 0;
-        if (found) continue;
-        char list[512] = "";
-        size_t used = 0;
-        for (size_t k = 0; known && known[k]; k++) {
-            int w = snprintf(list + used, sizeof(list) - used, "%s%s", k ? ", " : "", known[k]);
-            if (w < 0 || (size_t)w >= sizeof(list) - used) break;
-            used += (size_t)w;
-        }
-        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
-                              "%s: technique_options.%s: unknown option of technique '%s' (%s%s)",
-                              object->name, name, technique, used ? "known: " : "it has none",
-                              list);
+void meso_technique_list_names(char *buffer, size_t size) {
+    size_t used = 0;
+    buffer[0] = 0;
+    for (size_t i = 0; i < NUM_TECHNIQUES; i++) {
+        int w =
+            snprintf(buffer + used, size - used, "%s%s", i ? ", " : "", techniques[i]->info.name);
+        if (w < 0 || (size_t)w >= size - used) return;
+        used += (size_t)w;
     }
-    return MESO_OK;
 }

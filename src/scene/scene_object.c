@@ -129,9 +129,9 @@ static meso_result parse_procedural_solid(const scene_parser *p, const cJSON *it
     meso_solid_desc desc = {0};
     if (!meso_solid_kind_from_name(name, &desc.kind)) {
         scene_key k = scene_key_child(key, "procedural");
-        return scene_error(p, MESO_ERROR_FORMAT, &k,
-                           "unknown procedural solid \"%s\" (weave, chain, grid, squama, helix)",
-                           name);
+        return scene_error(
+            p, MESO_ERROR_FORMAT, &k,
+            "unknown procedural solid \"%s\" (weave, chain, grid, squama, helix, slab)", name);
     }
     long count = 0;
     float thickness = 0.0f;
@@ -147,10 +147,137 @@ static meso_result parse_procedural_solid(const scene_parser *p, const cJSON *it
     return MESO_OK;
 }
 
+static meso_result parse_height_map_or_solid(const scene_parser *p, const cJSON *item,
+                                             const scene_key *key, bool want_color,
+                                             meso_object *object, meso_image **out_color);
+
+/* "height": {"direction", "midlevel", "invert"}: the conventions of other tools (Blender,
+ * Substance), converted once, here, into meso's inward one so that every technique and the
+ * reference see the same field: the values are inverted in the field when asked, and the shell
+ * is placed by moving the mesh along its normals by m->offset (build_mesh):
+ *   inward   the mesh is the shell's top, white on it, black at -depth: offset 0 (meso's own)
+ *   outward  the mesh is the shell's bottom, black on it, white at +depth: offset depth
+ *   centered the value `midlevel` lies on the mesh: offset (1 - midlevel) depth
+ * In each case P' = (P + offset N) - (1 - h) depth N, which is the tool's surface. */
+static meso_result parse_height_convention(const scene_parser *p, const cJSON *item,
+                                           const scene_key *key, meso_mesostructure *m) {
+    static const char *const keys[] = {"direction", "midlevel", "invert", NULL};
+    if (!cJSON_IsObject(item))
+        return scene_error(p, MESO_ERROR_FORMAT, key,
+                           "must be {\"direction\": ..., \"midlevel\": ..., \"invert\": ...}");
+    meso_result r = scene_check_object(p, item, key, keys);
+    if (r != MESO_OK) return r;
+    const char *direction = "inward";
+    double midlevel = 0.5;
+    if ((r = scene_get_string(p, item, key, "direction", false, &direction)) ||
+        (r = scene_get_number(p, item, key, "midlevel", false, &midlevel)))
+        return r;
+    scene_key midlevel_key = scene_key_child(key, "midlevel");
+    bool has_midlevel = cJSON_GetObjectItemCaseSensitive(item, "midlevel") != NULL;
+    if (!(midlevel >= 0.0 && midlevel <= 1.0))
+        return scene_error(p, MESO_ERROR_FORMAT, &midlevel_key, "%g is not in [0, 1]", midlevel);
+    if (strcmp(direction, "inward") == 0 || strcmp(direction, "outward") == 0) {
+        if (has_midlevel)
+            return scene_error(p, MESO_ERROR_FORMAT, &midlevel_key,
+                               "only with \"direction\": \"centered\" (%s places the shell by "
+                               "the mesh)",
+                               direction);
+        m->offset = direction[0] == 'o' ? m->depth : 0.0f;
+    } else if (strcmp(direction, "centered") == 0) {
+        m->offset = (float)(1.0 - midlevel) * m->depth;
+    } else {
+        scene_key k = scene_key_child(key, "direction");
+        return scene_error(p, MESO_ERROR_FORMAT, &k,
+                           "must be \"inward\", \"outward\" or \"centered\", not \"%s\"",
+                           direction);
+    }
+    const cJSON *invert = cJSON_GetObjectItemCaseSensitive(item, "invert");
+    if (invert && !cJSON_IsBool(invert)) {
+        scene_key k = scene_key_child(key, "invert");
+        return scene_error(p, MESO_ERROR_FORMAT, &k, "must be true or false");
+    }
+    if (cJSON_IsTrue(invert)) {
+        meso_heightfield *hf = m->height_field;
+        size_t n = (size_t)hf->width * (size_t)hf->height;
+        for (size_t t = 0; t < n; t++) hf->heights[t] = 1.0f - hf->heights[t];
+        meso_heightfield_update_hash(hf);
+    }
+    return MESO_OK;
+}
+
+/* A relief impostor's solid (Policarpo & Oliveira 2006 §4): a whole model (a built-in shape or
+ * a mesh file) seen from above along -y, its bounds mapped into the unit box with a margin of
+ * 0.05: x -> u, -z -> v (the built-in plane's axes, so the impostor on a plane of the model's
+ * x-z size shows it unturned), y -> 1 - w. The plane's `size` should be the larger of the
+ * model's x and z extents / 0.9 and `depth` its y extent / 0.9 (docs/techniques/
+ * relief_layers.md), with the plane at y = the model's top + 0.05 depth. */
+static meso_result parse_impostor_solid(const scene_parser *p, const cJSON *item,
+                                        const scene_key *key, meso_object *object) {
+    static const char *const keys[] = {"impostor", "resolution", NULL};
+    meso_result r = scene_check_object(p, item, key, keys);
+    if (r != MESO_OK) return r;
+    const char *model = NULL;
+    long resolution = 96;
+    if ((r = scene_get_string(p, item, key, "impostor", true, &model)) ||
+        (r = scene_get_int(p, item, key, "resolution", 8, 256, false, &resolution)))
+        return r;
+    scene_key k = scene_key_child(key, "impostor");
+    meso_mesh *mesh = NULL;
+    meso_shape_desc shape = {0};
+    char path[SCENE_PATH_MAX];
+    snprintf(path, sizeof path, "%s", model);
+    if (meso_shape_kind_from_name(model, &shape.kind)) {
+        r = meso_mesh_create_shape(p->ctx, &shape, &mesh);
+    } else {
+        if ((r = scene_resolve_path(p, &k, model, path)) || (r = check_readable(p, &k, path)))
+            return r;
+        r = meso_mesh_load(p->ctx, path, &mesh);
+    }
+    if (r != MESO_OK) return r;
+    meso_vec3 lo = mesh->positions[0], hi = lo;
+    for (size_t i = 0; i < mesh->num_vertices; i++) {
+        meso_vec3 q = mesh->positions[i];
+        lo = (meso_vec3){fminf(lo.x, q.x), fminf(lo.y, q.y), fminf(lo.z, q.z)};
+        hi = (meso_vec3){fmaxf(hi.x, q.x), fmaxf(hi.y, q.y), fmaxf(hi.z, q.z)};
+    }
+    float lateral = fmaxf(hi.x - lo.x, hi.z - lo.z), height = hi.y - lo.y;
+    if (!(lateral > 0.0f) || !(height > 0.0f)) {
+        meso_mesh_destroy(mesh);
+        return scene_error(p, MESO_ERROR_FORMAT, &k, "%s: the model is flat", path);
+    }
+    for (size_t i = 0; i < mesh->num_vertices; i++) {
+        meso_vec3 q = mesh->positions[i];
+        mesh->positions[i] = (meso_vec3){0.5f + 0.9f * (q.x - 0.5f * (lo.x + hi.x)) / lateral,
+                                         0.5f - 0.9f * (q.z - 0.5f * (lo.z + hi.z)) / lateral,
+                                         0.05f + 0.9f * (q.y - lo.y) / height};
+    }
+    meso_mesostructure *m = &object->mesostructure;
+    r = meso_solid_create_from_model(p->ctx, mesh->positions, mesh->num_vertices, mesh->indices,
+                                     mesh->num_triangles, path, (int)resolution, &m->solid);
+    meso_mesh_destroy(mesh);
+    if (r != MESO_OK) return r;
+    m->wrap = MESO_WRAP_CLAMP; /* one model, not a tiling */
+    snprintf(m->source, sizeof(m->source), "%s impostor", base_name(model));
+    return MESO_OK;
+}
+
 static meso_result parse_mesostructure(const scene_parser *p, const cJSON *item,
                                        const scene_key *key, bool want_color, meso_object *object,
                                        meso_image **out_color) {
-    static const char *const keys[] = {"height_map", "solid", "depth", "wrap", NULL};
+    meso_result r = parse_height_map_or_solid(p, item, key, want_color, object, out_color);
+    if (r != MESO_OK) return r;
+    const cJSON *height = cJSON_GetObjectItemCaseSensitive(item, "height");
+    if (!height) return MESO_OK;
+    scene_key k = scene_key_child(key, "height");
+    if (object->mesostructure.kind != MESO_MESOSTRUCTURE_HEIGHT_FIELD)
+        return scene_error(p, MESO_ERROR_FORMAT, &k, "applies to a height_map, not a solid");
+    return parse_height_convention(p, height, &k, &object->mesostructure);
+}
+
+static meso_result parse_height_map_or_solid(const scene_parser *p, const cJSON *item,
+                                             const scene_key *key, bool want_color,
+                                             meso_object *object, meso_image **out_color) {
+    static const char *const keys[] = {"height_map", "solid", "depth", "wrap", "height", NULL};
     meso_result r = scene_check_object(p, item, key, keys);
     if (r != MESO_OK) return r;
     meso_mesostructure *m = &object->mesostructure;
@@ -197,10 +324,27 @@ static meso_result parse_mesostructure(const scene_parser *p, const cJSON *item,
     }
     m->kind = MESO_MESOSTRUCTURE_SOLID;
     scene_key k = scene_key_child(key, "solid");
-    if (cJSON_IsObject(solid)) return parse_procedural_solid(p, solid, &k, object);
-    if (cJSON_IsString(solid))
-        return scene_error(p, MESO_ERROR_UNSUPPORTED, &k, "voxel files are not supported yet");
-    return scene_error(p, MESO_ERROR_FORMAT, &k, "must be {\"procedural\": NAME, ...}");
+    if (cJSON_IsObject(solid))
+        return cJSON_GetObjectItemCaseSensitive(solid, "impostor")
+                   ? parse_impostor_solid(p, solid, &k, object)
+                   : parse_procedural_solid(p, solid, &k, object);
+    if (cJSON_IsString(solid)) { /* a tile mesh (DESIGN.md: x, y -> u, v; z -> 1 - w) */
+        char path[SCENE_PATH_MAX];
+        if ((r = scene_resolve_path(p, &k, solid->valuestring, path)) ||
+            (r = check_readable(p, &k, path)))
+            return r;
+        meso_mesh *tile = NULL;
+        if ((r = meso_mesh_load(p->ctx, path, &tile)) != MESO_OK) return r;
+        r = meso_solid_create_from_triangles(p->ctx, tile->positions, tile->num_vertices,
+                                             tile->indices, tile->num_triangles, path, 0,
+                                             &m->solid);
+        meso_mesh_destroy(tile);
+        if (r != MESO_OK) return r;
+        snprintf(m->source, sizeof(m->source), "%s", base_name(solid->valuestring));
+        return MESO_OK;
+    }
+    return scene_error(p, MESO_ERROR_FORMAT, &k,
+                       "must be a tile mesh path or {\"procedural\": NAME, ...}");
 }
 
 /* ---- Material ----------------------------------------------------------------------------- */
@@ -372,6 +516,10 @@ static meso_result build_mesh(const scene_parser *p, const cJSON *obj, const sce
         return r;
     meso_mesh *mesh = object->mesh;
     meso_mesh_transform(mesh, transform);
+    float offset = object->mesostructure.offset; /* "height": place the shell (see above) */
+    if (offset != 0.0f)
+        for (size_t v = 0; v < mesh->num_vertices; v++)
+            mesh->positions[v] = meso_vec3_madd(mesh->positions[v], mesh->normals[v], offset);
     if (mesh->uvs) {
         meso_mesh_scale_uvs(mesh, uv_scale);
         if ((r = check_texture_coordinates(p, key, mesh)) != MESO_OK) return r;
@@ -391,29 +539,58 @@ static meso_result build_mesh(const scene_parser *p, const cJSON *obj, const sce
 
 /* ---- Technique ---------------------------------------------------------------------------- */
 
+/* One option value: a finite number or a boolean (true = 1). */
+static meso_result parse_option(const scene_parser *p, const cJSON *child, const scene_key *key,
+                                const char *technique, meso_object *object) {
+    scene_key k = scene_key_child(key, child->string);
+    if (object->num_options >= MESO_OPTIONS_MAX)
+        return scene_error(p, MESO_ERROR_LIMIT, key, "more than %d options", MESO_OPTIONS_MAX);
+    for (int o = 0; o < object->num_options; o++)
+        if (strcmp(object->options[o].technique, technique) == 0 &&
+            strcmp(object->options[o].name, child->string) == 0)
+            return scene_error(p, MESO_ERROR_FORMAT, &k, "duplicate key");
+    meso_option *option = &object->options[object->num_options];
+    snprintf(option->technique, sizeof option->technique, "%s", technique);
+    meso_result r = copy_name(p, &k, child->string, option->name);
+    if (r != MESO_OK) return r;
+    if (cJSON_IsBool(child)) {
+        option->value = cJSON_IsTrue(child) ? 1.0 : 0.0;
+    } else if (cJSON_IsNumber(child) && isfinite(child->valuedouble)) {
+        option->value = child->valuedouble;
+    } else {
+        return scene_error(p, MESO_ERROR_FORMAT, &k, "must be a finite number or a boolean");
+    }
+    object->num_options++;
+    return MESO_OK;
+}
+
+/* "technique_options": {"relief": {"linear_steps": 64}, "vdm": {...}} keyed by technique, or
+ * the flat form {"linear_steps": 64} for the object's own technique (technique ""). The names
+ * are checked against the techniques' option tables by the renderer (meso_technique_check_scene),
+ * which this module does not link. */
 static meso_result parse_options(const scene_parser *p, const cJSON *item, const scene_key *key,
                                  meso_object *object) {
     if (!item) return MESO_OK;
     if (!cJSON_IsObject(item))
-        return scene_error(p, MESO_ERROR_FORMAT, key, "must be an object of numbers and booleans");
+        return scene_error(p, MESO_ERROR_FORMAT, key,
+                           "must be an object: {\"TECHNIQUE\": {\"option\": value}}");
     for (const cJSON *child = item->child; child; child = child->next) {
-        scene_key k = scene_key_child(key, child->string);
-        if (object->num_options >= MESO_OPTIONS_MAX)
-            return scene_error(p, MESO_ERROR_LIMIT, key, "more than %d options", MESO_OPTIONS_MAX);
-        for (int o = 0; o < object->num_options; o++)
-            if (strcmp(object->options[o].name, child->string) == 0)
-                return scene_error(p, MESO_ERROR_FORMAT, &k, "duplicate key");
-        meso_option *option = &object->options[object->num_options];
-        meso_result r = copy_name(p, &k, child->string, option->name);
-        if (r != MESO_OK) return r;
-        if (cJSON_IsBool(child)) {
-            option->value = cJSON_IsTrue(child) ? 1.0 : 0.0;
-        } else if (cJSON_IsNumber(child) && isfinite(child->valuedouble)) {
-            option->value = child->valuedouble;
+        meso_result r = MESO_OK;
+        if (!cJSON_IsObject(child)) {
+            r = parse_option(p, child, key, "", object);
         } else {
-            return scene_error(p, MESO_ERROR_FORMAT, &k, "must be a finite number or a boolean");
+            scene_key technique_key = scene_key_child(key, child->string);
+            char technique[MESO_NAME_MAX];
+            if ((r = copy_name(p, &technique_key, child->string, technique)) != MESO_OK) return r;
+            if (!technique[0])
+                return scene_error(p, MESO_ERROR_FORMAT, &technique_key, "empty technique name");
+            for (const cJSON *prev = item->child; prev != child; prev = prev->next)
+                if (strcmp(prev->string, child->string) == 0)
+                    return scene_error(p, MESO_ERROR_FORMAT, &technique_key, "duplicate key");
+            for (const cJSON *option = child->child; option && r == MESO_OK; option = option->next)
+                r = parse_option(p, option, &technique_key, technique, object);
         }
-        object->num_options++;
+        if (r != MESO_OK) return r;
     }
     return MESO_OK;
 }

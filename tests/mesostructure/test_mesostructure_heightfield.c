@@ -267,6 +267,70 @@ static void test_png_height_map_round_trips(void **state) {
     meso_context_destroy(ctx);
 }
 
+/* Defect: an RGB map whose red channel is constant rendered silently flat. */
+static void test_colour_height_maps_read_as_luminance(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(1);
+    for (int channels = 3; channels <= 4; channels++) {
+        meso_image *image = NULL;
+        assert_int_equal(meso_image_create(ctx, 8, 4, channels, &image), MESO_OK);
+        for (int j = 0; j < 4; j++)
+            for (int i = 0; i < 8; i++) {
+                float *p = meso_image_at(image, i, j);
+                p[0] = 0.5f;                     /* red constant */
+                p[1] = (float)i / 7.0f;          /* green: a ramp */
+                p[2] = (float)j / 3.0f;          /* blue: another */
+                if (channels == 4) p[3] = 0.25f; /* alpha: ignored */
+            }
+        meso_heightfield *hf = NULL;
+        assert_int_equal(meso_heightfield_create_from_image(ctx, image, MESO_WRAP_REPEAT, &hf),
+                         MESO_OK);
+        for (int j = 0; j < 4; j++)
+            for (int i = 0; i < 8; i++) {
+                double expected = 0.2126 * 0.5 + 0.7152 * i / 7.0 + 0.0722 * j / 3.0;
+                assert_float_equal(texel(hf, i, j), expected, 1e-6);
+            }
+        meso_heightfield_destroy(hf);
+        meso_image_destroy(image);
+    }
+    /* grey + alpha: the grey */
+    meso_image *grey = NULL;
+    assert_int_equal(meso_image_create(ctx, 2, 1, 2, &grey), MESO_OK);
+    grey->pixels[0] = 0.25f, grey->pixels[1] = 1.0f, grey->pixels[2] = 0.75f,
+    grey->pixels[3] = 0.0f;
+    meso_heightfield *hf = NULL;
+    assert_int_equal(meso_heightfield_create_from_image(ctx, grey, MESO_WRAP_REPEAT, &hf), MESO_OK);
+    assert_float_equal(texel(hf, 0, 0), 0.25, 0.0);
+    assert_float_equal(texel(hf, 1, 0), 0.75, 0.0);
+    meso_heightfield_destroy(hf);
+    meso_image_destroy(grey);
+    meso_context_destroy(ctx);
+}
+
+static void test_constant_height_map_warns_naming_the_file(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(1);
+    meso_image *image = NULL;
+    assert_int_equal(meso_image_create(ctx, 8, 8, 3, &image), MESO_OK);
+    for (size_t k = 0; k < 8 * 8 * 3; k++) image->pixels[k] = 0.6f;
+    const char *path = test_path(test_temp_dir(), "constant-height.png");
+    meso_png_desc png = {.bit_depth = 8, .encoding = MESO_ENCODING_LINEAR};
+    assert_int_equal(meso_image_save_png(ctx, image, path, &png), MESO_OK);
+    meso_heightfield *hf = NULL;
+    assert_int_equal(meso_heightfield_load_png(ctx, path, MESO_WRAP_REPEAT, &hf), MESO_OK);
+    assert_non_null(strstr(test_last_warning(), "constant-height.png: the height map is constant"));
+    meso_heightfield_destroy(hf);
+    /* a varied map gives no warning */
+    image->pixels[5] = 0.1f;
+    meso_log_warning(ctx, "%s", "none");
+    assert_int_equal(meso_image_save_png(ctx, image, path, &png), MESO_OK);
+    assert_int_equal(meso_heightfield_load_png(ctx, path, MESO_WRAP_REPEAT, &hf), MESO_OK);
+    assert_string_equal(test_last_warning(), "none");
+    meso_heightfield_destroy(hf);
+    meso_image_destroy(image);
+    meso_context_destroy(ctx);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_procedural_heightfields_tile_across_the_border),
@@ -279,6 +343,8 @@ int main(void) {
         cmocka_unit_test(test_clamp_and_repeat_differ_at_the_border),
         cmocka_unit_test(test_gradient_of_a_linear_ramp_is_exact),
         cmocka_unit_test(test_png_height_map_round_trips),
+        cmocka_unit_test(test_colour_height_maps_read_as_luminance),
+        cmocka_unit_test(test_constant_height_map_warns_naming_the_file),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -183,10 +183,14 @@ static void test_procedural_sources_names_and_options(void **state) {
     const meso_object *floor_object = &scene->objects[0];
     assert_string_equal(floor_object->name, "floor");
     assert_int_equal(floor_object->num_options, 3);
-    assert_float_equal(meso_object_option(floor_object, "linear_steps", 0), 16.0, 0.0);
-    assert_float_equal(meso_object_option(floor_object, "shadows", 0), 1.0, 0.0);
-    assert_float_equal(meso_object_option(floor_object, "exact", 5), 0.0, 0.0);
-    assert_float_equal(meso_object_option(floor_object, "missing", 7.5), 7.5, 0.0);
+    /* the flat form: technique "" (the object's own) */
+    const char *names[] = {"linear_steps", "shadows", "exact"};
+    const double values[] = {16.0, 1.0, 0.0};
+    for (int i = 0; i < 3; i++) {
+        assert_string_equal(floor_object->options[i].technique, "");
+        assert_string_equal(floor_object->options[i].name, names[i]);
+        assert_float_equal(floor_object->options[i].value, values[i], 0.0);
+    }
     const meso_mesostructure *m = &floor_object->mesostructure;
     assert_int_equal(m->kind, MESO_MESOSTRUCTURE_HEIGHT_FIELD);
     assert_string_equal(m->source, "bricks");

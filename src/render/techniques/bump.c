@@ -7,7 +7,8 @@ static meso_result bump_prepare(meso_context *ctx, const meso_scene *scene,
                                 const meso_object *object, void **out_state) {
     (void)scene;
     *out_state = NULL;
-    return meso_technique_check_options(ctx, object, "bump", (const char *const[]){NULL});
+    /* no options: any setting for it is an error naming its key */
+    return meso_technique_options_read(ctx, scene, object, &meso_technique_bump.info, NULL);
 }
 
 static void bump_release(void *state) { (void)state; }

@@ -7,57 +7,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* ---- Options ------------------------------------------------------------------------------ */
-
-meso_result displace_option_int(meso_context *ctx, const meso_object *object,
-                                const char *technique, const char *name, int lo, int hi,
-                                int fallback, int *out_value) {
-    double value = meso_object_option(object, name, (double)fallback);
-    if (!isfinite(value) || value != floor(value) || value < (double)lo || value > (double)hi) {
-        *out_value = fallback;
-        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
-                              "%s: technique_options.%s: %g is not an integer in [%d, %d] (%s)",
-                              object->name, name, value, lo, hi, technique);
-    }
-    *out_value = (int)value;
-    return MESO_OK;
-}
-
-meso_result displace_option_float(meso_context *ctx, const meso_object *object,
-                                  const char *technique, const char *name, double lo, double hi,
-                                  double fallback, float *out_value) {
-    double value = meso_object_option(object, name, fallback);
-    if (!isfinite(value) || value < lo || value > hi) {
-        *out_value = (float)fallback;
-        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
-                              "%s: technique_options.%s: %g is not a number in [%g, %g] (%s)",
-                              object->name, name, value, lo, hi, technique);
-    }
-    *out_value = (float)value;
-    return MESO_OK;
-}
-
-meso_result displace_shadow_options_read(meso_context *ctx, const meso_object *object,
-                                         const char *technique,
-                                         displace_shadow_options *out_options) {
-    int enabled = 1, pcf = 1, size = 2048;
-    float bias = 1.5f;
-    meso_result r;
-    memset(out_options, 0, sizeof(*out_options));
-    if ((r = displace_option_int(ctx, object, technique, "shadows", 0, 1, 1, &enabled)) ||
-        (r = displace_option_int(ctx, object, technique, "shadow_map_size", 16, 8192, 2048,
-                                 &size)) ||
-        (r = displace_option_float(ctx, object, technique, "shadow_bias", 0.0, 64.0, 1.5,
-                                   &bias)) ||
-        (r = displace_option_int(ctx, object, technique, "shadow_pcf", 0, 1, 1, &pcf)))
-        return r;
-    out_options->enabled = enabled != 0;
-    out_options->size = size;
-    out_options->bias = bias;
-    out_options->pcf = pcf != 0;
-    return MESO_OK;
-}
-
 /* ---- The displaced surface ---------------------------------------------------------------- */
 
 meso_result displace_surface_init(meso_context *ctx, const meso_object *object,

@@ -140,12 +140,18 @@ typedef struct displace_shadow_options {
     bool pcf;          /* "shadow_pcf" (1): 2 x 2 bilinear percentage-closer filtering */
 } displace_shadow_options;
 
-/* The option names read by displace_shadow_options_read, for meso_technique_check_options. */
-#define DISPLACE_SHADOW_OPTION_NAMES "shadows", "shadow_map_size", "shadow_bias", "shadow_pcf"
-
-meso_result displace_shadow_options_read(meso_context *ctx, const meso_object *object,
-                                         const char *technique,
-                                         displace_shadow_options *out_options);
+/* The option-table rows of the shadow maps, for a struct_type whose `member` is a
+ * displace_shadow_options: both geometry techniques list them in their tables. */
+#define DISPLACE_SHADOW_OPTION_ROWS(struct_type, member)                                           \
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, shadows, 0, 1, 1, "shadow maps from every light",            \
+                    struct_type, member.enabled),                                                  \
+        MESO_OPTION_ROW(MESO_OPTION_INT, shadow_map_size, 16, 8192, 2048,                          \
+                        "shadow map texels a side", struct_type, member.size),                     \
+        MESO_OPTION_ROW(MESO_OPTION_FLOAT, shadow_bias, 0.0, 64.0, 1.5,                            \
+                        "depth bias in shadow-map texels, scaled by the slope", struct_type,       \
+                        member.bias),                                                              \
+        MESO_OPTION_ROW(MESO_OPTION_BOOL, shadow_pcf, 0, 1, 1,                                     \
+                        "2 x 2 bilinear percentage-closer filtering", struct_type, member.pcf)
 
 typedef struct displace_light_map {
     bool active;            /* false: the light casts no shadow (visibility 1) */
@@ -184,14 +190,5 @@ void displace_shadows_release(displace_shadows *shadows);
 void displace_shade(const displace_surface *surface, const displace_shadows *shadows,
                     const meso_mesh *mesh, const meso_frame *frame, meso_fragment *fragments,
                     size_t count);
-
-/* Read an integer option in [lo, hi] (fallback when unset); errors name object and option. */
-meso_result displace_option_int(meso_context *ctx, const meso_object *object,
-                                const char *technique, const char *name, int lo, int hi,
-                                int fallback, int *out_value);
-/* Read a finite number option in [lo, hi]. */
-meso_result displace_option_float(meso_context *ctx, const meso_object *object,
-                                  const char *technique, const char *name, double lo, double hi,
-                                  double fallback, float *out_value);
 
 #endif

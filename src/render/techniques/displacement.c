@@ -22,7 +22,18 @@ typedef struct displacement_state {
     displace_tess_stats stats;
 } displacement_state;
 
-static const char *const displacement_options[] = {"level", DISPLACE_SHADOW_OPTION_NAMES, NULL};
+typedef struct displacement_options {
+    int level;
+    displace_shadow_options shadows;
+} displacement_options;
+
+static const meso_technique_option displacement_option_table[] = {
+    MESO_OPTION_ROW(MESO_OPTION_INT, level, -1, DISPLACE_MAX_LEVEL, -1,
+                    "uniform subdivision level (4^level triangles a base triangle); -1: texel "
+                    "density within the triangle budget",
+                    displacement_options, level),
+    DISPLACE_SHADOW_OPTION_ROWS(displacement_options, shadows),
+};
 
 /* Texel density (the longest base edge at about one texel) within the triangle budget. */
 static int auto_level(const displace_surface *surface) {
@@ -43,18 +54,16 @@ static void displacement_release(void *state) {
 
 static meso_result displacement_prepare(meso_context *ctx, const meso_scene *scene,
                                         const meso_object *object, void **out_state) {
-    (void)scene;
     *out_state = NULL;
-    meso_result r = meso_technique_check_options(ctx, object, "displacement", displacement_options);
+    displacement_options options;
+    meso_result r = meso_technique_options_read(ctx, scene, object,
+                                                &meso_technique_displacement.info, &options);
     if (r != MESO_OK) return r;
     displacement_state *s = calloc(1, sizeof(*s));
     if (!s) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: displacement", object->name);
+    s->shadows.options = options.shadows;
     if ((r = displace_surface_init(ctx, object, &s->surface)) != MESO_OK) goto fail;
-    int level = -1;
-    if ((r = displace_option_int(ctx, object, "displacement", "level", -1, DISPLACE_MAX_LEVEL, -1,
-                                 &level)) != MESO_OK)
-        goto fail;
-    s->level = level < 0 ? auto_level(&s->surface) : level;
+    s->level = options.level < 0 ? auto_level(&s->surface) : options.level;
     double triangles = (double)object->mesh->num_triangles * pow(4.0, s->level);
     if (triangles > (double)MESO_MESH_MAX_TRIANGLES) {
         r = meso_log_error(ctx, MESO_ERROR_LIMIT,
@@ -63,9 +72,7 @@ static meso_result displacement_prepare(meso_context *ctx, const meso_scene *sce
                            object->name, s->level, triangles, MESO_MESH_MAX_TRIANGLES);
         goto fail;
     }
-    if ((r = displace_shadow_options_read(ctx, object, "displacement", &s->shadows.options)) ||
-        (r = displace_tessellator_create(ctx, &s->surface, s->level, &s->tessellator)))
-        goto fail;
+    if ((r = displace_tessellator_create(ctx, &s->surface, s->level, &s->tessellator))) goto fail;
     *out_state = s;
     return MESO_OK;
 fail:
@@ -121,7 +128,9 @@ const meso_technique meso_technique_displacement = {
              .summary = "uniform tessellation into 4^L displaced triangles, shadow-mapped",
              .paper = "Doggett & Hirche 2000, \"Displacement Mapping\" (uniform baseline)",
              .kind = MESO_TECHNIQUE_GEOMETRY,
-             .accepts = MESO_TECHNIQUE_ACCEPTS_NONE | MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD},
+             .accepts = MESO_TECHNIQUE_ACCEPTS_NONE | MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD,
+             .options = displacement_option_table,
+             .num_options = MESO_OPTION_COUNT(displacement_option_table)},
     .prepare = displacement_prepare,
     .release = displacement_release,
     .geometry = displacement_geometry,

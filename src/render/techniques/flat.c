@@ -6,7 +6,8 @@ static meso_result flat_prepare(meso_context *ctx, const meso_scene *scene,
                                 const meso_object *object, void **out_state) {
     (void)scene;
     *out_state = NULL;
-    return meso_technique_check_options(ctx, object, "flat", (const char *const[]){NULL});
+    /* no options: any setting for it is an error naming its key */
+    return meso_technique_options_read(ctx, scene, object, &meso_technique_flat.info, NULL);
 }
 
 static void flat_release(void *state) { (void)state; }

@@ -17,7 +17,18 @@ typedef struct horizon_state {
     meso_horizon_map *map;
 } horizon_state;
 
-static const char *const known_options[] = {"num_azimuths", "max_distance", NULL};
+typedef struct horizon_options {
+    int num_azimuths, max_distance;
+} horizon_options;
+
+static const meso_technique_option horizon_option_table[] = {
+    MESO_OPTION_ROW(MESO_OPTION_INT, num_azimuths, 1, MESO_HORIZON_MAX_AZIMUTHS, 8,
+                    "directions of the baked horizon map (Sloan & Cohen 2000)", horizon_options,
+                    num_azimuths),
+    MESO_OPTION_ROW(MESO_OPTION_INT, max_distance, 1, MESO_HORIZON_MAX_DISTANCE, 64,
+                    "texels searched for the horizon in each direction", horizon_options,
+                    max_distance),
+};
 
 static void release(void *state) {
     horizon_state *s = state;
@@ -29,20 +40,16 @@ static void release(void *state) {
 
 static meso_result prepare(meso_context *ctx, const meso_scene *scene, const meso_object *object,
                            void **out_state) {
-    (void)scene;
     *out_state = NULL;
-    meso_result r = meso_technique_check_options(ctx, object, "horizon", known_options);
+    horizon_options options;
+    meso_result r =
+        meso_technique_options_read(ctx, scene, object, &meso_technique_horizon.info, &options);
     if (r != MESO_OK) return r;
-    int azimuths = 8, distance = 64;
     horizon_state *s = calloc(1, sizeof *s);
     if (!s) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
-    if ((r = relief_read_option(ctx, object, "horizon", "num_azimuths", 8, 1,
-                                MESO_HORIZON_MAX_AZIMUTHS, &azimuths)) != MESO_OK ||
-        (r = relief_read_option(ctx, object, "horizon", "max_distance", 64, 1,
-                                (int)MESO_HORIZON_MAX_DISTANCE, &distance)) != MESO_OK ||
-        (r = relief_heights_init(ctx, object, &s->heights)) != MESO_OK)
-        goto fail;
-    meso_horizon_desc desc = {.num_azimuths = azimuths, .max_distance = (float)distance};
+    if ((r = relief_heights_init(ctx, object, &s->heights)) != MESO_OK) goto fail;
+    meso_horizon_desc desc = {.num_azimuths = options.num_azimuths,
+                              .max_distance = (float)options.max_distance};
     if ((r = meso_bake_horizon(ctx, object->mesostructure.height_field, &desc, &s->map)) != MESO_OK)
         goto fail;
     *out_state = s;
@@ -170,7 +177,9 @@ const meso_technique meso_technique_horizon = {
              .summary = "bump mapping with horizon-map self-shadows",
              .paper = "Max 1988; Sloan & Cohen 2000 (baseline of VDM Table 1)",
              .kind = MESO_TECHNIQUE_PER_PIXEL,
-             .accepts = MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD},
+             .accepts = MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD,
+             .options = horizon_option_table,
+             .num_options = MESO_OPTION_COUNT(horizon_option_table)},
     .prepare = prepare,
     .release = release,
     .shade = shade,

@@ -8,12 +8,20 @@
  * docs/techniques/parallax.md. */
 #include "relief_common.h"
 
+typedef struct parallax_options {
+    bool offset_limiting;
+} parallax_options;
+
+static const meso_technique_option parallax_option_table[] = {
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, offset_limiting, 0, 1, 0,
+                    "Welsh 2004: no division by cos(theta), the shift never exceeds the depth",
+                    parallax_options, offset_limiting),
+};
+
 typedef struct parallax_state {
     relief_heights heights;
     bool offset_limiting;
 } parallax_state;
-
-static const char *const known_options[] = {"offset_limiting", NULL};
 
 static void release(void *state) {
     parallax_state *s = state;
@@ -24,20 +32,18 @@ static void release(void *state) {
 
 static meso_result prepare(meso_context *ctx, const meso_scene *scene, const meso_object *object,
                            void **out_state) {
-    (void)scene;
     *out_state = NULL;
-    meso_result r = meso_technique_check_options(ctx, object, "parallax", known_options);
+    parallax_options options;
+    meso_result r =
+        meso_technique_options_read(ctx, scene, object, &meso_technique_parallax.info, &options);
     if (r != MESO_OK) return r;
-    int limiting = 0;
     parallax_state *s = calloc(1, sizeof *s);
     if (!s) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
-    if ((r = relief_read_option(ctx, object, "parallax", "offset_limiting", 0, 0, 1, &limiting)) !=
-            MESO_OK ||
-        (r = relief_heights_init(ctx, object, &s->heights)) != MESO_OK) {
+    if ((r = relief_heights_init(ctx, object, &s->heights)) != MESO_OK) {
         release(s);
         return r;
     }
-    s->offset_limiting = limiting != 0;
+    s->offset_limiting = options.offset_limiting;
     *out_state = s;
     return MESO_OK;
 }
@@ -85,7 +91,9 @@ const meso_technique meso_technique_parallax = {
              .summary = "parallax mapping: one texture-coordinate shift along the view",
              .paper = "Kaneko et al. 2001, §3.1-3.4",
              .kind = MESO_TECHNIQUE_PER_PIXEL,
-             .accepts = MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD},
+             .accepts = MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD,
+             .options = parallax_option_table,
+             .num_options = MESO_OPTION_COUNT(parallax_option_table)},
     .prepare = prepare,
     .release = release,
     .shade = shade,

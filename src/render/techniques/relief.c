@@ -6,14 +6,33 @@
  * the options and the linear + binary search. docs/techniques/relief.md. */
 #include "relief_common.h"
 
+typedef struct relief_options {
+    int linear_steps, binary_steps, shadow_steps;
+    bool shadows, silhouettes;
+} relief_options;
+
+static const meso_technique_option relief_option_table[] = {
+    MESO_OPTION_ROW(MESO_OPTION_INT, linear_steps, 1, 1024, 16,
+                    "steps of the linear search along the view ray (App. A)", relief_options,
+                    linear_steps),
+    MESO_OPTION_ROW(MESO_OPTION_INT, binary_steps, 0, 32, 6,
+                    "steps of the binary search after the linear one", relief_options,
+                    binary_steps),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, shadows, 0, 1, 1,
+                    "self-shadows: a second linear search toward each light", relief_options,
+                    shadows),
+    MESO_OPTION_ROW(MESO_OPTION_INT, shadow_steps, 1, 1024, 16, "steps of the shadow search",
+                    relief_options, shadow_steps),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, silhouettes, 0, 1, 1,
+                    "silhouettes from per-vertex quadrics (Oliveira & Policarpo 2005)",
+                    relief_options, silhouettes),
+};
+
 typedef struct relief_state {
     relief_heights heights;
-    int linear_steps, binary_steps, shadow_steps;
+    relief_options options;
     relief_params params;
 } relief_state;
-
-static const char *const known_options[] = {"linear_steps", "binary_steps", "shadows",
-                                            "shadow_steps", "silhouettes",  NULL};
 
 static void release(void *state) {
     relief_state *s = state;
@@ -24,26 +43,16 @@ static void release(void *state) {
 
 static meso_result prepare(meso_context *ctx, const meso_scene *scene, const meso_object *object,
                            void **out_state) {
-    (void)scene;
     *out_state = NULL;
-    meso_result r = meso_technique_check_options(ctx, object, "relief", known_options);
-    if (r != MESO_OK) return r;
-    int shadows = 1, silhouettes = 1;
     relief_state *s = calloc(1, sizeof *s);
     if (!s) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
-    if ((r = relief_read_option(ctx, object, "relief", "linear_steps", 16, 1, 1024,
-                                &s->linear_steps)) != MESO_OK ||
-        (r = relief_read_option(ctx, object, "relief", "binary_steps", 6, 0, 32,
-                                &s->binary_steps)) != MESO_OK ||
-        (r = relief_read_option(ctx, object, "relief", "shadows", 1, 0, 1, &shadows)) != MESO_OK ||
-        (r = relief_read_option(ctx, object, "relief", "shadow_steps", 16, 1, 1024,
-                                &s->shadow_steps)) != MESO_OK ||
-        (r = relief_read_option(ctx, object, "relief", "silhouettes", 1, 0, 1, &silhouettes)) !=
-            MESO_OK ||
+    meso_result r;
+    if ((r = meso_technique_options_read(ctx, scene, object, &meso_technique_relief.info,
+                                         &s->options)) != MESO_OK ||
         (r = relief_heights_init(ctx, object, &s->heights)) != MESO_OK)
         goto fail;
-    s->params.shadows = shadows != 0;
-    s->params.silhouettes = silhouettes != 0;
+    s->params.shadows = s->options.shadows;
+    s->params.silhouettes = s->options.silhouettes;
     *out_state = s;
     return MESO_OK;
 fail:
@@ -55,23 +64,23 @@ static void search(const void *user, const relief_batch *batches, int count, v8f
                    int *out_hit) {
     const relief_state *s = user;
     for (int g = 0; g < count; ++g)
-        out_hit[g] =
-            relief_search8(&s->heights, &batches[g], s->linear_steps, s->binary_steps, &out_t[g]);
+        out_hit[g] = relief_search8(&s->heights, &batches[g], s->options.linear_steps,
+                                    s->options.binary_steps, &out_t[g]);
 }
 
 static void shadow(const void *user, const relief_shadow_batch *batches, int count,
                    int *out_blocked) {
     const relief_state *s = user;
     for (int g = 0; g < count; ++g)
-        out_blocked[g] = batches[g].active_bits
-                             ? relief_shadow_search8(&s->heights, &batches[g], s->shadow_steps)
-                             : 0;
+        out_blocked[g] = batches[g].active_bits ? relief_shadow_search8(&s->heights, &batches[g],
+                                                                        s->options.shadow_steps)
+                                                : 0;
 }
 
 static void shade(const void *state, const meso_frame *frame, const meso_object *object,
                   meso_fragment *fragments, size_t count) {
     const relief_state *s = state;
-    relief_tracer tracer = {s, search, shadow};
+    relief_tracer tracer = {s, search, shadow, NULL};
     relief_shade_fragments(&s->heights, &tracer, s->params, frame, object, fragments, count);
 }
 
@@ -84,7 +93,9 @@ const meso_technique meso_technique_relief = {
              .summary = "relief mapping: linear + binary search, self-shadows, silhouettes",
              .paper = "Policarpo & Oliveira 2006, §2.1 and Appendix A",
              .kind = MESO_TECHNIQUE_PER_PIXEL,
-             .accepts = MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD},
+             .accepts = MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD,
+             .options = relief_option_table,
+             .num_options = MESO_OPTION_COUNT(relief_option_table)},
     .prepare = prepare,
     .release = release,
     .shade = shade,

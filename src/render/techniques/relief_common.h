@@ -119,21 +119,6 @@ static inline v8f relief_sample8(const relief_heights *m, v8f x, v8f y) {
     return top + (bottom - top) * ty;
 }
 
-/* ---- Options ------------------------------------------------------------------------------ */
-
-/* An integer option in [lo, hi] (booleans: 0..1); the message names the object and option. */
-static inline meso_result relief_read_option(meso_context *ctx, const meso_object *object,
-                                             const char *technique, const char *name, int fallback,
-                                             int lo, int hi, int *out_value) {
-    double v = meso_object_option(object, name, (double)fallback);
-    if (!(v >= (double)lo && v <= (double)hi) || v != floor(v))
-        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
-                              "%s: technique_options.%s: %g is not an integer in %d..%d (%s)",
-                              object->name, name, v, lo, hi, technique);
-    *out_value = (int)v;
-    return MESO_OK;
-}
-
 /* ---- The view ray in texture space -------------------------------------------------------- */
 
 /* Write a world direction D in the fragment's frame: D = cu T + cv B + cn N. False when the
@@ -166,6 +151,10 @@ static inline meso_vec2 relief_fragment_quadric(const meso_object *object, const
 typedef struct relief_batch {
     int count;
     v8f x0, y0, xd, yd, a, b, t_end;
+    v8f qa, qb; /* the quadric at each fragment (0 without silhouettes): shadows use it too */
+    /* curved_uv only (else 0): at depth d the texture coordinates advance 1 / (1 - lateral d)
+     * times faster than on the mesh (relief_lateral_scale) */
+    v8f lateral;
     int flat_bits;  /* lanes whose hit is t = 0 without a search */
     int floor_bits; /* lanes whose search ends on the floor */
 } relief_batch;
@@ -225,10 +214,14 @@ static inline int relief_search8(const relief_heights *m, const relief_batch *ba
 /* ---- Shadows ------------------------------------------------------------------------------ */
 
 /* Light rays from the hits of one batch toward one light, in texel-centre coordinates: from
- * (x, y, d) at s = 0 to (x + xd, y + yd, 0) at s = 1, where the ray reaches the mesh. */
+ * (x, y, d) at s = 0 to (x + xd, y + yd, 0) at s = 1, where the ray leaves the shell. The
+ * depth along the way is d (1 - s) + bulge s (1 - s): on a curved mesh (the quadric of the
+ * view rays, above) the surface falls away from a rising light ray, which so leaves the
+ * shell sooner and, between its ends, lies deeper than the straight line (bulge >= 0 when
+ * convex); flat: bulge = 0. */
 typedef struct relief_shadow_batch {
     int count;
-    v8f x, y, d, xd, yd;
+    v8f x, y, d, xd, yd, bulge;
     int active_bits; /* lanes that need a search (lit lanes at d = 0 and dark ones do not) */
 } relief_shadow_batch;
 
@@ -246,7 +239,7 @@ static inline int relief_shadow_search8(const relief_heights *m, const relief_sh
     for (int k = 1; k < steps && pending; ++k) {
         float frac = (float)k * inv;
         v8f h = relief_sample8(m, s->x + s->xd * frac, s->y + s->yd * frac);
-        v8f f = s->d * (1.0f - frac) + h - 1.0f;
+        v8f f = (s->d + s->bulge * frac) * (1.0f - frac) + h - 1.0f;
         int bits = v8_mask_bits(f > RELIEF_SHADOW_BIAS) & pending;
         blocked |= bits;
         pending &= ~bits;
@@ -351,6 +344,29 @@ static inline v8vec3 relief_normal8(const relief_lanes *l, float depth, v8f gu, 
                     v8_select(keep, l->normal.z, n.z * inv)};
 }
 
+/* The displaced normal n, found in the frame of the fragment where the ray entered, carried
+ * to the hit t V away on the curved mesh: the quadric surface -(qa x^2 + qb y^2) has the
+ * normal N + 2 qa x T^ + 2 qb y B^ (unnormalised) at (x, y), so every normal there is turned
+ * by the rotation that takes N to it (small angle: n + (N_hit - N), renormalised). Flat
+ * meshes (q = 0) keep n. Without it a sphere is shaded as if every hit faced the entry's
+ * way: a uniform error over its lit side (docs/techniques/relief.md). */
+static inline v8vec3 relief_curve_normal8(const relief_lanes *l, const relief_batch *batch, v8f t,
+                                          v8vec3 n) {
+    v8f tl = v8_sqrt(v8_dot(l->tangent, l->tangent));
+    v8f bl = v8_sqrt(v8_dot(l->bitangent, l->bitangent));
+    v8f zero = v8_splat(0.0f);
+    v8f it = v8_select(tl > 0.0f, 1.0f / v8_select(tl > 0.0f, tl, v8_splat(1.0f)), zero);
+    v8f ib = v8_select(bl > 0.0f, 1.0f / v8_select(bl > 0.0f, bl, v8_splat(1.0f)), zero);
+    /* (x, y) of the hit from the entry, world units along T^ and B^; the turn 2 q (x, y) */
+    v8f sx = 2.0f * batch->qa * t * v8_dot(l->view, l->tangent) * it * it;
+    v8f sy = 2.0f * batch->qb * t * v8_dot(l->view, l->bitangent) * ib * ib;
+    v8vec3 turned = {n.x + l->tangent.x * sx + l->bitangent.x * sy,
+                     n.y + l->tangent.y * sx + l->bitangent.y * sy,
+                     n.z + l->tangent.z * sx + l->bitangent.z * sy};
+    v8f inv = 1.0f / v8_sqrt(v8_max(v8_dot(turned, turned), v8_splat(1e-30f)));
+    return (v8vec3){turned.x * inv, turned.y * inv, turned.z * inv};
+}
+
 /* ---- The relief family's fragment loop ---------------------------------------------------- */
 
 /* The tracer of one variant: its search for the view rays and its shadow test, each given
@@ -364,17 +380,33 @@ typedef struct relief_tracer {
     /* Per batch: the bits of blocked lanes (batches may have no active lane). */
     void (*shadow)(const void *user, const relief_shadow_batch *batches, int count,
                    int *out_blocked);
+    /* Optional (NULL: the height field's gradient, relief_normal8): the unit world normal at
+     * the hits (hx, hy) in texel-centre coordinates, depth hd, ray parameter t, of one batch.
+     * relief_layers reads its baked layer normals here (Policarpo & Oliveira 2006 §3). */
+    void (*normal)(const void *user, const relief_lanes *lanes, const relief_batch *batch, v8f t,
+                   v8f hx, v8f hy, v8f hd, float depth, v8vec3 *out_normal);
 } relief_tracer;
 
 typedef struct relief_params {
     bool shadows, silhouettes;
+    /* Beyond the papers (relief_layers): on a curved mesh the shell at depth w is a smaller
+     * (convex) or larger copy of the surface, so a ray's texture coordinates advance faster
+     * there than the tangent-plane walk says: by 1 / (1 - kappa w depth) with kappa the
+     * curvature along the ray (twice the quadric, Oliveira & Policarpo 2005), averaged from 0
+     * to the ray's depth d as 1 / (1 - kappa d depth / 2). */
+    bool curved_uv;
 } relief_params;
+
+/* The factor on the tangent-plane texture offset of a ray point at depth d (curved_uv). */
+static inline v8f relief_lateral_scale(const relief_batch *b, v8f d) {
+    return 1.0f / (1.0f - b->lateral * v8_max(d, v8_splat(0.0f)));
+}
 
 /* The view rays of eight fragments (see the top of this file). */
 static inline void relief_batch_setup(const relief_heights *m, const meso_object *object,
                                       const meso_fragment *f, const relief_lanes *l,
-                                      bool silhouettes, relief_batch *batch, v8f *out_du,
-                                      v8f *out_dv) {
+                                      bool silhouettes, bool curved_uv, relief_batch *batch,
+                                      v8f *out_du, v8f *out_dv) {
     float depth = object->mesostructure.depth;
     int all = (1 << l->count) - 1;
     v8f cu = v8_dot(l->view, l->bn), cv = v8_dot(l->view, l->nt), cn = v8_dot(l->view, l->tb);
@@ -397,11 +429,19 @@ static inline void relief_batch_setup(const relief_heights *m, const meso_object
             qa[k] = q.x;
             qb[k] = q.y;
         }
+        batch->qa = qa;
+        batch->qb = qb;
         v8f tl = v8_sqrt(v8_dot(l->tangent, l->tangent));
         v8f bl = v8_sqrt(v8_dot(l->bitangent, l->bitangent));
         v8f x = v8_select(tl > 0.0f, v8_dot(l->view, l->tangent) / tl, zero);
         v8f y = v8_select(bl > 0.0f, v8_dot(l->view, l->bitangent) / bl, zero);
         batch->b = v8_select(on, (qa * x * x + qb * y * y) * inv_depth, zero);
+        if (curved_uv) { /* kappa depth / 2 along the ray, kept below 0.9 (relief_params) */
+            v8f r2 = x * x + y * y;
+            v8f lateral = (qa * x * x + qb * y * y) * depth / v8_max(r2, v8_splat(1e-30f));
+            lateral = v8_min(v8_max(lateral, v8_splat(-0.9f)), v8_splat(0.9f));
+            batch->lateral = v8_select(on & (r2 > 0.0f), lateral, zero);
+        }
     }
     /* d(t) = 1 at the smaller root of b t^2 - a t + 1 = 0 (stable for b -> 0); without a real
      * root the convex shell is left at t = a / b. */
@@ -416,9 +456,10 @@ static inline void relief_batch_setup(const relief_heights *m, const meso_object
     *out_dv = cv;
 }
 
-/* Shade `count` fragments with a tracer, sixteen at a time as two batches of eight: view
- * rays, hits, depth correction, the displaced normal at the hit, self-shadows per light,
- * meso_shade_batch8. */
+/* Shade `count` fragments with a tracer, sixteen at a time (m: the map's size in texels for
+ * the texel-centre coordinates, and the heights unless the tracer has its own normal) as two
+ * batches of eight: view rays, hits, depth correction, the displaced normal at the hit,
+ * self-shadows per light, meso_shade_batch8. */
 static inline void relief_shade_fragments(const relief_heights *m, const relief_tracer *tracer,
                                           relief_params params, const meso_frame *frame,
                                           const meso_object *object, meso_fragment *fragments,
@@ -438,23 +479,31 @@ static inline void relief_shade_fragments(const relief_heights *m, const relief_
             if (first >= count) break;
             n[g] = count - first < RELIEF_LANES ? (int)(count - first) : RELIEF_LANES;
             relief_lanes_load(&l[g], frame, fragments + first, n[g]);
-            relief_batch_setup(m, object, fragments + first, &l[g], params.silhouettes, &batch[g],
-                               &du[g], &dv[g]);
+            relief_batch_setup(m, object, fragments + first, &l[g], params.silhouettes,
+                               params.curved_uv, &batch[g], &du[g], &dv[g]);
             groups = g + 1;
         }
         tracer->search(tracer->user, batch, groups, t, hit);
         for (int g = 0; g < groups; ++g) {
             /* The hits in texel space, their depth d and the gradient there. */
-            hx[g] = batch[g].x0 + batch[g].xd * t[g];
-            hy[g] = batch[g].y0 + batch[g].yd * t[g];
             hd[g] = v8_max(t[g] * (batch[g].a - batch[g].b * t[g]), v8_splat(0.0f));
-            v8f gu, gv;
-            relief_gradient8(m, hx[g], hy[g], &gu, &gv);
+            v8f tt = params.curved_uv ? t[g] * relief_lateral_scale(&batch[g], hd[g]) : t[g];
+            hx[g] = batch[g].x0 + batch[g].xd * tt;
+            hy[g] = batch[g].y0 + batch[g].yd * tt;
             hit_pos[g] = v8_madd(l[g].position, l[g].view, t[g]);
-            hit_u[g] = l[g].u + du[g] * t[g];
-            hit_v[g] = l[g].v + dv[g] * t[g];
+            hit_u[g] = l[g].u + du[g] * tt;
+            hit_v[g] = l[g].v + dv[g] * tt;
             out_depth[g] = l[g].depth * (1.0f + t[g]); /* dot(P + t V - eye, forward) */
-            normal[g] = relief_normal8(&l[g], depth, gu, gv);
+            if (tracer->normal) {
+                tracer->normal(tracer->user, &l[g], &batch[g], t[g], hx[g], hy[g], hd[g], depth,
+                               &normal[g]);
+            } else {
+                v8f gu, gv;
+                relief_gradient8(m, hx[g], hy[g], &gu, &gv);
+                normal[g] = relief_normal8(&l[g], depth, gu, gv);
+            }
+            if (params.silhouettes)
+                normal[g] = relief_curve_normal8(&l[g], &batch[g], t[g], normal[g]);
         }
         meso_shade_batch in[2];
         for (int li = 0; li < num_lights; ++li) {
@@ -475,15 +524,39 @@ static inline void relief_shade_fragments(const relief_heights *m, const relief_
                     L = (v8vec3){L.x * inv, L.y * inv, L.z * inv};
                 }
                 v8f lu = v8_dot(L, l[g].bn), lv = v8_dot(L, l[g].nt), ln = v8_dot(L, l[g].tb);
-                /* A light below the shell's top (or no frame): the surface itself blocks it. */
-                int up = v8_mask_bits(ln > 0.0f) & l[g].frame_bits;
+                /* The light ray leaves the shell where d(s) = hd - (ln s + q s^2) / depth
+                 * reaches 0 (s in world units along L, q = qa xL^2 + qb yL^2 the quadric
+                 * along L, as the view rays' b): s_out = 2 hd depth / (ln + sqrt(ln^2 +
+                 * 4 q hd depth)). On a convex mesh that can be so even for a light a little
+                 * below the tangent plane (the band past the terminator the truth still
+                 * lights); without a real positive root the surface itself blocks the light. */
+                v8f tl = v8_sqrt(v8_dot(l[g].tangent, l[g].tangent));
+                v8f bl = v8_sqrt(v8_dot(l[g].bitangent, l[g].bitangent));
+                v8f xl = v8_select(tl > 0.0f, v8_dot(L, l[g].tangent) / tl, v8_splat(0.0f));
+                v8f yl = v8_select(bl > 0.0f, v8_dot(L, l[g].bitangent) / bl, v8_splat(0.0f));
+                v8f q = batch[g].qa * xl * xl + batch[g].qb * yl * yl;
+                /* The light's elevation over the tangent plane at the hit, not at the entry:
+                 * the hit lies t V away, where the curved surface has turned by 2 q. */
+                v8f xv = v8_select(tl > 0.0f, v8_dot(l[g].view, l[g].tangent) / tl,
+                                   v8_splat(0.0f));
+                v8f yv = v8_select(bl > 0.0f, v8_dot(l[g].view, l[g].bitangent) / bl,
+                                   v8_splat(0.0f));
+                ln += 2.0f * t[g] * (batch[g].qa * xv * xl + batch[g].qb * yv * yl);
+                v8f reach = hd[g] * depth;
+                v8f disc = ln * ln + 4.0f * q * reach;
+                v8f denominator = ln + v8_sqrt(v8_max(disc, v8_splat(0.0f)));
+                v8i leaves = (disc >= 0.0f) & (denominator > 0.0f);
+                /* hit at the top (hd = 0): lit exactly when the light is above the plane */
+                v8i top = hd[g] <= 0.0f;
+                leaves = (leaves & ~top) | ((ln > 0.0f) & top);
+                int up = v8_mask_bits(leaves) & l[g].frame_bits;
                 dark[g] = hit[g] & ~up;
                 sb[g].active_bits = hit[g] & up & v8_mask_bits(hd[g] > 0.0f);
-                /* From d to d = 0 the light ray travels d depth / ln world units. */
-                v8f s = hd[g] * depth / v8_select(ln > 0.0f, ln, v8_splat(1.0f));
+                v8f s = 2.0f * reach / v8_select(leaves, denominator, v8_splat(1.0f));
                 sb[g].x = hx[g];
                 sb[g].y = hy[g];
                 sb[g].d = hd[g];
+                sb[g].bulge = v8_select(leaves, q * s * s / depth, v8_splat(0.0f));
                 sb[g].xd = lu * s * (float)m->width;
                 sb[g].yd = -lv * s * (float)m->height;
                 any |= sb[g].active_bits;
@@ -494,8 +567,8 @@ static inline void relief_shade_fragments(const relief_heights *m, const relief_
                 for (int g = 0; g < groups; ++g) dark[g] |= blocked[g] & sb[g].active_bits;
             }
             for (int g = 0; g < groups; ++g)
-                in[g].visibility[li] = v8_select(v8_mask_from_bits(dark[g]), v8_splat(0.0f),
-                                                 v8_splat(1.0f));
+                in[g].visibility[li] =
+                    v8_select(v8_mask_from_bits(dark[g]), v8_splat(0.0f), v8_splat(1.0f));
         }
         for (int g = 0; g < groups; ++g) {
             meso_fragment *f = fragments + start + (size_t)g * RELIEF_LANES;

@@ -32,7 +32,16 @@ typedef struct exact_state {
     int32_t level_offset[MESO_MINMAX_MAX_LEVELS];
 } exact_state;
 
-static const char *const known_options[] = {"shadows", "silhouettes", NULL};
+typedef struct exact_options {
+    bool shadows, silhouettes;
+} exact_options;
+
+static const meso_technique_option exact_option_table[] = {
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, shadows, 0, 1, 1,
+                    "self-shadows: the exact trace toward each light", exact_options, shadows),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, silhouettes, 0, 1, 1, "silhouettes from per-vertex quadrics",
+                    exact_options, silhouettes),
+};
 
 /* A ray in texel-centre coordinates with depth d(t) = c0 + c1 t + c2 t^2 over [t0, t1]; it hits
  * where d >= 1 - h + bias. */
@@ -455,9 +464,9 @@ static void shadow(const void *user, const relief_shadow_batch *batches, int cou
                                  .y0 = b->y - h * v8_floor(b->y * (1.0f / h)),
                                  .xd = b->xd,
                                  .yd = b->yd,
-                                 .c0 = b->d,
-                                 .c1 = -b->d,
-                                 .c2 = v8_splat(0.0f),
+                                 .c0 = b->d, /* d (1 - s) + bulge s (1 - s) */
+                                 .c1 = b->bulge - b->d,
+                                 .c2 = -b->bulge,
                                  .t0 = v8_splat(0.0f),
                                  .t1 = v8_splat(1.0f),
                                  .bias = RELIEF_SHADOW_BIAS};
@@ -466,7 +475,7 @@ static void shadow(const void *user, const relief_shadow_batch *batches, int cou
             int blocked = 0;
             for (int p = 1; p <= 3 && (b->active_bits & ~blocked); ++p) {
                 float sp = 0.25f * (float)p;
-                v8f f = b->d * (1.0f - sp) - 1.0f +
+                v8f f = (b->d + b->bulge * sp) * (1.0f - sp) - 1.0f +
                         relief_sample8(&s->heights, b->x + b->xd * sp, b->y + b->yd * sp);
                 blocked |= v8_mask_bits(f > RELIEF_SHADOW_BIAS) & b->active_bits;
             }
@@ -482,8 +491,16 @@ static void shadow(const void *user, const relief_shadow_batch *batches, int cou
         int blocked = 0;
         for (int k = 0; k < b->count; ++k) {
             if (!(b->active_bits >> k & 1)) continue;
-            exact_ray r = {b->x[k],  b->y[k], b->xd[k], b->yd[k], b->d[k],
-                           -b->d[k], 0.0,     0.0,      1.0,      RELIEF_SHADOW_BIAS};
+            exact_ray r = {b->x[k],
+                           b->y[k],
+                           b->xd[k],
+                           b->yd[k],
+                           b->d[k],
+                           b->bulge[k] - b->d[k],
+                           -b->bulge[k],
+                           0.0,
+                           1.0,
+                           RELIEF_SHADOW_BIAS};
             double t;
             if (trace_any(s, &r, &t)) blocked |= 1 << k;
         }
@@ -501,18 +518,14 @@ static void release(void *state) {
 
 static meso_result prepare(meso_context *ctx, const meso_scene *scene, const meso_object *object,
                            void **out_state) {
-    (void)scene;
     *out_state = NULL;
-    meso_result r = meso_technique_check_options(ctx, object, "relief_exact", known_options);
+    exact_options options;
+    meso_result r = meso_technique_options_read(ctx, scene, object,
+                                                &meso_technique_relief_exact.info, &options);
     if (r != MESO_OK) return r;
-    int shadows = 1, silhouettes = 1;
     exact_state *s = calloc(1, sizeof *s);
     if (!s) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
-    if ((r = relief_read_option(ctx, object, "relief_exact", "shadows", 1, 0, 1, &shadows)) !=
-            MESO_OK ||
-        (r = relief_read_option(ctx, object, "relief_exact", "silhouettes", 1, 0, 1,
-                                &silhouettes)) != MESO_OK ||
-        (r = relief_heights_init(ctx, object, &s->heights)) != MESO_OK ||
+    if ((r = relief_heights_init(ctx, object, &s->heights)) != MESO_OK ||
         (r = meso_bake_minmax(ctx, object->mesostructure.height_field, &s->pyramid)) != MESO_OK)
         goto fail;
     int w = s->heights.width, h = s->heights.height;
@@ -520,8 +533,8 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
     for (int l = 0; l < s->pyramid->num_levels; ++l) {
         s->level_offset[l] = (int32_t)(s->pyramid->levels[l].max - s->pyramid->block);
     }
-    s->params.shadows = shadows != 0;
-    s->params.silhouettes = silhouettes != 0;
+    s->params.shadows = options.shadows;
+    s->params.silhouettes = options.silhouettes;
     *out_state = s;
     return MESO_OK;
 fail:
@@ -532,7 +545,7 @@ fail:
 static void shade(const void *state, const meso_frame *frame, const meso_object *object,
                   meso_fragment *fragments, size_t count) {
     const exact_state *s = state;
-    relief_tracer tracer = {s, search, shadow};
+    relief_tracer tracer = {s, search, shadow, NULL};
     relief_shade_fragments(&s->heights, &tracer, s->params, frame, object, fragments, count);
 }
 
@@ -546,7 +559,9 @@ const meso_technique meso_technique_relief_exact = {
              .summary = "relief mapping traced exactly through a maximum mip-map",
              .paper = "Tevs, Ihrke & Seidel 2008 (beyond the papers); Policarpo & Oliveira 2006",
              .kind = MESO_TECHNIQUE_PER_PIXEL,
-             .accepts = MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD},
+             .accepts = MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD,
+             .options = exact_option_table,
+             .num_options = MESO_OPTION_COUNT(exact_option_table)},
     .prepare = prepare,
     .release = release,
     .shade = shade,

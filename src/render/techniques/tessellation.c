@@ -66,10 +66,33 @@ typedef struct frame_tests {
     float width, height, z_near;
 } frame_tests;
 
-static const char *const tessellation_options[] = {
-    "max_level",   "normal_test",    "normal_threshold", "area_test",  "area_threshold",
-    "view_test",   "view_threshold", "limit_test",       "span_texels",
-    DISPLACE_SHADOW_OPTION_NAMES, NULL};
+/* Read straight into the state. */
+static const meso_technique_option tessellation_option_table[] = {
+    MESO_OPTION_ROW(MESO_OPTION_INT, max_level, -1, DISPLACE_MAX_LEVEL, -1,
+                    "deepest subdivision level; -1: down to texel density", tessellation_state,
+                    max_level),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, normal_test, 0, 1, 1, "split where the normals differ",
+                    tessellation_state, normal_test),
+    MESO_OPTION_ROW(MESO_OPTION_FLOAT, normal_threshold, 0.0, 2.0, 0.2,
+                    "1 - cos of the normal difference that splits an edge", tessellation_state,
+                    normal_threshold),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, area_test, 0, 1, 1,
+                    "split where the height varies under the edge (summed-area table)",
+                    tessellation_state, area_test),
+    MESO_OPTION_ROW(MESO_OPTION_FLOAT, area_threshold, 0.0, 1.0, 0.05,
+                    "height variation that splits an edge", tessellation_state, area_threshold),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, view_test, 0, 1, 1, "split edges long on screen",
+                    tessellation_state, view_test),
+    MESO_OPTION_ROW(MESO_OPTION_FLOAT, view_threshold, 0.0, 1e6, 2.0,
+                    "screen length in pixels above which an edge splits", tessellation_state,
+                    view_threshold),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, limit_test, 0, 1, 1, "stop at texel density",
+                    tessellation_state, limit_test),
+    MESO_OPTION_ROW(MESO_OPTION_FLOAT, span_texels, 0.0, 1e6, 32.0,
+                    "texels an edge may span before it splits whatever the tests say",
+                    tessellation_state, span_texels),
+    DISPLACE_SHADOW_OPTION_ROWS(tessellation_state, shadows.options),
+};
 
 /* "Calculate surface normal": once per vertex, kept for the base mesh's vertices. */
 static void tests_vertex_static(const void *user, displace_vertex *v) {
@@ -212,37 +235,16 @@ static void tessellation_release(void *state) {
 
 static meso_result tessellation_prepare(meso_context *ctx, const meso_scene *scene,
                                         const meso_object *object, void **out_state) {
-    (void)scene;
     *out_state = NULL;
-    const char *name = "tessellation";
-    meso_result r = meso_technique_check_options(ctx, object, name, tessellation_options);
-    if (r != MESO_OK) return r;
     tessellation_state *s = calloc(1, sizeof(*s));
     if (!s) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: tessellation", object->name);
-    int normal = 1, area = 1, view = 1, limit = 1;
-    if ((r = displace_surface_init(ctx, object, &s->surface)) ||
-        (r = displace_option_int(ctx, object, name, "max_level", -1, DISPLACE_MAX_LEVEL, -1,
-                                 &s->max_level)) ||
-        (r = displace_option_int(ctx, object, name, "normal_test", 0, 1, 1, &normal)) ||
-        (r = displace_option_int(ctx, object, name, "area_test", 0, 1, 1, &area)) ||
-        (r = displace_option_int(ctx, object, name, "view_test", 0, 1, 1, &view)) ||
-        (r = displace_option_int(ctx, object, name, "limit_test", 0, 1, 1, &limit)) ||
-        (r = displace_option_float(ctx, object, name, "normal_threshold", 0.0, 2.0, 0.2,
-                                   &s->normal_threshold)) ||
-        (r = displace_option_float(ctx, object, name, "area_threshold", 0.0, 1.0, 0.05,
-                                   &s->area_threshold)) ||
-        (r = displace_option_float(ctx, object, name, "view_threshold", 0.0, 1e6, 2.0,
-                                   &s->view_threshold)) ||
-        (r = displace_option_float(ctx, object, name, "span_texels", 0.0, 1e6, 32.0,
-                                   &s->span_texels)) ||
-        (r = displace_shadow_options_read(ctx, object, name, &s->shadows.options)))
+    meso_result r;
+    if ((r = meso_technique_options_read(ctx, scene, object, &meso_technique_tessellation.info,
+                                         s)) ||
+        (r = displace_surface_init(ctx, object, &s->surface)))
         goto fail;
     if (s->max_level < 0) /* automatic: down to texel density (the limit test stops there) */
         s->max_level = displace_texel_level(&s->surface, DISPLACE_MAX_LEVEL);
-    s->normal_test = normal != 0;
-    s->area_test = area != 0;
-    s->view_test = view != 0;
-    s->limit_test = limit != 0;
     if (s->area_test && s->surface.heightfield &&
         (r = meso_bake_sat(ctx, s->surface.heightfield, &s->sat)) != MESO_OK)
         goto fail;
@@ -329,7 +331,9 @@ const meso_technique meso_technique_tessellation = {
              .summary = "adaptive view-dependent tessellation by edge midpoints, shadow-mapped",
              .paper = "Doggett & Hirche 2000, \"Adaptive Tessellation\", \"Edge Tests\"",
              .kind = MESO_TECHNIQUE_GEOMETRY,
-             .accepts = MESO_TECHNIQUE_ACCEPTS_NONE | MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD},
+             .accepts = MESO_TECHNIQUE_ACCEPTS_NONE | MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD,
+             .options = tessellation_option_table,
+             .num_options = MESO_OPTION_COUNT(tessellation_option_table)},
     .prepare = tessellation_prepare,
     .release = tessellation_release,
     .geometry = tessellation_geometry,
