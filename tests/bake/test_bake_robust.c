@@ -158,9 +158,54 @@ static char *read_file(const char *path, size_t *out_size) {
     return data;
 }
 
-/* The VDM file truncated at every byte of its header and table and at 1,000 random lengths,
- * and with 1,000 single bits flipped: every one refused by meso_vdm_load (the checksum and the
- * container's checks), none crashing. */
+/* Whether a loader accepts the file at path (the object it makes is destroyed). */
+typedef bool (*accepts_fn)(meso_context *ctx, const char *path);
+
+static bool vdm_accepts(meso_context *ctx, const char *path) {
+    meso_vdm *vdm = NULL;
+    meso_result r = meso_vdm_load(ctx, path, &vdm);
+    assert_true(r == MESO_OK || vdm == NULL);
+    meso_vdm_destroy(vdm);
+    return r == MESO_OK;
+}
+
+static bool layers_accepts(meso_context *ctx, const char *path) {
+    meso_layers *map = NULL;
+    meso_result r = meso_layers_load(ctx, path, &map);
+    assert_true(r == MESO_OK || map == NULL);
+    meso_layers_destroy(map);
+    return r == MESO_OK;
+}
+
+/* The file truncated at every byte of its first 2,048 (header, parameters, array table) and
+ * at 1,000 random lengths, and with 1,000 single bits flipped: every one refused by the kind's
+ * loader (the checksum and the container's checks), none crashing; the file itself loads. */
+static void expect_every_mutation_refused(meso_context *ctx, const char *path,
+                                          accepts_fn accepts) {
+    size_t size = 0;
+    char *original = read_file(path, &size);
+    const char *mutated = test_path(test_temp_dir(), "mutated.mesobake");
+    srand(15);
+    size_t header_and_table = size < 2048 ? size : 2048;
+    int accepted = 0;
+    for (size_t k = 0; k < header_and_table + 1000; k++) {
+        size_t length = k < header_and_table ? k : (size_t)rand() % size;
+        test_write_file(mutated, original, length);
+        accepted += accepts(ctx, mutated);
+    }
+    for (int k = 0; k < 1000; k++) {
+        size_t bit = (size_t)rand() % (size * 8);
+        original[bit / 8] ^= (char)(1u << (bit % 8));
+        test_write_file(mutated, original, size);
+        original[bit / 8] ^= (char)(1u << (bit % 8));
+        accepted += accepts(ctx, mutated);
+    }
+    assert_int_equal(accepted, 0);
+    test_write_file(mutated, original, size);
+    assert_true(accepts(ctx, mutated));
+    free(original);
+}
+
 static void test_every_truncation_and_bit_flip_of_a_vdm_file_is_refused(void **state) {
     (void)state;
     meso_context *ctx = test_context(2);
@@ -169,36 +214,23 @@ static void test_every_truncation_and_bit_flip_of_a_vdm_file_is_refused(void **s
     meso_vdm_desc desc = tiny_desc(hf);
     char path[1200];
     bake_into_cache(ctx, &desc, path, sizeof(path));
-    size_t size = 0;
-    char *original = read_file(path, &size);
-    const char *mutated = test_path(test_temp_dir(), "mutated.mesobake");
-    meso_vdm *vdm = NULL;
-    srand(15);
-    size_t header_and_table = size < 2048 ? size : 2048;
-    int refused = 0, tried = 0;
-    for (size_t k = 0; k < header_and_table + 1000; k++) {
-        size_t length = k < header_and_table ? k : (size_t)rand() % size;
-        test_write_file(mutated, original, length);
-        tried++;
-        refused += meso_vdm_load(ctx, mutated, &vdm) != MESO_OK;
-        assert_null(vdm);
-    }
-    for (int k = 0; k < 1000; k++) {
-        size_t bit = (size_t)rand() % (size * 8);
-        original[bit / 8] ^= (char)(1u << (bit % 8));
-        test_write_file(mutated, original, size);
-        original[bit / 8] ^= (char)(1u << (bit % 8));
-        tried++;
-        refused += meso_vdm_load(ctx, mutated, &vdm) != MESO_OK;
-        assert_null(vdm);
-    }
-    assert_int_equal(refused, tried);
-    /* the unmutated file still loads */
-    test_write_file(mutated, original, size);
-    assert_int_equal(meso_vdm_load(ctx, mutated, &vdm), MESO_OK);
-    meso_vdm_destroy(vdm);
-    free(original);
+    expect_every_mutation_refused(ctx, path, vdm_accepts);
     unsetenv("MESO_CACHE_DIR");
+    free_heightfield(hf);
+    meso_context_destroy(ctx);
+}
+
+static void test_every_truncation_and_bit_flip_of_a_layers_file_is_refused(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    meso_heightfield *hf = make_bumps(8);
+    meso_layers_desc desc = {.heightfield = hf, .width = 8, .height = 8, .num_layers = 4};
+    meso_layers *map = NULL;
+    assert_int_equal(meso_bake_layers(ctx, &desc, &map), MESO_OK);
+    const char *path = test_path(test_temp_dir(), "layers.mesobake");
+    assert_int_equal(meso_layers_save(ctx, map, path), MESO_OK);
+    meso_layers_destroy(map);
+    expect_every_mutation_refused(ctx, path, layers_accepts);
     free_heightfield(hf);
     meso_context_destroy(ctx);
 }
@@ -209,6 +241,7 @@ int main(void) {
         cmocka_unit_test(test_a_cache_entry_of_another_source_is_not_used),
         cmocka_unit_test(test_a_fifo_in_the_cache_is_skipped_without_blocking),
         cmocka_unit_test(test_every_truncation_and_bit_flip_of_a_vdm_file_is_refused),
+        cmocka_unit_test(test_every_truncation_and_bit_flip_of_a_layers_file_is_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
