@@ -232,6 +232,7 @@ static meso_result parse_impostor_solid(const scene_parser *p, const cJSON *item
         if ((r = scene_resolve_path(p, &k, model, path)) || (r = check_readable(p, &k, path)))
             return r;
         r = meso_mesh_load(p->ctx, path, &mesh);
+        if (r != MESO_OK) return relog_at_key(p, &k, r);
     }
     if (r != MESO_OK) return r;
     meso_vec3 lo = mesh->positions[0], hi = lo;
@@ -334,7 +335,7 @@ static meso_result parse_height_map_or_solid(const scene_parser *p, const cJSON 
             (r = check_readable(p, &k, path)))
             return r;
         meso_mesh *tile = NULL;
-        if ((r = meso_mesh_load(p->ctx, path, &tile)) != MESO_OK) return r;
+        if ((r = meso_mesh_load(p->ctx, path, &tile)) != MESO_OK) return relog_at_key(p, &k, r);
         r = meso_solid_create_from_triangles(p->ctx, tile->positions, tile->num_vertices,
                                              tile->indices, tile->num_triangles, path, 0,
                                              &m->solid);
