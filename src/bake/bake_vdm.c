@@ -860,9 +860,9 @@ meso_result meso_vdm_from_bake_file(meso_context *ctx, const meso_bake_file *bak
     static const struct {
         const char *array;
         double min, max;
-    } ranges[] = {{"weights", -65504.0, 65504.0},  {"eigen_vdm", -1.001, 1.001},
-                  {"eigen_mvm", -1.001, 1.001},     {"singular_values", 0.0, 3.4e38},
-                  {"report", 0.0, 3.4e38},          {"raw", -1e6, 1e6}};
+    } ranges[] = {{"weights", -65504.0, 65504.0}, {"eigen_vdm", -1.001, 1.001},
+                  {"eigen_mvm", -1.001, 1.001},   {"singular_values", 0.0, 3.4e38},
+                  {"report", 0.0, 3.4e38},        {"raw", -1e6, 1e6}};
     for (size_t i = 0; i < sizeof(ranges) / sizeof(ranges[0]); i++) {
         const meso_bake_array *a = meso_bake_file_find(bake, ranges[i].array);
         if (a && (result = meso_bake_array_check_values(ctx, name, a, ranges[i].min,

@@ -101,8 +101,8 @@ static meso_result resolve_output(meso_context *ctx, const char *path, char **ou
     }
     if (*out_exists && !S_ISREG(st.st_mode)) {
         free(target);
-        return meso_log_error(ctx, MESO_ERROR_IO, "%s: is %s; meso writes only regular files",
-                              path, file_type_name(st.st_mode));
+        return meso_log_error(ctx, MESO_ERROR_IO, "%s: is %s; meso writes only regular files", path,
+                              file_type_name(st.st_mode));
     }
     if (*out_exists) *out_mode = st.st_mode & 07777;
     if (!target) target = strdup(path);
@@ -190,8 +190,7 @@ meso_result meso_atomic_file_open(meso_context *ctx, const char *path, meso_atom
         snprintf(temp, length + 16, "%s.tmpXXXXXX", dest);
         fd = mkostemp(temp, O_CLOEXEC);
         if (fd < 0) {
-            r = meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot create: %s", path,
-                               strerror(errno));
+            r = meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot create: %s", path, strerror(errno));
             free(dest);
             free(temp);
             return r;

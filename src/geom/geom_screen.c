@@ -37,10 +37,10 @@ static unsigned ply_type_size(const char *type) {
     static const struct {
         const char *name;
         unsigned size;
-    } types[] = {{"char", 1},   {"int8", 1},    {"uchar", 1},   {"uint8", 1},  {"short", 2},
-                 {"int16", 2},  {"ushort", 2},  {"uint16", 2},  {"int", 4},    {"int32", 4},
-                 {"uint", 4},   {"uint32", 4},  {"float", 4},   {"float32", 4}, {"double", 8},
-                 {"float64", 8}};
+    } types[] = {{"char", 1},  {"int8", 1},    {"uchar", 1},  {"uint8", 1},
+                 {"short", 2}, {"int16", 2},   {"ushort", 2}, {"uint16", 2},
+                 {"int", 4},   {"int32", 4},   {"uint", 4},   {"uint32", 4},
+                 {"float", 4}, {"float32", 4}, {"double", 8}, {"float64", 8}};
     for (size_t i = 0; i < sizeof(types) / sizeof(types[0]); i++)
         if (!strcmp(types[i].name, type)) return types[i].size;
     return 0;
@@ -64,8 +64,10 @@ static size_t ply_header_end(const char *buffer) {
         bool line_start = line > buffer && (line[-1] == '\n' || line[-1] == '\r');
         if (!line_start) continue;
         if (*after == '\r') after++;
-        if (*after == '\n') after++;
-        else if (*after != 0) continue;
+        if (*after == '\n')
+            after++;
+        else if (*after != 0)
+            continue;
         return (size_t)(after - buffer);
     }
     return 0;
@@ -91,8 +93,7 @@ static meso_result screen_ply(meso_context *ctx, const char *path, char *buffer,
             binary = strncmp(word[1], "binary", 6) == 0;
         } else if (n >= 1 && !strcmp(word[0], "element")) {
             if (num_elements == 64)
-                return meso_log_error(ctx, MESO_ERROR_LIMIT, "%s: more than 64 PLY elements",
-                                      path);
+                return meso_log_error(ctx, MESO_ERROR_LIMIT, "%s: more than 64 PLY elements", path);
             char *end = NULL;
             errno = 0;
             if (n >= 3) count = strtoull(word[2], &end, 10);
@@ -110,8 +111,8 @@ static meso_result screen_ply(meso_context *ctx, const char *path, char *buffer,
             bool list = n >= 2 && !strcmp(word[1], "list");
             unsigned size = ply_type_size(list ? word[2] : word[1]);
             if (size == 0)
-                return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: PLY: unknown property type in '%.40s'",
-                                      path, line);
+                return meso_log_error(ctx, MESO_ERROR_FORMAT,
+                                      "%s: PLY: unknown property type in '%.40s'", path, line);
             /* A list may be empty, so only its count is sure to be there. ASCII: a digit and a
              * separator per value at least. */
             elements[num_elements - 1].least_bytes += binary ? size : 2;
@@ -123,8 +124,8 @@ static meso_result screen_ply(meso_context *ctx, const char *path, char *buffer,
             return meso_log_error(ctx, MESO_ERROR_LIMIT, "%s: %llu vertices exceed the limit %u",
                                   path, elements[i].count, MESO_MESH_MAX_VERTICES);
         if (!strcmp(elements[i].name, "face") && elements[i].count > MESO_MESH_MAX_TRIANGLES)
-            return meso_log_error(ctx, MESO_ERROR_LIMIT, "%s: %llu faces exceed the limit %u",
-                                  path, elements[i].count, MESO_MESH_MAX_TRIANGLES);
+            return meso_log_error(ctx, MESO_ERROR_LIMIT, "%s: %llu faces exceed the limit %u", path,
+                                  elements[i].count, MESO_MESH_MAX_TRIANGLES);
     }
     /* Counts above 2^40 (a terabyte of data at least) saturate, so the sums cannot wrap. */
     const unsigned long long saturated = 1ull << 40;
@@ -169,8 +170,8 @@ static meso_result screen_obj(meso_context *ctx, const char *path, FILE *file) {
             if (!resolve_beside(path, name, full, sizeof(full)) || stat(full, &st) != 0)
                 continue; /* missing: assimp goes on without the materials */
             if (!S_ISREG(st.st_mode))
-                r = meso_log_error(ctx, MESO_ERROR_FORMAT,
-                                   "%s: mtllib %s is not a regular file", path, full);
+                r = meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: mtllib %s is not a regular file",
+                                   path, full);
         }
     }
     return r;
@@ -202,8 +203,8 @@ static bool uri_is_beside(const char *uri) {
         part = slash ? slash + 1 : NULL;
     }
     /* percent-escapes could spell ".." or "/" again once decoded */
-    return strstr(uri, "%2e") == NULL && strstr(uri, "%2E") == NULL &&
-           strstr(uri, "%2f") == NULL && strstr(uri, "%2F") == NULL;
+    return strstr(uri, "%2e") == NULL && strstr(uri, "%2E") == NULL && strstr(uri, "%2f") == NULL &&
+           strstr(uri, "%2F") == NULL;
 }
 
 /* The size of buffer `index`'s data: the GLB binary chunk, a data: URI's length (an upper
@@ -213,8 +214,10 @@ static meso_result gltf_buffer_data_size(meso_context *ctx, const char *path, co
     const cJSON *uri = cJSON_GetObjectItemCaseSensitive(buffer, "uri");
     if (!uri) {
         if (glb_binary_size < 0)
-            return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: buffers[%d]: no uri and no GLB "
-                                  "binary chunk", path, index);
+            return meso_log_error(ctx, MESO_ERROR_FORMAT,
+                                  "%s: buffers[%d]: no uri and no GLB "
+                                  "binary chunk",
+                                  path, index);
         *out_size = (double)glb_binary_size;
         return MESO_OK;
     }
@@ -233,8 +236,7 @@ static meso_result gltf_buffer_data_size(meso_context *ctx, const char *path, co
                               path, index);
     char full[PATH_MAX];
     if (!resolve_beside(path, text, full, sizeof(full)))
-        return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: buffers[%d].uri: too long", path,
-                              index);
+        return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: buffers[%d].uri: too long", path, index);
     struct stat st;
     if (stat(full, &st) != 0)
         return meso_log_error(ctx, MESO_ERROR_IO, "%s: buffers[%d].uri: %s: %s", path, index, full,
@@ -266,8 +268,10 @@ static meso_result screen_gltf_json(meso_context *ctx, const char *path, const c
         const cJSON *buffer = cJSON_GetArrayItem(buffers, i);
         double declared = json_number(buffer, "byteLength", -1.0), available = 0.0;
         if (declared < 0.0) {
-            r = meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: buffers[%d].byteLength: missing or "
-                               "not a size", path, i);
+            r = meso_log_error(ctx, MESO_ERROR_FORMAT,
+                               "%s: buffers[%d].byteLength: missing or "
+                               "not a size",
+                               path, i);
             break;
         }
         r = gltf_buffer_data_size(ctx, path, buffer, i, glb_binary_size, &available);
@@ -280,7 +284,8 @@ static meso_result screen_gltf_json(meso_context *ctx, const char *path, const c
     }
     for (int i = 0; i < num_views && r == MESO_OK; i++) {
         const cJSON *view = cJSON_GetArrayItem(views, i);
-        double buffer = json_number(view, "buffer", -1.0), offset = json_number(view, "byteOffset", 0),
+        double buffer = json_number(view, "buffer", -1.0),
+               offset = json_number(view, "byteOffset", 0),
                length = json_number(view, "byteLength", -1.0);
         if (buffer < 0.0 || buffer >= num_buffers || offset < 0.0 || length < 0.0 ||
             offset + length > buffer_sizes[(int)buffer])
@@ -301,8 +306,10 @@ static meso_result screen_gltf_json(meso_context *ctx, const char *path, const c
         } else if (view == -2.0) {
             /* no data: assimp fills count zeros, bounded here like a mesh */
             if (count > 3.0 * MESO_MESH_MAX_TRIANGLES)
-                r = meso_log_error(ctx, MESO_ERROR_LIMIT, "%s: accessors[%d]: count %.0f exceeds "
-                                   "the limit %u", path, i, count, 3u * MESO_MESH_MAX_TRIANGLES);
+                r = meso_log_error(ctx, MESO_ERROR_LIMIT,
+                                   "%s: accessors[%d]: count %.0f exceeds "
+                                   "the limit %u",
+                                   path, i, count, 3u * MESO_MESH_MAX_TRIANGLES);
         } else if (count > 0.0 && offset + count > view_sizes[(int)view]) {
             /* every element takes at least one byte */
             r = meso_log_error(ctx, MESO_ERROR_FORMAT,
@@ -319,8 +326,7 @@ done:
 }
 
 /* GLB: a 12-byte header ("glTF", version, length), a JSON chunk, an optional BIN chunk. */
-static meso_result screen_glb(meso_context *ctx, const char *path, FILE *file,
-                              uint64_t file_size) {
+static meso_result screen_glb(meso_context *ctx, const char *path, FILE *file, uint64_t file_size) {
     unsigned char header[20];
     rewind(file);
     if (fread(header, 1, 20, file) != 20)

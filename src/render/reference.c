@@ -30,8 +30,8 @@ struct meso_reference {
     float epsilon;         /* shadow-ray offset, world units */
     _Atomic long long embree_bytes; /* Embree's own allocations (memory monitor) */
     long long embree_peak;
-    long long memory_limit;      /* the context's budget: Embree allocations beyond it fail */
-    _Atomic bool over_budget;    /* an allocation was refused for the budget */
+    long long memory_limit;   /* the context's budget: Embree allocations beyond it fail */
+    _Atomic bool over_budget; /* an allocation was refused for the budget */
     size_t side_bytes;
 };
 

@@ -34,7 +34,8 @@ meso_result meso_framebuffer_create(meso_context *ctx, int width, int height,
                               "framebuffer: size %d x %d exceeds the limit %d a side, %u pixels",
                               width, height, MESO_IMAGE_MAX_SIDE, (unsigned)MESO_IMAGE_MAX_PIXELS);
     }
-    meso_result r = meso_memory_check(ctx, "framebuffer", meso_render_memory_estimate(NULL, width, height));
+    meso_result r =
+        meso_memory_check(ctx, "framebuffer", meso_render_memory_estimate(NULL, width, height));
     if (r != MESO_OK) return r;
     size_t n = (size_t)width * (size_t)height;
     meso_framebuffer *fb = calloc(1, sizeof(*fb));
@@ -105,8 +106,7 @@ meso_result meso_framebuffer_save_png(meso_context *ctx, const meso_framebuffer 
         const meso_image *images[2] = {color, coverage};
         const char *paths[2] = {path, coverage_path};
         /* the mask is a fraction, not a colour: written linearly */
-        const meso_png_desc descs[2] = {{.encoding = encoding},
-                                        {.encoding = MESO_ENCODING_LINEAR}};
+        const meso_png_desc descs[2] = {{.encoding = encoding}, {.encoding = MESO_ENCODING_LINEAR}};
         r = meso_image_save_png_all(ctx, coverage_path ? 2 : 1, images, paths, descs);
     }
     meso_image_destroy(color);

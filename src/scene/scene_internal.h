@@ -17,7 +17,6 @@ typedef struct scene_parser {
     uint64_t *memory_estimate; /* bytes the objects parsed so far need (the memory budget) */
 } scene_parser;
 
-
 /* A key path: "" at the top, "objects[0]", "objects[0].material". */
 typedef struct scene_key {
     char text[SCENE_KEY_MAX];

@@ -214,8 +214,8 @@ meso_result meso_scene_parse(meso_context *ctx, const char *json, const char *na
     if (!base_dir || !base_dir[0]) base_dir = ".";
     if (!json) return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: no scene text", name);
     uint64_t memory_estimate = 0;
-    scene_parser p = {.ctx = ctx, .file = name, .base_dir = base_dir,
-                      .memory_estimate = &memory_estimate};
+    scene_parser p = {
+        .ctx = ctx, .file = name, .base_dir = base_dir, .memory_estimate = &memory_estimate};
     meso_scene *scene = calloc(1, sizeof(*scene));
     if (!scene) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", name);
     snprintf(scene->path, sizeof(scene->path), "%s", name);

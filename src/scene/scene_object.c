@@ -102,7 +102,8 @@ static meso_result parse_procedural_heightfield(const scene_parser *p, const cJS
     }
     desc.resolution = (int)resolution;
     /* heights (float) and the generated colour (3 floats) a texel */
-    uint64_t texels = (uint64_t)(resolution ? resolution : 512) * (uint64_t)(resolution ? resolution : 512);
+    uint64_t texels =
+        (uint64_t)(resolution ? resolution : 512) * (uint64_t)(resolution ? resolution : 512);
     if ((r = scene_account_memory(p, key, texels * (want_color ? 16 : 4))) != MESO_OK) return r;
     desc.rows = (int)rows;
     desc.columns = (int)columns;
@@ -457,8 +458,9 @@ static meso_result create_mesh(const scene_parser *p, const cJSON *obj, const sc
             return r;
         r = meso_mesh_load(p->ctx, path, out_mesh);
         if (r != MESO_OK) return relog_at_key(p, &file_key, r);
-        return scene_account_memory(p, key, meso_mesh_memory_estimate((*out_mesh)->num_vertices,
-                                                                      (*out_mesh)->num_triangles));
+        return scene_account_memory(
+            p, key,
+            meso_mesh_memory_estimate((*out_mesh)->num_vertices, (*out_mesh)->num_triangles));
     }
     if (shape && !cJSON_IsString(shape))
         return scene_error(p, MESO_ERROR_FORMAT, &shape_key,
@@ -499,8 +501,8 @@ static meso_result check_texture_coordinates(const scene_parser *p, const scene_
     if (largest <= MAX_TEXTURE_COORDINATE) return MESO_OK; /* NaN is refused by validation */
     scene_key k = scene_key_child(key, "uv_scale");
     return scene_error(p, MESO_ERROR_LIMIT, &k,
-                       "scaled texture coordinates reach %g, beyond the limit %g",
-                       (double)largest, (double)MAX_TEXTURE_COORDINATE);
+                       "scaled texture coordinates reach %g, beyond the limit %g", (double)largest,
+                       (double)MAX_TEXTURE_COORDINATE);
 }
 
 /* World-space mesh, scaled UVs, validated, with tangents, curvature and quadrics. */
@@ -677,8 +679,8 @@ uint64_t scene_objects_memory_estimate(const cJSON *objects) {
         const cJSON *m = cJSON_GetObjectItemCaseSensitive(obj, "mesostructure");
         const cJSON *source = cJSON_GetObjectItemCaseSensitive(m, "height_map");
         if (cJSON_IsObject(source)) {
-            double side = number_or_default(source, "resolution", 1,
-                                            MESO_HEIGHTFIELD_MAX_RESOLUTION);
+            double side =
+                number_or_default(source, "resolution", 1, MESO_HEIGHTFIELD_MAX_RESOLUTION);
             if (side == 0.0) side = 512.0;
             total += (uint64_t)(side * side) * 16; /* heights and generated colour */
         }

@@ -17,11 +17,10 @@ static meso_heightfield *make_bumps(int side) {
     assert_non_null(hf->heights);
     for (int y = 0; y < side; y++)
         for (int x = 0; x < side; x++)
-            hf->heights[y * side + x] =
-                0.5f + 0.4f * sinf(6.2831853f * (float)x / (float)side) *
-                           sinf(6.2831853f * (float)y / (float)side);
-    hf->hash = meso_hash64(hf->heights, sizeof(float) * (size_t)side * (size_t)side,
-                           MESO_HASH_SEED);
+            hf->heights[y * side + x] = 0.5f + 0.4f * sinf(6.2831853f * (float)x / (float)side) *
+                                                   sinf(6.2831853f * (float)y / (float)side);
+    hf->hash =
+        meso_hash64(hf->heights, sizeof(float) * (size_t)side * (size_t)side, MESO_HASH_SEED);
     return hf;
 }
 
@@ -54,8 +53,7 @@ static void bake_into_cache(meso_context *ctx, const meso_vdm_desc *desc, char *
 }
 
 /* Load `path`, let `edit` change it, save it back (so its checksum is valid again). */
-static void rewrite(meso_context *ctx, const char *path,
-                    void (*edit)(meso_bake_file *bake)) {
+static void rewrite(meso_context *ctx, const char *path, void (*edit)(meso_bake_file *bake)) {
     meso_bake_file *bake = NULL;
     assert_int_equal(meso_bake_file_load(ctx, path, &bake), MESO_OK);
     edit(bake);
@@ -180,8 +178,7 @@ static bool layers_accepts(meso_context *ctx, const char *path) {
 /* The file truncated at every byte of its first 2,048 (header, parameters, array table) and
  * at 1,000 random lengths, and with 1,000 single bits flipped: every one refused by the kind's
  * loader (the checksum and the container's checks), none crashing; the file itself loads. */
-static void expect_every_mutation_refused(meso_context *ctx, const char *path,
-                                          accepts_fn accepts) {
+static void expect_every_mutation_refused(meso_context *ctx, const char *path, accepts_fn accepts) {
     size_t size = 0;
     char *original = read_file(path, &size);
     const char *mutated = test_path(test_temp_dir(), "mutated.mesobake");
