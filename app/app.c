@@ -22,8 +22,11 @@ static size_t global_options(app_globals *g, app_option *out) {
         {"--quiet", NULL, APP_OPTION_FLAG, &g->quiet, NULL,
          "no summary, notes, warnings or progress bar on stderr (errors still)", NULL, 0, 0},
         {"--verbose", "-v", APP_OPTION_FLAG, &g->verbose, NULL,
-         "also print the library's information lines (triangle counts, memory, bake times)",
-         NULL, 0, 0},
+         "also print the library's information lines (triangle counts, memory, bake times)", NULL,
+         0, 0},
+        {"--memory-limit", NULL, APP_OPTION_STRING, &g->memory_limit, "SIZE",
+         "refuse work estimated to need more memory (bytes, or with K, M, G, T)", "3/4 of RAM", 0,
+         0},
         {"--help", "-h", APP_OPTION_FLAG, &g->help, NULL, "print this help and exit", NULL, 0, 0},
     };
     memcpy(out, options, sizeof(options));
@@ -37,9 +40,9 @@ int app_usage_error(const char *command, const char *format, ...) {
     vsnprintf(message, sizeof(message), format, args);
     va_end(args);
     if (command && command[0])
-        fprintf(stderr, "meso: %s: %s (see meso %s --help)\n", command, message, command);
+        app_error("%s: %s (see meso %s --help)", command, message, command);
     else
-        fprintf(stderr, "meso: %s (see meso --help)\n", message);
+        app_error("%s (see meso --help)", message);
     return APP_EXIT_BAD_INPUT;
 }
 
@@ -264,6 +267,19 @@ static int set_option(const char *command, const app_option *o, const char *valu
     return -1;
 }
 
+/* "4G", "512M", "1.5G" or bytes -> bytes; 0 when malformed. */
+static uint64_t parse_memory_size(const char *text) {
+    char *end = NULL;
+    double value = strtod(text, &end);
+    if (end == text || !isfinite(value) || value <= 0.0) return 0;
+    static const char units[] = "KMGT";
+    const char *unit = *end ? strchr(units, *end == 'k' ? 'K' : *end) : NULL;
+    if (*end && (!unit || end[1])) return 0;
+    if (unit)
+        for (const char *u = units; u <= unit; u++) value *= 1024.0;
+    return value >= 1.0 && value < 1.8e19 ? (uint64_t)value : 0;
+}
+
 int app_parse_options(const app_command_help *help, const app_option *options, size_t count,
                       int argc, char **argv, app_globals *globals, const char **positionals,
                       int max_positionals, int *out_num_positionals) {
@@ -312,6 +328,9 @@ int app_parse_options(const app_command_help *help, const app_option *options, s
         app_print_help(help, options, count);
         return APP_EXIT_OK;
     }
+    if (globals->memory_limit && parse_memory_size(globals->memory_limit) == 0)
+        return app_usage_error(command, "--memory-limit: '%s' is not a size (4G, 512M, bytes)",
+                               globals->memory_limit);
     return -1;
 }
 
@@ -336,6 +355,9 @@ meso_context *app_context_create(const app_globals *globals) {
                     : globals->progress ? MESO_PROGRESS_ALWAYS
                                         : MESO_PROGRESS_DEFAULT,
     };
+    if (globals->memory_limit) {
+        desc.memory_limit = parse_memory_size(globals->memory_limit);
+    }
     meso_context *ctx = NULL;
     if (meso_context_create(&desc, &ctx) != MESO_OK) {
         fprintf(stderr, "meso: out of memory\n");
@@ -349,12 +371,38 @@ int app_exit_status(meso_result result) {
     return meso_result_is_bad_input(result) ? APP_EXIT_BAD_INPUT : APP_EXIT_FAILURE;
 }
 
-int app_fail(meso_context *ctx, meso_result result) {
+void app_error(const char *format, ...) {
+    char message[2048], escaped[4 * sizeof(message)];
+    va_list args;
+    va_start(args, format);
+    vsnprintf(message, sizeof(message), format, args);
+    va_end(args);
+    /* One line whatever the arguments hold (a newline in a file name, a terminal escape). */
+    meso_text_escape_controls(message, escaped, sizeof(escaped));
+    fprintf(stderr, "meso: %s\n", escaped);
+}
+
+/* Whether a message begins with a file name: its first field (up to ": ") has a '.' or a '/',
+ * which the names of objects, keys and modules ("objects[0]", "torus", "render") do not. */
+static bool names_a_file(const char *message) {
+    size_t field = strcspn(message, ":");
+    if (message[field] != ':') return false;
+    for (size_t i = 0; i < field; i++)
+        if (message[i] == '.' || message[i] == '/') return true;
+    return false;
+}
+
+int app_fail_in(meso_context *ctx, meso_result result, const char *file) {
     const char *message = ctx ? meso_context_last_error(ctx) : "";
     if (!message || !message[0]) message = meso_result_string(result);
-    fprintf(stderr, "meso: %s\n", message);
+    if (file && !names_a_file(message))
+        app_error("%s: %s", file, message);
+    else
+        app_error("%s", message);
     return result == MESO_OK ? APP_EXIT_FAILURE : app_exit_status(result);
 }
+
+int app_fail(meso_context *ctx, meso_result result) { return app_fail_in(ctx, result, NULL); }
 
 /* ---- Paths -------------------------------------------------------------------------------- */
 

@@ -78,6 +78,7 @@ typedef struct app_globals {
     bool quiet;    /* --quiet: only errors */
     bool verbose;  /* --verbose: the library's info lines too */
     bool help;     /* --help */
+    const char *memory_limit; /* --memory-limit SIZE: "4G", "512M", bytes; NULL: the default */
 } app_globals;
 
 /* What --help prints about a command, besides its options. */
@@ -117,6 +118,11 @@ meso_context *app_context_create(const app_globals *globals);
 /* Print "meso: <last error of ctx>" (or the result's phrase when nothing was logged) and
  * return the exit status for `result`. */
 int app_fail(meso_context *ctx, meso_result result);
+/* The same, naming `file` first when the message does not begin with a file name (errors of
+ * the renderer name objects: "meso: scene.json: objects[0]: ..."). */
+int app_fail_in(meso_context *ctx, meso_result result, const char *file);
+/* Print one error line "meso: <formatted>" to stderr, control characters escaped. */
+void app_error(const char *format, ...) __attribute__((format(printf, 1, 2)));
 
 /* The exit status for a result: 0, 2 when meso_result_is_bad_input, else 1. */
 int app_exit_status(meso_result result);

@@ -121,7 +121,10 @@ int meso_cmd_compare(int argc, char **argv) {
     char auto_a[4096], auto_b[4096];
     if (!mask_a_path && coverage_beside(path_a, auto_a, sizeof auto_a)) mask_a_path = auto_a;
     if (!mask_b_path && coverage_beside(path_b, auto_b, sizeof auto_b)) mask_b_path = auto_b;
-    meso_result result = meso_image_load_png(ctx, path_a, &a);
+    /* Outputs are checked before any work and written together at the end: both or none. */
+    meso_result result = diff_path ? meso_file_check_output(ctx, diff_path) : MESO_OK;
+    if (result == MESO_OK && sheet_path) result = meso_file_check_output(ctx, sheet_path);
+    if (result == MESO_OK) result = meso_image_load_png(ctx, path_a, &a);
     if (result == MESO_OK) result = meso_image_load_png(ctx, path_b, &b);
     if (result == MESO_OK && mask_a_path) result = meso_image_load_png(ctx, mask_a_path, &mask_a);
     if (result == MESO_OK && mask_b_path) result = meso_image_load_png(ctx, mask_b_path, &mask_b);
@@ -130,8 +133,8 @@ int meso_cmd_compare(int argc, char **argv) {
         goto done;
     }
     if (a->width != b->width || a->height != b->height) {
-        fprintf(stderr, "meso: compare: %s is %dx%d but %s is %dx%d\n", path_a, a->width, a->height,
-                path_b, b->width, b->height);
+        app_error("%s: is %dx%d but %s is %dx%d", path_a, a->width, a->height, path_b, b->width,
+                  b->height);
         status = APP_EXIT_BAD_INPUT;
         goto done;
     }
@@ -139,8 +142,8 @@ int meso_cmd_compare(int argc, char **argv) {
     const char *mask_paths[2] = {mask_a_path, mask_b_path};
     for (int m = 0; m < 2; m++)
         if (masks[m] && (masks[m]->width != a->width || masks[m]->height != a->height)) {
-            fprintf(stderr, "meso: compare: %s is %dx%d but the images are %dx%d\n", mask_paths[m],
-                    masks[m]->width, masks[m]->height, a->width, a->height);
+            app_error("%s: is %dx%d but the images are %dx%d", mask_paths[m], masks[m]->width,
+                      masks[m]->height, a->width, a->height);
             status = APP_EXIT_BAD_INPUT;
             goto done;
         }
@@ -153,10 +156,6 @@ int meso_cmd_compare(int argc, char **argv) {
     result = meso_image_compare(ctx, a, b, &desc, &r);
     if (result == MESO_OK && (diff_path || sheet_path))
         result = meso_image_diff(ctx, a, b, (float)diff_scale, &diff);
-    if (result == MESO_OK && diff_path) {
-        meso_png_desc png = {.encoding = MESO_ENCODING_LINEAR}; /* colours as designed */
-        result = meso_image_save_png(ctx, diff, diff_path, &png);
-    }
     if (result != MESO_OK) {
         status = app_fail(ctx, result);
         goto done;
@@ -174,12 +173,19 @@ int meso_cmd_compare(int argc, char **argv) {
         const meso_image *cells[3] = {a, b, diff};
         const char *labels[3] = {label_a, label_b, label_d};
         result = meso_sheet_create(ctx, cells, labels, 3, 3, &sheet);
-        meso_png_desc png = {.encoding = MESO_ENCODING_LINEAR}; /* the files' values as given */
-        if (result == MESO_OK) result = meso_image_save_png(ctx, sheet, sheet_path, &png);
-        if (result != MESO_OK) {
-            status = app_fail(ctx, result);
-            goto done;
-        }
+    }
+    if (result == MESO_OK && (diff_path || sheet_path)) {
+        /* linear: the difference's colours as designed, the sheet's values as the files give */
+        const meso_png_desc linear[2] = {{.encoding = MESO_ENCODING_LINEAR},
+                                         {.encoding = MESO_ENCODING_LINEAR}};
+        const meso_image *images[2] = {diff_path ? diff : sheet, sheet};
+        const char *paths[2] = {diff_path ? diff_path : sheet_path, sheet_path};
+        size_t count = diff_path && sheet_path ? 2 : 1;
+        result = meso_image_save_png_all(ctx, count, images, paths, linear);
+    }
+    if (result != MESO_OK) {
+        status = app_fail(ctx, result);
+        goto done;
     }
     const char *coverage_from = with_masks ? "masks" : "background colour";
     if (json) {

@@ -285,17 +285,16 @@ int meso_cmd_info(int argc, char **argv) {
 
     unsigned char head[64];
     size_t head_size = 0;
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        fprintf(stderr, "meso: %s: cannot open: %s\n", path, strerror(errno));
-        return APP_EXIT_BAD_INPUT;
+    meso_context *probe_ctx = app_context_create(&globals);
+    if (!probe_ctx) return APP_EXIT_FAILURE;
+    FILE *f = NULL; /* a regular file only: a FIFO would block, a folder has no bytes */
+    meso_result opened = meso_file_open_read(probe_ctx, path, &f);
+    if (opened != MESO_OK) {
+        status = app_fail(probe_ctx, opened);
+        meso_context_destroy(probe_ctx);
+        return status;
     }
-    struct stat st;
-    if (fstat(fileno(f), &st) == 0 && S_ISDIR(st.st_mode)) {
-        fclose(f);
-        fprintf(stderr, "meso: %s: is a folder, not a file\n", path);
-        return APP_EXIT_BAD_INPUT;
-    }
+    meso_context_destroy(probe_ctx);
     head_size = fread(head, 1, sizeof(head), f);
     fclose(f);
     char extension[16];

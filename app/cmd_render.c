@@ -69,7 +69,10 @@ static int render_one(meso_context *ctx, const meso_scene *scene, const render_o
     int height = o->size.height ? o->size.height : scene->height;
     meso_encoding encoding = o->linear ? MESO_ENCODING_LINEAR : scene->encoding;
 
-    meso_result result = meso_renderer_create(ctx, scene, &desc, &renderer);
+    /* the frame's memory is checked before the renderer prepares (and bakes) anything */
+    meso_result result =
+        meso_memory_check(ctx, scene->path, meso_render_memory_estimate(&desc, width, height));
+    if (result == MESO_OK) result = meso_renderer_create(ctx, scene, &desc, &renderer);
     if (result == MESO_OK) result = meso_framebuffer_create(ctx, width, height, &fb);
     if (result == MESO_OK) result = meso_renderer_render(renderer, fb);
     if (result == MESO_OK)
@@ -81,7 +84,7 @@ static int render_one(meso_context *ctx, const meso_scene *scene, const render_o
                 scene_technique(scene, o->technique), width, height, 1000.0 * stats.prepare_seconds,
                 1000.0 * stats.last_frame_seconds, (unsigned long long)stats.triangles, o->output);
     }
-    int status = result == MESO_OK ? APP_EXIT_OK : app_fail(ctx, result);
+    int status = result == MESO_OK ? APP_EXIT_OK : app_fail_in(ctx, result, scene->path);
     meso_framebuffer_destroy(fb);
     meso_renderer_destroy(renderer);
     return status;
@@ -167,13 +170,13 @@ static int render_all(meso_context *ctx, const meso_scene *scene, const render_o
     app_compare_all all;
     result = app_compare_all_render(ctx, &desc, &all);
     meso_progress_end(desc.progress);
-    if (result != MESO_OK) return app_fail(ctx, result);
+    if (result != MESO_OK) return app_fail_in(ctx, result, scene->path);
 
     size_t rendered = 0;
     for (size_t i = 0; i < all.num_runs; i++) rendered += all.runs[i].rendered;
     if (rendered == 0) { /* one line: the last failure */
         app_compare_all_free(&all);
-        return app_fail(ctx, MESO_ERROR_UNSUPPORTED);
+        return app_fail_in(ctx, MESO_ERROR_UNSUPPORTED, scene->path);
     }
     if (!quiet) app_compare_all_print_notes(&all, NULL, true);
     result = app_compare_all_write_images(ctx, &all, o->output, NULL, true);
@@ -257,8 +260,8 @@ int meso_cmd_render(int argc, char **argv) {
     if (o.technique && !app_technique_known(o.technique)) {
         char known[1024];
         app_known_techniques(known, sizeof(known));
-        fprintf(stderr, "meso: %s: --technique: unknown technique '%s' (known: %s)\n", scene_path,
-                o.technique, known);
+        app_error("%s: --technique: unknown technique '%s' (known: %s)", scene_path, o.technique,
+                  known);
         return APP_EXIT_BAD_INPUT;
     }
     const char *names[64];
@@ -272,6 +275,19 @@ int meso_cmd_render(int argc, char **argv) {
 
     meso_context *ctx = app_context_create(&globals);
     if (!ctx) return APP_EXIT_FAILURE;
+    /* Every output is checked before any work, so a bad one fails at once and nothing is
+     * written (with --techniques or several scenes, OUT is a folder, made below with its
+     * parents; the files in it are checked as they are written). */
+    bool output_is_file = !o.techniques && num_positionals == 1;
+    const char *outputs[2] = {output_is_file ? o.output : NULL, o.coverage};
+    for (int i = 0; i < 2; i++) {
+        meso_result checked = outputs[i] ? meso_file_check_output(ctx, outputs[i]) : MESO_OK;
+        if (checked != MESO_OK) {
+            status = app_fail(ctx, checked);
+            meso_context_destroy(ctx);
+            return status;
+        }
+    }
     const char *batch_dir = num_positionals > 1 ? o.output : NULL;
     if (batch_dir) {
         meso_result made = app_make_dir(ctx, batch_dir);

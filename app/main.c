@@ -1,6 +1,7 @@
 /* The meso program: dispatches `meso CMD ...` to app/cmd_<CMD>.c. */
 #include "app.h"
 
+#include <signal.h>
 #include <string.h>
 
 typedef struct command {
@@ -46,7 +47,20 @@ static const command *find_command(const char *name) {
     return NULL;
 }
 
+/* SIGINT/SIGTERM: remove the temporary files of outputs being written, then die of the signal
+ * as if unhandled (the shell sees the usual status). */
+static void on_terminating_signal(int signal_number) {
+    meso_atomic_file_remove_temporaries();
+    signal(signal_number, SIG_DFL);
+    raise(signal_number);
+}
+
 int main(int argc, char **argv) {
+    const int terminating[] = {SIGINT, SIGTERM, SIGHUP};
+    for (size_t i = 0; i < sizeof(terminating) / sizeof(terminating[0]); i++) {
+        struct sigaction action = {.sa_handler = on_terminating_signal};
+        sigaction(terminating[i], &action, NULL);
+    }
     if (argc < 2) {
         print_help();
         return APP_EXIT_BAD_INPUT;

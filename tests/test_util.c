@@ -14,7 +14,15 @@ static void capture_log(void *user, meso_log_level level, const char *message) {
     if (level == MESO_LOG_WARNING) snprintf(last_warning, sizeof(last_warning), "%s", message);
 }
 
+/* Bakes of tests go under the build tree, never the user's ~/.cache/meso, also when a test
+ * runs outside ctest (which sets the same): the variables are set unless already set. */
+static void use_test_cache(void) {
+    setenv("MESO_CACHE_DIR", MESO_BINARY_DIR "/test-cache", 0);
+    setenv("XDG_CACHE_HOME", MESO_BINARY_DIR "/test-xdg-cache", 0);
+}
+
 meso_context *test_context(int num_threads) {
+    use_test_cache();
     meso_context *ctx = NULL;
     meso_context_desc desc = {.num_threads = num_threads, .log = capture_log,
                               .progress = MESO_PROGRESS_NEVER};
@@ -53,6 +61,7 @@ void test_write_file(const char *path, const void *data, size_t size) {
 }
 
 int test_run_meso(const char *arguments, const char **out_stderr) {
+    use_test_cache();
     static char err[8192];
     char err_path[1100], command[4096];
     snprintf(err_path, sizeof(err_path), "%s/stderr.txt", test_temp_dir());

@@ -76,6 +76,14 @@ const meso_bake_array *meso_bake_file_find(const meso_bake_file *bake, const cha
 size_t meso_bake_type_size(meso_bake_type type);
 /* Elements in the array (product of its dims). */
 uint64_t meso_bake_array_count(const meso_bake_array *array);
+/* Check that every element of an f32 or f16 array is finite and within [min, max]: a file
+ * whose checksum is valid may still hold Inf or NaN (written so, or crafted), which a
+ * technique would turn into out-of-range indices. Kinds' loaders call it for every array they
+ * read. MESO_OK, or MESO_ERROR_FORMAT logged as `<name>: array "weights": element 17 is inf,
+ * not a finite number in [-65504, 65504]`; MESO_ERROR_INVALID_ARGUMENT for another type.
+ * Thread-safe. */
+meso_result meso_bake_array_check_values(meso_context *ctx, const char *name,
+                                         const meso_bake_array *array, double min, double max);
 
 /* ---- The bake cache (docs/bake-format.md, "The bake cache") -------------------------------
  * Files <dir>/<kind>-<key as 16 hex digits>.mesobake; dir is $MESO_CACHE_DIR, else
@@ -88,12 +96,13 @@ meso_result meso_bake_cache_dir(meso_context *ctx, char *out_dir, size_t size);
 /* The cache file of (kind, key) into out_path. Same results as meso_bake_cache_dir. */
 meso_result meso_bake_cache_path(meso_context *ctx, const char *kind, uint64_t key, char *out_path,
                                  size_t size);
-/* The cached bake of (kind, key): *out_bake is the loaded file (caller destroys) or NULL when
- * there is none, the cache is disabled, or the entry is unreadable, corrupted or of another
- * kind / kind_version (a warning is logged and the entry will be replaced). Always MESO_OK
- * unless out of memory. Thread-safe. */
+/* The cached bake of (kind, key) made from the source whose hash is source_hash: *out_bake is
+ * the loaded file (caller destroys) or NULL when there is none, the cache is disabled, or the
+ * entry is unreadable, corrupted, of another kind / kind_version or made from another source
+ * (the stored source hash differs: a key collision or a planted file; a warning is logged and
+ * the entry will be replaced). Always MESO_OK unless out of memory. Thread-safe. */
 meso_result meso_bake_cache_load(meso_context *ctx, const char *kind, uint32_t kind_version,
-                                 uint64_t key, meso_bake_file **out_bake);
+                                 uint64_t key, uint64_t source_hash, meso_bake_file **out_bake);
 /* Store a bake under (bake->kind, key), atomically. MESO_OK also when the cache is disabled. */
 meso_result meso_bake_cache_save(meso_context *ctx, const meso_bake_file *bake, uint64_t key);
 

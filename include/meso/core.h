@@ -89,6 +89,7 @@ typedef struct meso_context_desc {
     meso_progress_mode progress;
     meso_progress_fn on_progress; /* NULL: none; called in addition to the bar */
     void *progress_user;
+    uint64_t memory_limit; /* bytes a job may need; 0: meso_memory_default_limit() */
 } meso_context_desc;
 
 typedef struct meso_context meso_context;
@@ -106,6 +107,12 @@ void meso_context_set_num_threads(meso_context *ctx, int num_threads);
 /* The message of the last error logged on ctx ("" if none). Valid until the next error. */
 const char *meso_context_last_error(const meso_context *ctx);
 
+/* Copy text into out (out_size bytes, always NUL-terminated, cut when it does not fit) with
+ * control characters written as \n, \t or \xNN, so that it prints as one line and sends no
+ * terminal escapes. Every logged message goes through it. Returns the length written.
+ * Thread-safe. */
+size_t meso_text_escape_controls(const char *text, char *out, size_t out_size);
+
 /* Log an error and return `code`, so that a failing path reads
  *     return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: truncated PNG", path);
  * The message names the file/object/field first, then the reason, without a trailing period. */
@@ -115,6 +122,21 @@ void meso_log_warning(meso_context *ctx, const char *format, ...)
     __attribute__((format(printf, 2, 3)));
 void meso_log_info(meso_context *ctx, const char *format, ...)
     __attribute__((format(printf, 2, 3)));
+
+/* ---- Memory budget ------------------------------------------------------------------------
+ * Jobs estimate the memory they will need (meshes after subdivision with their derived
+ * arrays, height fields, colour maps, framebuffers times samples) before allocating it, and
+ * refuse with MESO_ERROR_LIMIT when the estimate is over the context's limit, rather than
+ * running out of memory (or being killed) after minutes of work. */
+
+/* Three quarters of the physical memory (8 GiB when it cannot be read). Thread-safe. */
+uint64_t meso_memory_default_limit(void);
+/* The context's limit in bytes. Thread-safe. */
+uint64_t meso_context_memory_limit(const meso_context *ctx);
+/* MESO_OK when estimate_bytes is within the context's limit, else MESO_ERROR_LIMIT logged as
+ * "<name>: needs about 18.50 GiB of memory, more than the limit of 17.25 GiB (--memory-limit)".
+ * Thread-safe. */
+meso_result meso_memory_check(meso_context *ctx, const char *name, uint64_t estimate_bytes);
 
 /* ---- Parallel loops ----------------------------------------------------------------------- */
 
@@ -152,27 +174,47 @@ double meso_time_seconds(void);
 #define MESO_HASH_SEED UINT64_C(0xcbf29ce484222325)
 uint64_t meso_hash64(const void *data, size_t size, uint64_t seed);
 
-/* A file being written under a temporary name in the destination's folder; commit renames it
- * into place, abort removes it, so an interrupted run never leaves a half-written file. */
+/* A file being written beside its destination, unnamed (O_TMPFILE) where the file system
+ * allows it, else under a temporary name "<path>.tmpXXXXXX"; commit renames it into place,
+ * abort removes it, so an interrupted run never leaves a half-written file. A symbolic link at
+ * the destination is written through (the file it points to is replaced, the link stays); a
+ * destination that exists and is not a regular file (folder, FIFO, device) is refused. An
+ * existing file keeps its permission bits; a new one gets 0666 less the umask. */
 typedef struct meso_atomic_file {
     FILE *file;      /* write here */
-    char *path;      /* the destination */
-    char *temp_path; /* the temporary file */
+    char *path;      /* the destination (the link's target when path was a link) */
+    char *temp_path; /* the temporary name, NULL while the file is unnamed */
+    int temp_slot;   /* private: the name's entry for meso_atomic_file_remove_temporaries */
 } meso_atomic_file;
 
-/* Open a temporary file beside `path`. Returns MESO_OK or MESO_ERROR_IO (logged). */
+/* Open a temporary file beside `path`. Returns MESO_OK, MESO_ERROR_IO (logged: the folder is
+ * missing or not writable, or path is not a regular file) or MESO_ERROR_OUT_OF_MEMORY. */
 meso_result meso_atomic_file_open(meso_context *ctx, const char *path, meso_atomic_file *out_file);
 /* Flush, close and rename into place. Returns MESO_OK or MESO_ERROR_IO (logged); on error the
  * temporary file is removed. Frees the struct's strings in every case. */
 meso_result meso_atomic_file_commit(meso_context *ctx, meso_atomic_file *file);
 /* Close and remove the temporary file. */
 void meso_atomic_file_abort(meso_atomic_file *file);
+/* Remove every temporary file of atomic files still open in this process. Async-signal-safe:
+ * meant for SIGINT/SIGTERM handlers, which then end the process. Unnamed (O_TMPFILE) files
+ * need no removal: the kernel drops them with the process. */
+void meso_atomic_file_remove_temporaries(void);
 /* Write `size` bytes to `path` atomically. */
 meso_result meso_file_write_atomic(meso_context *ctx, const char *path, const void *data,
                                    size_t size);
+/* Check, before any work, that meso_atomic_file_open(path) would succeed: path is absent or a
+ * regular file (or a link to one), and its folder exists and is writable. Commands check every
+ * output first so that they write all of their outputs or none. MESO_OK or MESO_ERROR_IO
+ * (logged, naming path). Thread-safe. */
+meso_result meso_file_check_output(meso_context *ctx, const char *path);
 
-/* Read a whole file into a new NUL-terminated buffer (caller frees). Refuses files larger than
- * max_size bytes with MESO_ERROR_LIMIT before allocating. Missing file: MESO_ERROR_IO naming it. */
+/* Open an input file for reading, refusing anything but a regular file (a FIFO, device or
+ * folder) without blocking. MESO_OK or MESO_ERROR_IO (logged). The caller fcloses *out_file. */
+meso_result meso_file_open_read(meso_context *ctx, const char *path, FILE **out_file);
+
+/* Read a whole regular file into a new NUL-terminated buffer (caller frees). Refuses files
+ * larger than max_size bytes with MESO_ERROR_LIMIT before allocating. Missing file or not a
+ * regular file: MESO_ERROR_IO naming it. */
 meso_result meso_file_read(meso_context *ctx, const char *path, size_t max_size, char **out_data,
                            size_t *out_size);
 

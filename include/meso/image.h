@@ -66,6 +66,17 @@ typedef struct meso_png_desc {
  * Returns MESO_OK or MESO_ERROR_IO (logged). */
 meso_result meso_image_save_png(meso_context *ctx, const meso_image *image, const char *path,
                                 const meso_png_desc *desc);
+/* Save `count` images (at most MESO_PNG_SAVE_ALL_MAX) to paths[i] with descs[i] (descs may be
+ * NULL: defaults), all or none: every file is written under a temporary name first and renamed
+ * into place only when all were written. Returns as meso_image_save_png. */
+#define MESO_PNG_SAVE_ALL_MAX 8
+meso_result meso_image_save_png_all(meso_context *ctx, size_t count,
+                                    const meso_image *const *images, const char *const *paths,
+                                    const meso_png_desc *descs);
+/* The same PNG written to an open stream (e.g. a meso_atomic_file's, so that several outputs
+ * can be committed together); `path` only names the file in messages. Not flushed or closed. */
+meso_result meso_image_write_png(meso_context *ctx, const meso_image *image, FILE *file,
+                                 const char *path, const meso_png_desc *desc);
 
 /* ---- Textures ----------------------------------------------------------------------------- */
 

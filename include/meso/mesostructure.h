@@ -44,6 +44,9 @@ typedef enum meso_heightfield_kind {
     MESO_HEIGHTFIELD_TILES,       /* square tiles with grout, slightly uneven tops */
 } meso_heightfield_kind;
 
+/* The largest procedural resolution: its square is the image limit MESO_IMAGE_MAX_PIXELS. */
+#define MESO_HEIGHTFIELD_MAX_RESOLUTION 8192
+
 /* Zero fields take the defaults of meso_heightfield_desc_defaults(). */
 typedef struct meso_heightfield_desc {
     meso_heightfield_kind kind;

@@ -45,7 +45,8 @@ meso_result meso_framebuffer_color_image(meso_context *ctx, const meso_framebuff
 meso_result meso_framebuffer_coverage_image(meso_context *ctx, const meso_framebuffer *fb,
                                             meso_image **out_image);
 /* Save the colour with the scene's encoding (sRGB unless the scene says linear). When
- * coverage_path is not NULL the coverage mask is written there as a grey PNG too. */
+ * coverage_path is not NULL the coverage mask is written there as a grey PNG too: both files
+ * or neither (meso_image_save_png_all). */
 meso_result meso_framebuffer_save_png(meso_context *ctx, const meso_framebuffer *fb,
                                       meso_encoding encoding, const char *path,
                                       const char *coverage_path);
@@ -133,6 +134,13 @@ typedef struct meso_render_desc {
                               (or `flat` when that is `reference` or cannot draw it either)
                               instead of failing; see meso_renderer_object_technique */
 } meso_render_desc;
+
+/* The memory a frame of width x height with desc's samples needs besides the scene (the
+ * framebuffer and, with supersampling, the n x n-times larger sample targets: colour,
+ * coverage and depth, 20 bytes a sample; and the images it is saved from, 16 bytes a pixel).
+ * desc may be NULL (one sample). Callers check it with meso_memory_check before
+ * meso_framebuffer_create; meso_renderer_render checks it too. Pure. */
+uint64_t meso_render_memory_estimate(const meso_render_desc *desc, int width, int height);
 
 typedef struct meso_render_stats {
     double prepare_seconds;     /* meso_renderer_create */

@@ -70,7 +70,7 @@ meso_result meso_bake_cache_path(meso_context *ctx, const char *kind, uint64_t k
 
 /* Log the load failure as a warning instead of an error: a bad cache entry is re-baked. */
 meso_result meso_bake_cache_load(meso_context *ctx, const char *kind, uint32_t kind_version,
-                                 uint64_t key, meso_bake_file **out_bake) {
+                                 uint64_t key, uint64_t source_hash, meso_bake_file **out_bake) {
     if (out_bake) *out_bake = NULL;
     if (!kind || !out_bake) return MESO_ERROR_INVALID_ARGUMENT;
     char path[1200];
@@ -89,6 +89,15 @@ meso_result meso_bake_cache_load(meso_context *ctx, const char *kind, uint32_t k
                          "%s: cache entry of kind %s version %u, expected %s version %u; "
                          "baking again",
                          path, bake->kind, bake->kind_version, kind, kind_version);
+        meso_bake_file_destroy(bake);
+        return MESO_OK;
+    }
+    if (bake->source_hash != source_hash) {
+        meso_log_warning(ctx,
+                         "%s: cache entry made from another source (hash %016llx, expected "
+                         "%016llx); baking again",
+                         path, (unsigned long long)bake->source_hash,
+                         (unsigned long long)source_hash);
         meso_bake_file_destroy(bake);
         return MESO_OK;
     }

@@ -337,3 +337,31 @@ const meso_bake_array *meso_bake_file_find(const meso_bake_file *bake, const cha
             return &bake->arrays[a];
     return NULL;
 }
+
+meso_result meso_bake_array_check_values(meso_context *ctx, const char *name,
+                                         const meso_bake_array *array, double min, double max) {
+    if (!array || (array->type != MESO_BAKE_F32 && array->type != MESO_BAKE_F16))
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "%s: array \"%s\": not a float array", name,
+                              array ? array->name : "");
+    uint64_t count = meso_bake_array_count(array);
+    for (uint64_t i = 0; i < count; i++) {
+        double value;
+        if (array->type == MESO_BAKE_F32) {
+            float f;
+            memcpy(&f, (const unsigned char *)array->data + 4 * i, sizeof(f));
+            value = f;
+        } else {
+            _Float16 h;
+            memcpy(&h, (const unsigned char *)array->data + 2 * i, sizeof(h));
+            value = (double)h;
+        }
+        /* written so that NaN fails too */
+        if (!(value >= min && value <= max))
+            return meso_log_error(ctx, MESO_ERROR_FORMAT,
+                                  "%s: array \"%s\": element %llu is %g, not a finite number in "
+                                  "[%g, %g]",
+                                  name, array->name, (unsigned long long)i, value, min, max);
+    }
+    return MESO_OK;
+}

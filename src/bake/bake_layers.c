@@ -521,8 +521,9 @@ meso_result meso_layers_bake_cached(meso_context *ctx, const meso_layers_desc *d
     *out_map = NULL;
     uint64_t key = meso_layers_cache_key(desc);
     meso_bake_file *cached = NULL;
+    /* a layers bake stores its cache key as its source hash (meso_bake_layers) */
     meso_result r =
-        meso_bake_cache_load(ctx, MESO_LAYERS_KIND, MESO_LAYERS_KIND_VERSION, key, &cached);
+        meso_bake_cache_load(ctx, MESO_LAYERS_KIND, MESO_LAYERS_KIND_VERSION, key, key, &cached);
     if (r != MESO_OK) return r;
     if (cached) {
         r = meso_layers_from_bake_file(ctx, cached, "relief_layers cache entry", out_map);

@@ -853,6 +853,22 @@ meso_result meso_vdm_from_bake_file(meso_context *ctx, const meso_bake_file *bak
                               name);
     if (meso_bake_file_find(bake, "raw") && !raw)
         return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: array \"raw\": wrong shape", name);
+    /* Values, not only shapes: a valid checksum does not make Inf or NaN usable. Eigenvectors
+     * are unit vectors (|x| <= 1); weights are bounded by half precision's range, so a
+     * reconstruction of at most 16 terms stays far inside int range where the technique
+     * converts it to indices; the rest must be finite and the RMSEs and singular values >= 0. */
+    static const struct {
+        const char *array;
+        double min, max;
+    } ranges[] = {{"weights", -65504.0, 65504.0}, {"eigen_vdm", -1.001, 1.001},
+                  {"eigen_mvm", -1.001, 1.001},   {"singular_values", 0.0, 3.4e38},
+                  {"report", 0.0, 3.4e38},        {"raw", -1e6, 1e6}};
+    for (size_t i = 0; i < sizeof(ranges) / sizeof(ranges[0]); i++) {
+        const meso_bake_array *a = meso_bake_file_find(bake, ranges[i].array);
+        if (a && (result = meso_bake_array_check_values(ctx, name, a, ranges[i].min,
+                                                        ranges[i].max)) != MESO_OK)
+            return result;
+    }
     meso_vdm *vdm = calloc(1, sizeof(*vdm));
     if (!vdm) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", name);
     vdm->desc = d;
@@ -914,7 +930,8 @@ meso_result meso_vdm_bake_cached(meso_context *ctx, const meso_vdm_desc *desc, m
     uint64_t key = meso_vdm_cache_key(desc);
     meso_bake_file *cached = NULL;
     meso_result result =
-        meso_bake_cache_load(ctx, MESO_VDM_KIND, MESO_VDM_KIND_VERSION, key, &cached);
+        meso_bake_cache_load(ctx, MESO_VDM_KIND, MESO_VDM_KIND_VERSION, key,
+                             desc->heightfield ? desc->heightfield->hash : 0, &cached);
     if (result != MESO_OK) return result;
     if (cached) {
         result = meso_vdm_from_bake_file(ctx, cached, "vdm cache entry", out_vdm);

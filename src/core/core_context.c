@@ -1,6 +1,7 @@
 /* The context: threads, logging, the last error. */
 #include <omp.h>
 #include <stdlib.h>
+#include <unistd.h>
 #include <string.h>
 
 #include "core_internal.h"
@@ -32,6 +33,7 @@ meso_result meso_context_create(const meso_context_desc *desc, meso_context **ou
     ctx->progress_mode = d.progress;
     ctx->on_progress = d.on_progress;
     ctx->progress_user = d.progress_user;
+    ctx->memory_limit = d.memory_limit ? d.memory_limit : meso_memory_default_limit();
     pthread_mutex_init(&ctx->lock, NULL);
     pthread_mutex_init(&ctx->pool_lock, NULL);
     meso_context_set_num_threads(ctx, d.num_threads);
@@ -61,9 +63,29 @@ void meso_context_set_num_threads(meso_context *ctx, int num_threads) {
 
 const char *meso_context_last_error(const meso_context *ctx) { return ctx->last_error; }
 
+size_t meso_text_escape_controls(const char *text, char *out, size_t out_size) {
+    if (out_size == 0) return 0;
+    size_t used = 0;
+    /* up to 4 bytes an input byte (\xNN), and the NUL */
+    for (const unsigned char *p = (const unsigned char *)text; *p && used + 5 <= out_size; p++) {
+        if (*p >= 0x20 && *p != 0x7f)
+            out[used++] = (char)*p;
+        else if (*p == '\n' || *p == '\t')
+            used += (size_t)snprintf(out + used, out_size - used, "\\%c", *p == '\n' ? 'n' : 't');
+        else
+            used += (size_t)snprintf(out + used, out_size - used, "\\x%02x", *p);
+    }
+    out[used] = 0;
+    return used;
+}
+
 static void log_message(meso_context *ctx, meso_log_level level, const char *format, va_list args) {
-    char message[MESO_MESSAGE_MAX];
-    vsnprintf(message, sizeof(message), format, args);
+    char raw[MESO_MESSAGE_MAX], message[MESO_MESSAGE_MAX];
+    vsnprintf(raw, sizeof(raw), format, args);
+    /* Control characters from file names and scene text (a newline in a JSON key, a terminal
+     * escape) would forge a second "meso:" line or drive the terminal: every message stays one
+     * printable line. */
+    meso_text_escape_controls(raw, message, sizeof(message));
     pthread_mutex_lock(&ctx->lock);
     if (level == MESO_LOG_ERROR) memcpy(ctx->last_error, message, sizeof(message));
     if (ctx->log) ctx->log(ctx->log_user, level, message);
@@ -90,4 +112,34 @@ void meso_log_info(meso_context *ctx, const char *format, ...) {
     va_start(args, format);
     log_message(ctx, MESO_LOG_INFO, format, args);
     va_end(args);
+}
+
+/* ---- Memory budget ------------------------------------------------------------------------ */
+
+uint64_t meso_memory_default_limit(void) {
+    long pages = sysconf(_SC_PHYS_PAGES), page_size = sysconf(_SC_PAGESIZE);
+    if (pages <= 0 || page_size <= 0) return UINT64_C(8) << 30; /* unknown: 8 GiB */
+    /* Three quarters of the machine: room for the system and the estimate's error. */
+    return (uint64_t)pages * (uint64_t)page_size / 4 * 3;
+}
+
+uint64_t meso_context_memory_limit(const meso_context *ctx) { return ctx->memory_limit; }
+
+/* "18.50 GiB", "3.2 MiB" */
+static void format_bytes(uint64_t bytes, char *out, size_t out_size) {
+    if (bytes >= (UINT64_C(1) << 30))
+        snprintf(out, out_size, "%.2f GiB", (double)bytes / (double)(UINT64_C(1) << 30));
+    else
+        snprintf(out, out_size, "%.1f MiB", (double)bytes / (double)(UINT64_C(1) << 20));
+}
+
+meso_result meso_memory_check(meso_context *ctx, const char *name, uint64_t estimate_bytes) {
+    if (estimate_bytes <= ctx->memory_limit) return MESO_OK;
+    char estimate[32], limit[32];
+    format_bytes(estimate_bytes, estimate, sizeof(estimate));
+    format_bytes(ctx->memory_limit, limit, sizeof(limit));
+    return meso_log_error(ctx, MESO_ERROR_LIMIT,
+                          "%s: needs about %s of memory, more than the limit of %s "
+                          "(--memory-limit)",
+                          name, estimate, limit);
 }

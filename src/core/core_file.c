@@ -1,5 +1,18 @@
-/* Atomic file writes and whole-file reads. */
+/* Atomic file writes, output checks and whole-file reads.
+ *
+ * Outputs are all-or-nothing (DESIGN.md, "Nothing lost"): a file is written unnamed
+ * (O_TMPFILE) or under a temporary name beside the destination and renamed into place only
+ * when complete. Temporary names that exist are kept in a small registry so that a signal
+ * handler can remove them (meso_atomic_file_remove_temporaries); with O_TMPFILE a name exists
+ * only for the instant between linkat and rename, so even SIGKILL leaves nothing behind.
+ * Inputs are opened non-blocking and checked to be regular files before a byte is read: a
+ * FIFO given as an input would otherwise block open() forever.
+ */
+#define _GNU_SOURCE /* O_TMPFILE, linkat's AT_SYMLINK_FOLLOW */
 #include <errno.h>
+#include <fcntl.h>
+#include <limits.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -7,54 +20,245 @@
 
 #include "core_internal.h"
 
+/* ---- Registry of live temporary names (for signal handlers) ------------------------------- */
+
+/* Slots hold the names of temporary files that exist on disk. States: 0 free, 1 being filled,
+ * 2 live. The handler only reads live slots and calls unlink, both async-signal-safe. */
+#define TEMP_SLOTS 64
+static char temp_slot_paths[TEMP_SLOTS][PATH_MAX];
+static atomic_int temp_slot_states[TEMP_SLOTS];
+
+/* Returns the slot + 1, or 0 when the name is not registered (registry full or name too long:
+ * the file is still removed on every normal path, only a signal could leave it). */
+static int register_temporary(const char *path) {
+    if (strlen(path) >= PATH_MAX) return 0;
+    for (int i = 0; i < TEMP_SLOTS; i++) {
+        int expected = 0;
+        if (atomic_compare_exchange_strong(&temp_slot_states[i], &expected, 1)) {
+            memcpy(temp_slot_paths[i], path, strlen(path) + 1);
+            atomic_store(&temp_slot_states[i], 2);
+            return i + 1;
+        }
+    }
+    return 0;
+}
+
+static void unregister_temporary(int slot) {
+    if (slot > 0) atomic_store(&temp_slot_states[slot - 1], 0);
+}
+
+void meso_atomic_file_remove_temporaries(void) {
+    for (int i = 0; i < TEMP_SLOTS; i++)
+        if (atomic_load(&temp_slot_states[i]) == 2) unlink(temp_slot_paths[i]);
+}
+
+/* ---- Output checks ------------------------------------------------------------------------ */
+
+static const char *file_type_name(mode_t mode) {
+    if (S_ISDIR(mode)) return "a folder";
+    if (S_ISFIFO(mode)) return "a FIFO";
+    if (S_ISCHR(mode)) return "a character device";
+    if (S_ISBLK(mode)) return "a block device";
+    if (S_ISSOCK(mode)) return "a socket";
+    return "not a regular file";
+}
+
+/* The folder part of path ("." when none) into out. */
+static bool folder_of(const char *path, char *out, size_t out_size) {
+    const char *slash = strrchr(path, '/');
+    if (!slash) return snprintf(out, out_size, ".") < (int)out_size;
+    size_t length = slash == path ? 1 : (size_t)(slash - path);
+    if (length + 1 > out_size) return false;
+    memcpy(out, path, length);
+    out[length] = 0;
+    return true;
+}
+
+/* Where the bytes of `path` go: the path itself, or the file a symbolic link points to (a link
+ * is written through, so the link stays a link). *out_exists tells whether it exists, and
+ * *out_mode its permission bits when it does. */
+static meso_result resolve_output(meso_context *ctx, const char *path, char **out_target,
+                                  bool *out_exists, mode_t *out_mode) {
+    *out_target = NULL;
+    *out_exists = false;
+    *out_mode = 0;
+    if (!path[0]) return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "output: empty path");
+    struct stat st;
+    char *target = NULL;
+    if (lstat(path, &st) == 0 && S_ISLNK(st.st_mode)) {
+        if (stat(path, &st) != 0)
+            return meso_log_error(ctx, MESO_ERROR_IO, "%s: is a symbolic link to a missing file",
+                                  path);
+        target = realpath(path, NULL);
+        if (!target)
+            return meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot resolve: %s", path,
+                                  strerror(errno));
+        *out_exists = true;
+    } else if (lstat(path, &st) == 0) {
+        *out_exists = true;
+    } else if (errno != ENOENT) {
+        return meso_log_error(ctx, MESO_ERROR_IO, "%s: %s", path, strerror(errno));
+    }
+    if (*out_exists && !S_ISREG(st.st_mode)) {
+        free(target);
+        return meso_log_error(ctx, MESO_ERROR_IO, "%s: is %s; meso writes only regular files", path,
+                              file_type_name(st.st_mode));
+    }
+    if (*out_exists) *out_mode = st.st_mode & 07777;
+    if (!target) target = strdup(path);
+    if (!target) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", path);
+    *out_target = target;
+    return MESO_OK;
+}
+
+meso_result meso_file_check_output(meso_context *ctx, const char *path) {
+    char *target = NULL;
+    bool exists = false;
+    mode_t mode = 0;
+    meso_result r = resolve_output(ctx, path, &target, &exists, &mode);
+    if (r != MESO_OK) return r;
+    char folder[PATH_MAX];
+    struct stat st;
+    if (!folder_of(target, folder, sizeof(folder)))
+        r = meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: path too long", path);
+    else if (stat(folder, &st) != 0)
+        r = meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot write: folder %s: %s", path, folder,
+                           strerror(errno));
+    else if (!S_ISDIR(st.st_mode))
+        r = meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot write: %s is not a folder", path,
+                           folder);
+    else if (access(folder, W_OK | X_OK) != 0)
+        r = meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot write: folder %s: %s", path, folder,
+                           strerror(errno));
+    free(target);
+    return r;
+}
+
+/* ---- Atomic writes ------------------------------------------------------------------------ */
+
+/* The process's umask, read once: umask() can only be read by setting it, which races with
+ * other threads creating files, so it is done once (the first write) rather than per file. */
+static mode_t process_umask(void) {
+    static atomic_int cached = -1;
+    int mask = atomic_load(&cached);
+    if (mask < 0) {
+        mode_t old = umask(022);
+        umask(old);
+        mask = (int)old;
+        atomic_store(&cached, mask);
+    }
+    return (mode_t)mask;
+}
+
+/* An unnamed file in `folder` (Linux 3.11+, on file systems that support it), or -1. */
+static int open_unnamed(const char *folder) {
+#ifdef O_TMPFILE
+    /* The file is named at commit through /proc/self/fd (linkat); without /proc it could not
+     * be, so the named temporary is used instead. */
+    if (access("/proc/self/fd", X_OK) != 0) return -1;
+    return open(folder, O_TMPFILE | O_WRONLY | O_CLOEXEC, 0666);
+#else
+    (void)folder;
+    errno = EOPNOTSUPP;
+    return -1;
+#endif
+}
+
 meso_result meso_atomic_file_open(meso_context *ctx, const char *path, meso_atomic_file *out_file) {
     *out_file = (meso_atomic_file){0};
-    size_t length = strlen(path);
-    char *dest = malloc(length + 1);
-    char *temp = malloc(length + 16);
-    if (!dest || !temp) {
-        free(dest);
-        free(temp);
-        return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", path);
-    }
-    memcpy(dest, path, length + 1);
+    char *dest = NULL;
+    bool exists = false;
+    mode_t mode = 0;
+    meso_result r = resolve_output(ctx, path, &dest, &exists, &mode);
+    if (r != MESO_OK) return r;
     /* Same folder as the destination, so the rename cannot cross file systems. */
-    snprintf(temp, length + 16, "%s.tmpXXXXXX", path);
-    int fd = mkstemp(temp);
+    char folder[PATH_MAX];
+    if (!folder_of(dest, folder, sizeof(folder))) {
+        free(dest);
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: path too long", path);
+    }
+    int fd = open_unnamed(folder);
+    char *temp = NULL;
+    int slot = 0;
     if (fd < 0) {
-        meso_result r = meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot create: %s", path,
-                                       strerror(errno));
+        size_t length = strlen(dest);
+        temp = malloc(length + 16);
+        if (!temp) {
+            free(dest);
+            return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", path);
+        }
+        snprintf(temp, length + 16, "%s.tmpXXXXXX", dest);
+        fd = mkostemp(temp, O_CLOEXEC);
+        if (fd < 0) {
+            r = meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot create: %s", path, strerror(errno));
+            free(dest);
+            free(temp);
+            return r;
+        }
+        slot = register_temporary(temp);
+    }
+    /* An existing file keeps its permissions; a new one gets 0666 less the umask, as any
+     * program creating it would give it. */
+    fchmod(fd, exists ? mode : 0666 & ~process_umask());
+    FILE *file = fdopen(fd, "wb");
+    if (!file) {
+        r = meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot open: %s", path, strerror(errno));
+        close(fd);
+        if (temp) unlink(temp);
+        unregister_temporary(slot);
         free(dest);
         free(temp);
         return r;
     }
-    fchmod(fd, 0644);
-    FILE *file = fdopen(fd, "wb");
-    if (!file) {
-        close(fd);
-        unlink(temp);
-        free(dest);
-        free(temp);
-        return meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot open: %s", path, strerror(errno));
-    }
-    *out_file = (meso_atomic_file){file, dest, temp};
+    *out_file = (meso_atomic_file){file, dest, temp, slot};
     return MESO_OK;
 }
 
 static void release(meso_atomic_file *f) {
+    if (f->temp_path) unregister_temporary(f->temp_slot);
     free(f->path);
     free(f->temp_path);
     *f = (meso_atomic_file){0};
 }
 
+/* Give the unnamed file of `fd` the name f->temp_path (registered), for the rename. linkat
+ * straight to the destination would fail when it exists, and rename is what replaces a file
+ * atomically. */
+static bool name_unnamed_file(meso_atomic_file *f, int fd) {
+    char proc_path[64];
+    snprintf(proc_path, sizeof(proc_path), "/proc/self/fd/%d", fd);
+    size_t length = strlen(f->path);
+    f->temp_path = malloc(length + 16);
+    if (!f->temp_path) return false;
+    for (int attempt = 0; attempt < 100; attempt++) {
+        snprintf(f->temp_path, length + 16, "%s.tmp%06x", f->path,
+                 (unsigned)((getpid() * 2654435761u + (unsigned)attempt * 40503u +
+                             (unsigned)(uintptr_t)f) &
+                            0xffffff));
+        f->temp_slot = register_temporary(f->temp_path);
+        if (linkat(AT_FDCWD, proc_path, AT_FDCWD, f->temp_path, AT_SYMLINK_FOLLOW) == 0)
+            return true;
+        unregister_temporary(f->temp_slot);
+        f->temp_slot = 0;
+        if (errno != EEXIST) break;
+    }
+    free(f->temp_path);
+    f->temp_path = NULL;
+    return false;
+}
+
 meso_result meso_atomic_file_commit(meso_context *ctx, meso_atomic_file *f) {
     bool ok = fflush(f->file) == 0 && !ferror(f->file);
+    bool unnamed = f->temp_path == NULL;
+    if (ok && unnamed) ok = name_unnamed_file(f, fileno(f->file));
+    int saved_errno = errno;
     ok = fclose(f->file) == 0 && ok;
     f->file = NULL;
     if (!ok || rename(f->temp_path, f->path) != 0) {
+        if (ok || !saved_errno) saved_errno = errno;
         meso_result r = meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot write: %s", f->path,
-                                       strerror(errno));
-        unlink(f->temp_path);
+                                       strerror(saved_errno));
+        if (f->temp_path) unlink(f->temp_path);
         release(f);
         return r;
     }
@@ -81,16 +285,44 @@ meso_result meso_file_write_atomic(meso_context *ctx, const char *path, const vo
     return meso_atomic_file_commit(ctx, &f);
 }
 
+/* ---- Reading ------------------------------------------------------------------------------ */
+
+meso_result meso_file_open_read(meso_context *ctx, const char *path, FILE **out_file) {
+    *out_file = NULL;
+    /* O_NONBLOCK: opening a FIFO for reading would otherwise wait for a writer forever. It is
+     * cleared again once the file is known to be regular. */
+    int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0)
+        return meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot open: %s", path, strerror(errno));
+    struct stat st;
+    bool stat_ok = fstat(fd, &st) == 0;
+    if (!stat_ok || !S_ISREG(st.st_mode)) {
+        close(fd);
+        return meso_log_error(ctx, MESO_ERROR_IO, "%s: is %s, not a regular file", path,
+                              stat_ok ? file_type_name(st.st_mode) : "unreadable");
+    }
+    int flags = fcntl(fd, F_GETFL);
+    if (flags >= 0) fcntl(fd, F_SETFL, flags & ~O_NONBLOCK);
+    FILE *file = fdopen(fd, "rb");
+    if (!file) {
+        close(fd);
+        return meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot open: %s", path, strerror(errno));
+    }
+    *out_file = file;
+    return MESO_OK;
+}
+
 meso_result meso_file_read(meso_context *ctx, const char *path, size_t max_size, char **out_data,
                            size_t *out_size) {
     *out_data = NULL;
     if (out_size) *out_size = 0;
-    FILE *file = fopen(path, "rb");
-    if (!file) return meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot open: %s", path, strerror(errno));
+    FILE *file = NULL;
+    meso_result r = meso_file_open_read(ctx, path, &file);
+    if (r != MESO_OK) return r;
     struct stat st;
-    if (fstat(fileno(file), &st) != 0 || !S_ISREG(st.st_mode)) {
+    if (fstat(fileno(file), &st) != 0) {
         fclose(file);
-        return meso_log_error(ctx, MESO_ERROR_IO, "%s: not a regular file", path);
+        return meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot stat: %s", path, strerror(errno));
     }
     if ((uint64_t)st.st_size > max_size) {
         fclose(file);

@@ -21,7 +21,8 @@ struct meso_context {
     meso_progress_mode progress_mode;
     meso_progress_fn on_progress;
     void *progress_user;
-    pthread_mutex_t lock; /* serialises logging and last_error */
+    uint64_t memory_limit; /* bytes a job may estimate to need (meso_memory_check) */
+    pthread_mutex_t lock;  /* serialises logging and last_error */
     char last_error[MESO_MESSAGE_MAX];
 };
 

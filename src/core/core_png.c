@@ -27,8 +27,9 @@ static uint32_t read_u32(const unsigned char *p) {
 
 meso_result meso_image_load_png(meso_context *ctx, const char *path, meso_image **out_image) {
     *out_image = NULL;
-    FILE *file = fopen(path, "rb");
-    if (!file) return meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot open", path);
+    FILE *file = NULL;
+    meso_result opened = meso_file_open_read(ctx, path, &file);
+    if (opened != MESO_OK) return opened;
     unsigned char signature[8];
     if (fread(signature, 1, 8, file) != 8 || png_sig_cmp(signature, 0, 8) != 0) {
         fclose(file);
@@ -148,8 +149,8 @@ static unsigned quantise(float value, bool srgb, unsigned max) {
     return (unsigned)(value * (float)max + 0.5f);
 }
 
-meso_result meso_image_save_png(meso_context *ctx, const meso_image *image, const char *path,
-                                const meso_png_desc *desc) {
+meso_result meso_image_write_png(meso_context *ctx, const meso_image *image, FILE *file,
+                                 const char *path, const meso_png_desc *desc) {
     meso_png_desc d = desc ? *desc : (meso_png_desc){0};
     int bit_depth = d.bit_depth == 16 ? 16 : 8;
     bool srgb = d.encoding != MESO_ENCODING_LINEAR;
@@ -157,9 +158,7 @@ meso_result meso_image_save_png(meso_context *ctx, const meso_image *image, cons
     int color_channels = channels == 2 || channels == 4 ? channels - 1 : channels;
     static const int color_types[] = {0, PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA,
                                       PNG_COLOR_TYPE_RGB, PNG_COLOR_TYPE_RGB_ALPHA};
-    meso_atomic_file out;
-    meso_result r = meso_atomic_file_open(ctx, path, &out);
-    if (r != MESO_OK) return r;
+    meso_result r = MESO_OK;
     png_error_state state = {ctx, path, ""};
     png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &state, on_png_error,
                                               on_png_warning);
@@ -174,7 +173,7 @@ meso_result meso_image_save_png(meso_context *ctx, const meso_image *image, cons
         r = meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot write PNG (%s)", path, state.message);
         goto fail;
     }
-    png_init_io(png, out.file);
+    png_init_io(png, file);
     png_set_IHDR(png, info, (png_uint_32)image->width, (png_uint_32)image->height, bit_depth,
                  color_types[channels], PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
                  PNG_FILTER_TYPE_DEFAULT);
@@ -199,10 +198,49 @@ meso_result meso_image_save_png(meso_context *ctx, const meso_image *image, cons
     png_write_end(png, NULL);
     png_destroy_write_struct(&png, &info);
     free(row);
-    return meso_atomic_file_commit(ctx, &out);
+    return MESO_OK;
 fail:
     png_destroy_write_struct(png ? &png : NULL, info ? &info : NULL);
     free(row);
-    meso_atomic_file_abort(&out);
+    return r;
+}
+
+meso_result meso_image_save_png(meso_context *ctx, const meso_image *image, const char *path,
+                                const meso_png_desc *desc) {
+    meso_atomic_file out;
+    meso_result r = meso_atomic_file_open(ctx, path, &out);
+    if (r != MESO_OK) return r;
+    r = meso_image_write_png(ctx, image, out.file, path, desc);
+    if (r != MESO_OK) {
+        meso_atomic_file_abort(&out);
+        return r;
+    }
+    return meso_atomic_file_commit(ctx, &out);
+}
+
+meso_result meso_image_save_png_all(meso_context *ctx, size_t count,
+                                    const meso_image *const *images, const char *const *paths,
+                                    const meso_png_desc *descs) {
+    if (count > MESO_PNG_SAVE_ALL_MAX)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: more than %d files at once",
+                              count ? paths[0] : "png", MESO_PNG_SAVE_ALL_MAX);
+    meso_atomic_file files[MESO_PNG_SAVE_ALL_MAX] = {{0}};
+    meso_result r = MESO_OK;
+    /* Every file is written completely under its temporary name before any is renamed, so a
+     * failure (a missing folder, a full disk) leaves none of them changed. */
+    for (size_t i = 0; i < count && r == MESO_OK; i++) {
+        r = meso_atomic_file_open(ctx, paths[i], &files[i]);
+        if (r == MESO_OK)
+            r = meso_image_write_png(ctx, images[i], files[i].file, paths[i],
+                                     descs ? &descs[i] : NULL);
+    }
+    if (r != MESO_OK) {
+        for (size_t i = 0; i < count; i++) meso_atomic_file_abort(&files[i]); /* zeroed: no-op */
+        return r;
+    }
+    for (size_t i = 0; i < count; i++) {
+        meso_result c = meso_atomic_file_commit(ctx, &files[i]);
+        if (r == MESO_OK) r = c;
+    }
     return r;
 }

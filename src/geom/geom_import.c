@@ -168,51 +168,6 @@ static meso_result join_instances(import_state *s, size_t num_vertices, size_t n
     return MESO_OK;
 }
 
-/* assimp 5.2's PLY reader loops forever on a header whose "end_header" line it cannot find
- * (found by mutating test files), so PLY files (recognised by content, as assimp does) must
- * show an "end_header" line in their first PLY_HEADER_MAX bytes before assimp sees them. */
-#define PLY_HEADER_MAX 65536
-
-static meso_result check_ply_header(meso_context *ctx, const char *path, FILE *file) {
-    char *buffer = malloc(PLY_HEADER_MAX + 1);
-    if (!buffer) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", path);
-    size_t size = fread(buffer, 1, PLY_HEADER_MAX, file);
-    buffer[size] = 0;
-    meso_result r = MESO_OK;
-    bool is_ply = size >= 3 && (buffer[0] == 'p' || buffer[0] == 'P') &&
-                  (buffer[1] == 'l' || buffer[1] == 'L') && (buffer[2] == 'y' || buffer[2] == 'Y');
-    if (is_ply) {
-        /* The header is text: search it as a string up to the first NUL, for a line that is
-         * "end_header" (a token assimp can see), not merely containing it. */
-        bool found = false;
-        for (const char *at = strstr(buffer, "end_header"); at && !found;
-             at = strstr(at + 1, "end_header")) {
-            const char *line = at;
-            while (line > buffer && (line[-1] == ' ' || line[-1] == '\t')) line--;
-            char after = at[10];
-            found = line > buffer && (line[-1] == '\n' || line[-1] == '\r') &&
-                    (after == '\n' || after == '\r' || after == ' ' || after == '\t' || after == 0);
-        }
-        if (!found)
-            r = meso_log_error(ctx, MESO_ERROR_FORMAT,
-                               "%s: PLY header has no end_header in its first %d bytes", path,
-                               PLY_HEADER_MAX);
-        /* Declared counts over the limits are refused before assimp allocates for them. */
-        const char *names[2] = {"\nelement vertex ", "\nelement face "};
-        const unsigned limits[2] = {MESO_MESH_MAX_VERTICES, MESO_MESH_MAX_TRIANGLES};
-        for (int k = 0; k < 2 && r == MESO_OK; k++) {
-            const char *at = strstr(buffer, names[k]);
-            if (!at) continue;
-            unsigned long long count = strtoull(at + strlen(names[k]), NULL, 10);
-            if (count > limits[k])
-                r = meso_log_error(ctx, MESO_ERROR_LIMIT, "%s: %llu %s exceed the limit %u", path,
-                                   count, k == 0 ? "vertices" : "faces", limits[k]);
-        }
-    }
-    free(buffer);
-    return r;
-}
-
 /* What the post-processing steps need and assimp does not check: every face has corners,
  * and the counts (which post-processing can only shrink: a polygon of n corners becomes n - 2
  * triangles) are within the limits before assimp allocates for them. */
@@ -235,13 +190,10 @@ static meso_result check_raw_scene(meso_context *ctx, const char *path,
 
 meso_result meso_mesh_load(meso_context *ctx, const char *path, meso_mesh **out_mesh) {
     *out_mesh = NULL;
-    struct stat info;
-    if (stat(path, &info) == 0 && S_ISDIR(info.st_mode))
-        return meso_log_error(ctx, MESO_ERROR_IO, "%s: is a folder, not a mesh file", path);
-    FILE *probe = fopen(path, "rb");
-    if (!probe)
-        return meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot open: %s", path, strerror(errno));
-    meso_result r = check_ply_header(ctx, path, probe);
+    FILE *probe = NULL; /* a regular file only: assimp would block on a FIFO */
+    meso_result opened = meso_file_open_read(ctx, path, &probe);
+    if (opened != MESO_OK) return opened;
+    meso_result r = geom_screen_mesh_file(ctx, path, probe);
     fclose(probe);
     if (r != MESO_OK) return r;
 

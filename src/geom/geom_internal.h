@@ -9,6 +9,12 @@
 meso_result geom_check_counts(meso_context *ctx, const char *name, uint64_t num_vertices,
                               uint64_t num_triangles);
 
+/* Check a mesh file's declared sizes against its real size before assimp reads it (PLY
+ * element counts, glTF buffers, views and accessors, GLB chunks) and that a glTF's buffers
+ * are files beside it (geom_screen.c). `file` is open at any position. MESO_OK, or
+ * MESO_ERROR_FORMAT / _LIMIT / _IO logged naming the file. */
+meso_result geom_screen_mesh_file(meso_context *ctx, const char *path, FILE *file);
+
 /* Free (and NULL) tangents, bitangents, curvature and quadrics: the arrays that depend on the
  * positions, normals or UVs. */
 void geom_mesh_free_derived(meso_mesh *mesh);

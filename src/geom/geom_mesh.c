@@ -19,7 +19,11 @@ meso_result geom_check_counts(meso_context *ctx, const char *name, uint64_t num_
     if (num_triangles > MESO_MESH_MAX_TRIANGLES)
         return meso_log_error(ctx, MESO_ERROR_LIMIT, "%s: %llu triangles exceed the limit %u", name,
                               (unsigned long long)num_triangles, MESO_MESH_MAX_TRIANGLES);
-    return MESO_OK;
+    return meso_memory_check(ctx, name, meso_mesh_memory_estimate(num_vertices, num_triangles));
+}
+
+uint64_t meso_mesh_memory_estimate(uint64_t num_vertices, uint64_t num_triangles) {
+    return 150 * num_vertices + 70 * num_triangles;
 }
 
 void geom_mesh_free_derived(meso_mesh *mesh) {

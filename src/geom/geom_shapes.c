@@ -416,6 +416,37 @@ static int rounded_count(double x, int lo) {
     return n < lo ? lo : n;
 }
 
+/* Rows of the (segments x rows) grid of a shape (defaults applied): one definition for the
+ * generator and the memory estimate. */
+static int grid_rows(const meso_shape_desc *d) {
+    int n = d->segments;
+    switch (d->kind) {
+    case MESO_SHAPE_SPHERE: /* half as many rings as columns: square cells at the equator */
+        return rounded_count(n / 2.0, 2);
+    case MESO_SHAPE_TORUS: /* tube cells as long as wide, on the tube's centre circle */
+        return rounded_count(n * (double)d->minor_radius / d->size, 3);
+    case MESO_SHAPE_CYLINDER:
+        return rounded_count(n * (double)d->height / (2.0 * M_PI * d->size), 1);
+    case MESO_SHAPE_VASE: {
+        double length, max_radius, height;
+        vase_measure(&length, &max_radius, &height);
+        int nv = rounded_count(n * length / (2.0 * M_PI * max_radius), 4);
+        return nv > MAX_ROUND_SEGMENTS ? MAX_ROUND_SEGMENTS : nv;
+    }
+    default: /* plane: square cells; teapot: per patch side */
+        return n;
+    }
+}
+
+uint64_t meso_shape_memory_estimate(const meso_shape_desc *desc) {
+    meso_shape_desc d = meso_shape_desc_defaults(desc);
+    if (d.segments < 1) return 0; /* refused by the generator anyway */
+    uint64_t columns = (uint64_t)d.segments, rows = (uint64_t)grid_rows(&d);
+    /* a grid's bound; the teapot is 32 such patches */
+    uint64_t patches = d.kind == MESO_SHAPE_TEAPOT ? 32 : 1;
+    return patches * meso_mesh_memory_estimate((columns + 1) * (rows + 1), 2 * columns * rows);
+}
+
 meso_result meso_mesh_create_shape(meso_context *ctx, const meso_shape_desc *desc,
                                    meso_mesh **out_mesh) {
     *out_mesh = NULL;
@@ -437,15 +468,13 @@ meso_result meso_mesh_create_shape(meso_context *ctx, const meso_shape_desc *des
     if (r != MESO_OK) return r;
     switch (d.kind) {
     case MESO_SHAPE_SPHERE: {
-        /* Half as many rings as columns: square cells at the equator. */
-        sphere_shape s = {d.size, rounded_count(n / 2.0, 2), cos_lon, sin_lon};
+        sphere_shape s = {d.size, grid_rows(&d), cos_lon, sin_lon};
         grid_desc g = {name, n, s.nv, true, true, eval_sphere, &s};
         r = build_grid(ctx, &g, out_mesh);
         break;
     }
     case MESO_SHAPE_TORUS: {
-        /* Tube cells as long as they are wide, measured on the tube's centre circle. */
-        int nv = rounded_count(n * (double)d.minor_radius / d.size, 3);
+        int nv = grid_rows(&d);
         r = make_angle_table(ctx, nv, &cos_tube, &sin_tube);
         if (r != MESO_OK) break;
         torus_shape s = {d.size, d.minor_radius, cos_lon, sin_lon, cos_tube, sin_tube};
@@ -454,7 +483,7 @@ meso_result meso_mesh_create_shape(meso_context *ctx, const meso_shape_desc *des
         break;
     }
     case MESO_SHAPE_CYLINDER: {
-        int nv = rounded_count(n * (double)d.height / (2.0 * M_PI * d.size), 1);
+        int nv = grid_rows(&d);
         cylinder_shape s = {d.size, d.height, cos_lon, sin_lon};
         grid_desc g = {name, n, nv, false, false, eval_cylinder, &s};
         r = build_grid(ctx, &g, out_mesh);
@@ -463,8 +492,7 @@ meso_result meso_mesh_create_shape(meso_context *ctx, const meso_shape_desc *des
     case MESO_SHAPE_VASE: {
         double length, max_radius, height;
         vase_measure(&length, &max_radius, &height);
-        int nv = rounded_count(n * length / (2.0 * M_PI * max_radius), 4);
-        if (nv > MAX_ROUND_SEGMENTS) nv = MAX_ROUND_SEGMENTS;
+        int nv = grid_rows(&d);
         r = vase_rings(ctx, nv, &ring_t);
         if (r != MESO_OK) break;
         double point[2], tangent[2];

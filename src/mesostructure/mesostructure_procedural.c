@@ -207,10 +207,11 @@ static meso_result validate_desc(meso_context *ctx, const meso_heightfield_desc 
     if (d->kind < MESO_HEIGHTFIELD_BRICKS || d->kind > MESO_HEIGHTFIELD_TILES)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "procedural height field: kind: unknown kind %d", (int)d->kind);
-    if (d->resolution < 1 || d->resolution > MESO_IMAGE_MAX_SIDE)
-        return meso_log_error(
-            ctx, d->resolution < 1 ? MESO_ERROR_INVALID_ARGUMENT : MESO_ERROR_LIMIT,
-            "%s: resolution: %d is not in [1, %d]", name, d->resolution, MESO_IMAGE_MAX_SIDE);
+    if (d->resolution < 1 || d->resolution > MESO_HEIGHTFIELD_MAX_RESOLUTION)
+        return meso_log_error(ctx,
+                              d->resolution < 1 ? MESO_ERROR_INVALID_ARGUMENT : MESO_ERROR_LIMIT,
+                              "%s: resolution: %d is not in [1, %d]", name, d->resolution,
+                              MESO_HEIGHTFIELD_MAX_RESOLUTION);
     if (d->rows < 1 || d->rows > 1024)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: rows: %d is not in [1, 1024]",
                               name, d->rows);

@@ -13,6 +13,7 @@
  * ray per light against the whole scene. Work is split into 16 x 16 sample tiles writing
  * disjoint memory, so the output does not depend on the thread count.
  */
+#include <limits.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -29,6 +30,8 @@ struct meso_reference {
     float epsilon;         /* shadow-ray offset, world units */
     _Atomic long long embree_bytes; /* Embree's own allocations (memory monitor) */
     long long embree_peak;
+    long long memory_limit;   /* the context's budget: Embree allocations beyond it fail */
+    _Atomic bool over_budget; /* an allocation was refused for the budget */
     size_t side_bytes;
 };
 
@@ -107,6 +110,14 @@ size_t reference_base_triangle(const reference_object *ref, uint64_t triangle) {
 static bool monitor_memory(void *user, ssize_t bytes, bool post) {
     meso_reference *reference = user;
     long long now = atomic_fetch_add(&reference->embree_bytes, (long long)bytes) + bytes;
+    /* The micro-triangles' BVH is the reference's big allocation and is known only while
+     * Embree builds it: refusing the allocation that crosses the budget makes the build fail
+     * cleanly (RTC_ERROR_OUT_OF_MEMORY) instead of the process being killed. */
+    if (bytes > 0 && !post && now > reference->memory_limit) {
+        atomic_fetch_sub(&reference->embree_bytes, (long long)bytes);
+        atomic_store(&reference->over_budget, true);
+        return false;
+    }
     if (now > reference->embree_peak) reference->embree_peak = now; /* an estimate under races */
     return true;
 }
@@ -188,6 +199,8 @@ meso_result meso_reference_create_with(meso_context *ctx, const meso_scene *scen
                                 config);
         goto fail;
     }
+    uint64_t limit = meso_context_memory_limit(ctx);
+    reference->memory_limit = limit > (uint64_t)LLONG_MAX ? LLONG_MAX : (long long)limit;
     rtcSetDeviceMemoryMonitorFunction(reference->device, monitor_memory, reference);
     reference->scene = rtcNewScene(reference->device);
     rtcSetSceneFlags(reference->scene, RTC_SCENE_FLAG_COMPACT | RTC_SCENE_FLAG_ROBUST);
@@ -259,6 +272,13 @@ meso_result meso_reference_create_with(meso_context *ctx, const meso_scene *scen
     rtcCommitScene(reference->scene);
     meso_progress_end(build.progress);
     enum RTCError error = rtcGetDeviceError(reference->device);
+    if (error != RTC_ERROR_NONE && atomic_load(&reference->over_budget)) {
+        result = meso_log_error(ctx, MESO_ERROR_LIMIT,
+                                "%s: reference: the ray-tracing structure needs more memory than "
+                                "the limit of %.1f MiB (--memory-limit)",
+                                scene->path, (double)limit / (double)(UINT64_C(1) << 20));
+        goto fail;
+    }
     if (error != RTC_ERROR_NONE) {
         result = meso_log_error(ctx, error == RTC_ERROR_OUT_OF_MEMORY ? MESO_ERROR_OUT_OF_MEMORY
                                                                        : MESO_ERROR_INTERNAL,

@@ -10,6 +10,17 @@ float *meso_render_alloc_floats(size_t count) {
     return aligned_alloc(64, bytes ? bytes : 64);
 }
 
+/* colour (3 floats), coverage and depth a sample */
+#define BYTES_PER_SAMPLE (5 * sizeof(float))
+
+uint64_t meso_render_memory_estimate(const meso_render_desc *desc, int width, int height) {
+    uint64_t pixels = (uint64_t)(width > 0 ? width : 0) * (uint64_t)(height > 0 ? height : 0);
+    int samples = desc && desc->samples > 1 ? desc->samples : 1;
+    uint64_t n = samples > 1 ? (uint64_t)ceil(sqrt((double)samples) - 1e-9) : 1;
+    /* + the colour and coverage images a save converts the framebuffer to (16 bytes a pixel) */
+    return pixels * (BYTES_PER_SAMPLE * (1 + (n > 1 ? n * n : 0)) + 16);
+}
+
 meso_result meso_framebuffer_create(meso_context *ctx, int width, int height,
                                     meso_framebuffer **out_framebuffer) {
     *out_framebuffer = NULL;
@@ -23,6 +34,9 @@ meso_result meso_framebuffer_create(meso_context *ctx, int width, int height,
                               "framebuffer: size %d x %d exceeds the limit %d a side, %u pixels",
                               width, height, MESO_IMAGE_MAX_SIDE, (unsigned)MESO_IMAGE_MAX_PIXELS);
     }
+    meso_result r =
+        meso_memory_check(ctx, "framebuffer", meso_render_memory_estimate(NULL, width, height));
+    if (r != MESO_OK) return r;
     size_t n = (size_t)width * (size_t)height;
     meso_framebuffer *fb = calloc(1, sizeof(*fb));
     if (!fb) goto oom;
@@ -85,16 +99,17 @@ meso_result meso_framebuffer_save_png(meso_context *ctx, const meso_framebuffer 
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "framebuffer: NULL %s",
                               fb ? "path" : "framebuffer");
     }
-    meso_image *image = NULL;
-    meso_result r = meso_framebuffer_color_image(ctx, fb, &image);
-    if (r != MESO_OK) return r;
-    r = meso_image_save_png(ctx, image, path, &(meso_png_desc){.encoding = encoding});
-    meso_image_destroy(image);
-    if (r != MESO_OK || !coverage_path) return r;
-    if ((r = meso_framebuffer_coverage_image(ctx, fb, &image)) != MESO_OK) return r;
-    /* the mask is a fraction, not a colour: written linearly */
-    r = meso_image_save_png(ctx, image, coverage_path,
-                            &(meso_png_desc){.encoding = MESO_ENCODING_LINEAR});
-    meso_image_destroy(image);
+    meso_image *color = NULL, *coverage = NULL;
+    meso_result r = meso_framebuffer_color_image(ctx, fb, &color);
+    if (r == MESO_OK && coverage_path) r = meso_framebuffer_coverage_image(ctx, fb, &coverage);
+    if (r == MESO_OK) {
+        const meso_image *images[2] = {color, coverage};
+        const char *paths[2] = {path, coverage_path};
+        /* the mask is a fraction, not a colour: written linearly */
+        const meso_png_desc descs[2] = {{.encoding = encoding}, {.encoding = MESO_ENCODING_LINEAR}};
+        r = meso_image_save_png_all(ctx, coverage_path ? 2 : 1, images, paths, descs);
+    }
+    meso_image_destroy(color);
+    meso_image_destroy(coverage);
     return r;
 }

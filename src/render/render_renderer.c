@@ -309,7 +309,12 @@ static meso_result draw_frame(meso_renderer *rd, meso_framebuffer *fb, const mes
     float *color = fb->color, *coverage = fb->coverage, *depth = fb->depth;
     meso_result r;
     if (n > 1) {
-        if ((r = reserve_samples(rd, samples)) != MESO_OK) return r;
+        meso_render_desc desc = {.samples = n * n};
+        if ((r = meso_memory_check(ctx, rd->scene->path,
+                                   meso_render_memory_estimate(&desc, fb->width, fb->height))) !=
+                MESO_OK ||
+            (r = reserve_samples(rd, samples)) != MESO_OK)
+            return r;
         color = rd->sample_color, coverage = rd->sample_coverage, depth = rd->sample_depth;
     }
     uint64_t triangles = 0, fragments = 0;

@@ -14,6 +14,7 @@ typedef struct scene_parser {
     meso_context *ctx;
     const char *file;     /* the scene's name in messages */
     const char *base_dir; /* relative paths resolve against it */
+    uint64_t *memory_estimate; /* bytes the objects parsed so far need (the memory budget) */
 } scene_parser;
 
 /* A key path: "" at the top, "objects[0]", "objects[0].material". */
@@ -25,6 +26,18 @@ scene_key scene_key_child(const scene_key *parent, const char *key);
 scene_key scene_key_index(const scene_key *parent, int index);
 
 /* Log "<file>: <key path>: <reason>" (or "<file>: <reason>" at the top) and return code. */
+/* Add `bytes` to the scene's memory estimate and refuse (MESO_ERROR_LIMIT, naming the file
+ * and key) when the total exceeds the context's limit: eight 4096-segment planes are refused
+ * at the second, not after 18 GB. */
+meso_result scene_account_memory(const scene_parser *p, const scene_key *key, uint64_t bytes);
+
+/* Containers nested deeper than this are refused (cJSON's own limit is 1000). */
+#define SCENE_MAX_DEPTH 64
+
+/* Refuse numbers cJSON accepts but JSON does not ("01", "64.", "1.e5", "+1"), naming the key
+ * path: the text of a scene cJSON has parsed. */
+meso_result scene_check_numbers(const scene_parser *p, const char *json);
+
 meso_result scene_error(const scene_parser *p, meso_result code, const scene_key *key,
                         const char *format, ...) __attribute__((format(printf, 4, 5)));
 
@@ -56,6 +69,9 @@ meso_result scene_resolve_path(const scene_parser *p, const scene_key *key, cons
 
 /* Parse objects[index] into *object (zeroed by the caller; released by scene_object_deinit
  * whatever the result). */
+/* The memory the objects' built-in shapes and procedural height fields will need, read from
+ * the JSON before any is built (values the parse would refuse count as defaults). */
+uint64_t scene_objects_memory_estimate(const cJSON *objects);
 meso_result scene_parse_object(const scene_parser *p, const cJSON *item, int index,
                                meso_object *object);
 void scene_object_deinit(meso_object *object);

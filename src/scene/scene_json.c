@@ -213,3 +213,80 @@ meso_result scene_resolve_path(const scene_parser *p, const scene_key *key, cons
                            SCENE_PATH_MAX - 1);
     return MESO_OK;
 }
+
+/* ---- Strict numbers ----------------------------------------------------------------------- */
+
+/* Whether text[0 .. length) is a number as RFC 8259 §6 spells it:
+ * -?(0|[1-9][0-9]*)(.[0-9]+)?([eE][+-]?[0-9]+)? */
+static bool is_json_number(const char *text, size_t length) {
+    size_t i = 0;
+    if (i < length && text[i] == '-') i++;
+    if (i < length && text[i] == '0') {
+        i++;
+    } else if (i < length && text[i] >= '1' && text[i] <= '9') {
+        while (i < length && text[i] >= '0' && text[i] <= '9') i++;
+    } else {
+        return false;
+    }
+    if (i < length && text[i] == '.') {
+        size_t digits = ++i;
+        while (i < length && text[i] >= '0' && text[i] <= '9') i++;
+        if (i == digits) return false;
+    }
+    if (i < length && (text[i] == 'e' || text[i] == 'E')) {
+        i++;
+        if (i < length && (text[i] == '+' || text[i] == '-')) i++;
+        size_t digits = i;
+        while (i < length && text[i] >= '0' && text[i] <= '9') i++;
+        if (i == digits) return false;
+    }
+    return i == length;
+}
+
+/* One open container while scanning: an array counts its elements, an object remembers the
+ * last key read. */
+typedef struct scan_frame {
+    bool is_array;
+    int index;
+    char key[64];
+} scan_frame;
+
+meso_result scene_check_numbers(const scene_parser *p, const char *json) {
+    scan_frame stack[SCENE_MAX_DEPTH];
+    int depth = 0;
+    for (const char *c = json; *c; c++) {
+        if (*c == '{' || *c == '[') {
+            if (depth == SCENE_MAX_DEPTH)
+                return scene_error(p, MESO_ERROR_LIMIT, NULL, "nested deeper than %d",
+                                   SCENE_MAX_DEPTH);
+            stack[depth++] = (scan_frame){*c == '[', 0, ""};
+        } else if (*c == '}' || *c == ']') {
+            if (depth > 0) depth--;
+        } else if (*c == ',' && depth > 0 && stack[depth - 1].is_array) {
+            stack[depth - 1].index++;
+        } else if (*c == '"') {
+            const char *start = ++c;
+            while (*c && *c != '"') c += c[0] == '\\' && c[1] ? 2 : 1;
+            if (!*c) break;
+            const char *after = c + 1;
+            while (*after == ' ' || *after == '\t' || *after == '\n' || *after == '\r') after++;
+            if (*after == ':' && depth > 0 && !stack[depth - 1].is_array)
+                snprintf(stack[depth - 1].key, sizeof(stack[depth - 1].key), "%.*s",
+                         (int)(c - start), start);
+        } else if (*c == '-' || (*c >= '0' && *c <= '9')) {
+            size_t length = strspn(c, "0123456789+-.eE");
+            if (!is_json_number(c, length)) {
+                scene_key key = {""};
+                for (int i = 0; i < depth; i++)
+                    key = stack[i].is_array ? scene_key_index(&key, stack[i].index)
+                                            : scene_key_child(&key, stack[i].key);
+                return scene_error(p, MESO_ERROR_FORMAT, &key,
+                                   "'%.*s' is not a JSON number (no leading zeros, digits after "
+                                   "the point)",
+                                   (int)(length < 32 ? length : 32), c);
+            }
+            c += length - 1;
+        }
+    }
+    return MESO_OK;
+}

@@ -138,13 +138,19 @@ static meso_result parse_objects(const scene_parser *p, const cJSON *item, meso_
     if (count > MESO_SCENE_MAX_OBJECTS)
         return scene_error(p, MESO_ERROR_LIMIT, &key, "%d objects exceed the limit of %d", count,
                            MESO_SCENE_MAX_OBJECTS);
+    /* The whole scene's estimate first, so that a scene over the memory budget is refused
+     * before its first mesh is built (the running account below catches imported meshes). */
+    char name[1024 + SCENE_KEY_MAX];
+    snprintf(name, sizeof(name), "%s: objects", p->file);
+    meso_result r = meso_memory_check(p->ctx, name, scene_objects_memory_estimate(item));
+    if (r != MESO_OK) return r;
     scene->objects = calloc((size_t)count, sizeof(meso_object));
     if (!scene->objects) return scene_error(p, MESO_ERROR_OUT_OF_MEMORY, &key, "out of memory");
     int index = 0;
     for (const cJSON *object = item->child; object; object = object->next, index++) {
         /* Counted before parsing so that destroy releases a half-built object too. */
         scene->num_objects = index + 1;
-        meso_result r = scene_parse_object(p, object, index, &scene->objects[index]);
+        r = scene_parse_object(p, object, index, &scene->objects[index]);
         if (r != MESO_OK) return r;
     }
     return MESO_OK;
@@ -173,6 +179,7 @@ static meso_result parse_document(const scene_parser *p, const char *json, meso_
         r = scene_error(p, MESO_ERROR_FORMAT, NULL, "the top level must be a JSON object");
         goto done;
     }
+    if ((r = scene_check_numbers(p, json))) goto done;
     if ((r = scene_check_object(p, root, &top, keys))) goto done;
     const cJSON *description = cJSON_GetObjectItemCaseSensitive(root, "description");
     if (description && !cJSON_IsString(description)) {
@@ -192,13 +199,23 @@ done:
     return r;
 }
 
+meso_result scene_account_memory(const scene_parser *p, const scene_key *key, uint64_t bytes) {
+    *p->memory_estimate += bytes;
+    if (*p->memory_estimate <= meso_context_memory_limit(p->ctx)) return MESO_OK;
+    char name[1024 + SCENE_KEY_MAX + 2];
+    snprintf(name, sizeof(name), "%s: %s", p->file, key->text[0] ? key->text : "objects");
+    return meso_memory_check(p->ctx, name, *p->memory_estimate);
+}
+
 meso_result meso_scene_parse(meso_context *ctx, const char *json, const char *name,
                              const char *base_dir, meso_scene **out_scene) {
     *out_scene = NULL;
     if (!name) name = "scene";
     if (!base_dir || !base_dir[0]) base_dir = ".";
     if (!json) return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: no scene text", name);
-    scene_parser p = {.ctx = ctx, .file = name, .base_dir = base_dir};
+    uint64_t memory_estimate = 0;
+    scene_parser p = {
+        .ctx = ctx, .file = name, .base_dir = base_dir, .memory_estimate = &memory_estimate};
     meso_scene *scene = calloc(1, sizeof(*scene));
     if (!scene) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", name);
     snprintf(scene->path, sizeof(scene->path), "%s", name);

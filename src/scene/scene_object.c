@@ -22,11 +22,24 @@ static meso_result copy_name(const scene_parser *p, const scene_key *key, const 
 /* A missing referenced file is reported with the scene, the key and the resolved path, which
  * the loaders' own messages (naming only the file) would not say. */
 static meso_result check_readable(const scene_parser *p, const scene_key *key, const char *path) {
-    FILE *file = fopen(path, "rb");
-    if (!file)
-        return scene_error(p, MESO_ERROR_IO, key, "%s: cannot open: %s", path, strerror(errno));
+    FILE *file = NULL;
+    if (meso_file_open_read(p->ctx, path, &file) != MESO_OK) {
+        /* the loader's reason ("path: is a FIFO, ..."), said at the scene's key */
+        char reason[1024];
+        snprintf(reason, sizeof(reason), "%s", meso_context_last_error(p->ctx));
+        return scene_error(p, MESO_ERROR_IO, key, "%s", reason);
+    }
     fclose(file);
     return MESO_OK;
+}
+
+/* A loader's error (naming only its own file) said again at the scene's key, so that the
+ * one line names the scene, the key and the loaded file's reason. */
+static meso_result relog_at_key(const scene_parser *p, const scene_key *key, meso_result r) {
+    if (r == MESO_ERROR_OUT_OF_MEMORY) return r;
+    char reason[1024];
+    snprintf(reason, sizeof(reason), "%s", meso_context_last_error(p->ctx));
+    return scene_error(p, r, key, "%s", reason);
 }
 
 /* A library call refused parameters the parser let through (e.g. an odd weave count): report
@@ -65,7 +78,7 @@ static meso_result parse_procedural_heightfield(const scene_parser *p, const cJS
     }
     long resolution = 0, rows = 0, columns = 0, seed = 0;
     float gap = 0.0f, bevel = 0.0f, roughness = 0.0f;
-    if ((r = scene_get_int(p, item, key, "resolution", 1, MESO_IMAGE_MAX_SIDE, true,
+    if ((r = scene_get_int(p, item, key, "resolution", 1, MESO_HEIGHTFIELD_MAX_RESOLUTION, true,
                            &resolution)) ||
         (r = scene_get_int(p, item, key, "rows", 1, 1024, false, &rows)) ||
         (r = scene_get_int(p, item, key, "columns", 1, 1024, false, &columns)) ||
@@ -88,6 +101,10 @@ static meso_result parse_procedural_heightfield(const scene_parser *p, const cJS
                            (double)roughness);
     }
     desc.resolution = (int)resolution;
+    /* heights (float) and the generated colour (3 floats) a texel */
+    uint64_t texels =
+        (uint64_t)(resolution ? resolution : 512) * (uint64_t)(resolution ? resolution : 512);
+    if ((r = scene_account_memory(p, key, texels * (want_color ? 16 : 4))) != MESO_OK) return r;
     desc.rows = (int)rows;
     desc.columns = (int)columns;
     desc.seed = (uint32_t)seed;
@@ -216,6 +233,7 @@ static meso_result parse_impostor_solid(const scene_parser *p, const cJSON *item
         if ((r = scene_resolve_path(p, &k, model, path)) || (r = check_readable(p, &k, path)))
             return r;
         r = meso_mesh_load(p->ctx, path, &mesh);
+        if (r != MESO_OK) return relog_at_key(p, &k, r);
     }
     if (r != MESO_OK) return r;
     meso_vec3 lo = mesh->positions[0], hi = lo;
@@ -300,7 +318,9 @@ static meso_result parse_height_map_or_solid(const scene_parser *p, const cJSON 
             (r = check_readable(p, &k, path)))
             return r;
         r = meso_heightfield_load_png(p->ctx, path, m->wrap, &m->height_field);
-        if (r != MESO_OK) return r;
+        if (r != MESO_OK) return relog_at_key(p, &k, r);
+        uint64_t texels = (uint64_t)m->height_field->width * (uint64_t)m->height_field->height;
+        if ((r = scene_account_memory(p, &k, 4 * texels)) != MESO_OK) return r;
         snprintf(m->source, sizeof(m->source), "%s", base_name(height_map->valuestring));
         return MESO_OK;
     }
@@ -316,7 +336,7 @@ static meso_result parse_height_map_or_solid(const scene_parser *p, const cJSON 
             (r = check_readable(p, &k, path)))
             return r;
         meso_mesh *tile = NULL;
-        if ((r = meso_mesh_load(p->ctx, path, &tile)) != MESO_OK) return r;
+        if ((r = meso_mesh_load(p->ctx, path, &tile)) != MESO_OK) return relog_at_key(p, &k, r);
         r = meso_solid_create_from_triangles(p->ctx, tile->positions, tile->num_vertices,
                                              tile->indices, tile->num_triangles, path, 0,
                                              &m->solid);
@@ -339,7 +359,14 @@ static meso_result load_color_map(const scene_parser *p, const scene_key *key, c
         return r;
     meso_image *image = NULL;
     r = meso_image_load_png(p->ctx, path, &image);
-    if (r != MESO_OK) return r;
+    if (r != MESO_OK) return relog_at_key(p, key, r);
+    /* the image and the texture made from it with its mip levels (a third more) */
+    uint64_t image_bytes = (uint64_t)image->width * (uint64_t)image->height *
+                           (uint64_t)image->channels * sizeof(float);
+    if ((r = scene_account_memory(p, key, image_bytes + image_bytes / 3 * 4)) != MESO_OK) {
+        meso_image_destroy(image);
+        return r;
+    }
     /* Colour maps are authored in sRGB; shading is linear (DESIGN.md). Alpha stays linear. */
     int colour_channels = image->channels >= 3 ? 3 : 1;
     size_t n = (size_t)image->width * (size_t)image->height;
@@ -429,7 +456,11 @@ static meso_result create_mesh(const scene_parser *p, const cJSON *obj, const sc
         if ((r = scene_resolve_path(p, &file_key, file, path)) ||
             (r = check_readable(p, &file_key, path)))
             return r;
-        return meso_mesh_load(p->ctx, path, out_mesh);
+        r = meso_mesh_load(p->ctx, path, out_mesh);
+        if (r != MESO_OK) return relog_at_key(p, &file_key, r);
+        return scene_account_memory(
+            p, key,
+            meso_mesh_memory_estimate((*out_mesh)->num_vertices, (*out_mesh)->num_triangles));
     }
     if (shape && !cJSON_IsString(shape))
         return scene_error(p, MESO_ERROR_FORMAT, &shape_key,
@@ -447,8 +478,31 @@ static meso_result create_mesh(const scene_parser *p, const cJSON *obj, const sc
         (r = scene_get_int(p, obj, key, "segments", 1, 4096, true, &segments)))
         return r;
     desc.segments = (int)segments;
+    /* accounted before it is built: a mesh over the budget is never allocated */
+    if ((r = scene_account_memory(p, key, meso_shape_memory_estimate(&desc))) != MESO_OK) return r;
     r = meso_mesh_create_shape(p->ctx, &desc, out_mesh);
     return r == MESO_OK ? r : relog_as_format(p, key, r);
+}
+
+/* Scaled texture coordinates are limited so that u times the largest texture side (16384 =
+ * 2^14) stays within 2^30: samplers and techniques convert texel positions to int, and a
+ * uv_scale of 1e10 would overflow them (undefined behaviour). 65536 tiles is far beyond what
+ * can be seen. */
+#define MAX_TEXTURE_COORDINATE 65536.0f
+
+static meso_result check_texture_coordinates(const scene_parser *p, const scene_key *key,
+                                             const meso_mesh *mesh) {
+    float largest = 0.0f;
+    for (size_t i = 0; i < mesh->num_vertices; i++) {
+        float u = fabsf(mesh->uvs[i].x), v = fabsf(mesh->uvs[i].y);
+        largest = u > largest ? u : largest;
+        largest = v > largest ? v : largest;
+    }
+    if (largest <= MAX_TEXTURE_COORDINATE) return MESO_OK; /* NaN is refused by validation */
+    scene_key k = scene_key_child(key, "uv_scale");
+    return scene_error(p, MESO_ERROR_LIMIT, &k,
+                       "scaled texture coordinates reach %g, beyond the limit %g", (double)largest,
+                       (double)MAX_TEXTURE_COORDINATE);
 }
 
 /* World-space mesh, scaled UVs, validated, with tangents, curvature and quadrics. */
@@ -469,7 +523,10 @@ static meso_result build_mesh(const scene_parser *p, const cJSON *obj, const sce
     if (offset != 0.0f)
         for (size_t v = 0; v < mesh->num_vertices; v++)
             mesh->positions[v] = meso_vec3_madd(mesh->positions[v], mesh->normals[v], offset);
-    if (mesh->uvs) meso_mesh_scale_uvs(mesh, uv_scale);
+    if (mesh->uvs) {
+        meso_mesh_scale_uvs(mesh, uv_scale);
+        if ((r = check_texture_coordinates(p, key, mesh)) != MESO_OK) return r;
+    }
     bool require_uvs =
         object->mesostructure.kind != MESO_MESOSTRUCTURE_NONE || object->material.color_map != NULL;
     char label[SCENE_KEY_MAX + 1100];
@@ -595,6 +652,40 @@ meso_result scene_parse_object(const scene_parser *p, const cJSON *item, int ind
 fail:
     meso_image_destroy(generated_color);
     return r;
+}
+
+/* A number member in [lo, hi], else 0 (the default): the estimate reads the scene before
+ * it is validated, and leaves the refusing of bad values to the parse. */
+static double number_or_default(const cJSON *object, const char *name, double lo, double hi) {
+    const cJSON *item = cJSON_GetObjectItemCaseSensitive(object, name);
+    return cJSON_IsNumber(item) && item->valuedouble >= lo && item->valuedouble <= hi
+               ? item->valuedouble
+               : 0.0;
+}
+
+uint64_t scene_objects_memory_estimate(const cJSON *objects) {
+    uint64_t total = 0;
+    for (const cJSON *obj = objects ? objects->child : NULL; obj; obj = obj->next) {
+        const cJSON *shape = cJSON_GetObjectItemCaseSensitive(obj, "shape");
+        meso_shape_desc desc = {0};
+        if ((!shape || cJSON_IsString(shape)) &&
+            meso_shape_kind_from_name(shape ? shape->valuestring : "plane", &desc.kind)) {
+            desc.size = (float)number_or_default(obj, "size", 1e-30, 1e30);
+            desc.minor_radius = (float)number_or_default(obj, "minor_radius", 1e-30, 1e30);
+            desc.height = (float)number_or_default(obj, "height", 1e-30, 1e30);
+            desc.segments = (int)number_or_default(obj, "segments", 1, 4096);
+            total += meso_shape_memory_estimate(&desc);
+        }
+        const cJSON *m = cJSON_GetObjectItemCaseSensitive(obj, "mesostructure");
+        const cJSON *source = cJSON_GetObjectItemCaseSensitive(m, "height_map");
+        if (cJSON_IsObject(source)) {
+            double side =
+                number_or_default(source, "resolution", 1, MESO_HEIGHTFIELD_MAX_RESOLUTION);
+            if (side == 0.0) side = 512.0;
+            total += (uint64_t)(side * side) * 16; /* heights and generated colour */
+        }
+    }
+    return total;
 }
 
 void scene_object_deinit(meso_object *object) {

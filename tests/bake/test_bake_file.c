@@ -216,19 +216,27 @@ static void test_bake_cache_uses_meso_cache_dir_and_round_trips(void **state) {
     assert_int_equal(meso_bake_cache_path(ctx, "test_kind", 0xabcull, path, sizeof(path)), MESO_OK);
     assert_non_null(strstr(path, "cache/nested/test_kind-0000000000000abc.mesobake"));
     meso_bake_file *loaded = (meso_bake_file *)1;
-    assert_int_equal(meso_bake_cache_load(ctx, "test_kind", 3, 0xabc, &loaded), MESO_OK);
-    assert_null(loaded);
     meso_bake_file bake = sample_bake();
+    assert_int_equal(meso_bake_cache_load(ctx, "test_kind", 3, 0xabc, bake.source_hash, &loaded),
+                     MESO_OK);
+    assert_null(loaded);
     assert_int_equal(meso_bake_cache_save(ctx, &bake, 0xabc), MESO_OK);
-    assert_int_equal(meso_bake_cache_load(ctx, "test_kind", 3, 0xabc, &loaded), MESO_OK);
+    assert_int_equal(meso_bake_cache_load(ctx, "test_kind", 3, 0xabc, bake.source_hash, &loaded),
+                     MESO_OK);
     assert_non_null(loaded);
     meso_bake_file_destroy(loaded);
+    /* made from another source (the stored source hash is not the one asked for): not used */
+    assert_int_equal(meso_bake_cache_load(ctx, "test_kind", 3, 0xabc, 0x42, &loaded), MESO_OK);
+    assert_null(loaded);
+    assert_non_null(strstr(test_last_warning(), "made from another source"));
     /* another kind version: not used */
-    assert_int_equal(meso_bake_cache_load(ctx, "test_kind", 4, 0xabc, &loaded), MESO_OK);
+    assert_int_equal(meso_bake_cache_load(ctx, "test_kind", 4, 0xabc, bake.source_hash, &loaded),
+                     MESO_OK);
     assert_null(loaded);
     /* a corrupted entry: a warning, then treated as absent */
     test_write_file(path, "MESOBAKE garbage", 16);
-    assert_int_equal(meso_bake_cache_load(ctx, "test_kind", 3, 0xabc, &loaded), MESO_OK);
+    assert_int_equal(meso_bake_cache_load(ctx, "test_kind", 3, 0xabc, bake.source_hash, &loaded),
+                     MESO_OK);
     assert_null(loaded);
     assert_non_null(strstr(test_last_warning(), "unusable cache entry"));
     setenv("MESO_CACHE_DIR", "off", 1);

@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# Fuzz meso's loaders with libFuzzer (clang, ASan + UBSan + float-cast-overflow):
+#   scripts/fuzz.sh SECONDS [png|scene|mesh|bake ...]      (default: all four, SECONDS each)
+# Builds build-fuzz/ (BUILD_FUZZ overrides), runs each target on its kept corpus
+# tests/fuzz/corpus/<target>/, then merges the inputs that found new coverage into it. A crash
+# is written to tests/fuzz/crashes/<target>/: fix it, then move the file into the corpus,
+# where `make test` replays it (fuzz_corpus_<target>) in every build.
+set -euo pipefail
+seconds=${1:?usage: scripts/fuzz.sh SECONDS [png|scene|mesh|bake ...]}
+shift
+targets=("$@")
+[ ${#targets[@]} -gt 0 ] || targets=(png scene mesh bake)
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=${BUILD_FUZZ:-$root/build-fuzz}
+
+CC=${CC:-clang} cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DMESO_FUZZ=ON -DMESO_SANITIZE=ON -DMESO_NATIVE=OFF >/dev/null
+cmake --build "$build" -j "${JOBS:-2}" --target $(printf 'fuzz_%s ' "${targets[@]}")
+
+# Leaks are reported (LeakSanitizer) but do not stop the run: libassimp's own leaks on some
+# malformed files would otherwise end the mesh target at its first input.
+export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=0:abort_on_error=1}
+export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
+export MESO_CACHE_DIR=off TMPDIR=$build
+status=0
+for target in "${targets[@]}"; do
+    corpus=$root/tests/fuzz/corpus/$target
+    found=$build/found/$target
+    crashes=$root/tests/fuzz/crashes/$target
+    mkdir -p "$found" "$crashes"
+    echo "fuzz_$target: $seconds s on $(ls "$corpus" | wc -l) kept inputs"
+    "$build/fuzz_$target" -max_total_time="$seconds" -timeout=30 -rss_limit_mb=2048 \
+        -max_len=65536 -artifact_prefix="$crashes/" "$found" "$corpus" || status=1
+    # keep only what adds coverage
+    "$build/fuzz_$target" -merge=1 "$corpus" "$found" >/dev/null 2>&1 || true
+    rmdir "$crashes" 2>/dev/null || echo "fuzz_$target: crashes in $crashes"
+done
+exit $status

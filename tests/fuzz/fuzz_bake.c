@@ -1,0 +1,21 @@
+/* Fuzz target: the bake container (meso_bake_file_load) and every kind's loader that reads
+ * one: VDM (meso_vdm_from_bake_file, meso_vdm_describe) and relief layers
+ * (meso_layers_from_bake_file, meso_layers_describe). */
+#include "fuzz_target.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+    meso_context *ctx = fuzz_context();
+    meso_bake_file *bake = NULL;
+    if (meso_bake_file_load(ctx, fuzz_write_file(data, size, "mesobake"), &bake) != MESO_OK)
+        return 0;
+    meso_vdm *vdm = NULL;
+    if (meso_vdm_from_bake_file(ctx, bake, "fuzz", &vdm) == MESO_OK) meso_vdm_destroy(vdm);
+    meso_layers *layers = NULL;
+    if (meso_layers_from_bake_file(ctx, bake, "fuzz", &layers) == MESO_OK)
+        meso_layers_destroy(layers);
+    char text[256];
+    meso_vdm_describe(bake, text, sizeof text);
+    meso_layers_describe(bake, text, sizeof text);
+    meso_bake_file_destroy(bake);
+    return 0;
+}
