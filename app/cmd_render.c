@@ -1,5 +1,6 @@
 /* meso render: one scene to a PNG, or every technique side by side against the reference. */
 #include "app.h"
+#include "render_camera.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -18,6 +19,8 @@ typedef struct render_options {
     bool wireframe;
     const char *coverage;
     bool linear;
+    int orbit;                   /* frames of a turntable into folder OUT (0: none) */
+    app_camera_override camera; /* --eye, --target, --fov, --light */
 } render_options;
 
 static const app_command_help render_help = {
@@ -37,7 +40,9 @@ static const app_command_help render_help = {
     .examples = "  meso render examples/bricks-plane.json -o bricks.png\n"
                 "  meso render examples/bricks-plane.json -o relief.png --technique relief "
                 "--size 256x256\n"
-                "  meso render examples/bricks-plane.json --techniques all -o out/bricks\n",
+                "  meso render examples/bricks-plane.json --techniques all -o out/bricks\n"
+                "  meso render examples/bricks-teapot.json --technique relief --orbit 120 -o "
+                "orbit\n",
 };
 
 /* "relief", or "mixed" when the objects use different techniques. */
@@ -197,6 +202,11 @@ int meso_cmd_render(int argc, char **argv) {
          "frames timed per technique after the first, median reported (with --techniques; "
          "at most 2 s each)",
          "5", 1, 1000},
+        {"--orbit", NULL, APP_OPTION_INT, &o.orbit, "N",
+         "write N frames turning about the camera's up axis through its target into folder OUT "
+         "(OUT/frame-0000.png ...)",
+         NULL, 1, 100000},
+        APP_CAMERA_OVERRIDE_OPTIONS(o.camera),
     };
     app_globals globals;
     const char *positionals[1];
@@ -208,6 +218,8 @@ int meso_cmd_render(int argc, char **argv) {
     if (!o.output) return app_usage_error("render", "missing -o OUT");
     if (o.technique && o.techniques)
         return app_usage_error("render", "--technique and --techniques exclude each other");
+    if (o.orbit && o.techniques)
+        return app_usage_error("render", "--orbit and --techniques exclude each other");
     const char *scene_path = positionals[0];
     if (o.technique && !app_technique_known(o.technique)) {
         char known[1024];
@@ -231,6 +243,16 @@ int meso_cmd_render(int argc, char **argv) {
     meso_result result = meso_scene_load(ctx, scene_path, &scene);
     if (result != MESO_OK)
         status = app_fail(ctx, result);
+    else if ((status = app_camera_override_apply("render", &o.camera, scene)) >= 0)
+        ; /* the override's message is printed */
+    else if (o.orbit)
+        status = app_render_orbit(
+            ctx, scene,
+            &(meso_render_desc){
+                .technique = o.technique, .samples = o.samples, .wireframe = o.wireframe},
+            o.size.width ? o.size.width : scene->width,
+            o.size.height ? o.size.height : scene->height,
+            o.linear ? MESO_ENCODING_LINEAR : scene->encoding, o.orbit, o.output, globals.quiet);
     else if (o.techniques)
         status = render_all(ctx, scene, &o, names, num_names, globals.quiet);
     else
