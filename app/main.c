@@ -15,6 +15,7 @@ static const command commands[] = {
     {"info", meso_cmd_info, "describe a PNG, scene, mesh or bake file"},
     {"demo", meso_cmd_demo, "render the built-in examples with every technique"},
     {"bench", meso_cmd_bench, "time techniques per frame, and their thread scaling"},
+    {"view", meso_cmd_view, "an interactive window: orbit, switch techniques, compare"},
 };
 #define NUM_COMMANDS (sizeof(commands) / sizeof(commands[0]))
 
