@@ -19,6 +19,7 @@
 
 typedef struct view_options {
     const char *technique;
+    const char *techniques; /* the list to prepare and switch between (NULL: all that apply) */
     app_size size;
     double target_fps;
     bool fixed_resolution;
@@ -641,15 +642,32 @@ static void run_frame(viewer *v, double start_seconds) {
 
 /* ---- Setting up --------------------------------------------------------------------------- */
 
-/* The techniques that can draw the scene, in the registry's order; the initial one. Returns
- * -1, or an exit status after printing why. */
-static int list_techniques(const meso_scene *scene, const char *wanted, const char **names,
-                           int *out_count, int *out_initial) {
+/* Whether the window can show technique `name` on the scene: not the reference (C renders
+ * it), and it must draw every object. */
+static bool technique_shown(const meso_scene *scene, const char *name) {
+    const meso_technique_info *info = meso_technique_find(name);
+    return info && info->kind != MESO_TECHNIQUE_REFERENCE && app_technique_applies(info, scene);
+}
+
+/* The techniques of the window: those of --techniques (each must draw the scene), else every
+ * one that can, in the registry's order; and the initial one. Returns -1, or an exit status
+ * after printing why. */
+static int list_techniques(const meso_scene *scene, const char *const *listed, int num_listed,
+                           const char *wanted, const char **names, int *out_count,
+                           int *out_initial) {
     int count = 0;
-    for (size_t i = 0; i < meso_technique_count() && count < VIEW_MAX_TECHNIQUES; i++) {
-        const meso_technique_info *info = meso_technique_get(i);
-        if (info->kind != MESO_TECHNIQUE_REFERENCE && app_technique_applies(info, scene))
-            names[count++] = info->name;
+    for (int i = 0; i < num_listed && count < VIEW_MAX_TECHNIQUES; i++) {
+        if (!technique_shown(scene, listed[i])) {
+            fprintf(stderr, "meso: %s: --techniques: '%s' cannot draw this scene's objects%s\n",
+                    scene->path, listed[i],
+                    !strcmp(listed[i], "reference") ? " in the window (press C for it)" : "");
+            return APP_EXIT_BAD_INPUT;
+        }
+        names[count++] = listed[i];
+    }
+    for (size_t i = 0; !listed && i < meso_technique_count() && count < VIEW_MAX_TECHNIQUES; i++) {
+        if (technique_shown(scene, meso_technique_get(i)->name))
+            names[count++] = meso_technique_get(i)->name;
     }
     const char *initial = wanted ? wanted
                           : scene->num_objects > 0 && scene->objects[0].technique[0]
@@ -830,6 +848,9 @@ int meso_cmd_view(int argc, char **argv) {
     const app_option options[] = {
         {"--technique", NULL, APP_OPTION_STRING, &o.technique, "T", "the technique shown first",
          "the first object's", 0, 0},
+        {"--techniques", NULL, APP_OPTION_STRING, &o.techniques, "LIST",
+         "comma-separated techniques to prepare and switch between", "all that can draw the "
+         "scene", 0, 0},
         {"--size", NULL, APP_OPTION_SIZE, &o.size, "WxH", "the window's size", "the scene's", 0,
          0},
         {"--fps", NULL, APP_OPTION_DOUBLE, &o.target_fps, "F",
@@ -857,6 +878,14 @@ int meso_cmd_view(int argc, char **argv) {
     if (num_positionals < 1) return app_usage_error("view", "missing the SCENE file");
     if (o.events && o.script)
         return app_usage_error("view", "--events and --script exclude each other");
+    const char *listed[VIEW_MAX_TECHNIQUES];
+    char listed_storage[1024];
+    int num_listed = 0;
+    if (o.techniques) {
+        num_listed = app_parse_technique_list("view", o.techniques, listed_storage,
+                                              sizeof(listed_storage), listed, VIEW_MAX_TECHNIQUES);
+        if (num_listed < 0) return APP_EXIT_BAD_INPUT;
+    }
 
     viewer *v = calloc(1, sizeof(*v));
     if (!v) return APP_EXIT_FAILURE;
@@ -881,7 +910,8 @@ int meso_cmd_view(int argc, char **argv) {
     } else if ((r = meso_scene_load(v->ctx, positionals[0], &v->scene)) != MESO_OK) {
         status = app_fail(v->ctx, r); /* the same line as meso render's */
     } else if ((status = app_camera_override_apply("view", &o.camera, v->scene)) >= 0) {
-    } else if ((status = list_techniques(v->scene, o.technique, names, &count, &initial)) >= 0) {
+    } else if ((status = list_techniques(v->scene, o.techniques ? listed : NULL, num_listed,
+                                           o.technique, names, &count, &initial)) >= 0) {
     } else if (!display_available(&sdl_started, reason, sizeof(reason))) {
         fprintf(stderr,
                 "meso: view: no display (%s); for frames without a window use meso render %s "
