@@ -102,8 +102,10 @@ typedef struct viewer {
     bool scripted;
 
     double last_move;
-    double frame_ms, overhead_ms; /* last frame's render time and events + present time */
-    double *timed_render_ms, *timed_overhead_ms;
+    double frame_ms; /* the last live frame's render time */
+    /* per drawn frame, for the summary's medians: render, events (handling, preparing),
+     * upload (sRGB conversion into the texture), present (copy to the window) */
+    double *timed[4];
     size_t num_timed;
     double open_seconds;
     int frames_reduced;
@@ -114,7 +116,7 @@ typedef struct viewer {
     int screenshot_number;
     int status;
     int threads; /* --threads, for the reference's own context too */
-    bool quiet;
+    bool quiet, verbose;
     bool running;
     /* what each technique's renderer was prepared with: prepared again when the state differs */
     struct prepared_with {
@@ -238,7 +240,9 @@ static void make_srgb_table(viewer *v) {
 static bool upload(viewer *v, const float *rgb, int width, int height, bool linear) {
     if (!v->texture || v->texture_width != width || v->texture_height != height) {
         if (v->texture) SDL_DestroyTexture(v->texture);
-        v->texture = SDL_CreateTexture(v->sdl, SDL_PIXELFORMAT_RGB24, SDL_TEXTUREACCESS_STREAMING,
+        /* XRGB8888, the window surface's own format: the software renderer's copy is then a
+         * plain one (RGB24 went through SDL's generic converter: 12 ms at 800x600) */
+        v->texture = SDL_CreateTexture(v->sdl, SDL_PIXELFORMAT_RGB888, SDL_TEXTUREACCESS_STREAMING,
                                        width, height);
         if (!v->texture) return false;
         v->texture_width = width, v->texture_height = height;
@@ -249,11 +253,17 @@ static bool upload(viewer *v, const float *rgb, int width, int height, bool line
     int pitch = 0;
     if (SDL_LockTexture(v->texture, NULL, &data, &pitch) != 0) return false;
     for (int y = 0; y < height; y++) {
-        uint8_t *row = (uint8_t *)data + (size_t)y * (size_t)pitch;
+        uint32_t *row = (uint32_t *)((uint8_t *)data + (size_t)y * (size_t)pitch);
         const float *in = rgb + (size_t)y * (size_t)width * 3;
-        for (int i = 0; i < 3 * width; i++) {
-            float c = in[i] < 0.0f ? 0.0f : in[i] > 1.0f ? 1.0f : in[i];
-            row[i] = linear ? v->srgb[(int)(c * 4095.0f + 0.5f)] : (uint8_t)(c * 255.0f + 0.5f);
+        for (int x = 0; x < width; x++) {
+            uint32_t pixel = 0;
+            for (int k = 0; k < 3; k++) {
+                float c = in[3 * x + k] < 0.0f ? 0.0f : in[3 * x + k] > 1.0f ? 1.0f : in[3 * x + k];
+                uint32_t byte = linear ? v->srgb[(int)(c * 4095.0f + 0.5f)]
+                                       : (uint32_t)(c * 255.0f + 0.5f);
+                pixel = pixel << 8 | byte;
+            }
+            row[x] = pixel;
         }
     }
     SDL_UnlockTexture(v->texture);
@@ -508,11 +518,11 @@ static void handle_event(viewer *v, const SDL_Event *e) {
  * so every event is handled, drawn and timed like a person's. */
 static void push_script_event(viewer *v) {
     SDL_SetModState(KMOD_NONE);
+    if (v->frames_to_wait > 0) {
+        v->frames_to_wait--;
+        return;
+    }
     while (v->next_event < v->num_events) {
-        if (v->frames_to_wait > 0) {
-            v->frames_to_wait--;
-            return;
-        }
         const view_event *e = &v->events[v->next_event];
         if (e->type == VIEW_EVENT_WAIT && v->job) return; /* until the reference is in */
         v->next_event++;
@@ -561,10 +571,9 @@ static bool needs_prepare(const viewer *v) {
            p->wireframe != v->state.wireframe || p->main_option != v->state.main_option[t];
 }
 
-static void record_timing(viewer *v, double render_ms, double overhead_ms) {
+static void record_timing(viewer *v, const double seconds[4]) {
     if (v->num_timed >= MAX_TIMED_FRAMES) return;
-    v->timed_render_ms[v->num_timed] = render_ms;
-    v->timed_overhead_ms[v->num_timed] = overhead_ms;
+    for (int i = 0; i < 4; i++) v->timed[i][v->num_timed] = 1000.0 * seconds[i];
     v->num_timed++;
 }
 
@@ -633,8 +642,8 @@ static void run_frame(viewer *v, double start_seconds) {
     double present_seconds = meso_time_seconds() - t;
     if (v->open_seconds == 0.0) v->open_seconds = meso_time_seconds() - start_seconds;
     if (drew)
-        record_timing(v, 1000.0 * render_seconds,
-                      1000.0 * (events_seconds + upload_seconds + present_seconds));
+        record_timing(v, (double[4]){render_seconds, events_seconds, upload_seconds,
+                                     present_seconds});
     update_title(v, false);
     if (v->scripted && v->next_event >= v->num_events && v->frames_to_wait == 0 && !v->job)
         v->running = false; /* the script's last event has been handled and drawn */
@@ -749,6 +758,13 @@ static void init_state(viewer *v, const char *const *names, int count, int initi
 
 static bool open_window(viewer *v) {
     SDL_SetHint(SDL_HINT_RENDER_SCALE_QUALITY, "1");
+    /* The frame is drawn on the CPU already; all SDL does is copy it to the window. Its GL
+     * renderer without a GPU is llvmpipe, whose threads compete with meso's for the cores and
+     * whose teardown took 2 s. SDL_RENDER_DRIVER in the environment still wins. */
+    SDL_SetHintWithPriority(SDL_HINT_RENDER_DRIVER, "software", SDL_HINT_DEFAULT);
+    /* and the window surface is the video driver's own (X11: shared memory), not a texture of
+     * a GL renderer again (16 ms a frame at 800x600 through llvmpipe) */
+    SDL_SetHintWithPriority(SDL_HINT_FRAMEBUFFER_ACCELERATION, "0", SDL_HINT_DEFAULT);
     v->window = SDL_CreateWindow("meso view", SDL_WINDOWPOS_UNDEFINED, SDL_WINDOWPOS_UNDEFINED,
                                  v->window_width, v->window_height, SDL_WINDOW_RESIZABLE);
     if (v->window) v->sdl = SDL_CreateRenderer(v->window, -1, 0);
@@ -757,20 +773,24 @@ static bool open_window(viewer *v) {
         fprintf(stderr, "meso: view: cannot open a window (SDL: %s)\n", SDL_GetError());
         return false;
     }
+    SDL_RendererInfo info;
+    if (v->verbose && SDL_GetRendererInfo(v->sdl, &info) == 0)
+        fprintf(stderr, "meso: view: SDL video driver %s, renderer %s\n",
+                SDL_GetCurrentVideoDriver(), info.name);
     return true;
 }
 
 static void print_summary(viewer *v, double seconds) {
     if (v->quiet || v->num_timed == 0) return;
     size_t n = v->num_timed;
-    double render = app_median(v->timed_render_ms, n);
-    double overhead = app_median(v->timed_overhead_ms, n);
+    double median[4];
+    for (int i = 0; i < 4; i++) median[i] = app_median(v->timed[i], n);
     fprintf(stderr,
             "meso: view: window open %.0f ms after start; %zu frames drawn in %.2f s (%.1f "
-            "frames/s), %d below full size; median render %.1f ms, median events + upload + "
-            "present %.2f ms; load average %.2f\n",
-            1000.0 * v->open_seconds, n, seconds, (double)n / seconds, v->frames_reduced, render,
-            overhead, app_load_average());
+            "frames/s), %d below full size; median ms a frame: render %.1f, events %.2f, upload "
+            "%.2f, present %.2f; load average %.2f\n",
+            1000.0 * v->open_seconds, n, seconds, (double)n / seconds, v->frames_reduced,
+            median[0], median[1], median[2], median[3], app_load_average());
 }
 
 static void viewer_close(viewer *v) {
@@ -784,8 +804,7 @@ static void viewer_close(viewer *v) {
     if (v->texture) SDL_DestroyTexture(v->texture);
     if (v->sdl) SDL_DestroyRenderer(v->sdl);
     if (v->window) SDL_DestroyWindow(v->window);
-    free(v->timed_render_ms);
-    free(v->timed_overhead_ms);
+    for (int i = 0; i < 4; i++) free(v->timed[i]);
 }
 
 /* Whether a window can open. SDL falls back to its offscreen driver when there is no display,
@@ -892,20 +911,22 @@ int meso_cmd_view(int argc, char **argv) {
     v->options = &o;
     v->threads = globals.threads;
     v->quiet = globals.quiet;
+    v->verbose = globals.verbose;
     v->running = true;
     if ((o.events || o.script) && (status = read_script(&o, v)) >= 0) {
         free(v);
         return status;
     }
-    v->timed_render_ms = malloc(MAX_TIMED_FRAMES * sizeof(double));
-    v->timed_overhead_ms = malloc(MAX_TIMED_FRAMES * sizeof(double));
+    bool allocated = true;
+    for (int i = 0; i < 4; i++)
+        allocated &= (v->timed[i] = malloc(MAX_TIMED_FRAMES * sizeof(double))) != NULL;
     v->ctx = app_context_create(&globals);
     meso_result r = MESO_OK;
     bool sdl_started = false;
     char reason[256];
     const char *names[VIEW_MAX_TECHNIQUES];
     int count = 0, initial = 0;
-    if (!v->ctx || !v->timed_render_ms || !v->timed_overhead_ms) {
+    if (!v->ctx || !allocated) {
         status = APP_EXIT_FAILURE;
     } else if ((r = meso_scene_load(v->ctx, positionals[0], &v->scene)) != MESO_OK) {
         status = app_fail(v->ctx, r); /* the same line as meso render's */
