@@ -36,12 +36,14 @@ static const app_command_help view_help = {
     .summary =
         "Open a window drawing the scene with meso's renderer. Drag with the left button to\n"
         "orbit about the camera's target, with Shift to turn the light, with the right button\n"
-        "(or Ctrl) to pan; the wheel zooms. Keys (also listed in docs/viewer.md):\n"
-        "  Tab / Shift+Tab, 1..9  technique      S shadows   E silhouettes   M wireframe\n"
-        "  + / -  main option (relief linear_steps, vdm eigenfunctions, tessellation\n"
-        "         view_threshold)    C render the reference of this view in the background,\n"
-        "  V  live / reference / difference    A adaptive resolution   R reset the view\n"
-        "  P  screenshot    W write the camera and light as a scene file    Esc, Q quit\n"
+        "(or Ctrl) to pan; the wheel zooms. Keys (docs/viewer.md):\n"
+        "  Tab, Shift+Tab, 1..9  technique     S shadows   E silhouettes   M wireframe\n"
+        "  + / -  step the main option (relief linear_steps, vdm eigenfunctions,\n"
+        "         tessellation view_threshold)\n"
+        "  C  render the reference of this view in the background, then compare\n"
+        "  V  show the live image / the reference / the difference (title: PSNR)\n"
+        "  A  adaptive resolution on / off    R  reset the camera and light\n"
+        "  P  screenshot    W  write the camera and light as a scene file    Esc, Q  quit\n"
         "The title shows the technique, frame time, triangles and resolution. Every\n"
         "technique is prepared (baked) before the window opens. While the view moves, frames\n"
         "slower than 1/--fps are drawn at a lower resolution and refined when it stops.\n"
@@ -102,7 +104,9 @@ typedef struct viewer {
     bool scripted;
 
     double last_move;
-    double frame_ms; /* the last live frame's render time */
+    double frame_ms;            /* the last live frame's render time (the title's) */
+    double frame_total_seconds; /* and with its events, upload and present: what adaptive
+                                   resolution holds to 1 / --fps */
     /* per drawn frame, for the summary's medians: render, events (handling, preparing),
      * upload (sRGB conversion into the texture), present (copy to the window) */
     double *timed[4];
@@ -602,7 +606,11 @@ static void record_timing(viewer *v, const double seconds[4]) {
 /* One frame: events, (re)preparing, drawing at the adaptive size, presenting. */
 static void run_frame(viewer *v, double start_seconds) {
     SDL_Event event;
-    bool idle = v->frame_valid && !v->frame_reduced && !v->job && !v->scripted;
+    /* Nothing to draw: sleep on the event queue rather than spin, also while the reference
+     * renders (it needs the cores) and while a script waits for it. */
+    bool script_waits = v->scripted && v->job && v->next_event < v->num_events &&
+                        v->events[v->next_event].type == VIEW_EVENT_WAIT;
+    bool idle = v->frame_valid && !v->frame_reduced && (!v->scripted || script_waits);
     if (idle && SDL_WaitEventTimeout(&event, IDLE_WAIT_MS)) handle_event(v, &event);
     double t0 = meso_time_seconds();
     if (v->scripted) push_script_event(v);
@@ -631,7 +639,7 @@ static void run_frame(viewer *v, double start_seconds) {
     bool drew = false;
     if (v->state.display == VIEW_DISPLAY_LIVE) {
         if (v->state.adaptive && moving && !v->frame_valid)
-            view_resolution_update(&v->resolution, v->frame_ms / 1000.0, true);
+            view_resolution_update(&v->resolution, v->frame_total_seconds, true);
         else if (!moving)
             view_resolution_update(&v->resolution, 0.0, false);
         int width, height;
@@ -663,9 +671,11 @@ static void run_frame(viewer *v, double start_seconds) {
     present(v);
     double present_seconds = meso_time_seconds() - t;
     if (v->open_seconds == 0.0) v->open_seconds = meso_time_seconds() - start_seconds;
-    if (drew)
+    if (drew) {
         record_timing(v, (double[4]){render_seconds, events_seconds, upload_seconds,
                                      present_seconds});
+        v->frame_total_seconds = render_seconds + events_seconds + upload_seconds + present_seconds;
+    }
     update_title(v, false);
     if (v->scripted && v->next_event >= v->num_events && v->frames_to_wait == 0 && !v->job)
         v->running = false; /* the script's last event has been handled and drawn */
