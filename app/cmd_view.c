@@ -94,7 +94,7 @@ typedef struct viewer {
     uint8_t srgb[4096]; /* linear [0,1] in 4096 steps -> sRGB byte, for the display only */
 
     view_reference *job;
-    bool job_stale;                        /* the view moved since the job started */
+    bool job_stale;                                   /* the view moved since the job started */
     meso_image *compare_live, *compare_live_coverage; /* the technique at the job's view */
     meso_image *reference, *reference_coverage, *difference;
     meso_compare_result metrics;
@@ -174,8 +174,8 @@ static void update_title(viewer *v, bool force) {
             snprintf(reference, sizeof(reference), " | reference %d%% (%.0f s)%s",
                      (int)(100.0 * fraction), seconds, v->job_stale ? ", view moved" : "");
         else
-            snprintf(reference, sizeof(reference), " | reference: building the true surface (%.0f s)",
-                     seconds);
+            snprintf(reference, sizeof(reference),
+                     " | reference: building the true surface (%.0f s)", seconds);
     } else if (v->state.has_reference) {
         static const char *const shown[] = {"live", "reference", "difference"};
         snprintf(reference, sizeof(reference), " | %s, PSNR %.1f dB (covered %.1f)",
@@ -183,9 +183,10 @@ static void update_title(viewer *v, bool force) {
     }
     meso_render_stats stats = meso_renderer_get_stats(v->renderers[v->state.technique]);
     int width = v->frame ? v->frame->width : 0, height = v->frame ? v->frame->height : 0;
-    snprintf(v->title, sizeof(v->title), "meso view: %s%s | %s%.1f ms | %llu triangles | %dx%d%s%s%s%s",
-             technique, option, switches, v->frame_ms, (unsigned long long)stats.triangles, width,
-             height, v->state.wireframe ? " | wireframe" : "", reference,
+    snprintf(v->title, sizeof(v->title),
+             "meso view: %s%s | %s%.1f ms | %llu triangles | %dx%d%s%s%s%s", technique, option,
+             switches, v->frame_ms, (unsigned long long)stats.triangles, width, height,
+             v->state.wireframe ? " | wireframe" : "", reference,
              now < v->notice_until ? " | " : "", now < v->notice_until ? v->notice : "");
     SDL_SetWindowTitle(v->window, v->title);
 }
@@ -253,7 +254,8 @@ typedef struct upload_job {
 
 static void upload_rows(void *user, size_t job, int thread_index) {
     const upload_job *u = user;
-    int y0 = (int)job * UPLOAD_ROWS, y1 = y0 + UPLOAD_ROWS < u->height ? y0 + UPLOAD_ROWS : u->height;
+    int y0 = (int)job * UPLOAD_ROWS,
+        y1 = y0 + UPLOAD_ROWS < u->height ? y0 + UPLOAD_ROWS : u->height;
     for (int y = y0; y < y1; y++) {
         uint32_t *row = (uint32_t *)(u->data + (size_t)y * (size_t)u->pitch);
         const float *in = u->rgb + (size_t)y * (size_t)u->width * 3;
@@ -302,8 +304,7 @@ static bool upload_shown(viewer *v) {
     case VIEW_DISPLAY_REFERENCE:
         return upload(v, v->reference->pixels, v->reference->width, v->reference->height, true);
     case VIEW_DISPLAY_DIFFERENCE: /* false colours, designed as display values */
-        return upload(v, v->difference->pixels, v->difference->width, v->difference->height,
-                      false);
+        return upload(v, v->difference->pixels, v->difference->width, v->difference->height, false);
     case VIEW_DISPLAY_LIVE:
         break;
     }
@@ -340,7 +341,8 @@ static void screenshot(viewer *v) {
     if (v->state.display == VIEW_DISPLAY_LIVE) {
         meso_framebuffer *full = NULL;
         r = render_live(v, v->window_width, v->window_height, &full);
-        if (r == MESO_OK) r = meso_framebuffer_save_png(v->ctx, full, v->scene->encoding, path, NULL);
+        if (r == MESO_OK)
+            r = meso_framebuffer_save_png(v->ctx, full, v->scene->encoding, path, NULL);
         meso_framebuffer_destroy(full);
     } else {
         bool reference = v->state.display == VIEW_DISPLAY_REFERENCE;
@@ -369,8 +371,7 @@ static void write_scene(viewer *v) {
     char path[4096];
     scene_file_path(v, path, sizeof(path));
     meso_camera camera = app_camera_from_view(&v->state.camera);
-    bool light_moved =
-        memcmp(&v->state.light, &v->state.home_light, sizeof(v->state.light)) != 0;
+    bool light_moved = memcmp(&v->state.light, &v->state.home_light, sizeof(v->state.light)) != 0;
     meso_vec3 light = {0};
     if (v->state.has_light && light_moved) /* the very bits the live view renders with */
         light = v->scenes[v->state.technique]->scene.lights[0].direction;
@@ -427,12 +428,14 @@ static void poll_reference(viewer *v) {
     } else {
         const meso_framebuffer *image = view_reference_image(v->job);
         r = meso_framebuffer_color_image(v->ctx, image, &v->reference);
-        if (r == MESO_OK) r = meso_framebuffer_coverage_image(v->ctx, image, &v->reference_coverage);
+        if (r == MESO_OK)
+            r = meso_framebuffer_coverage_image(v->ctx, image, &v->reference_coverage);
         meso_compare_desc desc = {.coverage_a = v->compare_live_coverage,
                                   .coverage_b = v->reference_coverage};
         if (r == MESO_OK)
             r = meso_image_compare(v->ctx, v->compare_live, v->reference, &desc, &v->metrics);
-        if (r == MESO_OK) r = meso_image_diff(v->ctx, v->compare_live, v->reference, 0.0f, &v->difference);
+        if (r == MESO_OK)
+            r = meso_image_diff(v->ctx, v->compare_live, v->reference, 0.0f, &v->difference);
         if (r == MESO_OK) {
             v->state.has_reference = true;
             v->state.display = VIEW_DISPLAY_REFERENCE;
@@ -522,8 +525,8 @@ static void handle_event(viewer *v, const SDL_Event *e) {
         break;
     }
     case SDL_MOUSEWHEEL:
-        view_state_wheel(&v->state, e->wheel.direction == SDL_MOUSEWHEEL_FLIPPED ? -e->wheel.y
-                                                                                : e->wheel.y);
+        view_state_wheel(&v->state,
+                         e->wheel.direction == SDL_MOUSEWHEEL_FLIPPED ? -e->wheel.y : e->wheel.y);
         break;
     case SDL_WINDOWEVENT:
         if (e->window.event == SDL_WINDOWEVENT_SIZE_CHANGED && e->window.data1 > 0 &&
@@ -672,8 +675,8 @@ static void run_frame(viewer *v, double start_seconds) {
     double present_seconds = meso_time_seconds() - t;
     if (v->open_seconds == 0.0) v->open_seconds = meso_time_seconds() - start_seconds;
     if (drew) {
-        record_timing(v, (double[4]){render_seconds, events_seconds, upload_seconds,
-                                     present_seconds});
+        record_timing(v,
+                      (double[4]){render_seconds, events_seconds, upload_seconds, present_seconds});
         v->frame_total_seconds = render_seconds + events_seconds + upload_seconds + present_seconds;
     }
     update_title(v, false);
@@ -780,9 +783,8 @@ static void init_state(viewer *v, const char *const *names, int count, int initi
     for (int i = 0; i < count; i++) {
         const view_technique_knobs *knobs = view_technique_knobs_find(names[i]);
         if (knobs->main_option)
-            v->state.main_option[i] = view_scene_initial_option(scene, names[i],
-                                                                knobs->main_option,
-                                                                knobs->main_default);
+            v->state.main_option[i] =
+                view_scene_initial_option(scene, names[i], knobs->main_option, knobs->main_default);
     }
     v->state.adaptive = !v->options->fixed_resolution;
     v->resolution = (view_resolution){1.0, 1.0 / v->options->target_fps};
@@ -821,8 +823,8 @@ static void print_summary(viewer *v, double seconds) {
             "meso: view: window open %.0f ms after start; %zu frames drawn in %.2f s (%.1f "
             "frames/s), %d below full size; median ms a frame: render %.1f, events %.2f, upload "
             "%.2f, present %.2f; load average %.2f\n",
-            1000.0 * v->open_seconds, n, seconds, (double)n / seconds, v->frames_reduced,
-            median[0], median[1], median[2], median[3], app_load_average());
+            1000.0 * v->open_seconds, n, seconds, (double)n / seconds, v->frames_reduced, median[0],
+            median[1], median[2], median[3], app_load_average());
 }
 
 static void viewer_close(viewer *v) {
@@ -900,10 +902,11 @@ int meso_cmd_view(int argc, char **argv) {
         {"--technique", NULL, APP_OPTION_STRING, &o.technique, "T", "the technique shown first",
          "the first object's", 0, 0},
         {"--techniques", NULL, APP_OPTION_STRING, &o.techniques, "LIST",
-         "comma-separated techniques to prepare and switch between", "all that can draw the "
-         "scene", 0, 0},
-        {"--size", NULL, APP_OPTION_SIZE, &o.size, "WxH", "the window's size", "the scene's", 0,
-         0},
+         "comma-separated techniques to prepare and switch between",
+         "all that can draw the "
+         "scene",
+         0, 0},
+        {"--size", NULL, APP_OPTION_SIZE, &o.size, "WxH", "the window's size", "the scene's", 0, 0},
         {"--fps", NULL, APP_OPTION_DOUBLE, &o.target_fps, "F",
          "frame rate aimed at while the view moves (adaptive resolution)", "30", 1, 1000},
         {"--fixed-resolution", NULL, APP_OPTION_FLAG, &o.fixed_resolution, NULL,
@@ -912,8 +915,8 @@ int meso_cmd_view(int argc, char **argv) {
          "replay events one a frame, then quit: 'drag 40,0; light 0,-20; wheel 2; key p' "
          "(docs/viewer.md)",
          NULL, 0, 0},
-        {"--script", NULL, APP_OPTION_STRING, &o.script, "FILE", "replay the events in FILE",
-         NULL, 0, 0},
+        {"--script", NULL, APP_OPTION_STRING, &o.script, "FILE", "replay the events in FILE", NULL,
+         0, 0},
         {"--screenshot", NULL, APP_OPTION_STRING, &o.screenshot, "OUT.png",
          "where P writes (overwritten each time)", "meso-view-NNNN.png, the next free", 0, 0},
         {"--save-scene", NULL, APP_OPTION_STRING, &o.save_scene, "OUT.json",
@@ -923,8 +926,8 @@ int meso_cmd_view(int argc, char **argv) {
     app_globals globals;
     const char *positionals[1];
     int num_positionals = 0;
-    int status = app_parse_options(&view_help, options, sizeof(options) / sizeof(options[0]),
-                                   argc, argv, &globals, positionals, 1, &num_positionals);
+    int status = app_parse_options(&view_help, options, sizeof(options) / sizeof(options[0]), argc,
+                                   argv, &globals, positionals, 1, &num_positionals);
     if (status >= 0) return status;
     if (num_positionals < 1) return app_usage_error("view", "missing the SCENE file");
     if (o.events && o.script)
@@ -964,7 +967,7 @@ int meso_cmd_view(int argc, char **argv) {
         status = app_fail(v->ctx, r); /* the same line as meso render's */
     } else if ((status = app_camera_override_apply("view", &o.camera, v->scene)) >= 0) {
     } else if ((status = list_techniques(v->scene, o.techniques ? listed : NULL, num_listed,
-                                           o.technique, names, &count, &initial)) >= 0) {
+                                         o.technique, names, &count, &initial)) >= 0) {
     } else if (!display_available(&sdl_started, reason, sizeof(reason))) {
         fprintf(stderr,
                 "meso: view: no display (%s); for frames without a window use meso render %s "

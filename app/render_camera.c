@@ -61,8 +61,10 @@ int app_camera_override_apply(const char *command, const app_camera_override *o,
     meso_vec3 side = meso_vec3_cross(forward, camera.up);
     /* the same conditions the scene loader puts on a camera, with the same kind of message */
     if (!(meso_vec3_length(forward) > 1e-9f) || !(meso_vec3_length(side) > 1e-9f)) {
-        fprintf(stderr, "meso: %s: --eye/--target: the eye must differ from the target and not "
-                        "look along up\n", scene->path);
+        fprintf(stderr,
+                "meso: %s: --eye/--target: the eye must differ from the target and not "
+                "look along up\n",
+                scene->path);
         return APP_EXIT_BAD_INPUT;
     }
     scene->camera = camera;
@@ -85,9 +87,8 @@ int app_camera_override_apply(const char *command, const app_camera_override *o,
     return -1;
 }
 
-int app_render_orbit(meso_context *ctx, meso_scene *scene, const meso_render_desc *desc,
-                     int width, int height, meso_encoding encoding, int count, const char *dir,
-                     bool quiet) {
+int app_render_orbit(meso_context *ctx, meso_scene *scene, const meso_render_desc *desc, int width,
+                     int height, meso_encoding encoding, int count, const char *dir, bool quiet) {
     const meso_camera home = scene->camera;
     const view_camera home_view = app_camera_to_view(&home);
     meso_renderer *renderer = NULL;

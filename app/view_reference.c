@@ -13,7 +13,7 @@ struct view_reference {
     meso_context *ctx; /* the job's own: its workers and its last error are not the window's */
     view_scene *scene; /* the view as it was when the job started */
     meso_framebuffer *image;
-    atomic_int status;      /* view_reference_status */
+    atomic_int status; /* view_reference_status */
     _Atomic double fraction;
     atomic_bool cancel;
     double start_seconds;
@@ -54,8 +54,8 @@ static void free_job(view_reference *job) {
 }
 
 meso_result view_reference_start(meso_context *ctx, const meso_scene *source,
-                                 const view_state *state, int width, int height,
-                                 int num_threads, view_reference **out_job) {
+                                 const view_state *state, int width, int height, int num_threads,
+                                 view_reference **out_job) {
     *out_job = NULL;
     view_reference *job = calloc(1, sizeof(*job));
     if (!job) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "reference: out of memory");
@@ -95,13 +95,11 @@ view_reference_status view_reference_poll(view_reference *job, double *out_fract
 }
 
 const meso_framebuffer *view_reference_image(const view_reference *job) {
-    return atomic_load(&((view_reference *)job)->status) == VIEW_REFERENCE_DONE ? job->image
-                                                                                 : NULL;
+    return atomic_load(&((view_reference *)job)->status) == VIEW_REFERENCE_DONE ? job->image : NULL;
 }
 
 const char *view_reference_error(const view_reference *job) {
-    return atomic_load(&((view_reference *)job)->status) == VIEW_REFERENCE_FAILED ? job->error
-                                                                                   : "";
+    return atomic_load(&((view_reference *)job)->status) == VIEW_REFERENCE_FAILED ? job->error : "";
 }
 
 void view_reference_destroy(view_reference *job) {

@@ -20,8 +20,8 @@ typedef enum view_reference_status {
  * height on `num_threads` workers (0: every core). The source scene must outlive the job.
  * Returns MESO_OK, or an error logged on ctx (out of memory, no thread). */
 meso_result view_reference_start(meso_context *ctx, const meso_scene *source,
-                                 const view_state *state, int width, int height,
-                                 int num_threads, view_reference **out_job);
+                                 const view_state *state, int width, int height, int num_threads,
+                                 view_reference **out_job);
 
 /* The job's status; *out_fraction receives the fraction traced (0 while the true geometry
  * is being built), *out_seconds the time since it started. Thread-safe. */

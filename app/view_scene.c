@@ -79,8 +79,8 @@ void view_scene_set_view(view_scene *scene, const view_state *state) {
     }
 }
 
-double view_scene_initial_option(const meso_scene *scene, const char *technique,
-                                 const char *name, double fallback) {
+double view_scene_initial_option(const meso_scene *scene, const char *technique, const char *name,
+                                 double fallback) {
     if (scene->num_objects < 1 || strcmp(own_technique(&scene->objects[0]), technique) != 0)
         return fallback;
     return meso_object_option(&scene->objects[0], name, fallback);
@@ -98,8 +98,10 @@ static size_t skip_space(const char *t, size_t i) {
 
 static size_t skip_string(const char *t, size_t i) {
     for (i++; t[i]; i++) {
-        if (t[i] == '\\' && t[i + 1]) i++;
-        else if (t[i] == '"') return i + 1;
+        if (t[i] == '\\' && t[i + 1])
+            i++;
+        else if (t[i] == '"')
+            return i + 1;
     }
     return 0;
 }

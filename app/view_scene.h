@@ -12,8 +12,8 @@
 #include "view_state.h"
 
 typedef struct view_scene {
-    meso_scene scene;      /* shallow copy of the source; objects points to `objects` */
-    meso_object *objects;  /* own copies of the object structs */
+    meso_scene scene;     /* shallow copy of the source; objects points to `objects` */
+    meso_object *objects; /* own copies of the object structs */
     const meso_scene *source;
 } view_scene;
 
@@ -31,8 +31,8 @@ void view_scene_set_view(view_scene *scene, const view_state *state);
 
 /* The scene's value of a technique's switch or option for the viewer's initial state: the
  * first object's option when `technique` is its own, else `fallback`. */
-double view_scene_initial_option(const meso_scene *scene, const char *technique,
-                                 const char *name, double fallback);
+double view_scene_initial_option(const meso_scene *scene, const char *technique, const char *name,
+                                 double fallback);
 
 /* Write the scene file `source_path` again to `out_path` (atomically) with its top-level
  * "camera" replaced by `camera` and the "direction" of its first light by `light_direction`

@@ -14,15 +14,18 @@ static bool parse_key(const char *word, int *out_key, bool *out_shift) {
         *out_shift = true;
         word += 6;
     }
-    if (!strcmp(word, "tab")) *out_key = '\t';
-    else if (!strcmp(word, "esc")) *out_key = 27;
+    if (!strcmp(word, "tab"))
+        *out_key = '\t';
+    else if (!strcmp(word, "esc"))
+        *out_key = 27;
     else if (strlen(word) == 1 && isgraph((unsigned char)word[0])) {
         *out_key = (unsigned char)word[0];
         if (isupper(*out_key)) { /* "W" is Shift+w, as a keyboard sends it */
             *out_key = tolower(*out_key);
             *out_shift = true;
         }
-    } else return false;
+    } else
+        return false;
     return true;
 }
 
@@ -44,8 +47,9 @@ static bool parse_event(const char *verb, const char *argument, view_event *even
         event->type = VIEW_EVENT_KEY;
         if (!parse_key(argument, &event->key, &event->shift)) *out_problem = "unknown key";
     } else if (!strcmp(verb, "drag") || !strcmp(verb, "light") || !strcmp(verb, "pan")) {
-        event->type = verb[0] == 'd' ? VIEW_EVENT_DRAG : verb[0] == 'l' ? VIEW_EVENT_LIGHT
-                                                                      : VIEW_EVENT_PAN;
+        event->type = verb[0] == 'd'   ? VIEW_EVENT_DRAG
+                      : verb[0] == 'l' ? VIEW_EVENT_LIGHT
+                                       : VIEW_EVENT_PAN;
         if (!parse_pair(argument, &event->dx, &event->dy)) *out_problem = "expected DX,DY";
     } else if (!strcmp(verb, "wheel")) {
         char *end = NULL;
@@ -59,7 +63,8 @@ static bool parse_event(const char *verb, const char *argument, view_event *even
         char *end = NULL;
         event->type = VIEW_EVENT_FRAMES;
         long n = strtol(argument, &end, 10);
-        if (end == argument || *end || n < 1 || n > 100000) *out_problem = "expected N in 1..100000";
+        if (end == argument || *end || n < 1 || n > 100000)
+            *out_problem = "expected N in 1..100000";
         event->count = (int)n;
     } else {
         *out_problem = "unknown event (key, drag, light, pan, wheel, wait, frames)";

@@ -34,8 +34,8 @@ typedef enum view_event_type {
 
 typedef struct view_event {
     view_event_type type;
-    int key;    /* KEY: a character as in view_state.h ('\t', 27 for Escape) */
-    bool shift; /* KEY: with Shift */
+    int key;       /* KEY: a character as in view_state.h ('\t', 27 for Escape) */
+    bool shift;    /* KEY: with Shift */
     double dx, dy; /* DRAG, LIGHT, PAN: pixels; WHEEL: dx = notches */
     int count;     /* FRAMES */
 } view_event;

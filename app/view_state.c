@@ -15,8 +15,12 @@
 
 /* ---- Vectors ------------------------------------------------------------------------------ */
 
-static view_vec3 add(view_vec3 a, view_vec3 b) { return (view_vec3){a.x + b.x, a.y + b.y, a.z + b.z}; }
-static view_vec3 sub(view_vec3 a, view_vec3 b) { return (view_vec3){a.x - b.x, a.y - b.y, a.z - b.z}; }
+static view_vec3 add(view_vec3 a, view_vec3 b) {
+    return (view_vec3){a.x + b.x, a.y + b.y, a.z + b.z};
+}
+static view_vec3 sub(view_vec3 a, view_vec3 b) {
+    return (view_vec3){a.x - b.x, a.y - b.y, a.z - b.z};
+}
 static view_vec3 scale(view_vec3 a, double s) { return (view_vec3){a.x * s, a.y * s, a.z * s}; }
 static double dot(view_vec3 a, view_vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 static view_vec3 cross(view_vec3 a, view_vec3 b) {
@@ -75,8 +79,7 @@ void view_camera_pan(view_camera *camera, double dx, double dy, int viewport_hei
     camera->target = add(camera->target, move);
 }
 
-void view_camera_zoom(view_camera *camera, double steps, double min_distance,
-                      double max_distance) {
+void view_camera_zoom(view_camera *camera, double steps, double min_distance, double max_distance) {
     view_vec3 offset = sub(camera->eye, camera->target);
     double distance = length(offset);
     if (!(distance > 0.0)) return;
@@ -291,8 +294,7 @@ bool view_state_apply(view_state *state, view_action action, int argument) {
     return false;
 }
 
-void view_state_drag(view_state *state, view_drag drag, double dx, double dy,
-                     int viewport_height) {
+void view_state_drag(view_state *state, view_drag drag, double dx, double dy, int viewport_height) {
     if (dx == 0.0 && dy == 0.0) return;
     switch (drag) {
     case VIEW_DRAG_ORBIT: /* the object turns with the mouse: the eye goes the other way */
@@ -326,8 +328,9 @@ void view_resolution_update(view_resolution *resolution, double frame_seconds, b
     }
     double s = resolution->scale > 0.0 ? resolution->scale : 1.0;
     if (frame_seconds > 0.0) {
-        /* a frame's cost goes with its pixels, the square of the scale; aim 10% under */
-        double ratio = sqrt(0.9 * resolution->target_seconds / frame_seconds);
+        /* a frame's cost goes with its pixels, the square of the scale; aim a quarter under
+         * the target, as frame times on a shared machine scatter by that much */
+        double ratio = sqrt(0.75 * resolution->target_seconds / frame_seconds);
         if (frame_seconds > resolution->target_seconds)
             s *= ratio < 0.5 ? 0.5 : ratio;
         else if (frame_seconds < 0.6 * resolution->target_seconds)

@@ -43,8 +43,7 @@ void view_camera_pan(view_camera *camera, double dx, double dy, int viewport_hei
 
 /* Move the eye toward the target by `steps` wheel notches (positive: closer), each 10% of
  * the distance; the distance stays within [min_distance, max_distance]. */
-void view_camera_zoom(view_camera *camera, double steps, double min_distance,
-                      double max_distance);
+void view_camera_zoom(view_camera *camera, double steps, double min_distance, double max_distance);
 
 /* Frame `frame` of `count` of a turntable around `home`: its eye turned by 360 * frame / count
  * degrees about the up axis through the target (frame 0 is home itself). */
@@ -154,8 +153,7 @@ typedef enum view_drag {
     VIEW_DRAG_LIGHT,
     VIEW_DRAG_PAN,
 } view_drag;
-void view_state_drag(view_state *state, view_drag drag, double dx, double dy,
-                     int viewport_height);
+void view_state_drag(view_state *state, view_drag drag, double dx, double dy, int viewport_height);
 void view_state_wheel(view_state *state, double steps);
 
 /* The current technique's name and its main option's value (NAN when it has none). */

@@ -87,7 +87,8 @@ static void test_app_view_scripted_screenshot_is_render_of_the_written_scene(voi
     /* and the view did move: the scene's own camera gives another image */
     run_ok("render %s %s --technique relief -o %s --quiet", BRICKS, SIZE, in_dir("home.png"));
     size_t a, b;
-    char *moved = read_whole(in_dir("scripted.png"), &a), *home = read_whole(in_dir("home.png"), &b);
+    char *moved = read_whole(in_dir("scripted.png"), &a),
+         *home = read_whole(in_dir("home.png"), &b);
     assert_true(a != b || memcmp(moved, home, a) != 0);
     free(moved);
     free(home);
@@ -181,8 +182,7 @@ static void test_app_view_bad_events_are_usage_errors(void **state) {
 
 static void test_app_render_orbit_writes_numbered_frames_from_the_scene_s_view(void **state) {
     (void)state;
-    run_ok("render %s %s --technique bump --orbit 3 -o %s --quiet", BRICKS, SIZE,
-           in_dir("orbit"));
+    run_ok("render %s %s --technique bump --orbit 3 -o %s --quiet", BRICKS, SIZE, in_dir("orbit"));
     run_ok("render %s %s --technique bump -o %s --quiet", BRICKS, SIZE, in_dir("orbit-0.png"));
     assert_same_bytes(in_dir("orbit/frame-0000.png"), in_dir("orbit-0.png"));
     size_t a, b;

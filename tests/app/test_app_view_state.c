@@ -19,9 +19,7 @@ static void assert_vec3_near(view_vec3 a, view_vec3 b, double tolerance) {
         fail_msg("(%.9g, %.9g, %.9g) != (%.9g, %.9g, %.9g)", a.x, a.y, a.z, b.x, b.y, b.z);
 }
 
-static view_camera camera_on_z(void) {
-    return (view_camera){{0, 0, 2}, {0, 0, 0}, {0, 1, 0}, 40};
-}
+static view_camera camera_on_z(void) { return (view_camera){{0, 0, 2}, {0, 0, 0}, {0, 1, 0}, 40}; }
 
 static void test_view_orbit_yaw_turns_about_up_keeping_distance(void **state) {
     (void)state;
@@ -155,8 +153,8 @@ static void test_view_state_switches_techniques_and_steps_options(void **state) 
     assert_false(s.shadows);
 }
 
-static void test_view_state_display_cycles_only_with_a_reference_and_moving_goes_live(
-    void **state) {
+static void
+test_view_state_display_cycles_only_with_a_reference_and_moving_goes_live(void **state) {
     (void)state;
     view_state s = fresh_state();
     assert_false(view_state_apply(&s, VIEW_ACTION_CYCLE_DISPLAY, 0));
