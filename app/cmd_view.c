@@ -441,6 +441,11 @@ static void poll_reference(viewer *v) {
             v->state.display = VIEW_DISPLAY_REFERENCE;
             v->frame_valid = false;
             notice(v, "reference in %.1f s (V: live / reference / difference)", seconds);
+            if (!v->quiet)
+                fprintf(stderr, "meso: view: reference in %.1f s: %s against it: PSNR %.2f dB "
+                                "(covered %.2f), SSIM %.3f, IoU %.3f\n",
+                        seconds, view_state_technique(&v->state), v->metrics.psnr,
+                        v->metrics.psnr_covered, v->metrics.ssim, v->metrics.coverage_iou);
         }
     }
     view_reference_destroy(v->job); /* its thread has finished: no wait */
