@@ -252,24 +252,26 @@ typedef struct upload_job {
     bool linear;
 } upload_job;
 
+/* A channel in [0,1] as a step of 4095 (NaN and below 0 give 0: the comparisons fail). */
+static inline int channel_step(float c) {
+    float scaled = c * 4095.0f + 0.5f;
+    scaled = scaled > 0.0f ? scaled : 0.0f;
+    return (int)(scaled < 4095.0f ? scaled : 4095.0f);
+}
+
 static void upload_rows(void *user, size_t job, int thread_index) {
     const upload_job *u = user;
-    int y0 = (int)job * UPLOAD_ROWS,
-        y1 = y0 + UPLOAD_ROWS < u->height ? y0 + UPLOAD_ROWS : u->height;
+    int y0 = (int)job * UPLOAD_ROWS;
+    int y1 = y0 + UPLOAD_ROWS < u->height ? y0 + UPLOAD_ROWS : u->height;
+    uint8_t display[4096]; /* step -> byte: through the sRGB curve, or as it is */
+    for (int i = 0; i < 4096; i++)
+        display[i] = u->linear ? u->v->srgb[i] : (uint8_t)((i * 255 + 2047) / 4095);
     for (int y = y0; y < y1; y++) {
         uint32_t *row = (uint32_t *)(u->data + (size_t)y * (size_t)u->pitch);
         const float *in = u->rgb + (size_t)y * (size_t)u->width * 3;
-        for (int x = 0; x < u->width; x++) {
-            uint32_t pixel = 0;
-            for (int k = 0; k < 3; k++) {
-                float c = in[3 * x + k];
-                c = c < 0.0f ? 0.0f : c > 1.0f ? 1.0f : c;
-                uint32_t byte = u->linear ? u->v->srgb[(int)(c * 4095.0f + 0.5f)]
-                                          : (uint32_t)(c * 255.0f + 0.5f);
-                pixel = pixel << 8 | byte;
-            }
-            row[x] = pixel;
-        }
+        for (int x = 0; x < u->width; x++, in += 3)
+            row[x] = (uint32_t)display[channel_step(in[0])] << 16 |
+                     (uint32_t)display[channel_step(in[1])] << 8 | display[channel_step(in[2])];
     }
 }
 
