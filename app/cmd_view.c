@@ -115,7 +115,7 @@ typedef struct viewer {
     int frames_reduced;
     char notice[256];
     double notice_until;
-    char title[512];
+    char title[1024];
     double title_time;
     int screenshot_number;
     int status;
