@@ -204,7 +204,7 @@ int meso_cmd_render(int argc, char **argv) {
          "5", 1, 1000},
         {"--orbit", NULL, APP_OPTION_INT, &o.orbit, "N",
          "write N frames turning about the camera's up axis through its target into folder OUT "
-         "(OUT/frame-0000.png ...)",
+         "(OUT/frame-0000.png ...; with --techniques OUT/<technique>/frame-0000.png ...)",
          NULL, 1, 100000},
         APP_CAMERA_OVERRIDE_OPTIONS(o.camera),
     };
@@ -218,8 +218,6 @@ int meso_cmd_render(int argc, char **argv) {
     if (!o.output) return app_usage_error("render", "missing -o OUT");
     if (o.technique && o.techniques)
         return app_usage_error("render", "--technique and --techniques exclude each other");
-    if (o.orbit && o.techniques)
-        return app_usage_error("render", "--orbit and --techniques exclude each other");
     const char *scene_path = positionals[0];
     if (o.technique && !app_technique_known(o.technique)) {
         char known[1024];
@@ -245,6 +243,13 @@ int meso_cmd_render(int argc, char **argv) {
         status = app_fail(ctx, result);
     else if ((status = app_camera_override_apply("render", &o.camera, scene)) >= 0)
         ; /* the override's message is printed */
+    else if (o.orbit && o.techniques)
+        status = app_render_orbit_techniques(
+            ctx, scene, names, num_names,
+            &(meso_render_desc){.samples = o.samples, .wireframe = o.wireframe},
+            o.size.width ? o.size.width : scene->width,
+            o.size.height ? o.size.height : scene->height,
+            o.linear ? MESO_ENCODING_LINEAR : scene->encoding, o.orbit, o.output, globals.quiet);
     else if (o.orbit)
         status = app_render_orbit(
             ctx, scene,

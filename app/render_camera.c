@@ -128,3 +128,30 @@ int app_render_orbit(meso_context *ctx, meso_scene *scene, const meso_render_des
     meso_renderer_destroy(renderer);
     return status;
 }
+
+int app_render_orbit_techniques(meso_context *ctx, meso_scene *scene, const char *const *names,
+                                int num_names, const meso_render_desc *desc, int width,
+                                int height, meso_encoding encoding, int count, const char *dir,
+                                bool quiet) {
+    int status = APP_EXIT_OK;
+    for (int i = 0; i < num_names; i++) {
+        const meso_technique_info *info = meso_technique_find(names[i]);
+        if (info && !app_technique_applies(info, scene)) {
+            if (!quiet)
+                fprintf(stderr, "meso: note: %s: skipped: it cannot draw this scene's objects\n",
+                        names[i]);
+            continue;
+        }
+        char folder[4096];
+        if (!app_path_join(folder, sizeof(folder), dir, names[i])) {
+            fprintf(stderr, "meso: %s: path too long\n", dir);
+            return APP_EXIT_BAD_INPUT;
+        }
+        meso_render_desc technique_desc = *desc;
+        technique_desc.technique = names[i];
+        int one = app_render_orbit(ctx, scene, &technique_desc, width, height, encoding, count,
+                                   folder, quiet);
+        if (one != APP_EXIT_OK && status == APP_EXIT_OK) status = one;
+    }
+    return status;
+}

@@ -53,4 +53,12 @@ int app_render_orbit(meso_context *ctx, meso_scene *scene, const meso_render_des
                      int width, int height, meso_encoding encoding, int count, const char *dir,
                      bool quiet);
 
+/* app_render_orbit for each technique of `names` that can draw the scene, into
+ * dir/<technique>/frame-0000.png ... (one strip of frames each; one that cannot draw the scene
+ * is skipped with a note). Returns an exit status: the first failure's, or 0. */
+int app_render_orbit_techniques(meso_context *ctx, meso_scene *scene, const char *const *names,
+                                int num_names, const meso_render_desc *desc, int width,
+                                int height, meso_encoding encoding, int count, const char *dir,
+                                bool quiet);
+
 #endif
