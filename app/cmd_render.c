@@ -19,7 +19,7 @@ typedef struct render_options {
     bool wireframe;
     const char *coverage;
     bool linear;
-    int orbit;                   /* frames of a turntable into folder OUT (0: none) */
+    int orbit;                  /* frames of a turntable into folder OUT (0: none) */
     app_camera_override camera; /* --eye, --target, --fov, --light */
 } render_options;
 

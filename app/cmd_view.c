@@ -444,8 +444,9 @@ static void poll_reference(viewer *v) {
             v->frame_valid = false;
             notice(v, "reference in %.1f s (V: live / reference / difference)", seconds);
             if (!v->quiet)
-                fprintf(stderr, "meso: view: reference in %.1f s: %s against it: PSNR %.2f dB "
-                                "(covered %.2f), SSIM %.3f, IoU %.3f\n",
+                fprintf(stderr,
+                        "meso: view: reference in %.1f s: %s against it: PSNR %.2f dB "
+                        "(covered %.2f), SSIM %.3f, IoU %.3f\n",
                         seconds, view_state_technique(&v->state), v->metrics.psnr,
                         v->metrics.psnr_covered, v->metrics.ssim, v->metrics.coverage_iou);
         }

@@ -130,9 +130,8 @@ int app_render_orbit(meso_context *ctx, meso_scene *scene, const meso_render_des
 }
 
 int app_render_orbit_techniques(meso_context *ctx, meso_scene *scene, const char *const *names,
-                                int num_names, const meso_render_desc *desc, int width,
-                                int height, meso_encoding encoding, int count, const char *dir,
-                                bool quiet) {
+                                int num_names, const meso_render_desc *desc, int width, int height,
+                                meso_encoding encoding, int count, const char *dir, bool quiet) {
     int status = APP_EXIT_OK;
     for (int i = 0; i < num_names; i++) {
         const meso_technique_info *info = meso_technique_find(names[i]);
