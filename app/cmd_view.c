@@ -90,7 +90,6 @@ typedef struct viewer {
     SDL_Texture *texture;
     int texture_width, texture_height;
     int window_width, window_height;
-    uint8_t *pixels;
     uint8_t srgb[4096]; /* linear [0,1] in 4096 steps -> sRGB byte, for the display only */
 
     view_reference *job;

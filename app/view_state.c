@@ -217,7 +217,6 @@ double view_state_main_option(const view_state *state) {
 static bool select_technique(view_state *state, int index) {
     if (index < 0 || index >= state->num_techniques || index == state->technique) return false;
     state->technique = index;
-    state->renderer_stale = true;
     return true;
 }
 
@@ -231,7 +230,6 @@ static bool step_main_option(view_state *state, int direction) {
     next = clamp(next, knobs->main_min, knobs->main_max);
     if (next == *value) return false;
     *value = next;
-    state->renderer_stale = true;
     return true;
 }
 
@@ -261,17 +259,14 @@ bool view_state_apply(view_state *state, view_action action, int argument) {
     case VIEW_ACTION_TOGGLE_SHADOWS:
         if (!knobs->has_shadows) return false;
         state->shadows = !state->shadows;
-        state->renderer_stale = true;
-        return true;
+            return true;
     case VIEW_ACTION_TOGGLE_SILHOUETTES:
         if (!knobs->has_silhouettes) return false;
         state->silhouettes = !state->silhouettes;
-        state->renderer_stale = true;
-        return true;
+            return true;
     case VIEW_ACTION_TOGGLE_WIREFRAME:
         state->wireframe = !state->wireframe;
-        state->renderer_stale = true;
-        return true;
+            return true;
     case VIEW_ACTION_OPTION_UP:
         return step_main_option(state, +1);
     case VIEW_ACTION_OPTION_DOWN:

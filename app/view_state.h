@@ -131,9 +131,10 @@ typedef struct view_state {
     view_display display;
     bool has_reference; /* a reference image exists, so the display may cycle to it */
 
-    /* Set by view_state_apply and friends; the caller clears what it has handled. */
-    bool renderer_stale; /* technique, switches or main option changed: prepare again */
-    bool view_changed;   /* camera or light moved: the reference image is out of date */
+    /* Set when the camera or light moves (the reference image is then out of date); the
+     * caller clears it. Whether a renderer must be prepared again is the caller's to compare:
+     * the technique, the switches and main_option say all it was prepared with. */
+    bool view_changed;
 } view_state;
 
 /* A state for the scene's camera and first light (light NULL when it is not directional),
