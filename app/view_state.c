@@ -259,14 +259,14 @@ bool view_state_apply(view_state *state, view_action action, int argument) {
     case VIEW_ACTION_TOGGLE_SHADOWS:
         if (!knobs->has_shadows) return false;
         state->shadows = !state->shadows;
-            return true;
+        return true;
     case VIEW_ACTION_TOGGLE_SILHOUETTES:
         if (!knobs->has_silhouettes) return false;
         state->silhouettes = !state->silhouettes;
-            return true;
+        return true;
     case VIEW_ACTION_TOGGLE_WIREFRAME:
         state->wireframe = !state->wireframe;
-            return true;
+        return true;
     case VIEW_ACTION_OPTION_UP:
         return step_main_option(state, +1);
     case VIEW_ACTION_OPTION_DOWN:
