@@ -1,5 +1,6 @@
 /* meso render: one scene to a PNG, or every technique side by side against the reference. */
 #include "app.h"
+#include "render_camera.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -20,6 +21,8 @@ typedef struct render_options {
     const char *coverage;
     bool linear;
     app_settings settings; /* --set */
+    int orbit;                  /* frames of a turntable into folder OUT (0: none) */
+    app_camera_override camera; /* --eye, --target, --fov, --light */
 } render_options;
 
 static const app_command_help render_help = {
@@ -43,7 +46,9 @@ static const app_command_help render_help = {
                 "  meso render examples/bricks-plane.json -o relief.png --technique relief "
                 "--size 256x256\n"
                 "  meso render examples/bricks-plane.json --techniques all -o out/bricks\n"
-                "  meso render examples/*.json -o out --size 256x256\n",
+                "  meso render examples/*.json -o out --size 256x256\n"
+                "  meso render examples/bricks-teapot.json --technique relief --orbit 120 -o "
+                "orbit\n",
 };
 
 /* "relief", or "mixed" when the objects use different techniques. */
@@ -240,6 +245,11 @@ int meso_cmd_render(int argc, char **argv) {
          "at most 2 s each)",
          "5", 1, 1000},
         APP_SET_OPTION(&o.settings),
+        {"--orbit", NULL, APP_OPTION_INT, &o.orbit, "N",
+         "write N frames turning about the camera's up axis through its target into folder OUT "
+         "(OUT/frame-0000.png ...; with --techniques OUT/<technique>/frame-0000.png ...)",
+         NULL, 1, 100000},
+        APP_CAMERA_OVERRIDE_OPTIONS(o.camera),
     };
     app_globals globals;
     const char *positionals[MAX_BATCH_SCENES];
@@ -278,7 +288,7 @@ int meso_cmd_render(int argc, char **argv) {
     /* Every output is checked before any work, so a bad one fails at once and nothing is
      * written (with --techniques or several scenes, OUT is a folder, made below with its
      * parents; the files in it are checked as they are written). */
-    bool output_is_file = !o.techniques && num_positionals == 1;
+    bool output_is_file = !o.techniques && !o.orbit && num_positionals == 1;
     const char *outputs[2] = {output_is_file ? o.output : NULL, o.coverage};
     for (int i = 0; i < 2; i++) {
         meso_result checked = outputs[i] ? meso_file_check_output(ctx, outputs[i]) : MESO_OK;
@@ -313,12 +323,33 @@ int meso_cmd_render(int argc, char **argv) {
         }
         meso_scene *scene = NULL;
         meso_result result = meso_scene_load(ctx, positionals[s], &scene);
+        meso_render_desc orbit_desc = {.technique = o.technique,
+                                       .samples = o.samples,
+                                       .wireframe = o.wireframe,
+                                       .options = o.settings.items,
+                                       .num_options = o.settings.count};
         if (result != MESO_OK)
             status = app_fail(ctx, result);
+        else if ((status = app_camera_override_apply("render", &o.camera, scene)) >= 0)
+            ; /* the override's message is printed */
+        else if (o.orbit)
+            status = o.techniques
+                         ? app_render_orbit_techniques(
+                               ctx, scene, names, num_names, &orbit_desc,
+                               o.size.width ? o.size.width : scene->width,
+                               o.size.height ? o.size.height : scene->height,
+                               o.linear ? MESO_ENCODING_LINEAR : scene->encoding, o.orbit,
+                               scene_options.output, globals.quiet)
+                         : app_render_orbit(ctx, scene, &orbit_desc,
+                                            o.size.width ? o.size.width : scene->width,
+                                            o.size.height ? o.size.height : scene->height,
+                                            o.linear ? MESO_ENCODING_LINEAR : scene->encoding,
+                                            o.orbit, scene_options.output, globals.quiet);
         else if (o.techniques)
             status = render_all(ctx, scene, &scene_options, names, num_names, globals.quiet);
         else
             status = render_one(ctx, scene, &scene_options, globals.quiet);
+        if (status < 0) status = APP_EXIT_OK;
         meso_scene_destroy(scene);
     }
     meso_context_destroy(ctx);

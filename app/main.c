@@ -17,6 +17,7 @@ static const command commands[] = {
     {"demo", meso_cmd_demo, "render the built-in examples with every technique"},
     {"bench", meso_cmd_bench, "time techniques per frame, and their thread scaling"},
     {"cache", meso_cmd_cache, "list, size or clear the bake cache"},
+    {"view", meso_cmd_view, "an interactive window: orbit, switch techniques, compare"},
 };
 #define NUM_COMMANDS (sizeof(commands) / sizeof(commands[0]))
 

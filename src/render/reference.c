@@ -432,10 +432,13 @@ typedef struct render_job {
     const meso_frame *frame;
     float *color, *coverage, *depth;
     int tiles_x;
+    meso_progress *progress; /* a tile a unit; the user may cancel (an interactive viewer) */
+    atomic_bool cancelled;
 } render_job;
 
 static void render_tile(void *user, size_t job, int thread_index) {
-    const render_job *rj = user;
+    render_job *rj = user;
+    if (atomic_load_explicit(&rj->cancelled, memory_order_relaxed)) return;
     const meso_reference *reference = rj->reference;
     const meso_frame *frame = rj->frame;
     const meso_scene *scene = reference->scene_data;
@@ -512,6 +515,7 @@ static void render_tile(void *user, size_t job, int thread_index) {
             rj->coverage[pixel] = 1.0f;
             rj->depth[pixel] = rh.ray.tfar;
         }
+    if (meso_progress_advance(rj->progress, 1)) atomic_store(&rj->cancelled, true);
 }
 
 meso_result meso_reference_render(meso_context *ctx, const meso_reference *reference,
@@ -520,8 +524,15 @@ meso_result meso_reference_render(meso_context *ctx, const meso_reference *refer
     if (!reference || !frame || !color || !coverage || !depth || frame->width <= 0 ||
         frame->height <= 0)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "reference: render: no target");
-    render_job rj = {reference, frame, color, coverage, depth, (frame->width + TILE - 1) / TILE};
+    render_job rj = {.reference = reference, .frame = frame, .color = color,
+                     .coverage = coverage, .depth = depth,
+                     .tiles_x = (frame->width + TILE - 1) / TILE};
     size_t tiles = (size_t)rj.tiles_x * (size_t)((frame->height + TILE - 1) / TILE);
+    atomic_init(&rj.cancelled, false);
+    rj.progress = meso_progress_begin(ctx, "reference: trace", tiles);
     meso_parallel_for(ctx, tiles, render_tile, &rj);
+    meso_progress_end(rj.progress);
+    if (atomic_load(&rj.cancelled))
+        return meso_log_error(ctx, MESO_ERROR_CANCELLED, "reference: render: cancelled");
     return MESO_OK;
 }
