@@ -519,6 +519,12 @@ static inline float lookup(const vdm_state *s, meso_vec2 uv, float theta, float 
 /* The 8 corner values, clamped to >= 0 and sorted ascending; false when they agree within 1/50
  * shell depth (the table is smooth there: its interpolated d is used as the paper does). */
 static inline bool sorted_corners(const float in[8], float out[8]) {
+    float lo = in[0], hi = in[0];
+    for (int i = 1; i < 8; i++) {
+        lo = fminf(lo, in[i]);
+        hi = fmaxf(hi, in[i]);
+    }
+    if (fmaxf(hi, 0.0f) - fmaxf(lo, 0.0f) < 0.02f) return false; /* most pixels: no sort */
     for (int i = 0; i < 8; i++) { /* insertion sort */
         float x = in[i] > 0.0f ? in[i] : 0.0f;
         int j = i;
