@@ -13,6 +13,14 @@ targets=("$@")
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${BUILD_FUZZ:-$root/build-fuzz}
 
+# libFuzzer comes with clang (Debian's package); `make test` replays the corpus without it.
+if ! command -v "${CC:-clang}" >/dev/null; then
+    sudo=""
+    [ "$(id -u)" -eq 0 ] || sudo="sudo"
+    echo "fuzz.sh: installing clang (libFuzzer)" >&2
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends clang >/dev/null
+fi
+
 CC=${CC:-clang} cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DMESO_FUZZ=ON -DMESO_SANITIZE=ON -DMESO_NATIVE=OFF >/dev/null
 cmake --build "$build" -j "${JOBS:-2}" --target $(printf 'fuzz_%s ' "${targets[@]}")
