@@ -128,14 +128,17 @@ static void test_helpers_sleep_between_loops(void **state) {
     _Atomic int *runs = calloc(64, sizeof *runs);
     counts c = {.runs = runs, .num_threads = 4};
     meso_parallel_for(ctx, 64, count_job, &c);
-    /* Let any spinning end, then the idle helpers must use (next to) no CPU for 300 ms. */
+    /* Let any spinning end, then the idle helpers must use (next to) no CPU for 300 ms: three
+     * spinning helpers on this 2-core box would use at least one core, 0.3 s. The clock counts
+     * the whole process, so 0.1 s leaves room for the sanitizer runtime's own background
+     * thread (0.03-0.04 s measured in the ASan build; the Release build stays under 0.02 s). */
     struct timespec pause = {0, 50 * 1000 * 1000};
     nanosleep(&pause, NULL);
     double before = process_cpu_seconds();
     pause.tv_nsec = 300 * 1000 * 1000;
     nanosleep(&pause, NULL);
     double used = process_cpu_seconds() - before;
-    if (used > 0.02) fail_msg("idle helpers used %.3f s of CPU in 0.3 s", used);
+    if (used > 0.1) fail_msg("idle helpers used %.3f s of CPU in 0.3 s", used);
     free(runs);
     meso_context_destroy(ctx);
 }
