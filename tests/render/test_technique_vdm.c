@@ -25,22 +25,38 @@ static const char *write_grey_png(const char *name, float value, bool groove) {
     return path;
 }
 
-static meso_scene *plane_scene(meso_context *ctx, const char *png, const char *technique,
-                               const char *options) {
+/* How a test scene looks at its plane: image side, eye, field of view, light, uv_scale, depth. */
+typedef struct scene_view {
+    int side;
+    const char *eye, *light;
+    int fov_y_deg, uv_scale;
+    float depth;
+} scene_view;
+
+static meso_scene *plane_scene_seen(meso_context *ctx, const char *png, const char *technique,
+                                    const char *options, scene_view view) {
     char json[2048];
     snprintf(json, sizeof(json),
-             "{\"image\": {\"width\": 40, \"height\": 40, \"encoding\": \"linear\"},"
-             " \"camera\": {\"eye\": [0, 1.1, 1.3], \"target\": [0, 0, 0], \"up\": [0, 1, 0],"
-             " \"fov_y_deg\": 55},"
-             " \"lights\": [{\"type\": \"directional\", \"direction\": [0.3, 0.8, 0.2],"
+             "{\"image\": {\"width\": %d, \"height\": %d, \"encoding\": \"linear\"},"
+             " \"camera\": {\"eye\": [%s], \"target\": [0, 0, 0], \"up\": [0, 1, 0],"
+             " \"fov_y_deg\": %d},"
+             " \"lights\": [{\"type\": \"directional\", \"direction\": [%s],"
              " \"color\": [1, 1, 1]}],"
-             " \"objects\": [{\"shape\": \"plane\", \"size\": 2, \"uv_scale\": [2, 2],"
-             " \"mesostructure\": {\"height_map\": \"%s\", \"depth\": 0.1},"
+             " \"objects\": [{\"shape\": \"plane\", \"size\": 2, \"uv_scale\": [%d, %d],"
+             " \"mesostructure\": {\"height_map\": \"%s\", \"depth\": %g},"
              " \"technique\": \"%s\", \"technique_options\": {%s}}]}",
-             png, technique, options);
+             view.side, view.side, view.eye, view.fov_y_deg, view.light, view.uv_scale,
+             view.uv_scale, png, (double)view.depth, technique, options);
     meso_scene *scene = NULL;
     assert_int_equal(meso_scene_parse(ctx, json, "vdm-test.json", NULL, &scene), MESO_OK);
     return scene;
+}
+
+/* The plane tiled 2 x 2, seen from the front at 40 x 40 pixels. */
+static meso_scene *plane_scene(meso_context *ctx, const char *png, const char *technique,
+                               const char *options) {
+    scene_view view = {40, "0, 1.1, 1.3", "0.3, 0.8, 0.2", 55, 2, 0.1f};
+    return plane_scene_seen(ctx, png, technique, options, view);
 }
 
 static meso_framebuffer *render(meso_context *ctx, const meso_scene *scene) {
@@ -151,20 +167,8 @@ static const char *write_cones_png(void) {
 /* The cones once over a plane, seen from off every axis at 35 degrees of elevation. */
 static meso_scene *cones_scene(meso_context *ctx, const char *png, const char *technique,
                                const char *options) {
-    char json[2048];
-    snprintf(json, sizeof(json),
-             "{\"image\": {\"width\": 96, \"height\": 96, \"encoding\": \"linear\"},"
-             " \"camera\": {\"eye\": [0.9, 1.1, 1.3], \"target\": [0, 0, 0], \"up\": [0, 1, 0],"
-             " \"fov_y_deg\": 45},"
-             " \"lights\": [{\"type\": \"directional\", \"direction\": [-0.5, 0.7, 0.3],"
-             " \"color\": [1, 1, 1]}],"
-             " \"objects\": [{\"shape\": \"plane\", \"size\": 2,"
-             " \"mesostructure\": {\"height_map\": \"%s\", \"depth\": 0.15},"
-             " \"technique\": \"%s\", \"technique_options\": {%s}}]}",
-             png, technique, options);
-    meso_scene *scene = NULL;
-    assert_int_equal(meso_scene_parse(ctx, json, "vdm-cones.json", NULL, &scene), MESO_OK);
-    return scene;
+    scene_view view = {96, "0.9, 1.1, 1.3", "-0.5, 0.7, 0.3", 45, 1, 0.15f};
+    return plane_scene_seen(ctx, png, technique, options, view);
 }
 
 /* The fraction of pixels both cover whose view depth differs from the reference's by more than
