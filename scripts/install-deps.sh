@@ -11,6 +11,7 @@ packages=(
     libembree-dev         # reference ray tracer (Embree 3)
     liblapacke-dev libopenblas-dev   # SVD (VDM / GDM compression)
     libcmocka-dev         # tests
+    libcairo2-dev fonts-dejavu-core   # labels of sheets and plots (DejaVu Sans Mono)
     libsdl2-dev           # meso view (optional: without it the viewer is not built)
     python3-numpy python3-pil   # the docs' measuring scripts (scripts/error_bands.py)
 )

@@ -51,8 +51,9 @@ meso_result meso_sheet_create(meso_context *ctx, const meso_image *const *images
                               const char *const *labels, size_t count, int columns,
                               meso_image **out_image);
 
-/* Draw text into an RGB(A) image at (x, y) (top-left) with the built-in 5x7 font scaled by
- * `scale`, in `color`. Clipped to the image. */
+/* Draw text into an RGB(A) image at (x, y) (top-left) in `color`, anti-aliased, with DejaVu
+ * Sans Mono (cairo, fontconfig) at 10 * `scale` pixels: 6 * scale pixels a character, lines
+ * 12 * scale apart ('\n' starts one). Clipped to the image. Not thread-safe (fontconfig). */
 void meso_image_draw_text(meso_image *image, int x, int y, int scale, const float color[3],
                           const char *text);
 

@@ -152,6 +152,27 @@ static void test_compare_text_draws_distinct_glyphs_inside_the_image(void **stat
     meso_context_destroy(ctx);
 }
 
+/* The lowest row with ink (> 0.5) in columns [x0, x1), -1 for none. */
+static int lowest_ink(const meso_image *image, int x0, int x1) {
+    for (int y = image->height - 1; y >= 0; y--)
+        for (int x = x0; x < x1; x++)
+            if (meso_image_at(image, x, y)[0] > 0.5f) return y;
+    return -1;
+}
+
+/* Issue 14: the 5 x 7 font drew "p" and "g" on the baseline ("bumP"). */
+static void test_compare_text_has_descenders(void **state) {
+    meso_context *ctx = test_context(1);
+    meso_image *image = filled(ctx, 40, 16, 3, 0.0f);
+    const float white[3] = {1, 1, 1};
+    meso_image_draw_text(image, 1, 1, 1, white, "op");
+    int o_bottom = lowest_ink(image, 1, 7), p_bottom = lowest_ink(image, 7, 13);
+    if (!(o_bottom > 0 && p_bottom >= o_bottom + 2))
+        fail_msg("o ends at row %d, p at %d: no descender", o_bottom, p_bottom);
+    meso_image_destroy(image);
+    meso_context_destroy(ctx);
+}
+
 static void test_compare_sheet_lays_out_cells_with_labels(void **state) {
     meso_context *ctx = test_context(1);
     meso_image *a = filled(ctx, 20, 10, 3, 0.25f), *b = filled(ctx, 30, 12, 1, 0.75f);
@@ -159,13 +180,13 @@ static void test_compare_sheet_lays_out_cells_with_labels(void **state) {
     const char *labels[3] = {"A", "B\ntwo lines", NULL};
     meso_image *sheet = NULL;
     assert_int_equal(meso_sheet_create(ctx, images, labels, 3, 2, &sheet), MESO_OK);
-    /* 2 columns of 30 + 8 px, 2 rows of 12 + 18 (two lines) + 16 */
+    /* 2 columns of 30 + 8 px, 2 rows of 12 + 24 (two lines of 12) + 16 */
     assert_int_equal(sheet->width, 2 * (30 + 8) + 8);
-    assert_int_equal(sheet->height, 2 * (12 + 18 + 16) + 8);
+    assert_int_equal(sheet->height, 2 * (12 + 24 + 16) + 8);
     assert_true(fabsf(meso_image_at(sheet, 8, 8)[0] - 0.25f) < 1e-6f);
     assert_true(fabsf(meso_image_at(sheet, 8 + 38, 8)[1] - 0.75f) < 1e-6f);
     /* label ink beneath the first cell */
-    assert_true(lit_pixels(sheet, 8, 8 + 12, 8 + 30, 8 + 12 + 18 + 8) > 5);
+    assert_true(lit_pixels(sheet, 8, 8 + 12, 8 + 30, 8 + 12 + 24 + 8) > 5);
     meso_image_destroy(sheet);
     meso_image_destroy(a);
     meso_image_destroy(b);
@@ -181,6 +202,7 @@ int main(void) {
         cmocka_unit_test(test_compare_different_sizes_is_an_error_naming_both_sizes),
         cmocka_unit_test(test_compare_diff_is_black_where_equal_and_red_at_full_scale),
         cmocka_unit_test(test_compare_text_draws_distinct_glyphs_inside_the_image),
+        cmocka_unit_test(test_compare_text_has_descenders),
         cmocka_unit_test(test_compare_sheet_lays_out_cells_with_labels),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
