@@ -434,6 +434,18 @@ meso_result meso_bake_vdm(meso_context *ctx, const meso_vdm_desc *desc, meso_vdm
     size_t rows = rows_of(&d);
     int columns = columns_of(&d), vdm_columns = d.num_theta * d.num_curvatures;
     int k = d.vdm_eigenfunctions, m = d.mvm_eigenfunctions, kw = k > m ? k : m;
+    /* The memory budget, before allocating: W (float, then halves), the resampled grid, the
+     * streamed SVD's blocks and Gram matrix (bake_svd.c: 8192 rows as float and double), the
+     * raw table when kept. Holding A between the passes is extra, taken only if it fits. */
+    uint64_t table_bytes = (uint64_t)rows * (uint64_t)columns * sizeof(float);
+    uint64_t needed = (uint64_t)rows * (uint64_t)kw * (sizeof(float) + sizeof(uint16_t)) +
+                      (uint64_t)d.width * (uint64_t)d.height * sizeof(float) +
+                      UINT64_C(8192) * (uint64_t)columns * (sizeof(float) + sizeof(double)) +
+                      3u * (uint64_t)columns * (uint64_t)columns * sizeof(double) +
+                      (d.keep_raw ? table_bytes : 0);
+    if ((result = meso_memory_check(ctx, "vdm bake", needed)) != MESO_OK) return result;
+    bool hold_table = !d.keep_raw && table_bytes <= (UINT64_C(1) << 31) &&
+                      needed + table_bytes <= meso_context_memory_limit(ctx);
     float *grid = NULL, *vectors = NULL, *scale = NULL;
     meso_vdm *vdm = calloc(1, sizeof(*vdm));
     if (!vdm) goto out_of_memory;
@@ -457,12 +469,11 @@ meso_result meso_bake_vdm(meso_context *ctx, const meso_vdm_desc *desc, meso_vdm
 
     resample_heightfield(d.heightfield, d.width, d.height, grid);
     bake_job job = {.desc = d, .grid = grid, .clamp = d.heightfield->wrap == MESO_WRAP_CLAMP};
-    /* A table of up to 2 GiB (128^2: 277 MB, 256^2: 1.1 GB) is held between the passes
-     * instead of cast again: half the bake. Larger ones (512^2: 4.4 GB), or no memory for
-     * it, stream twice. */
+    /* A table of up to 2 GiB (128^2: 277 MB, 256^2: 1.1 GB) within the memory budget is held
+     * between the passes instead of cast again: half the bake. Larger ones (512^2: 4.4 GB),
+     * or no room for it, stream twice. */
     float *table = vdm->raw;
-    if (!table && (uint64_t)rows * (uint64_t)columns <= (UINT64_C(1) << 29))
-        table = malloc(sizeof(float) * rows * (size_t)columns);
+    if (hold_table) table = malloc(table_bytes);
     meso_bake_rows source = {
         .rows = rows,
         .columns = columns,
