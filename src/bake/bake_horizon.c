@@ -161,6 +161,11 @@ meso_result meso_bake_horizon(meso_context *ctx, const meso_heightfield *heightf
                               "bytes or %d a side",
                               width, height, d.num_azimuths, (size_t)MESO_HORIZON_MAX_BYTES,
                               MESO_HORIZON_MAX_SIDE);
+    /* the memory budget: the slopes, the padded field and a row of scratch per thread */
+    uint64_t needed = (uint64_t)bytes + (uint64_t)(width + 1) * (uint64_t)(height + 1) * 4u +
+                      (uint64_t)meso_context_num_threads(ctx) * (uint64_t)width * 4u;
+    meso_result budget = meso_memory_check(ctx, "horizon bake", needed);
+    if (budget != MESO_OK) return budget;
     map = calloc(1, sizeof *map);
     padded = malloc((size_t)(width + 1) * (size_t)(height + 1) * sizeof(float));
     if (!map || !padded) goto oom;

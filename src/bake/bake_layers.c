@@ -111,6 +111,12 @@ static meso_result check_desc(meso_context *ctx, const meso_layers_desc *d) {
 
 static meso_result allocate(meso_context *ctx, int width, int height, int num_layers,
                             meso_layers **out) {
+    /* the memory budget: depth and two normal planes as float, the counts, and the 8-bit
+     * copies a save or load makes of the three planes */
+    uint64_t texels = (uint64_t)width * (uint64_t)height;
+    meso_result budget = meso_memory_check(ctx, "relief_layers bake",
+                                           texels * (uint64_t)num_layers * (3u * 4u + 3u) + texels);
+    if (budget != MESO_OK) return budget;
     meso_layers *map = calloc(1, sizeof *map);
     if (!map) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "relief_layers: out of memory");
     map->width = width;

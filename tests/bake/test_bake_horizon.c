@@ -113,12 +113,30 @@ static void test_one_and_two_threads_bake_the_same_bytes(void **state) {
     meso_context_destroy(two);
 }
 
+/* The memory budget (issue 15): 40 x 24 texels x 8 azimuths is 30 KiB, refused under 16 KiB. */
+static void test_bake_keeps_to_the_memory_budget(void **state) {
+    (void)state;
+    meso_context *tiny = NULL;
+    assert_int_equal(meso_context_create(&(meso_context_desc){.num_threads = 1,
+                                                              .memory_limit = 16u << 10},
+                                         &tiny),
+                     MESO_OK);
+    meso_heightfield *hf = make_field(tiny, 40, 24, 0.7f);
+    meso_horizon_map *map = NULL;
+    assert_int_equal(meso_bake_horizon(tiny, hf, NULL, &map), MESO_ERROR_LIMIT);
+    assert_null(map);
+    assert_non_null(strstr(meso_context_last_error(tiny), "horizon bake"));
+    meso_heightfield_destroy(hf);
+    meso_context_destroy(tiny);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_flat_field_has_horizon_zero_everywhere),
         cmocka_unit_test(test_pillar_gives_its_angle_at_its_distance),
         cmocka_unit_test(test_bad_desc_fields_are_named),
         cmocka_unit_test(test_one_and_two_threads_bake_the_same_bytes),
+        cmocka_unit_test(test_bake_keeps_to_the_memory_budget),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
