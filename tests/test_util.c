@@ -60,6 +60,21 @@ void test_write_file(const char *path, const void *data, size_t size) {
     fclose(f);
 }
 
+char *test_read_file(const char *path, size_t *out_size) {
+    FILE *f = fopen(path, "rb");
+    if (!f) fail_msg("%s was not written", path);
+    fseek(f, 0, SEEK_END);
+    long size = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *data = malloc((size_t)size + 1);
+    assert_non_null(data);
+    assert_int_equal(fread(data, 1, (size_t)size, f), (size_t)size);
+    fclose(f);
+    data[size] = 0;
+    *out_size = (size_t)size;
+    return data;
+}
+
 int test_run_meso(const char *arguments, const char **out_stderr) {
     use_test_cache();
     static char err[8192];

@@ -20,6 +20,9 @@ const char *test_temp_dir(void);
 const char *test_path(const char *dir, const char *name);
 /* Write `text` to a file. */
 void test_write_file(const char *path, const void *data, size_t size);
+/* A whole file, NUL-terminated, in memory the caller frees; its size (without the NUL) in
+ * *out_size. Fails the test, naming the file, when it cannot be read. */
+char *test_read_file(const char *path, size_t *out_size);
 /* Write a PNG that is only a signature and an IHDR (valid CRC) declaring width x height RGB:
  * for testing that declared sizes are checked before allocating. */
 void test_write_png_header(const char *path, uint32_t width, uint32_t height);

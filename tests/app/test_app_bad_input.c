@@ -56,20 +56,6 @@ static void expect_bad_input_either(const char *arguments, const char *a, const 
     assert_null(memchr(err, '\n', length - 1));
 }
 
-static char *read_whole(const char *path, size_t *out_size) {
-    FILE *f = fopen(path, "rb");
-    assert_non_null(f);
-    fseek(f, 0, SEEK_END);
-    long size = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *data = malloc((size_t)size);
-    assert_non_null(data);
-    assert_int_equal(fread(data, 1, (size_t)size, f), (size_t)size);
-    fclose(f);
-    *out_size = (size_t)size;
-    return data;
-}
-
 /* A PNG cut in half: valid signature and header, missing image data. */
 static const char *write_truncated_png(void) {
     meso_context *ctx = test_context(1);
@@ -81,7 +67,7 @@ static const char *write_truncated_png(void) {
     meso_image_destroy(image);
     meso_context_destroy(ctx);
     size_t size = 0;
-    char *data = read_whole(full, &size);
+    char *data = test_read_file(full, &size);
     const char *path = test_path(test_temp_dir(), "truncated.png");
     test_write_file(path, data, size / 2);
     free(data);

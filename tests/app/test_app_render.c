@@ -20,20 +20,6 @@ static const char *fresh_dir(const char *name) {
     return out;
 }
 
-static char *read_whole(const char *path, size_t *out_size) {
-    FILE *f = fopen(path, "rb");
-    if (!f) fail_msg("%s was not written", path);
-    fseek(f, 0, SEEK_END);
-    long size = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *data = malloc((size_t)size + 1);
-    assert_non_null(data);
-    assert_int_equal(fread(data, 1, (size_t)size, f), (size_t)size);
-    fclose(f);
-    *out_size = (size_t)size;
-    return data;
-}
-
 /* The names in dir, sorted, joined by spaces. */
 static void list_dir(const char *dir, char *out, size_t out_size) {
     struct dirent **entries = NULL;
@@ -95,8 +81,8 @@ static void test_app_render_same_bytes_for_any_thread_count(void **state) {
              test_path(dir, "two.png"));
     run_ok(args);
     size_t size_one = 0, size_two = 0;
-    char *one = read_whole(test_path(dir, "one.png"), &size_one);
-    char *two = read_whole(test_path(dir, "two.png"), &size_two);
+    char *one = test_read_file(test_path(dir, "one.png"), &size_one);
+    char *two = test_read_file(test_path(dir, "two.png"), &size_two);
     assert_int_equal(size_one, size_two);
     assert_memory_equal(one, two, size_one);
     free(one);
@@ -121,7 +107,7 @@ static void test_app_render_techniques_writes_images_sheet_and_results(void **st
             fail_msg("%s/%s missing", dir, files[i]);
     }
     size_t size = 0;
-    char *csv = read_whole(test_path(dir, "results.csv"), &size);
+    char *csv = test_read_file(test_path(dir, "results.csv"), &size);
     csv[size] = 0;
     assert_non_null(strstr(csv, "scene,technique,status"));
     assert_non_null(strstr(csv, ",flat,ok,"));
@@ -166,7 +152,7 @@ static void test_app_render_techniques_results_and_folder_are_exact(void **state
                         "reference.png "
                         "relief.coverage.png relief.png results.csv results.json sheet.png ");
     size_t size = 0;
-    char *json = read_whole(test_path(dir, "results.json"), &size);
+    char *json = test_read_file(test_path(dir, "results.json"), &size);
     json[size] = 0;
     /* one relief run, after the reference */
     const char *first = strstr(json, "\"technique\": \"relief\"");
@@ -182,7 +168,7 @@ static void test_app_render_techniques_results_and_folder_are_exact(void **state
     assert_null(strstr(json, "e+"));
     free(json);
     /* the plot: relief a labelled point, the reference's time a line */
-    char *svg = read_whole(test_path(dir, "error-vs-time.svg"), &size);
+    char *svg = test_read_file(test_path(dir, "error-vs-time.svg"), &size);
     svg[size] = 0;
     assert_non_null(strstr(svg, "<svg xmlns="));
     assert_non_null(strstr(svg, "<circle"));
@@ -209,8 +195,8 @@ static void test_app_render_batch_writes_one_image_per_scene(void **state) {
     list_dir(test_path(dir, "out"), names, sizeof(names));
     assert_string_equal(names, "bricks-plane.png bumps-sphere.png ");
     size_t size_a = 0, size_b = 0;
-    char *a = read_whole(test_path(test_path(dir, "out"), "bumps-sphere.png"), &size_a);
-    char *b = read_whole(test_path(dir, "alone.png"), &size_b);
+    char *a = test_read_file(test_path(test_path(dir, "out"), "bumps-sphere.png"), &size_a);
+    char *b = test_read_file(test_path(dir, "alone.png"), &size_b);
     assert_int_equal(size_a, size_b);
     assert_memory_equal(a, b, size_a);
     free(a);

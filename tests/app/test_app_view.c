@@ -15,23 +15,9 @@
 
 static char dir[1024];
 
-static char *read_whole(const char *path, size_t *out_size) {
-    FILE *f = fopen(path, "rb");
-    if (!f) fail_msg("%s was not written", path);
-    fseek(f, 0, SEEK_END);
-    long size = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *data = malloc((size_t)size + 1);
-    assert_non_null(data);
-    assert_int_equal(fread(data, 1, (size_t)size, f), (size_t)size);
-    fclose(f);
-    *out_size = (size_t)size;
-    return data;
-}
-
 static void assert_same_bytes(const char *a, const char *b) {
     size_t size_a, size_b;
-    char *data_a = read_whole(a, &size_a), *data_b = read_whole(b, &size_b);
+    char *data_a = test_read_file(a, &size_a), *data_b = test_read_file(b, &size_b);
     if (size_a != size_b || memcmp(data_a, data_b, size_a) != 0)
         fail_msg("%s and %s differ (%zu and %zu bytes)", a, b, size_a, size_b);
     free(data_a);
@@ -87,8 +73,8 @@ static void test_app_view_scripted_screenshot_is_render_of_the_written_scene(voi
     /* and the view did move: the scene's own camera gives another image */
     run_ok("render %s %s --technique relief -o %s --quiet", BRICKS, SIZE, in_dir("home.png"));
     size_t a, b;
-    char *moved = read_whole(in_dir("scripted.png"), &a),
-         *home = read_whole(in_dir("home.png"), &b);
+    char *moved = test_read_file(in_dir("scripted.png"), &a),
+         *home = test_read_file(in_dir("home.png"), &b);
     assert_true(a != b || memcmp(moved, home, a) != 0);
     free(moved);
     free(home);
@@ -186,8 +172,8 @@ static void test_app_render_orbit_writes_numbered_frames_from_the_scene_s_view(v
     run_ok("render %s %s --technique bump -o %s --quiet", BRICKS, SIZE, in_dir("orbit-0.png"));
     assert_same_bytes(in_dir("orbit/frame-0000.png"), in_dir("orbit-0.png"));
     size_t a, b;
-    char *first = read_whole(in_dir("orbit/frame-0001.png"), &a);
-    char *second = read_whole(in_dir("orbit/frame-0002.png"), &b);
+    char *first = test_read_file(in_dir("orbit/frame-0001.png"), &a);
+    char *second = test_read_file(in_dir("orbit/frame-0002.png"), &b);
     assert_true(a != b || memcmp(first, second, a) != 0);
     free(first);
     free(second);
