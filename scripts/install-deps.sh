@@ -12,6 +12,7 @@ packages=(
     liblapacke-dev libopenblas-dev   # SVD (VDM / GDM compression)
     libcmocka-dev         # tests
     libcairo2-dev fonts-dejavu-core   # labels of sheets and plots (DejaVu Sans Mono)
+    clang libclang-rt-14-dev libomp-dev   # make test-clang (UBSan, float-cast-overflow), fuzzing
     libsdl2-dev           # meso view (optional: without it the viewer is not built)
     python3-numpy python3-pil   # the docs' measuring scripts (scripts/error_bands.py)
 )

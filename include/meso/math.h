@@ -8,6 +8,8 @@
 #define MESO_MATH_H
 
 #include <math.h>
+#include <stdint.h>
+#include <string.h>
 
 typedef struct meso_vec2 { float x, y; } meso_vec2;
 typedef struct meso_vec3 { float x, y, z; } meso_vec3;
@@ -131,6 +133,49 @@ static inline float meso_srgb_to_linear(float c) {
 }
 static inline float meso_linear_to_srgb(float c) {
     return c <= 0.0031308f ? c * 12.92f : 1.055f * powf(c, 1.0f / 2.4f) - 0.055f;
+}
+
+/* IEEE 754 binary16 ("half") bits to and from float, rounding to nearest even, in plain integer
+ * arithmetic: the same bits from every compiler and CPU (GCC's _Float16, clang 14 has none on
+ * x86-64; F16C's vcvtps2ph gives the same bits, a test says so). Infinities stay infinite,
+ * values past the largest half (65504, rounding) become infinite, NaN stays a quiet NaN. */
+static inline uint16_t meso_half_from_float(float value) {
+    uint32_t bits;
+    memcpy(&bits, &value, sizeof(bits));
+    uint16_t sign = (uint16_t)((bits >> 16) & 0x8000u);
+    uint32_t magnitude = bits & 0x7fffffffu;
+    if (magnitude >= 0x7f800000u) /* Inf, NaN (payload's top bits kept, made quiet) */
+        return (uint16_t)(sign | 0x7c00u |
+                          (magnitude > 0x7f800000u ? 0x200u | ((magnitude >> 13) & 0x3ffu) : 0));
+    if (magnitude >= 0x477ff000u) return (uint16_t)(sign | 0x7c00u); /* rounds past 65504 */
+    if (magnitude >= 0x38800000u) { /* normal: rebias the exponent (127 - 15), round 13 bits */
+        uint32_t rebiased = magnitude - 0x38000000u;
+        return (uint16_t)(sign | ((rebiased + 0xfffu + ((rebiased >> 13) & 1u)) >> 13));
+    }
+    /* subnormal half: value / 2^-24 rounded to nearest even */
+    int shift = 126 - (int)(magnitude >> 23);
+    if (shift > 24) return sign;
+    uint32_t mantissa = (magnitude & 0x7fffffu) | 0x800000u;
+    uint32_t result = mantissa >> shift, rest = mantissa & ((1u << shift) - 1u);
+    uint32_t halfway = 1u << (shift - 1);
+    if (rest > halfway || (rest == halfway && (result & 1u))) result++;
+    return (uint16_t)(sign | result);
+}
+static inline float meso_half_to_float(uint16_t half) {
+    uint32_t sign = (uint32_t)(half & 0x8000u) << 16;
+    uint32_t exponent = (half >> 10) & 0x1fu, mantissa = half & 0x3ffu, bits;
+    if (exponent == 0x1fu) {
+        bits = sign | 0x7f800000u | (mantissa << 13);
+    } else if (exponent) {
+        bits = sign | ((exponent + 112u) << 23) | (mantissa << 13);
+    } else { /* zero or subnormal: mantissa * 2^-24, exact in float */
+        float magnitude = (float)mantissa * 0x1p-24f;
+        memcpy(&bits, &magnitude, sizeof(bits));
+        bits |= sign;
+    }
+    float value;
+    memcpy(&value, &bits, sizeof(value));
+    return value;
 }
 
 #endif

@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "meso/bake_file.h"
+#include "meso/math.h"
 
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
 #error "meso bake files store arrays in host order, which must be little-endian"
@@ -352,9 +353,9 @@ meso_result meso_bake_array_check_values(meso_context *ctx, const char *name,
             memcpy(&f, (const unsigned char *)array->data + 4 * i, sizeof(f));
             value = f;
         } else {
-            _Float16 h;
+            uint16_t h;
             memcpy(&h, (const unsigned char *)array->data + 2 * i, sizeof(h));
-            value = (double)h;
+            value = meso_half_to_float(h);
         }
         /* written so that NaN fails too */
         if (!(value >= min && value <= max))

@@ -344,9 +344,8 @@ static bool make_half_weights(meso_vdm *vdm) {
     vdm->weights_half = malloc(count * sizeof(uint16_t));
     if (!vdm->weights_half) return false;
     for (size_t i = 0; i < count; i++) {
-        _Float16 h = (_Float16)vdm->weights[i];
-        memcpy(&vdm->weights_half[i], &h, sizeof(h));
-        vdm->weights[i] = (float)h;
+        vdm->weights_half[i] = meso_half_from_float(vdm->weights[i]);
+        vdm->weights[i] = meso_half_to_float(vdm->weights_half[i]);
     }
     return true;
 }
@@ -893,11 +892,8 @@ meso_result meso_vdm_from_bake_file(meso_context *ctx, const meso_bake_file *bak
         vdm->weights_half = malloc(sizeof(uint16_t) * rows * (size_t)kw);
         if (vdm->weights && vdm->weights_half) {
             memcpy(vdm->weights_half, weights, sizeof(uint16_t) * rows * (size_t)kw);
-            for (size_t i = 0; i < rows * (size_t)kw; i++) {
-                _Float16 h;
-                memcpy(&h, &vdm->weights_half[i], sizeof(h));
-                vdm->weights[i] = (float)h;
-            }
+            for (size_t i = 0; i < rows * (size_t)kw; i++)
+                vdm->weights[i] = meso_half_to_float(vdm->weights_half[i]);
         }
     } else {
         vdm->weights = copy_floats(weights, rows * (size_t)kw);

@@ -92,7 +92,8 @@ void raster_bins_release(raster_bins *bins);
 static inline const uint32_t *raster_chunk_tile(const raster_chunk *chunk, int tile,
                                                 size_t *out_count) {
     *out_count = chunk->tile_start[tile + 1] - chunk->tile_start[tile];
-    return chunk->entries + chunk->tile_start[tile];
+    /* an empty chunk has no entries array: no offset from NULL (undefined behaviour) */
+    return *out_count ? chunk->entries + chunk->tile_start[tile] : NULL;
 }
 
 /* ---- Colour pass (raster_tiles.c) --------------------------------------------------------- */

@@ -53,13 +53,6 @@ static void write_readme_example(const char *path) {
     fclose(out);
 }
 
-/* A sanitized build installs sanitized archives: their users link the runtime too. */
-#ifdef __SANITIZE_ADDRESS__
-#define SANITIZE_FLAGS "-fsanitize=address,undefined"
-#else
-#define SANITIZE_FLAGS ""
-#endif
-
 static void test_install_to_a_prefix_builds_the_readme_example(void **state) {
     (void)state;
     char dir[1100], command[4096];
@@ -86,9 +79,10 @@ static void test_install_to_a_prefix_builds_the_readme_example(void **state) {
     /* the example reads examples/bricks-plane.json and writes bricks.png in its folder */
     shell(dir, "ln -s " MESO_SOURCE_DIR "/examples examples");
 
-    /* pkg-config, as the README says */
+    /* pkg-config, as the README says; a sanitized build installs sanitized archives, so their
+     * users link the runtime too, with the compiler that built them (CMake passes both) */
     shell(dir, "export PKG_CONFIG_PATH=\"$PWD/prefix/lib/pkgconfig\" && "
-               "cc -std=c17 " SANITIZE_FLAGS
+               "'" MESO_C_COMPILER "' -std=c17 " MESO_SANITIZE_FLAGS
                " app.c -o app-pkg-config $(pkg-config --cflags --libs --static libmeso) "
                "&& MESO_CACHE_DIR=off ./app-pkg-config && test -s bricks.png && rm bricks.png");
 
@@ -104,7 +98,7 @@ static void test_install_to_a_prefix_builds_the_readme_example(void **state) {
                              "target_link_libraries(app PRIVATE meso::meso)\n";
     test_write_file(lists, cmake_text, strlen(cmake_text));
     shell(dir, "cmake -S cmake-consumer -B cmake-build -DCMAKE_PREFIX_PATH=\"$PWD/prefix\" "
-               "-DCMAKE_C_FLAGS=\"" SANITIZE_FLAGS "\" && "
+               "-DCMAKE_C_COMPILER='" MESO_C_COMPILER "' -DCMAKE_C_FLAGS=\"" MESO_SANITIZE_FLAGS "\" && "
                "cmake --build cmake-build && MESO_CACHE_DIR=off ./cmake-build/app && "
                "test -s bricks.png");
 }

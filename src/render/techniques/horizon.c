@@ -136,7 +136,6 @@ static void shade(const void *state, const meso_frame *frame, const meso_object 
         meso_shade_batch_all_visible(&in, frame);
         for (int k = 0; k < n; ++k) {
             for (int li = 0; li < num_lights; ++li) {
-                float *vis = &in.visibility[li][k];
                 meso_vec3 L = meso_light_direction(&scene->lights[li], f[k].position);
                 float lu, lv, ln;
                 if (!(depth > 0.0f) || !relief_frame_solve(&f[k], L, &lu, &lv, &ln)) continue;
@@ -156,7 +155,8 @@ static void shade(const void *state, const meso_frame *frame, const meso_object 
                 float sin_d = ln * run - along * rise, cos_d = along * run + ln * rise;
                 float norm = sqrtf((ln * ln + along * along) * (run * run + rise * rise));
                 sin_d = norm > 0.0f ? sin_d / norm : 1.0f;
-                *vis = cos_d < 0.0f && sin_d < 0.0f
+                /* (a vector element is assigned, not pointed to: clang has no address of one) */
+                in.visibility[li][k] = cos_d < 0.0f && sin_d < 0.0f
                            ? 0.0f
                            : smooth_step(-SOFT_RADIANS, SOFT_RADIANS, sin_d);
             }

@@ -63,20 +63,11 @@ static inline v8f load8h(const uint16_t *p) {
     return out;
 #else
     v8f out;
-    for (int i = 0; i < 8; i++) {
-        _Float16 h;
-        memcpy(&h, p + i, sizeof(h));
-        out[i] = (float)h;
-    }
+    for (int i = 0; i < 8; i++) out[i] = meso_half_to_float(p[i]);
     return out;
 #endif
 }
-static inline uint16_t to_half(float x) {
-    _Float16 h = (_Float16)x;
-    uint16_t bits;
-    memcpy(&bits, &h, sizeof(bits));
-    return bits;
-}
+static inline uint16_t to_half(float x) { return meso_half_from_float(x); }
 static inline float sum8(v8f v) {
     return ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]));
 }
