@@ -46,6 +46,11 @@ int app_usage_error(const char *command, const char *format, ...) {
     return APP_EXIT_BAD_INPUT;
 }
 
+int app_check_bits(const char *command, int bits) {
+    if (bits == 0 || bits == 8 || bits == 16) return -1;
+    return app_usage_error(command, "--bits: %d is not 8 or 16", bits);
+}
+
 /* Print text from column `indent` (already reached), breaking lines at spaces before `width`. */
 static void print_wrapped(const char *text, int indent, int width) {
     int column = indent;

@@ -48,6 +48,17 @@ typedef struct app_settings {
 } app_settings;
 
 /* The --set row of a command's option table, writing into `settings`. */
+/* --bits 8|16: the bit depth of the PNGs a command writes (OpenEXR outputs, chosen by an
+ * ".exr" extension, are always half floats); app_check_bits says the usage error. */
+#define APP_BITS_OPTION(bits)                                                                      \
+    {                                                                                              \
+        "--bits", NULL, APP_OPTION_INT, (bits), "8|16",                                            \
+            "bits a channel of the PNG written (an .exr output is half floats, linear)", "8", 8,   \
+            16                                                                                     \
+    }
+/* -1 when bits is 0 (not given), 8 or 16, else the usage error's exit status. */
+int app_check_bits(const char *command, int bits);
+
 #define APP_SET_OPTION(settings)                                                                   \
     {                                                                                              \
         "--set", NULL, APP_OPTION_SETTING, (settings), "T.NAME=V",                                 \

@@ -82,9 +82,11 @@ int meso_cmd_compare(int argc, char **argv) {
     const char *background_text = NULL;
     bool json = false;
     double fail_below = NAN, diff_scale = 0.25;
+    int bits = 0;
     const app_option options[] = {
         {"--output", "-o", APP_OPTION_STRING, &diff_path, "DIFF.png",
-         "write the false-colour difference (black 0, blue, green, yellow, red at --diff-scale)",
+         "write the false-colour difference (black 0, blue, green, yellow, red at --diff-scale); "
+         "DIFF.exr writes OpenEXR (half floats)",
          NULL, 0, 0},
         {"--json", NULL, APP_OPTION_FLAG, &json, NULL, "print the numbers as one JSON object", NULL,
          0, 0},
@@ -100,6 +102,7 @@ int meso_cmd_compare(int argc, char **argv) {
          "mean channel difference shown red in the difference image", "0.25", 1e-6, 1e6},
         {"--sheet", NULL, APP_OPTION_STRING, &sheet_path, "SHEET.png",
          "write a labelled sheet: A, B, the difference and the numbers", NULL, 0, 0},
+        APP_BITS_OPTION(&bits),
     };
     size_t num_options = sizeof options / sizeof options[0];
     app_globals globals;
@@ -110,6 +113,7 @@ int meso_cmd_compare(int argc, char **argv) {
     if (status >= 0) return status;
     if (num_positionals != 2)
         return app_usage_error("compare", "needs two images, A.png and B.png");
+    if ((status = app_check_bits("compare", bits)) >= 0) return status;
     float background[3] = {0, 0, 0};
     if (background_text && !parse_rgb(background_text, background))
         return app_usage_error("compare", "--background: '%s' is not R,G,B", background_text);
@@ -176,12 +180,12 @@ int meso_cmd_compare(int argc, char **argv) {
     }
     if (result == MESO_OK && (diff_path || sheet_path)) {
         /* linear: the difference's colours as designed, the sheet's values as the files give */
-        const meso_png_desc linear[2] = {{.encoding = MESO_ENCODING_LINEAR},
-                                         {.encoding = MESO_ENCODING_LINEAR}};
+        const meso_png_desc linear[2] = {{.bit_depth = bits, .encoding = MESO_ENCODING_LINEAR},
+                                         {.bit_depth = bits, .encoding = MESO_ENCODING_LINEAR}};
         const meso_image *images[2] = {diff_path ? diff : sheet, sheet};
         const char *paths[2] = {diff_path ? diff_path : sheet_path, sheet_path};
         size_t count = diff_path && sheet_path ? 2 : 1;
-        result = meso_image_save_png_all(ctx, count, images, paths, linear);
+        result = meso_image_save_all(ctx, count, images, paths, linear); /* .exr: OpenEXR */
     }
     if (result != MESO_OK) {
         status = app_fail(ctx, result);

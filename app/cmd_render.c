@@ -20,6 +20,7 @@ typedef struct render_options {
     bool wireframe;
     const char *coverage;
     bool linear;
+    int bits; /* --bits: PNG bit depth (0: 8) */
     app_settings settings; /* --set */
     int orbit;                  /* frames of a turntable into folder OUT (0: none) */
     app_camera_override camera; /* --eye, --target, --fov, --light */
@@ -80,8 +81,9 @@ static int render_one(meso_context *ctx, const meso_scene *scene, const render_o
     if (result == MESO_OK) result = meso_renderer_create(ctx, scene, &desc, &renderer);
     if (result == MESO_OK) result = meso_framebuffer_create(ctx, width, height, &fb);
     if (result == MESO_OK) result = meso_renderer_render(renderer, fb);
-    if (result == MESO_OK)
-        result = meso_framebuffer_save_png(ctx, fb, encoding, o->output, o->coverage);
+    /* the output's extension chooses PNG or OpenEXR */
+    meso_png_desc png = {.bit_depth = o->bits, .encoding = encoding};
+    if (result == MESO_OK) result = meso_framebuffer_save(ctx, fb, &png, o->output, o->coverage);
     if (result == MESO_OK && !quiet) {
         meso_render_stats stats = meso_renderer_get_stats(renderer);
         fprintf(stderr,
@@ -223,7 +225,9 @@ int meso_cmd_render(int argc, char **argv) {
     render_options o = {.samples = 1, .frames = 5};
     const app_option options[] = {
         {"--output", "-o", APP_OPTION_STRING, &o.output, "OUT",
-         "the PNG to write (a folder with --techniques)", "required", 0, 0},
+         "the image to write: OUT.png, or OUT.exr for OpenEXR (half floats, linear); a folder "
+         "with --techniques",
+         "required", 0, 0},
         {"--technique", NULL, APP_OPTION_STRING, &o.technique, "T",
          "draw every object with technique T", "each object's own", 0, 0},
         {"--techniques", NULL, APP_OPTION_STRING, &o.techniques, "LIST",
@@ -236,6 +240,7 @@ int meso_cmd_render(int argc, char **argv) {
          "overlay the rasterized triangles' edges", NULL, 0, 0},
         {"--coverage", NULL, APP_OPTION_STRING, &o.coverage, "MASK.png",
          "also write the coverage mask (grey PNG)", NULL, 0, 0},
+        APP_BITS_OPTION(&o.bits),
         {"--linear", NULL, APP_OPTION_FLAG, &o.linear, NULL, "write linear values instead of sRGB",
          "the scene's encoding", 0, 0},
         {"--reference-samples", NULL, APP_OPTION_INT, &o.reference_samples, "S",
@@ -260,6 +265,7 @@ int meso_cmd_render(int argc, char **argv) {
     if (status >= 0) return status;
     if (num_positionals < 1) return app_usage_error("render", "missing the SCENE file");
     if (!o.output) return app_usage_error("render", "missing -o OUT");
+    if ((status = app_check_bits("render", o.bits)) >= 0) return status;
     if (o.technique && o.techniques)
         return app_usage_error("render", "--technique and --techniques exclude each other");
     if (num_positionals > 1 && o.coverage)

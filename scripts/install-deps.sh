@@ -11,6 +11,7 @@ packages=(
     libembree-dev         # reference ray tracer (Embree 3)
     liblapacke-dev libopenblas-dev   # SVD (VDM / GDM compression)
     libcmocka-dev         # tests
+    libopenexr-dev        # .exr outputs (OpenEXRCore's C API)
     libcairo2-dev fonts-dejavu-core   # labels of sheets and plots (DejaVu Sans Mono)
     clang libclang-rt-14-dev libomp-dev   # make test-clang (UBSan, float-cast-overflow), fuzzing
     libsdl2-dev           # meso view (optional: without it the viewer is not built)

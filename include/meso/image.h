@@ -73,6 +73,20 @@ meso_result meso_image_save_png(meso_context *ctx, const meso_image *image, cons
 meso_result meso_image_save_png_all(meso_context *ctx, size_t count,
                                     const meso_image *const *images, const char *const *paths,
                                     const meso_png_desc *descs);
+/* Save as OpenEXR when the path ends in ".exr" (any case), else as PNG with desc: OpenEXR
+ * files hold the values as they are (linear, not clamped: desc's encoding and bit depth do not
+ * apply) as 16-bit half floats (1 channel: Y, 2: Y A, 3: R G B, 4: R G B A), ZIP-compressed,
+ * one scanline part. Atomic as meso_image_save_png; the _all form writes all or none. */
+meso_result meso_image_save(meso_context *ctx, const meso_image *image, const char *path,
+                            const meso_png_desc *desc);
+meso_result meso_image_save_all(meso_context *ctx, size_t count, const meso_image *const *images,
+                                const char *const *paths, const meso_png_desc *descs);
+/* Whether meso_image_save writes `path` as OpenEXR (it ends in ".exr", any case). */
+bool meso_image_path_is_exr(const char *path);
+/* An OpenEXR file (as meso_image_save) written to an open stream at its start, through its
+ * file descriptor; `path` only names the file in messages. MESO_OK, MESO_ERROR_IO (logged). */
+meso_result meso_image_write_exr(meso_context *ctx, const meso_image *image, FILE *file,
+                                 const char *path);
 /* The same PNG written to an open stream (e.g. a meso_atomic_file's, so that several outputs
  * can be committed together); `path` only names the file in messages. Not flushed or closed. */
 meso_result meso_image_write_png(meso_context *ctx, const meso_image *image, FILE *file,

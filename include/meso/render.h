@@ -50,6 +50,12 @@ meso_result meso_framebuffer_coverage_image(meso_context *ctx, const meso_frameb
 meso_result meso_framebuffer_save_png(meso_context *ctx, const meso_framebuffer *fb,
                                       meso_encoding encoding, const char *path,
                                       const char *coverage_path);
+/* As meso_framebuffer_save_png, each file's format chosen by its extension (meso_image_save:
+ * ".exr" is OpenEXR, half floats, linear and unclamped; else PNG), the colour PNG with desc's
+ * bit depth and encoding (NULL: 8-bit sRGB), the coverage PNG linear at desc's bit depth. */
+meso_result meso_framebuffer_save(meso_context *ctx, const meso_framebuffer *fb,
+                                  const meso_png_desc *desc, const char *path,
+                                  const char *coverage_path);
 
 /* ---- Techniques --------------------------------------------------------------------------- */
 

@@ -218,9 +218,10 @@ meso_result meso_image_save_png(meso_context *ctx, const meso_image *image, cons
     return meso_atomic_file_commit(ctx, &out);
 }
 
-meso_result meso_image_save_png_all(meso_context *ctx, size_t count,
-                                    const meso_image *const *images, const char *const *paths,
-                                    const meso_png_desc *descs) {
+/* save_png_all and save_all: PNG always, or the format the path's extension names. */
+static meso_result save_all(meso_context *ctx, size_t count, const meso_image *const *images,
+                            const char *const *paths, const meso_png_desc *descs,
+                            bool format_from_extension) {
     if (count > MESO_PNG_SAVE_ALL_MAX)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: more than %d files at once",
                               count ? paths[0] : "png", MESO_PNG_SAVE_ALL_MAX);
@@ -230,7 +231,10 @@ meso_result meso_image_save_png_all(meso_context *ctx, size_t count,
      * failure (a missing folder, a full disk) leaves none of them changed. */
     for (size_t i = 0; i < count && r == MESO_OK; i++) {
         r = meso_atomic_file_open(ctx, paths[i], &files[i]);
-        if (r == MESO_OK)
+        if (r != MESO_OK) break;
+        if (format_from_extension && meso_image_path_is_exr(paths[i]))
+            r = meso_image_write_exr(ctx, images[i], files[i].file, paths[i]);
+        else
             r = meso_image_write_png(ctx, images[i], files[i].file, paths[i],
                                      descs ? &descs[i] : NULL);
     }
@@ -243,4 +247,20 @@ meso_result meso_image_save_png_all(meso_context *ctx, size_t count,
         if (r == MESO_OK) r = c;
     }
     return r;
+}
+
+meso_result meso_image_save_png_all(meso_context *ctx, size_t count,
+                                    const meso_image *const *images, const char *const *paths,
+                                    const meso_png_desc *descs) {
+    return save_all(ctx, count, images, paths, descs, false);
+}
+
+meso_result meso_image_save_all(meso_context *ctx, size_t count, const meso_image *const *images,
+                                const char *const *paths, const meso_png_desc *descs) {
+    return save_all(ctx, count, images, paths, descs, true);
+}
+
+meso_result meso_image_save(meso_context *ctx, const meso_image *image, const char *path,
+                            const meso_png_desc *desc) {
+    return save_all(ctx, 1, &image, &path, desc, true);
 }

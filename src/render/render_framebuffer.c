@@ -92,9 +92,10 @@ meso_result meso_framebuffer_coverage_image(meso_context *ctx, const meso_frameb
     return MESO_OK;
 }
 
-meso_result meso_framebuffer_save_png(meso_context *ctx, const meso_framebuffer *fb,
-                                      meso_encoding encoding, const char *path,
-                                      const char *coverage_path) {
+/* save_png and save: PNG always, or each file's format from its extension. */
+static meso_result save_framebuffer(meso_context *ctx, const meso_framebuffer *fb,
+                                    const meso_png_desc *desc, const char *path,
+                                    const char *coverage_path, bool format_from_extension) {
     if (!fb || !path) {
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "framebuffer: NULL %s",
                               fb ? "path" : "framebuffer");
@@ -106,10 +107,28 @@ meso_result meso_framebuffer_save_png(meso_context *ctx, const meso_framebuffer 
         const meso_image *images[2] = {color, coverage};
         const char *paths[2] = {path, coverage_path};
         /* the mask is a fraction, not a colour: written linearly */
-        const meso_png_desc descs[2] = {{.encoding = encoding}, {.encoding = MESO_ENCODING_LINEAR}};
-        r = meso_image_save_png_all(ctx, coverage_path ? 2 : 1, images, paths, descs);
+        const meso_png_desc descs[2] = {*desc,
+                                        {.bit_depth = desc->bit_depth,
+                                         .encoding = MESO_ENCODING_LINEAR}};
+        size_t count = coverage_path ? 2 : 1;
+        r = format_from_extension ? meso_image_save_all(ctx, count, images, paths, descs)
+                                  : meso_image_save_png_all(ctx, count, images, paths, descs);
     }
     meso_image_destroy(color);
     meso_image_destroy(coverage);
     return r;
+}
+
+meso_result meso_framebuffer_save_png(meso_context *ctx, const meso_framebuffer *fb,
+                                      meso_encoding encoding, const char *path,
+                                      const char *coverage_path) {
+    meso_png_desc desc = {.encoding = encoding};
+    return save_framebuffer(ctx, fb, &desc, path, coverage_path, false);
+}
+
+meso_result meso_framebuffer_save(meso_context *ctx, const meso_framebuffer *fb,
+                                  const meso_png_desc *desc, const char *path,
+                                  const char *coverage_path) {
+    meso_png_desc defaults = {0};
+    return save_framebuffer(ctx, fb, desc ? desc : &defaults, path, coverage_path, true);
 }

@@ -1,0 +1,126 @@
+/* OpenEXR files through the library's C API (OpenEXRCore): linear half-float scanline images,
+ * ZIP-compressed, written through a stream callback into a meso_atomic_file so they commit
+ * all-or-nothing like the PNGs. */
+#include <openexr.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <unistd.h>
+
+#include "core_internal.h"
+#include "meso/image.h"
+
+typedef struct exr_stream {
+    int fd;
+    char message[256]; /* the library's last error */
+} exr_stream;
+
+static void on_exr_error(exr_const_context_t exr, exr_result_t code, const char *message) {
+    void *user = NULL;
+    if (exr_get_user_data(exr, &user) == EXR_ERR_SUCCESS && user) {
+        exr_stream *stream = user;
+        snprintf(stream->message, sizeof(stream->message), "%s",
+                 message ? message : exr_get_default_error_message(code));
+    }
+}
+
+/* The library writes the header, the chunks and finally the offset table at given offsets. */
+static int64_t write_at(exr_const_context_t exr, void *user, const void *buffer, uint64_t size,
+                        uint64_t offset, exr_stream_error_func_ptr_t error) {
+    exr_stream *stream = user;
+    const unsigned char *bytes = buffer;
+    uint64_t done = 0;
+    while (done < size) {
+        ssize_t n = pwrite(stream->fd, bytes + done, size - done, (off_t)(offset + done));
+        if (n <= 0) {
+            error(exr, EXR_ERR_WRITE_IO, "cannot write (disk full?)");
+            return -1;
+        }
+        done += (uint64_t)n;
+    }
+    return (int64_t)done;
+}
+
+/* EXR's channel names for 1-4 channels: luminance, luminance + alpha, RGB, RGBA. */
+static const char *const channel_names[5][4] = {
+    {NULL}, {"Y"}, {"Y", "A"}, {"R", "G", "B"}, {"R", "G", "B", "A"}};
+
+meso_result meso_image_write_exr(meso_context *ctx, const meso_image *image, FILE *file,
+                                 const char *path) {
+    if (!image || image->channels < 1 || image->channels > 4)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: no image to write", path);
+    int channels = image->channels;
+    exr_stream stream = {.fd = fileno(file)};
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.user_data = &stream;
+    init.write_fn = write_at;
+    init.error_handler_fn = on_exr_error;
+    exr_context_t exr = NULL;
+    exr_encode_pipeline_t encoder = EXR_ENCODE_PIPELINE_INITIALIZER;
+    bool encoder_started = false;
+    int32_t lines_per_chunk = 0;
+    /* one chunk of half rows, interleaved as the image's floats are */
+    uint16_t *halves = NULL;
+    int part = 0;
+    exr_result_t e = exr_start_write(&exr, path, EXR_WRITE_FILE_DIRECTLY, &init);
+    if (e == EXR_ERR_SUCCESS) e = exr_add_part(exr, "", EXR_STORAGE_SCANLINE, &part);
+    if (e == EXR_ERR_SUCCESS)
+        e = exr_initialize_required_attr_simple(exr, part, image->width, image->height,
+                                                EXR_COMPRESSION_ZIP);
+    for (int c = 0; c < channels && e == EXR_ERR_SUCCESS; c++)
+        e = exr_add_channel(exr, part, channel_names[channels][c], EXR_PIXEL_HALF,
+                            EXR_PERCEPTUALLY_LINEAR, 1, 1);
+    if (e == EXR_ERR_SUCCESS) e = exr_write_header(exr);
+    if (e == EXR_ERR_SUCCESS) e = exr_get_scanlines_per_chunk(exr, part, &lines_per_chunk);
+    size_t row_values = (size_t)image->width * (size_t)channels;
+    if (e == EXR_ERR_SUCCESS) {
+        halves = malloc(row_values * (size_t)lines_per_chunk * sizeof(uint16_t));
+        if (!halves) e = EXR_ERR_OUT_OF_MEMORY;
+    }
+    for (int y = 0; y < image->height && e == EXR_ERR_SUCCESS; y += lines_per_chunk) {
+        int lines = image->height - y < lines_per_chunk ? image->height - y : lines_per_chunk;
+        const float *src = meso_image_at(image, 0, y);
+        for (size_t i = 0; i < row_values * (size_t)lines; i++)
+            halves[i] = meso_half_from_float(src[i]);
+        exr_chunk_info_t chunk;
+        e = exr_write_scanline_chunk_info(exr, part, y, &chunk);
+        if (e != EXR_ERR_SUCCESS) break;
+        e = encoder_started ? exr_encoding_update(exr, part, &chunk, &encoder)
+                            : exr_encoding_initialize(exr, part, &chunk, &encoder);
+        if (e != EXR_ERR_SUCCESS) break;
+        for (int c = 0; c < encoder.channel_count; c++) {
+            exr_coding_channel_info_t *channel = &encoder.channels[c];
+            /* the library orders channels by name: find each one's place in our pixels */
+            int index = 0;
+            while (index < channels && strcmp(channel_names[channels][index], channel->channel_name))
+                index++;
+            channel->user_data_type = EXR_PIXEL_HALF;
+            channel->user_bytes_per_element = 2;
+            channel->user_pixel_stride = (int32_t)(channels * sizeof(uint16_t));
+            channel->user_line_stride = (int32_t)(row_values * sizeof(uint16_t));
+            channel->encode_from_ptr = (const uint8_t *)(halves + index);
+        }
+        if (!encoder_started) {
+            e = exr_encoding_choose_default_routines(exr, part, &encoder);
+            encoder_started = true;
+        }
+        if (e == EXR_ERR_SUCCESS) e = exr_encoding_run(exr, part, &encoder);
+    }
+    if (encoder_started) exr_encoding_destroy(exr, &encoder);
+    exr_result_t finished = exr ? exr_finish(&exr) : EXR_ERR_SUCCESS; /* writes the offsets */
+    if (e == EXR_ERR_SUCCESS) e = finished;
+    free(halves);
+    if (e == EXR_ERR_OUT_OF_MEMORY)
+        return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", path);
+    if (e != EXR_ERR_SUCCESS)
+        return meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot write OpenEXR (%s)", path,
+                              stream.message[0] ? stream.message
+                                                : exr_get_default_error_message(e));
+    return MESO_OK;
+}
+
+bool meso_image_path_is_exr(const char *path) {
+    size_t n = path ? strlen(path) : 0;
+    return n >= 4 && strcasecmp(path + n - 4, ".exr") == 0;
+}
