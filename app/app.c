@@ -644,7 +644,8 @@ void app_machine_description(char *out, size_t out_size) {
         fclose(f);
     }
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
-    snprintf(out, out_size, "%ld cores, %s", cores, model);
+    /* the techniques' instruction set: a portable build picks it at run time */
+    snprintf(out, out_size, "%ld cores, %s, techniques %s", cores, model, meso_technique_isa());
 }
 
 double app_load_average(void) {

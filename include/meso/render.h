@@ -101,6 +101,11 @@ typedef struct meso_technique_info {
 
 /* The registered techniques, in a fixed order (flat, bump, ...). Thread-safe. */
 size_t meso_technique_count(void);
+/* The instruction set the techniques run with: "avx2" (a portable x86-64 build on a CPU with
+ * AVX2, FMA and F16C), "baseline" (the portable code: other CPUs, or MESO_ISA=baseline in the
+ * environment) or "native" (built with -DMESO_NATIVE=ON). The images are the same bits in every
+ * case (docs/performance.md). Thread-safe. */
+const char *meso_technique_isa(void);
 const meso_technique_info *meso_technique_get(size_t index);
 /* NULL when no technique has that name. */
 const meso_technique_info *meso_technique_find(const char *name);

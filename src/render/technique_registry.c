@@ -1,6 +1,12 @@
-/* The technique registry: every entry of techniques/technique_list.h, then `reference`. */
+/* The technique registry: every entry of techniques/technique_list.h, then `reference`. A
+ * portable x86-64 build also holds each technique compiled for AVX2 + FMA + F16C
+ * (meso_technique_<name>_avx2, CMakeLists.txt), handed out when the CPU has them. */
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#if MESO_HAS_AVX2_TECHNIQUES
+#include <cpuid.h>
+#endif
 
 #include "reference_internal.h"
 
@@ -25,16 +31,54 @@ static const meso_technique *const techniques[] = {
 };
 #define NUM_TECHNIQUES (sizeof(techniques) / sizeof(techniques[0]))
 
+#if MESO_HAS_AVX2_TECHNIQUES
+#define MESO_TECHNIQUE(name) extern const meso_technique meso_technique_##name##_avx2;
+#include "technique_list.h"
+#undef MESO_TECHNIQUE
+static const meso_technique *const techniques_avx2[] = {
+#define MESO_TECHNIQUE(name) &meso_technique_##name##_avx2,
+#include "technique_list.h"
+#undef MESO_TECHNIQUE
+    &technique_reference,
+};
+
+/* AVX2 and FMA (which __builtin_cpu_supports checks with the OS's saving of AVX state), and
+ * F16C: CPUID leaf 1, ECX bit 29 (clang 14's builtin does not know "f16c"). */
+static bool cpu_has_avx2_fma_f16c(void) {
+    unsigned a, b, c, d;
+    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
+           __get_cpuid(1, &a, &b, &c, &d) && (c >> 29) & 1u;
+}
+#endif
+
+/* The table of the instruction set in use: MESO_ISA=baseline forces the portable code (to
+ * compare the two: both draw the same bits), otherwise the AVX2 copy where the CPU runs it. */
+static const meso_technique *const *technique_table(void) {
+#if MESO_HAS_AVX2_TECHNIQUES
+    const char *isa = getenv("MESO_ISA");
+    if (!(isa && strcmp(isa, "baseline") == 0) && cpu_has_avx2_fma_f16c()) return techniques_avx2;
+#endif
+    return techniques;
+}
+
+const char *meso_technique_isa(void) {
+#if MESO_HAS_AVX2_TECHNIQUES
+    if (technique_table() == techniques_avx2) return "avx2";
+#endif
+    return MESO_BUILD_NATIVE ? "native" : "baseline";
+}
+
 size_t meso_technique_count(void) { return NUM_TECHNIQUES; }
 
 const meso_technique_info *meso_technique_get(size_t index) {
-    return index < NUM_TECHNIQUES ? &techniques[index]->info : NULL;
+    return index < NUM_TECHNIQUES ? &technique_table()[index]->info : NULL;
 }
 
 const meso_technique *meso_technique_lookup(const char *name) {
     if (!name) return NULL;
+    const meso_technique *const *table = technique_table();
     for (size_t i = 0; i < NUM_TECHNIQUES; i++) {
-        if (strcmp(techniques[i]->info.name, name) == 0) return techniques[i];
+        if (strcmp(table[i]->info.name, name) == 0) return table[i];
     }
     return NULL;
 }
