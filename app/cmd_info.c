@@ -104,11 +104,21 @@ static void print_mesh(const meso_mesh *mesh, const char *indent) {
 
 static meso_result info_mesh(meso_context *ctx, const char *path) {
     meso_mesh *mesh = NULL;
-    meso_result result = meso_mesh_load(ctx, path, &mesh);
+    meso_mesh_material material;
+    meso_result result = meso_mesh_load_with_material(ctx, path, &mesh, &material);
     if (result == MESO_OK) result = meso_mesh_validate(ctx, mesh, path, false);
     if (result == MESO_OK) {
         printf("mesh: %s\n", path);
         print_mesh(mesh, "");
+        /* what a scene using this file would take from it (docs/scene-format.md) */
+        printf("material:");
+        if (material.has_color)
+            printf(" base colour %g %g %g,", material.color.x, material.color.y, material.color.z);
+        if (material.color_map[0]) printf(" colour texture %s,", material.color_map);
+        if (material.normal_map[0]) printf(" normal texture %s (not used),", material.normal_map);
+        if (!material.has_color && !material.color_map[0] && !material.normal_map[0])
+            printf(" none,");
+        printf(" ignored: %s\n", material.ignored[0] ? material.ignored : "nothing");
     }
     meso_mesh_destroy(mesh);
     return result;
@@ -182,6 +192,8 @@ static meso_result info_scene(meso_context *ctx, const char *path) {
                    o->material.color_map->levels[0]->height);
         print_vec3(", specular ", o->material.specular);
         printf(", shininess %g\n", o->material.shininess);
+        if (o->mesh_material_note[0])
+            printf("      material of the mesh file: %s\n", o->mesh_material_note);
         print_mesostructure(&o->mesostructure);
         const meso_technique_info *t = meso_technique_find(o->technique);
         printf("      technique: %s", o->technique);

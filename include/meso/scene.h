@@ -90,6 +90,9 @@ typedef struct meso_object {
     char technique[MESO_NAME_MAX]; /* as written in the scene ("flat" when absent) */
     meso_option options[MESO_OPTIONS_MAX];
     int num_options;
+    /* shape {"file"}: what of the mesh file's material was used and what not ("base colour
+     * used, colour texture used, ignored: occlusion texture"), "" otherwise (meso info) */
+    char mesh_material_note[768];
 } meso_object;
 
 typedef struct meso_scene {

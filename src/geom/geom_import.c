@@ -6,12 +6,14 @@
  * degenerate-triangle warning name the file.
  */
 #include <errno.h>
+#include <math.h>
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 
 #include <assimp/cimport.h>
+#include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
@@ -188,8 +190,86 @@ static meso_result check_raw_scene(meso_context *ctx, const char *path,
     return geom_check_counts(ctx, path, num_vertices, num_corners / 3);
 }
 
+static void append_ignored(meso_mesh_material *m, const char *what) {
+    size_t used = strlen(m->ignored);
+    snprintf(m->ignored + used, sizeof(m->ignored) - used, "%s%s", used ? ", " : "", what);
+}
+
+/* A texture's path of `type`, when it names a file: embedded images ("*0") and data URIs are
+ * listed as ignored. */
+static void read_texture(const struct aiMaterial *material, enum aiTextureType type,
+                         const char *what, char *out, meso_mesh_material *m) {
+    struct aiString path;
+    if (aiGetMaterialTexture(material, type, 0, &path, NULL, NULL, NULL, NULL, NULL, NULL) !=
+            aiReturn_SUCCESS || path.length == 0)
+        return;
+    char ignored[96];
+    if (path.data[0] == '*' || strncmp(path.data, "data:", 5) == 0) {
+        snprintf(ignored, sizeof ignored, "%s (embedded image)", what);
+        append_ignored(m, ignored);
+    } else if (path.length >= MESO_MESH_MATERIAL_PATH_MAX) {
+        snprintf(ignored, sizeof ignored, "%s (path too long)", what);
+        append_ignored(m, ignored);
+    } else {
+        memcpy(out, path.data, path.length + 1);
+    }
+}
+
+/* The first instance's material; what else the file holds goes to `ignored`. */
+static void read_material(const struct aiScene *scene, const import_state *s,
+                          meso_mesh_material *m) {
+    memset(m, 0, sizeof(*m));
+    if (s->num_instances == 0 || !scene->mMaterials) return;
+    unsigned index = s->instances[0].mesh->mMaterialIndex;
+    if (index >= scene->mNumMaterials) return;
+    const struct aiMaterial *material = scene->mMaterials[index];
+    struct aiString name;
+    if (aiGetMaterialString(material, AI_MATKEY_NAME, &name) == aiReturn_SUCCESS &&
+        strcmp(name.data, AI_DEFAULT_MATERIAL_NAME) == 0)
+        return; /* assimp's stand-in for "no material" */
+    struct aiColor4D color;
+    if (aiGetMaterialColor(material, AI_MATKEY_COLOR_DIFFUSE, &color) == aiReturn_SUCCESS &&
+        isfinite(color.r) && isfinite(color.g) && isfinite(color.b)) {
+        m->has_color = true;
+        m->color = (meso_vec3){meso_clampf(color.r, 0.0f, 1.0f), meso_clampf(color.g, 0.0f, 1.0f),
+                               meso_clampf(color.b, 0.0f, 1.0f)};
+    }
+    read_texture(material, aiTextureType_DIFFUSE, "base colour texture", m->color_map, m);
+    read_texture(material, aiTextureType_NORMALS, "normal texture", m->normal_map, m);
+    static const struct {
+        enum aiTextureType type;
+        const char *what;
+    } unused[] = {{aiTextureType_SPECULAR, "specular texture"},
+                  {aiTextureType_EMISSIVE, "emissive texture"},
+                  {aiTextureType_HEIGHT, "bump/height texture"},
+                  {aiTextureType_OPACITY, "opacity texture"},
+                  {aiTextureType_METALNESS, "metallic texture"},
+                  {aiTextureType_DIFFUSE_ROUGHNESS, "roughness texture"},
+                  {aiTextureType_AMBIENT_OCCLUSION, "occlusion texture"},
+                  {aiTextureType_LIGHTMAP, "occlusion texture"}, /* glTF's, in assimp 5.2 */
+                  {aiTextureType_UNKNOWN, "metallic-roughness texture"}};
+    for (size_t u = 0; u < sizeof(unused) / sizeof(unused[0]); u++)
+        if (aiGetMaterialTextureCount(material, unused[u].type) > 0)
+            append_ignored(m, unused[u].what);
+    size_t others = 0;
+    for (size_t i = 1; i < s->num_instances; i++)
+        others += s->instances[i].mesh->mMaterialIndex != index;
+    if (others) {
+        char text[96];
+        snprintf(text, sizeof text, "the materials of %zu other mesh%s", others,
+                 others == 1 ? "" : "es");
+        append_ignored(m, text);
+    }
+}
+
 meso_result meso_mesh_load(meso_context *ctx, const char *path, meso_mesh **out_mesh) {
+    return meso_mesh_load_with_material(ctx, path, out_mesh, NULL);
+}
+
+meso_result meso_mesh_load_with_material(meso_context *ctx, const char *path,
+                                         meso_mesh **out_mesh, meso_mesh_material *out_material) {
     *out_mesh = NULL;
+    if (out_material) memset(out_material, 0, sizeof(*out_material));
     FILE *probe = NULL; /* a regular file only: assimp would block on a FIFO */
     meso_result opened = meso_file_open_read(ctx, path, &probe);
     if (opened != MESO_OK) return opened;
@@ -254,6 +334,7 @@ meso_result meso_mesh_load(meso_context *ctx, const char *path, meso_mesh **out_
     if (r != MESO_OK) goto fail;
     r = meso_mesh_validate(ctx, mesh, path, false);
     if (r != MESO_OK) goto fail;
+    if (out_material) read_material(scene, &s, out_material);
     *out_mesh = mesh;
     mesh = NULL;
 fail:

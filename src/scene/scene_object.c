@@ -351,12 +351,12 @@ static meso_result parse_height_map_or_solid(const scene_parser *p, const cJSON 
 
 /* ---- Material ----------------------------------------------------------------------------- */
 
-static meso_result load_color_map(const scene_parser *p, const scene_key *key, const char *file,
-                                  meso_wrap wrap, meso_texture **out_texture) {
-    char path[SCENE_PATH_MAX];
-    meso_result r;
-    if ((r = scene_resolve_path(p, key, file, path)) || (r = check_readable(p, key, path)))
-        return r;
+/* A colour map at a resolved path, converted from sRGB to linear. */
+static meso_result load_color_map_file(const scene_parser *p, const scene_key *key,
+                                       const char *path, meso_wrap wrap,
+                                       meso_texture **out_texture) {
+    meso_result r = check_readable(p, key, path);
+    if (r != MESO_OK) return r;
     meso_image *image = NULL;
     r = meso_image_load_png(p->ctx, path, &image);
     if (r != MESO_OK) return relog_at_key(p, key, r);
@@ -378,6 +378,68 @@ static meso_result load_color_map(const scene_parser *p, const scene_key *key, c
     r = meso_texture_create(p->ctx, image, wrap, true, out_texture);
     meso_image_destroy(image);
     return r;
+}
+
+static meso_result load_color_map(const scene_parser *p, const scene_key *key, const char *file,
+                                  meso_wrap wrap, meso_texture **out_texture) {
+    char path[SCENE_PATH_MAX];
+    meso_result r = scene_resolve_path(p, key, file, path);
+    return r == MESO_OK ? load_color_map_file(p, key, path, wrap, out_texture) : r;
+}
+
+static void append_note(char *text, size_t size, const char *note) {
+    size_t used = strlen(text);
+    snprintf(text + used, size - used, "%s%s", used ? ", " : "", note);
+}
+
+/* The mesh file's own material (shape {"file"}: glTF baseColorFactor / baseColorTexture, MTL
+ * Kd / map_Kd), used when the scene's material sets no colour (neither "albedo" nor
+ * "color_map"). The texture must lie beside the mesh file or below it (no absolute path, no
+ * ".."), like a glTF's buffers. What was used and what not goes to object->mesh_material_note
+ * for meso info. */
+static meso_result apply_mesh_material(const scene_parser *p, const cJSON *obj,
+                                       const scene_key *key, const char *mesh_path,
+                                       const meso_mesh_material *from_file, meso_object *object) {
+    char *note = object->mesh_material_note;
+    size_t note_size = sizeof(object->mesh_material_note);
+    const cJSON *material = cJSON_GetObjectItemCaseSensitive(obj, "material");
+    bool scene_sets_colour = cJSON_GetObjectItemCaseSensitive(material, "albedo") ||
+                             cJSON_GetObjectItemCaseSensitive(material, "color_map");
+    bool has_any = from_file->has_color || from_file->color_map[0];
+    if (has_any && scene_sets_colour) {
+        append_note(note, note_size, "colour not used: the scene's material sets one");
+    } else if (has_any) {
+        if (from_file->has_color) {
+            object->material.albedo = from_file->color;
+            append_note(note, note_size, "base colour used");
+        }
+        const char *texture = from_file->color_map;
+        if (texture[0] && (texture[0] == '/' || strstr(texture, ".."))) {
+            append_note(note, note_size, "colour texture not used: not beside the mesh file");
+        } else if (texture[0]) {
+            char path[SCENE_PATH_MAX];
+            const char *slash = strrchr(mesh_path, '/');
+            int folder = slash ? (int)(slash - mesh_path) : 1;
+            int n = snprintf(path, sizeof path, "%.*s/%s", folder, slash ? mesh_path : ".",
+                             texture);
+            scene_key k = scene_key_child(key, "shape");
+            if (n < 0 || n >= (int)sizeof path)
+                return scene_error(p, MESO_ERROR_LIMIT, &k, "texture path too long");
+            const meso_mesostructure *m = &object->mesostructure;
+            meso_wrap wrap = m->kind != MESO_MESOSTRUCTURE_NONE ? m->wrap : MESO_WRAP_REPEAT;
+            meso_result r = load_color_map_file(p, &k, path, wrap, &object->material.color_map);
+            if (r != MESO_OK) return r;
+            append_note(note, note_size, "colour texture used");
+        }
+    }
+    if (from_file->normal_map[0])
+        append_note(note, note_size, "normal texture not used (normal maps are not implemented)");
+    if (from_file->ignored[0]) {
+        char ignored[600];
+        snprintf(ignored, sizeof ignored, "ignored: %s", from_file->ignored);
+        append_note(note, note_size, ignored);
+    }
+    return MESO_OK;
 }
 
 static meso_result parse_material(const scene_parser *p, const cJSON *item, const scene_key *key,
@@ -434,8 +496,13 @@ static meso_result parse_transform(const scene_parser *p, const cJSON *item, con
     return MESO_OK;
 }
 
+/* The object's mesh: a built-in shape or a mesh file; for a file, its material (zeroed for a
+ * built-in shape) and resolved path. */
 static meso_result create_mesh(const scene_parser *p, const cJSON *obj, const scene_key *key,
-                               meso_mesh **out_mesh) {
+                               meso_mesh **out_mesh, meso_mesh_material *out_material,
+                               char out_path[SCENE_PATH_MAX]) {
+    memset(out_material, 0, sizeof(*out_material));
+    out_path[0] = 0;
     static const char *const shape_params[] = {"size", "minor_radius", "height", "segments"};
     const cJSON *shape = cJSON_GetObjectItemCaseSensitive(obj, "shape");
     scene_key shape_key = scene_key_child(key, "shape");
@@ -452,11 +519,10 @@ static meso_result create_mesh(const scene_parser *p, const cJSON *obj, const sc
             (r = scene_get_string(p, shape, &shape_key, "file", true, &file)))
             return r;
         scene_key file_key = scene_key_child(&shape_key, "file");
-        char path[SCENE_PATH_MAX];
-        if ((r = scene_resolve_path(p, &file_key, file, path)) ||
-            (r = check_readable(p, &file_key, path)))
+        if ((r = scene_resolve_path(p, &file_key, file, out_path)) ||
+            (r = check_readable(p, &file_key, out_path)))
             return r;
-        r = meso_mesh_load(p->ctx, path, out_mesh);
+        r = meso_mesh_load_with_material(p->ctx, out_path, out_mesh, out_material);
         if (r != MESO_OK) return relog_at_key(p, &file_key, r);
         return scene_account_memory(
             p, key,
@@ -510,12 +576,15 @@ static meso_result build_mesh(const scene_parser *p, const cJSON *obj, const sce
                               meso_object *object) {
     meso_mat4 transform;
     meso_vec2 uv_scale = {1.0f, 1.0f};
+    meso_mesh_material from_file;
+    char mesh_path[SCENE_PATH_MAX];
     scene_key transform_key = scene_key_child(key, "transform");
     meso_result r;
     if ((r = parse_transform(p, cJSON_GetObjectItemCaseSensitive(obj, "transform"), &transform_key,
                              &transform)) ||
         (r = scene_get_vec2(p, obj, key, "uv_scale", true, &uv_scale)) ||
-        (r = create_mesh(p, obj, key, &object->mesh)))
+        (r = create_mesh(p, obj, key, &object->mesh, &from_file, mesh_path)) ||
+        (mesh_path[0] && (r = apply_mesh_material(p, obj, key, mesh_path, &from_file, object))))
         return r;
     meso_mesh *mesh = object->mesh;
     meso_mesh_transform(mesh, transform);
