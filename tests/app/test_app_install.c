@@ -81,10 +81,21 @@ static void test_install_to_a_prefix_builds_the_readme_example(void **state) {
 
     /* pkg-config, as the README says; a sanitized build installs sanitized archives, so their
      * users link the runtime too, with the compiler that built them (CMake passes both) */
+#if MESO_SHARED_BUILD
+    /* -DMESO_SHARED=ON: both ways link the installed libmeso.so (found at run time through
+     * LD_LIBRARY_PATH for pkg-config, the imported target's run path for CMake) */
+    shell(dir, "export PKG_CONFIG_PATH=\"$PWD/prefix/lib/pkgconfig\" && "
+               "'" MESO_C_COMPILER "' -std=c17 " MESO_SANITIZE_FLAGS
+               " app.c -o app-pkg-config $(pkg-config --cflags --libs libmeso) && "
+               "readelf -d app-pkg-config | grep -q 'NEEDED.*libmeso\\.so' && "
+               "MESO_CACHE_DIR=off LD_LIBRARY_PATH=\"$PWD/prefix/lib\" ./app-pkg-config && "
+               "test -s bricks.png && rm bricks.png");
+#else
     shell(dir, "export PKG_CONFIG_PATH=\"$PWD/prefix/lib/pkgconfig\" && "
                "'" MESO_C_COMPILER "' -std=c17 " MESO_SANITIZE_FLAGS
                " app.c -o app-pkg-config $(pkg-config --cflags --libs --static libmeso) "
                "&& MESO_CACHE_DIR=off ./app-pkg-config && test -s bricks.png && rm bricks.png");
+#endif
 
     /* find_package(meso) */
     snprintf(command, sizeof command, "%s/cmake-consumer", dir);
@@ -101,6 +112,11 @@ static void test_install_to_a_prefix_builds_the_readme_example(void **state) {
                "-DCMAKE_C_COMPILER='" MESO_C_COMPILER "' -DCMAKE_C_FLAGS=\"" MESO_SANITIZE_FLAGS "\" && "
                "cmake --build cmake-build && MESO_CACHE_DIR=off ./cmake-build/app && "
                "test -s bricks.png");
+#if MESO_SHARED_BUILD
+    shell(dir, "readelf -d cmake-build/app | grep -q 'NEEDED.*libmeso\\.so' && "
+               "test -L prefix/lib/libmeso.so && "
+               "! nm -D --defined-only prefix/lib/libmeso.so | grep -v ' meso_' | grep -q ' T '");
+#endif
 }
 
 int main(void) {
