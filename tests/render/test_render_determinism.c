@@ -6,51 +6,26 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "test_util.h"
+#include "example_renders.h"
 
 /* The examples as shipped in examples/ (the effect scenes there are bricks-plane re-lit). */
 static const char *const examples[] = {"bricks-plane",    "bricks-teapot", "bumps-sphere",
                                        "weave-plane",     "weave-torus",   "chainmail-plane",
                                        "teapot-impostor"};
 
-/* Small bakes for the techniques that bake, keyed by technique as --set passes them. */
-static const meso_option small_bakes[] = {
-    {"vdm", "resolution", 32},         {"vdm", "num_theta", 16},
-    {"vdm", "num_curvatures", 4},      {"relief_layers", "size", 64},
-};
-
-static meso_framebuffer *render(const meso_scene *scene, const char *technique, int threads) {
-    meso_context *ctx = test_context(threads);
-    meso_render_desc desc = {.technique = technique,
-                             .fallback = true,
-                             .options = small_bakes,
-                             .num_options = (int)(sizeof small_bakes / sizeof small_bakes[0])};
-    meso_framebuffer *fb = NULL;
-    if (meso_render_scene(ctx, scene, &desc, &fb) != MESO_OK)
-        fail_msg("%s with %s, %d threads: %s", scene->path, technique, threads,
-                 meso_context_last_error(ctx));
-    meso_context_destroy(ctx);
-    return fb;
-}
-
 static void test_every_example_and_technique_is_identical_for_1_2_and_7_threads(void **state) {
     (void)state;
     int compared = 0;
     for (size_t e = 0; e < sizeof examples / sizeof examples[0]; e++) {
-        char path[1024];
-        snprintf(path, sizeof path, "%s/examples/%s.json", MESO_SOURCE_DIR, examples[e]);
         meso_context *ctx = test_context(1);
-        meso_scene *scene = NULL;
-        if (meso_scene_load(ctx, path, &scene) != MESO_OK)
-            fail_msg("%s: %s", path, meso_context_last_error(ctx));
-        scene->width = scene->height = 48;
+        meso_scene *scene = example_scene_load(ctx, examples[e], 48);
         for (size_t t = 0; t < meso_technique_count(); t++) {
             const meso_technique_info *technique = meso_technique_get(t);
             /* with fallback, an object the technique cannot draw uses its own technique */
-            meso_framebuffer *one = render(scene, technique->name, 1);
+            meso_framebuffer *one = example_render(scene, technique->name, 1);
             size_t bytes = sizeof(float) * 3 * (size_t)one->width * (size_t)one->height;
             for (int threads = 2; threads <= 7; threads += 5) {
-                meso_framebuffer *many = render(scene, technique->name, threads);
+                meso_framebuffer *many = example_render(scene, technique->name, threads);
                 if (memcmp(one->color, many->color, bytes) != 0 ||
                     memcmp(one->depth, many->depth, bytes / 3) != 0)
                     fail_msg("%s with %s: 1 and %d threads differ", examples[e],

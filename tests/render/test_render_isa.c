@@ -7,31 +7,17 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "test_util.h"
+#include "example_renders.h"
 
 static const char *const examples[] = {"bricks-plane", "bumps-sphere", "weave-torus"};
 
-/* Small bakes for the techniques that bake, keyed by technique as --set passes them. */
-static const meso_option small_bakes[] = {
-    {"vdm", "resolution", 32},    {"vdm", "num_theta", 16},
-    {"vdm", "num_curvatures", 4}, {"relief_layers", "size", 64},
-};
-
+/* The example drawn with `technique` through the copy `isa` names (NULL: the CPU's choice). */
 static meso_framebuffer *render(const meso_scene *scene, const char *technique, const char *isa) {
     if (isa)
         setenv("MESO_ISA", isa, 1);
     else
         unsetenv("MESO_ISA");
-    meso_context *ctx = test_context(2);
-    meso_render_desc desc = {.technique = technique,
-                             .fallback = true,
-                             .options = small_bakes,
-                             .num_options = (int)(sizeof small_bakes / sizeof small_bakes[0])};
-    meso_framebuffer *fb = NULL;
-    if (meso_render_scene(ctx, scene, &desc, &fb) != MESO_OK)
-        fail_msg("%s with %s (%s): %s", scene->path, technique, meso_technique_isa(),
-                 meso_context_last_error(ctx));
-    meso_context_destroy(ctx);
+    meso_framebuffer *fb = example_render(scene, technique, 2);
     unsetenv("MESO_ISA");
     return fb;
 }
@@ -47,13 +33,8 @@ static void test_avx2_and_baseline_techniques_draw_the_same_bits(void **state) {
     }
     int compared = 0;
     for (size_t e = 0; e < sizeof examples / sizeof examples[0]; e++) {
-        char path[1024];
-        snprintf(path, sizeof path, "%s/examples/%s.json", MESO_SOURCE_DIR, examples[e]);
         meso_context *ctx = test_context(1);
-        meso_scene *scene = NULL;
-        if (meso_scene_load(ctx, path, &scene) != MESO_OK)
-            fail_msg("%s: %s", path, meso_context_last_error(ctx));
-        scene->width = scene->height = 64;
+        meso_scene *scene = example_scene_load(ctx, examples[e], 64);
         for (size_t t = 0; t < meso_technique_count(); t++) {
             const char *name = meso_technique_get(t)->name;
             if (strcmp(name, "reference") == 0) continue; /* not a rasterized technique */

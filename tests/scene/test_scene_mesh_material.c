@@ -53,14 +53,22 @@ static const char obj_quad[] = "mtllib quad.mtl\nv -1 0 1\nv 1 0 1\nv 1 0 -1\nv 
                                "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl brick\n"
                                "f 1/1 2/2 3/3 4/4\n";
 
-static void test_gltf_base_colour_and_textures_are_read(void **state) {
-    (void)state;
-    const char *dir = test_temp_dir();
-    const char *path = write_text(dir, "painted.gltf", gltf_triangle);
+/* The material of the mesh file `name` holding `text`, written in the test's folder. */
+static meso_mesh_material load_material(const char *name, const char *text) {
+    const char *path = write_text(test_temp_dir(), name, text);
     meso_context *ctx = test_context(1);
     meso_mesh *mesh = NULL;
     meso_mesh_material material;
-    assert_int_equal(meso_mesh_load_with_material(ctx, path, &mesh, &material), MESO_OK);
+    if (meso_mesh_load_with_material(ctx, path, &mesh, &material) != MESO_OK)
+        fail_msg("%s: %s", path, meso_context_last_error(ctx));
+    meso_mesh_destroy(mesh);
+    meso_context_destroy(ctx);
+    return material;
+}
+
+static void test_gltf_base_colour_and_textures_are_read(void **state) {
+    (void)state;
+    meso_mesh_material material = load_material("painted.gltf", gltf_triangle);
     assert_true(material.has_color);
     assert_float_equal(material.color.x, 0.25f, 1e-6f);
     assert_float_equal(material.color.y, 0.5f, 1e-6f);
@@ -68,33 +76,22 @@ static void test_gltf_base_colour_and_textures_are_read(void **state) {
     assert_string_equal(material.color_map, "c.png");
     assert_string_equal(material.normal_map, "n.png");
     assert_non_null(strstr(material.ignored, "occlusion"));
-    meso_mesh_destroy(mesh);
-    meso_context_destroy(ctx);
 }
 
 static void test_obj_mtl_kd_and_map_kd_are_read_and_no_mtl_is_no_material(void **state) {
     (void)state;
-    const char *dir = test_temp_dir();
-    write_text(dir, "quad.mtl", "newmtl brick\nKd 0.6 0.3 0.1\nmap_Kd brick.png\n");
-    const char *path = write_text(dir, "quad.obj", obj_quad);
-    meso_context *ctx = test_context(1);
-    meso_mesh *mesh = NULL;
-    meso_mesh_material material;
-    assert_int_equal(meso_mesh_load_with_material(ctx, path, &mesh, &material), MESO_OK);
+    write_text(test_temp_dir(), "quad.mtl", "newmtl brick\nKd 0.6 0.3 0.1\nmap_Kd brick.png\n");
+    meso_mesh_material material = load_material("quad.obj", obj_quad);
     assert_true(material.has_color);
     assert_float_equal(material.color.x, 0.6f, 1e-6f);
     assert_float_equal(material.color.z, 0.1f, 1e-6f);
     assert_string_equal(material.color_map, "brick.png");
-    meso_mesh_destroy(mesh);
 
     /* without an MTL, assimp's default material is no material */
-    path = write_text(dir, "plain.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
-    assert_int_equal(meso_mesh_load_with_material(ctx, path, &mesh, &material), MESO_OK);
+    material = load_material("plain.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     assert_false(material.has_color);
     assert_string_equal(material.color_map, "");
     assert_string_equal(material.ignored, "");
-    meso_mesh_destroy(mesh);
-    meso_context_destroy(ctx);
 }
 
 static meso_scene *load_scene(meso_context *ctx, const char *dir, const char *name,
