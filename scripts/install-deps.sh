@@ -14,6 +14,10 @@ packages=(
     libcairo2-dev fonts-dejavu-core   # labels of sheets and plots (DejaVu Sans Mono)
     libsdl2-dev           # meso view (optional: without it the viewer is not built)
     python3-numpy python3-pil   # the docs' measuring scripts (scripts/error_bands.py)
+    libegl-dev libepoxy-dev     # the OpenGL back end: EGL headless, GL entry points
+    libegl-mesa0 libgl1-mesa-dri   # Mesa's EGL and llvmpipe: GL 3.3 core without a GPU
+    glslang-tools         # glslangValidator checks shaders/ in make test
+    libopenexr-dev        # meso bake -o: VDM tables as OpenEXR
 )
 
 missing=()

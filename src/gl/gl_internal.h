@@ -1,0 +1,49 @@
+/* Private interface of the OpenGL back end: the embedded shader files, the headless context
+ * and program building. The GL entry points come from libepoxy, which resolves them at run
+ * time from whatever libEGL / libGL the machine has (glvnd + Mesa on Debian). */
+#ifndef MESO_GL_INTERNAL_H
+#define MESO_GL_INTERNAL_H
+
+#include <stddef.h>
+
+#include <epoxy/egl.h>
+#include <epoxy/gl.h>
+
+#include "meso/gl.h"
+
+/* ---- The shader files, built in (cmake/embed_shaders.cmake) ------------------------------- */
+
+typedef struct gl_embedded_shader {
+    const char *name; /* "relief.frag" */
+    const char *text;
+} gl_embedded_shader;
+extern const gl_embedded_shader gl_embedded_shaders[];
+extern const size_t gl_embedded_shader_count;
+
+/* The built-in text of shaders/<name>, NULL when there is none. */
+const char *gl_shader_builtin(const char *name);
+
+/* ---- Headless context (gl_context.c) ------------------------------------------------------ */
+
+typedef struct gl_context {
+    EGLDisplay display;
+    EGLContext context;
+} gl_context;
+
+/* An OpenGL 3.3 core context with no surface (drawing goes to framebuffer objects), current on
+ * the calling thread. MESO_ERROR_UNSUPPORTED naming what is missing; out_info (may be NULL)
+ * says how far it got. */
+meso_result gl_context_create(meso_context *ctx, gl_context *out, meso_gl_info *out_info);
+/* Make it current on the calling thread. */
+meso_result gl_context_make_current(meso_context *ctx, const gl_context *gl);
+void gl_context_destroy(gl_context *gl);
+
+/* ---- Programs (gl_program.c) -------------------------------------------------------------- */
+
+/* Compile and link meso.vert with `<technique>.frag` and the files its first line requires
+ * ("// meso:requires a.glsl b.glsl"), read from shader_dir or the built-in copies. Errors:
+ * MESO_ERROR_FORMAT with the log as "shaders/<file>:<line>: <message>" lines. */
+meso_result gl_program_build(meso_context *ctx, const char *technique, const char *shader_dir,
+                             GLuint *out_program);
+
+#endif
