@@ -42,6 +42,10 @@ int app_fail_backend(meso_context *ctx, meso_result result, const char *file,
     if (result != MESO_ERROR_UNSUPPORTED || !app_backend_is_gl(backend))
         return app_fail_in(ctx, result, file);
     const char *message = meso_context_last_error(ctx);
-    app_error("%s: %s; --backend cpu works", file, message && message[0] ? message : "unsupported");
+    if (!message || !message[0]) message = meso_result_string(result);
+    if (strncmp(message, file, strlen(file)) == 0)
+        app_error("%s; --backend cpu works", message);
+    else
+        app_error("%s: %s; --backend cpu works", file, message);
     return APP_EXIT_FAILURE;
 }

@@ -18,7 +18,7 @@
  *
  * Errors: no EGL, or no OpenGL 3.3 core context: MESO_ERROR_UNSUPPORTED with a message saying
  * what is missing. A shader that does not compile: MESO_ERROR_FORMAT with the compiler's log,
- * each line as "shaders/<file>:<line>: <message>".
+ * each line as "shaders/<file>:<line>: <message>" (the folder is shader_dir when given).
  *
  * Threads: a renderer makes its context current on the calling thread in each call; use one
  * renderer from one thread at a time. meso's CPU thread count does not apply (llvmpipe has

@@ -42,7 +42,7 @@ void gl_context_destroy(gl_context *gl);
 
 /* Compile and link meso.vert with `<technique>.frag` and the files its first line requires
  * ("// meso:requires a.glsl b.glsl"), read from shader_dir or the built-in copies. Errors:
- * MESO_ERROR_FORMAT with the log as "shaders/<file>:<line>: <message>" lines. */
+ * MESO_ERROR_FORMAT with the log as "<shader_dir or shaders>/<file>:<line>: <message>". */
 meso_result gl_program_build(meso_context *ctx, const char *technique, const char *shader_dir,
                              GLuint *out_program);
 

@@ -1,8 +1,9 @@
 /* Programs: the shader files put together (meso.vert; the technique's .frag after the files
  * its first line requires), compiled and linked, with the compiler's log given back as
  * "shaders/<file>:<line>: <message>" so an error points into the file, not into the
- * concatenation. Each file is preceded by `#line 1 <index>`, so the compiler reports the
- * index as its source-string number and the line within the file. */
+ * concatenation. Each file k is preceded by `#line <(k + 1) * 10000 + 1> <k>`: drivers that
+ * report the source-string number give k, and those that do not (Mesa 22 reports 0) give a
+ * line number whose ten-thousands say k. */
 #include <ctype.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -13,6 +14,7 @@
 #define GL_MAX_SHADER_FILES 8
 #define GL_SHADER_MAX_BYTES (1u << 20) /* a shader file read from --shader-dir */
 #define GL_REQUIRES_TAG "// meso:requires"
+#define GL_LINES_PER_FILE 10000 /* no shader file is longer */
 
 const char *gl_shader_builtin(const char *name) {
     for (size_t i = 0; i < gl_embedded_shader_count; i++)
@@ -95,8 +97,9 @@ done:
 
 /* Rewrite the compiler's log: "<k>:<line>(<column>): <message>" (Mesa), "<k>(<line>) :
  * <message>" (NVIDIA) and "ERROR: <k>:<line>: <message>" (AMD, glslang) become
- * "shaders/<file k>:<line>: <message>"; lines joined by "; " (one message line). */
-static void format_log(const char *log, const shader_files *files, char *out, size_t size) {
+ * "<dir>/<file k>:<line>: <message>"; lines joined by "; " (one message line). */
+static void format_log(const char *log, const shader_files *files, const char *dir, char *out,
+                       size_t size) {
     size_t used = 0;
     out[0] = 0;
     for (const char *line = log; *line && used + 1 < size;) {
@@ -116,8 +119,12 @@ static void format_log(const char *log, const shader_files *files, char *out, si
             while (*after == ' ') after++;
         }
         int w;
+        if (number >= GL_LINES_PER_FILE) {
+            k = number / GL_LINES_PER_FILE - 1;
+            number %= GL_LINES_PER_FILE;
+        }
         if (number >= 0 && k >= 0 && k < files->count)
-            w = snprintf(out + used, size - used, "%sshaders/%s:%ld: %.*s", used ? "; " : "",
+            w = snprintf(out + used, size - used, "%s%s/%s:%ld: %.*s", used ? "; " : "", dir,
                          files->names[k], number, (int)(line + length - after), after);
         else if (length > 0)
             w = snprintf(out + used, size - used, "%s%.*s", used ? "; " : "", (int)length, line);
@@ -130,14 +137,15 @@ static void format_log(const char *log, const shader_files *files, char *out, si
 }
 
 static meso_result compile_stage(meso_context *ctx, GLenum stage, const shader_files *files,
-                                 GLuint *out_shader) {
+                                 const char *shader_dir, GLuint *out_shader) {
     /* "#version" first, then each file after a #line naming it */
     const char *strings[2 * GL_MAX_SHADER_FILES + 1];
     char lines[GL_MAX_SHADER_FILES][32];
     int n = 0;
     strings[n++] = "#version 330 core\n";
     for (int k = 0; k < files->count; k++) {
-        snprintf(lines[k], sizeof lines[k], "\n#line 1 %d\n", k); /* \n: a file may not end with one */
+        /* the leading \n: a file may not end with one */
+        snprintf(lines[k], sizeof lines[k], "\n#line %d %d\n", (k + 1) * GL_LINES_PER_FILE + 1, k);
         strings[n++] = lines[k];
         strings[n++] = files->texts[k];
     }
@@ -149,7 +157,7 @@ static meso_result compile_stage(meso_context *ctx, GLenum stage, const shader_f
     if (!ok) {
         char log[4096], message[4096];
         glGetShaderInfoLog(shader, sizeof log, NULL, log);
-        format_log(log, files, message, sizeof message);
+        format_log(log, files, shader_dir ? shader_dir : "shaders", message, sizeof message);
         glDeleteShader(shader);
         return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s", message);
     }
@@ -168,8 +176,8 @@ meso_result gl_program_build(meso_context *ctx, const char *technique, const cha
     meso_result r;
     if ((r = shader_files_collect(ctx, "meso.vert", shader_dir, &vert)) != MESO_OK ||
         (r = shader_files_collect(ctx, frag_name, shader_dir, &frag)) != MESO_OK ||
-        (r = compile_stage(ctx, GL_VERTEX_SHADER, &vert, &vs)) != MESO_OK ||
-        (r = compile_stage(ctx, GL_FRAGMENT_SHADER, &frag, &fs)) != MESO_OK)
+        (r = compile_stage(ctx, GL_VERTEX_SHADER, &vert, shader_dir, &vs)) != MESO_OK ||
+        (r = compile_stage(ctx, GL_FRAGMENT_SHADER, &frag, shader_dir, &fs)) != MESO_OK)
         goto done;
     program = glCreateProgram();
     glAttachShader(program, vs);
