@@ -86,6 +86,7 @@ static void run_technique(const char *technique) {
 
 static void test_flat_agrees(void **state) { (void)state; run_technique("flat"); }
 static void test_relief_agrees(void **state) { (void)state; run_technique("relief"); }
+static void test_parallax_agrees(void **state) { (void)state; run_technique("parallax"); }
 
 /* Options reach the shader as the CPU reads them: with 4 linear steps and no binary search the
  * image changes visibly (staircase), and still agrees with the CPU's with the same options. */
@@ -114,6 +115,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_flat_agrees),
         cmocka_unit_test(test_relief_agrees),
+        cmocka_unit_test(test_parallax_agrees),
         cmocka_unit_test(test_relief_options_agree),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
