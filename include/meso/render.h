@@ -166,6 +166,7 @@ typedef struct meso_render_camera {
     meso_vec3 eye, forward;
     meso_mat4 view_projection;
     float z_near, z_far;
+    float pixel_size; /* world width of a pixel at view depth 1 */
 } meso_render_camera;
 meso_render_camera meso_render_camera_get(const meso_scene *scene, int width, int height);
 

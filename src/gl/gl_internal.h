@@ -46,4 +46,15 @@ void gl_context_destroy(gl_context *gl);
 meso_result gl_program_build(meso_context *ctx, const char *technique, const char *shader_dir,
                              GLuint *out_program);
 
+/* ---- Per-technique data (gl_<technique>.c) ------------------------------------------------ */
+
+/* vdm: the bake (cached, as the CPU technique's), uploaded as textures units 2-4. */
+typedef struct gl_vdm gl_vdm;
+meso_result gl_vdm_create(meso_context *ctx, const meso_object *object,
+                          const meso_technique_info *info, const double *options, gl_vdm **out,
+                          size_t *memory);
+/* Bind its textures and set its uniforms on `program` (current). */
+void gl_vdm_bind(const gl_vdm *vdm, GLuint program, float pixel_size);
+void gl_vdm_destroy(gl_vdm *vdm);
+
 #endif

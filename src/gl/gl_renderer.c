@@ -11,7 +11,7 @@
 #include "gl_internal.h"
 
 #define GL_MAX_OPTIONS 32 /* rows of any technique's option table */
-#define GL_FLOATS_PER_VERTEX 16
+#define GL_FLOATS_PER_VERTEX 24
 
 typedef struct gl_program_slot {
     char technique[MESO_NAME_MAX];
@@ -25,6 +25,7 @@ typedef struct gl_object {
     GLuint vao, vertices, indices;
     GLsizei index_count;
     GLuint color_map, height;
+    gl_vdm *vdm; /* technique vdm: its table */
     double options[GL_MAX_OPTIONS];
 } gl_object;
 
@@ -106,8 +107,9 @@ static meso_result program_for(meso_gl_renderer *r, const char *technique, const
     return MESO_OK;
 }
 
-/* The mesh as interleaved vertices: position, normal, tangent, bitangent, uv, quadric
- * (meso.vert's locations 0-5), zero where the mesh has no such array. */
+/* The mesh as interleaved vertices: position, normal, tangent, bitangent, uv, quadric,
+ * principal curvatures and their directions (meso.vert's locations 0-8), zero where the mesh
+ * has no such array. */
 static meso_result upload_mesh(meso_gl_renderer *r, gl_object *o) {
     const meso_mesh *mesh = o->object->mesh;
     if (!mesh || mesh->num_triangles == 0) return MESO_OK;
@@ -131,6 +133,13 @@ static meso_result upload_mesh(meso_gl_renderer *r, gl_object *o) {
         }
         if (mesh->uvs) memcpy(p + 12, &mesh->uvs[i], 2 * sizeof(float));
         if (mesh->quadrics) memcpy(p + 14, &mesh->quadrics[i], 2 * sizeof(float));
+        if (mesh->curvature_max && mesh->curvature_min && mesh->curvature_dir_max &&
+            mesh->curvature_dir_min) {
+            p[16] = mesh->curvature_max[i];
+            p[17] = mesh->curvature_min[i];
+            memcpy(p + 18, &mesh->curvature_dir_max[i], 3 * sizeof(float));
+            memcpy(p + 21, &mesh->curvature_dir_min[i], 3 * sizeof(float));
+        }
     }
     glGenVertexArrays(1, &o->vao);
     glBindVertexArray(o->vao);
@@ -138,9 +147,9 @@ static meso_result upload_mesh(meso_gl_renderer *r, gl_object *o) {
     glBindBuffer(GL_ARRAY_BUFFER, o->vertices);
     glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)bytes, v, GL_STATIC_DRAW);
     free(v);
-    static const int sizes[6] = {3, 3, 3, 3, 2, 2};
+    static const int sizes[9] = {3, 3, 3, 3, 2, 2, 2, 3, 3};
     size_t offset = 0;
-    for (GLuint k = 0; k < 6; k++) {
+    for (GLuint k = 0; k < 9; k++) {
         glEnableVertexAttribArray(k);
         glVertexAttribPointer(k, sizes[k], GL_FLOAT, GL_FALSE,
                               GL_FLOATS_PER_VERTEX * sizeof(float), (const void *)offset);
@@ -202,6 +211,10 @@ static meso_result prepare_object(meso_gl_renderer *r, int index, const meso_gl_
     const meso_heightfield *hf = object->mesostructure.height_field;
     if (hf && (result = upload_texture(r, object, hf->width, hf->height, GL_R32F, GL_RED,
                                        hf->heights, 4, &o->height)) != MESO_OK)
+        return result;
+    if (strcmp(o->info->name, "vdm") == 0 &&
+        (result = gl_vdm_create(r->ctx, object, o->info, o->options, &o->vdm,
+                                &r->stats.memory_bytes)) != MESO_OK)
         return result;
     return MESO_OK;
 }
@@ -398,6 +411,7 @@ meso_result meso_gl_renderer_render(meso_gl_renderer *r, meso_framebuffer *fb) {
         glBindTexture(GL_TEXTURE_2D, o->color_map);
         glActiveTexture(GL_TEXTURE1);
         glBindTexture(GL_TEXTURE_2D, o->height);
+        if (o->vdm) gl_vdm_bind(o->vdm, o->program, camera.pixel_size);
         glBindVertexArray(o->vao);
         glDrawElements(GL_TRIANGLES, o->index_count, GL_UNSIGNED_INT, NULL);
         triangles += (uint64_t)o->index_count / 3;
@@ -457,6 +471,7 @@ void meso_gl_renderer_destroy(meso_gl_renderer *r) {
             if (o->indices) glDeleteBuffers(1, &o->indices);
             if (o->color_map) glDeleteTextures(1, &o->color_map);
             if (o->height) glDeleteTextures(1, &o->height);
+            gl_vdm_destroy(o->vdm);
         }
         for (int i = 0; i < r->num_programs; i++) glDeleteProgram(r->programs[i].program);
     }

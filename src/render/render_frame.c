@@ -56,5 +56,6 @@ meso_render_camera meso_render_camera_get(const meso_scene *scene, int width, in
                                 .forward = frame.forward,
                                 .view_projection = frame.view_projection,
                                 .z_near = frame.z_near,
-                                .z_far = frame.z_far};
+                                .z_far = frame.z_far,
+                                .pixel_size = meso_vec3_length(frame.pixel_right)};
 }

@@ -78,15 +78,21 @@ static agreement check_agreement(const char *example, const char *technique,
  * the sphere (point-free curvature everywhere). */
 static const char *const examples[] = {"bricks-plane", "bricks-teapot", "bumps-sphere"};
 
-static void run_technique(const char *technique) {
+static void run_technique(const char *technique, const meso_option *options, int num_options) {
     gl_require_device();
     for (size_t i = 0; i < sizeof examples / sizeof examples[0]; i++)
-        check_agreement(examples[i], technique, NULL, 0);
+        check_agreement(examples[i], technique, options, num_options);
 }
 
-static void test_flat_agrees(void **state) { (void)state; run_technique("flat"); }
-static void test_relief_agrees(void **state) { (void)state; run_technique("relief"); }
-static void test_parallax_agrees(void **state) { (void)state; run_technique("parallax"); }
+static void test_flat_agrees(void **state) { (void)state; run_technique("flat", NULL, 0); }
+static void test_relief_agrees(void **state) { (void)state; run_technique("relief", NULL, 0); }
+static void test_parallax_agrees(void **state) { (void)state; run_technique("parallax", NULL, 0); }
+/* A 32 x 32 table bakes in a fraction of a second; both back ends read the same one. */
+static void test_vdm_agrees(void **state) {
+    (void)state;
+    const meso_option small = {.technique = "vdm", .name = "resolution", .value = 32};
+    run_technique("vdm", &small, 1);
+}
 
 /* Options reach the shader as the CPU reads them: with 4 linear steps and no binary search the
  * image changes visibly (staircase), and still agrees with the CPU's with the same options. */
@@ -116,6 +122,7 @@ int main(void) {
         cmocka_unit_test(test_flat_agrees),
         cmocka_unit_test(test_relief_agrees),
         cmocka_unit_test(test_parallax_agrees),
+        cmocka_unit_test(test_vdm_agrees),
         cmocka_unit_test(test_relief_options_agree),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
