@@ -170,8 +170,18 @@ meso_frame meso_frame_get() {
 
 // The normal of the height-field surface P' = P - (1 - h) depth N over a point of frame f
 // with height gradient g = (dh/du, dh/dv): normalize(cross(T + depth h_u N, B + depth h_v N))
-// turned to N's side (Blinn 1978); a zero gradient keeps N itself.
+// turned to N's side (Blinn 1978). meso_displaced_normal of meso's C.
 vec3 meso_displaced_normal(meso_frame f, float depth, vec2 g) {
+    vec3 n = cross(f.tangent + f.normal * (g.x * depth), f.bitangent + f.normal * (g.y * depth));
+    float len2 = dot(n, n);
+    if (!(len2 > 0.0) || isinf(len2)) return f.normal;
+    n *= 1.0 / sqrt(len2);
+    return dot(n, f.normal) < 0.0 ? -n : n;
+}
+
+// The same for the relief family and parallax (relief_normal8 of meso's C): a zero gradient
+// keeps the interpolated N itself, so a flat field draws exactly the `flat` image.
+vec3 meso_relief_normal(meso_frame f, float depth, vec2 g) {
     vec3 du = f.tangent + f.normal * (g.x * depth);
     vec3 dv = f.bitangent + f.normal * (g.y * depth);
     vec3 n = cross(du, dv);

@@ -102,7 +102,7 @@ void relief_main() {
     vec3 hit_position = f.position + f.view * t;
     vec2 hit_uv = v_uv + vec2(cu, cv) * t;
     float view_depth = dot(f.view, u_forward) * (1.0 + t);
-    vec3 n = meso_displaced_normal(f, depth, meso_height_gradient(hit));
+    vec3 n = meso_relief_normal(f, depth, meso_height_gradient(hit));
     if (u_silhouettes) n = relief_curve_normal(f, q, t, n);
     // ---- self-shadows, one light ray per light
     float visibility[MESO_MAX_LIGHTS];

@@ -26,7 +26,7 @@ void main() {
     vec2 offset = vec2(cu, cv) * (scale * d);
     vec2 g = meso_height_gradient(p + vec2(offset.x * float(u_height_size.x),
                                            -offset.y * float(u_height_size.y)));
-    vec3 n = meso_displaced_normal(f, u_depth, g);
+    vec3 n = meso_relief_normal(f, u_depth, g);
     float visibility[MESO_MAX_LIGHTS];
     meso_all_visible(visibility);
     meso_write(meso_shade(f.position, n, v_uv + offset, visibility), dot(f.view, u_forward));
