@@ -77,6 +77,26 @@ meso_render_stats meso_gl_renderer_get_stats(const meso_gl_renderer *renderer);
 const char *meso_gl_renderer_object_technique(const meso_gl_renderer *renderer, int object);
 void meso_gl_renderer_destroy(meso_gl_renderer *renderer);
 
+/* ---- Texture export (meso bake -o) -------------------------------------------------------- */
+
+/* Write into folder `dir` (existing) what each object's shader reads, as ordinary files, and
+ * manifest.json describing them (sizes, formats, scale factors, which uniform reads which file,
+ * the uniforms' values): per object <i>-<name>.height.png (16-bit grey, h = value / 65535),
+ * <i>-<name>.color.png (16-bit linear RGB) and for vdm the SVD tables as OpenEXR:
+ * .vdm-weights.exr (half), .vdm-eigen.exr and .mvm-eigen.exr (float). The techniques are
+ * resolved and their options read as meso_gl_renderer_create does (desc may be NULL); bakes
+ * come from the cache. No GL context is needed. Each file is written atomically, the manifest
+ * last. docs/gpu.md. */
+meso_result meso_gl_export_textures(meso_context *ctx, const meso_scene *scene,
+                                    const meso_render_desc *desc, const char *dir);
+
+/* Write an OpenEXR image (scanlines, ZIP) of num_channels channels named names[c], pixels
+ * interleaved [y][x][c] (row 0 at the top), stored as half floats when `half` else as floats;
+ * atomically. MESO_ERROR_IO naming the path. OpenEXR 3.1's C API (OpenEXRCore). */
+meso_result meso_exr_write(meso_context *ctx, const char *path, int width, int height,
+                           int num_channels, const char *const *names, const float *pixels,
+                           bool half);
+
 #ifdef __cplusplus
 }
 #endif

@@ -9,6 +9,7 @@
 #include <epoxy/egl.h>
 #include <epoxy/gl.h>
 
+#include "meso/bake_vdm.h"
 #include "meso/gl.h"
 
 /* ---- The shader files, built in (cmake/embed_shaders.cmake) ------------------------------- */
@@ -46,9 +47,31 @@ void gl_context_destroy(gl_context *gl);
 meso_result gl_program_build(meso_context *ctx, const char *technique, const char *shader_dir,
                              GLuint *out_program);
 
+/* ---- Techniques ---------------------------------------------------------------------------- */
+
+/* The technique of an object: desc's override or its own; with desc->fallback, an override
+ * that cannot draw the object gives way to the object's own, else flat (as
+ * meso_renderer_create). MESO_ERROR_UNSUPPORTED when it has no shader. */
+meso_result gl_resolve_technique(meso_context *ctx, const meso_object *object,
+                                 const meso_render_desc *desc, const meso_technique_info **out);
+
 /* ---- Per-technique data (gl_<technique>.c) ------------------------------------------------ */
 
-/* vdm: the bake (cached, as the CPU technique's), uploaded as textures units 2-4. */
+/* vdm: the bake (cached, the CPU technique's bake for the same options) laid out as the CPU
+ * technique reads it; no GL needed (texture export uses it too). */
+typedef struct gl_vdm_table {
+    meso_vdm *vdm;
+    meso_vdm_view view;
+    meso_vdm_lanes lanes;
+    int k, m;                       /* eigenfunctions used */
+    float tile_world, depth_tiles;  /* world length of a tile; the shell depth in tiles */
+} gl_vdm_table;
+meso_result gl_vdm_bake(meso_context *ctx, const meso_object *object,
+                        const meso_technique_info *info, const double *options,
+                        gl_vdm_table *out);
+void gl_vdm_table_release(gl_vdm_table *table);
+
+/* The table uploaded as textures units 2-4. */
 typedef struct gl_vdm gl_vdm;
 meso_result gl_vdm_create(meso_context *ctx, const meso_object *object,
                           const meso_technique_info *info, const double *options, gl_vdm **out,

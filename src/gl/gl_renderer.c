@@ -49,9 +49,7 @@ static unsigned accepts_bit(meso_mesostructure_kind kind) {
                                                    : MESO_TECHNIQUE_ACCEPTS_NONE;
 }
 
-/* The technique of an object: the override or its own; with fallback, an override that cannot
- * draw the object gives way to the object's own, else flat (as meso_renderer_create). */
-static meso_result resolve_technique(meso_context *ctx, const meso_object *object,
+meso_result gl_resolve_technique(meso_context *ctx, const meso_object *object,
                                      const meso_render_desc *desc,
                                      const meso_technique_info **out) {
     const char *own = object->technique[0] ? object->technique : "flat";
@@ -196,7 +194,7 @@ static meso_result prepare_object(meso_gl_renderer *r, int index, const meso_gl_
     const meso_object *object = &r->scene->objects[index];
     o->object = object;
     meso_result result;
-    if ((result = resolve_technique(r->ctx, object, &desc->render, &o->info)) != MESO_OK ||
+    if ((result = gl_resolve_technique(r->ctx, object, &desc->render, &o->info)) != MESO_OK ||
         (result = meso_technique_options_values(r->ctx, r->scene, index, &desc->render,
                                                 o->info->name, o->options)) != MESO_OK ||
         (result = program_for(r, o->info->name, desc->shader_dir, &o->program)) != MESO_OK ||
@@ -252,7 +250,7 @@ meso_result meso_gl_renderer_create(meso_context *ctx, const meso_scene *scene,
     /* the techniques first: a scene the GL cannot draw says so before any context is made */
     for (int i = 0; i < scene->num_objects; i++) {
         const meso_technique_info *info;
-        if ((result = resolve_technique(ctx, &scene->objects[i], &d.render, &info)) != MESO_OK)
+        if ((result = gl_resolve_technique(ctx, &scene->objects[i], &d.render, &info)) != MESO_OK)
             goto fail;
     }
     if ((result = gl_context_create(ctx, &r->gl, NULL)) != MESO_OK) goto fail;

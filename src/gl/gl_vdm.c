@@ -96,10 +96,10 @@ static meso_result upload(meso_context *ctx, const meso_object *object, const me
                                 "%s: vdm: the GL could not store the table", object->name);
 }
 
-meso_result gl_vdm_create(meso_context *ctx, const meso_object *object,
-                          const meso_technique_info *info, const double *options,
-                          gl_vdm **out, size_t *memory) {
-    *out = NULL;
+meso_result gl_vdm_bake(meso_context *ctx, const meso_object *object,
+                        const meso_technique_info *info, const double *options,
+                        gl_vdm_table *out) {
+    memset(out, 0, sizeof *out);
     const meso_heightfield *hf = object->mesostructure.height_field;
     if (option_value(info, options, "compressed") == 0.0)
         return meso_log_error(ctx, MESO_ERROR_UNSUPPORTED,
@@ -138,31 +138,52 @@ meso_result gl_vdm_create(meso_context *ctx, const meso_object *object,
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "%s: technique_options.eigenfunctions: at most %d for this table",
                               object->name, rank);
-    gl_vdm *g = calloc(1, sizeof *g);
-    meso_vdm *vdm = NULL;
-    meso_vdm_lanes lanes = {0};
-    meso_result r = g ? meso_vdm_bake_cached(ctx, &desc, &vdm)
-                      : meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "out of memory");
-    meso_vdm_view view;
+    meso_result r = meso_vdm_bake_cached(ctx, &desc, &out->vdm);
     if (r == MESO_OK) {
-        view = meso_vdm_get_view(vdm);
-        r = meso_vdm_lanes_init(ctx, &view, k, m, option_value(info, options, "mipmap") != 0.0,
-                                object->name, &lanes);
+        out->view = meso_vdm_get_view(out->vdm);
+        r = meso_vdm_lanes_init(ctx, &out->view, k, m,
+                                option_value(info, options, "mipmap") != 0.0, object->name,
+                                &out->lanes);
     }
-    if (r == MESO_OK) r = upload(ctx, object, &view, &lanes, g, memory);
+    if (r != MESO_OK) {
+        gl_vdm_table_release(out);
+        return r;
+    }
+    out->k = k;
+    out->m = m;
+    out->tile_world = tile;
+    out->depth_tiles = depth_tiles;
+    return MESO_OK;
+}
+
+void gl_vdm_table_release(gl_vdm_table *table) {
+    meso_vdm_lanes_deinit(&table->lanes);
+    meso_vdm_destroy(table->vdm);
+    memset(table, 0, sizeof *table);
+}
+
+meso_result gl_vdm_create(meso_context *ctx, const meso_object *object,
+                          const meso_technique_info *info, const double *options,
+                          gl_vdm **out, size_t *memory) {
+    *out = NULL;
+    gl_vdm_table table;
+    meso_result r = gl_vdm_bake(ctx, object, info, options, &table);
+    if (r != MESO_OK) return r;
+    gl_vdm *g = calloc(1, sizeof *g);
+    r = g ? upload(ctx, object, &table.view, &table.lanes, g, memory)
+          : meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
     if (r == MESO_OK) {
         const meso_mesh *mesh = object->mesh;
-        g->curvature_min = view.curvature_min;
-        g->curvature_max = view.curvature_max;
-        g->tile_world = tile;
-        g->depth_tiles = depth_tiles;
+        g->curvature_min = table.view.curvature_min;
+        g->curvature_max = table.view.curvature_max;
+        g->tile_world = table.tile_world;
+        g->depth_tiles = table.depth_tiles;
         g->has_curvature = mesh->curvature_max && mesh->curvature_min && mesh->curvature_dir_max &&
                            mesh->curvature_dir_min;
         *out = g;
         g = NULL;
     }
-    meso_vdm_lanes_deinit(&lanes);
-    meso_vdm_destroy(vdm);
+    gl_vdm_table_release(&table);
     gl_vdm_destroy(g);
     return r;
 }

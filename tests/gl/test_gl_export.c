@@ -1,0 +1,150 @@
+/* meso bake -o: the OpenEXR writer round-trips (read back with OpenEXR's own C reader), and
+ * the export writes what the manifest lists: 16-bit heights equal to the field within one
+ * step of 1/65535, the VDM tables with the sizes the manifest says. No GL context needed. */
+#include <math.h>
+#include <openexr.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "test_util.h"
+
+/* Read every channel of a scanline EXR as floats, interleaved in the order of `names`. */
+static float *read_exr(const char *path, int num_channels, const char *const *names,
+                       int *out_width, int *out_height) {
+    exr_context_t exr = NULL;
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    assert_int_equal(exr_start_read(&exr, path, &init), EXR_ERR_SUCCESS);
+    exr_attr_box2i_t window;
+    assert_int_equal(exr_get_data_window(exr, 0, &window), EXR_ERR_SUCCESS);
+    int width = window.max.x - window.min.x + 1, height = window.max.y - window.min.y + 1;
+    int32_t lines = 0;
+    assert_int_equal(exr_get_scanlines_per_chunk(exr, 0, &lines), EXR_ERR_SUCCESS);
+    float *planes = calloc((size_t)width * height * num_channels, sizeof(float));
+    for (int y = 0; y < height; y += lines) {
+        exr_chunk_info_t chunk;
+        exr_decode_pipeline_t decoder;
+        assert_int_equal(exr_read_scanline_chunk_info(exr, 0, window.min.y + y, &chunk),
+                         EXR_ERR_SUCCESS);
+        assert_int_equal(exr_decoding_initialize(exr, 0, &chunk, &decoder), EXR_ERR_SUCCESS);
+        assert_int_equal(decoder.channel_count, num_channels);
+        for (int k = 0; k < decoder.channel_count; k++) {
+            int c = 0;
+            while (c < num_channels && strcmp(names[c], decoder.channels[k].channel_name)) c++;
+            assert_true(c < num_channels);
+            decoder.channels[k].user_bytes_per_element = 4;
+            decoder.channels[k].user_data_type = EXR_PIXEL_FLOAT;
+            decoder.channels[k].user_pixel_stride = 4;
+            decoder.channels[k].user_line_stride = 4 * width;
+            decoder.channels[k].decode_to_ptr =
+                (uint8_t *)(planes + (size_t)c * width * height + (size_t)y * width);
+        }
+        assert_int_equal(exr_decoding_choose_default_routines(exr, 0, &decoder), EXR_ERR_SUCCESS);
+        assert_int_equal(exr_decoding_run(exr, 0, &decoder), EXR_ERR_SUCCESS);
+        exr_decoding_destroy(exr, &decoder);
+    }
+    exr_finish(&exr);
+    float *pixels = malloc((size_t)width * height * num_channels * sizeof(float));
+    for (size_t i = 0; i < (size_t)width * height; i++)
+        for (int c = 0; c < num_channels; c++)
+            pixels[i * num_channels + c] = planes[(size_t)c * width * height + i];
+    free(planes);
+    *out_width = width;
+    *out_height = height;
+    return pixels;
+}
+
+static void test_exr_round_trip(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(1);
+    enum { W = 37, H = 21, C = 3 }; /* not a multiple of the 16-line chunks */
+    const char *names[C] = {"b", "A", "c0"};
+    float pixels[W * H * C];
+    for (int i = 0; i < W * H * C; i++) pixels[i] = sinf((float)i * 0.37f) * 3.0f + 0.001f * i;
+    for (int half = 0; half < 2; half++) {
+        const char *path = test_path(test_temp_dir(), half ? "half.exr" : "float.exr");
+        assert_int_equal(meso_exr_write(ctx, path, W, H, C, names, pixels, half), MESO_OK);
+        int w, h;
+        float *back = read_exr(path, C, names, &w, &h);
+        assert_int_equal(w, W);
+        assert_int_equal(h, H);
+        for (int i = 0; i < W * H * C; i++) {
+            float expected = half ? (float)(_Float16)pixels[i] : pixels[i];
+            if (back[i] != expected) fail_msg("%s: value %d: %g, not %g", path, i, back[i], expected);
+        }
+        free(back);
+    }
+    /* bad size: refused, nothing written */
+    const char *bad = test_path(test_temp_dir(), "bad.exr");
+    assert_int_equal(meso_exr_write(ctx, bad, 0, 4, 1, names, pixels, false),
+                     MESO_ERROR_INVALID_ARGUMENT);
+    assert_int_not_equal(access(bad, F_OK), 0);
+    meso_context_destroy(ctx);
+}
+
+static void test_export_vdm_scene(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    meso_scene *scene = NULL;
+    assert_int_equal(meso_scene_load(ctx, MESO_SOURCE_DIR "/examples/bumps-sphere.json", &scene),
+                     MESO_OK);
+    const char *dir = test_path(test_temp_dir(), "export");
+    char command[1200];
+    snprintf(command, sizeof command, "rm -rf %s && mkdir -p %s", dir, dir);
+    assert_int_equal(system(command), 0);
+    meso_option small = {.technique = "vdm", .name = "resolution", .value = 32};
+    meso_render_desc desc = {.technique = "vdm", .options = &small, .num_options = 1};
+    assert_int_equal(meso_gl_export_textures(ctx, scene, &desc, dir), MESO_OK);
+
+    size_t size;
+    char *manifest = test_read_file(test_path(dir, "manifest.json"), &size);
+    assert_non_null(strstr(manifest, "\"fragment_shader\": \"vdm.frag\""));
+    assert_non_null(strstr(manifest, "\"u_resolution\": 32"));
+    assert_non_null(strstr(manifest, "\"uniform\": \"u_vdm_weights\", \"width\": 256, \"height\": 32"));
+    free(manifest);
+
+    /* the heights, 16 bits: within half a step of the field */
+    const meso_heightfield *hf = scene->objects[0].mesostructure.height_field;
+    char name[160];
+    snprintf(name, sizeof name, "0-%s.height.png", scene->objects[0].name);
+    meso_image *heights = NULL;
+    assert_int_equal(meso_image_load_png(ctx, test_path(dir, name), &heights), MESO_OK);
+    assert_int_equal(heights->width, hf->width);
+    float worst = 0.0f;
+    for (size_t i = 0; i < (size_t)hf->width * hf->height; i++)
+        worst = fmaxf(worst, fabsf(heights->pixels[i * heights->channels] - hf->heights[i]));
+    assert_true(worst <= 0.5f / 65535.0f + 1e-6f);
+    meso_image_destroy(heights);
+
+    /* the tables: sizes and channels as the manifest says, finite, not all zero */
+    const char *w_names[8] = {"W00", "W01", "W02", "W03", "W04", "W05", "W06", "W07"};
+    const char *e_names[8] = {"E00", "E01", "E02", "E03", "E04", "E05", "E06", "E07"};
+    int w, h;
+    snprintf(name, sizeof name, "0-%s.vdm-weights.exr", scene->objects[0].name);
+    float *weights = read_exr(test_path(dir, name), 8, w_names, &w, &h);
+    assert_int_equal(w, 32 * 8);
+    assert_int_equal(h, 32);
+    double energy = 0.0;
+    for (int i = 0; i < w * h * 8; i++) {
+        assert_true(isfinite(weights[i]));
+        energy += weights[i] * weights[i];
+    }
+    assert_true(energy > 0.0);
+    free(weights);
+    snprintf(name, sizeof name, "0-%s.vdm-eigen.exr", scene->objects[0].name);
+    float *eigen = read_exr(test_path(dir, name), 8, e_names, &w, &h);
+    assert_int_equal(w, 32); /* num_theta */
+    assert_int_equal(h, 16); /* num_curvatures */
+    free(eigen);
+    meso_scene_destroy(scene);
+    meso_context_destroy(ctx);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_exr_round_trip),
+        cmocka_unit_test(test_export_vdm_scene),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
