@@ -1,59 +1,15 @@
 /* Texture export (meso bake SCENE -o DIR): what each object's shader reads, as files an engine
  * loads without meso: heights and colours as 16-bit PNG, the VDM's SVD tables as OpenEXR, and
  * manifest.json saying which uniform reads which file and the uniforms' values (docs/gpu.md). */
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include <cjson/cJSON.h>
+
 #include "gl_internal.h"
 
 #define EXPORT_MAX_CHANNELS 64
-
-/* ---- A growing JSON text ------------------------------------------------------------------ */
-
-typedef struct json_text {
-    char *data;
-    size_t length, capacity;
-    bool failed;
-} json_text;
-
-static void json_printf(json_text *t, const char *format, ...) __attribute__((format(printf, 2, 3)));
-static void json_printf(json_text *t, const char *format, ...) {
-    if (t->failed) return;
-    va_list args;
-    va_start(args, format);
-    int n = vsnprintf(NULL, 0, format, args);
-    va_end(args);
-    if (n < 0 || t->length + (size_t)n + 1 > t->capacity) {
-        size_t capacity = (t->capacity + (size_t)(n > 0 ? n : 0) + 1) * 2;
-        char *grown = realloc(t->data, capacity);
-        if (!grown || n < 0) {
-            t->failed = true;
-            return;
-        }
-        t->data = grown;
-        t->capacity = capacity;
-    }
-    va_start(args, format);
-    vsnprintf(t->data + t->length, t->capacity - t->length, format, args);
-    va_end(args);
-    t->length += (size_t)n;
-}
-
-static void json_string(json_text *t, const char *s) {
-    json_printf(t, "\"");
-    for (; *s; s++) {
-        unsigned char c = (unsigned char)*s;
-        if (c == '"' || c == '\\')
-            json_printf(t, "\\%c", c);
-        else if (c < 0x20)
-            json_printf(t, "\\u%04x", c);
-        else
-            json_printf(t, "%c", c);
-    }
-    json_printf(t, "\"");
-}
 
 /* ---- Files ---------------------------------------------------------------------------------- */
 
@@ -61,21 +17,31 @@ typedef struct export_object {
     meso_context *ctx;
     const char *dir;
     char prefix[80];
-    json_text *json;
-    int num_textures;
+    cJSON *textures; /* the object's "textures" array of the manifest */
+    cJSON *uniforms; /* its "uniforms" object */
 } export_object;
 
 /* The file's path and its manifest entry. */
 static void texture_entry(export_object *e, const char *file, const char *uniform, int width,
                           int height, const char *format, const char *layout) {
-    json_printf(e->json, "%s\n        {\"file\": ", e->num_textures++ ? "," : "");
-    json_string(e->json, file);
-    json_printf(e->json, ", \"uniform\": \"%s\", \"width\": %d, \"height\": %d, \"format\": ",
-                uniform, width, height);
-    json_string(e->json, format);
-    json_printf(e->json, ", \"layout\": ");
-    json_string(e->json, layout);
-    json_printf(e->json, "}");
+    cJSON *entry = cJSON_CreateObject();
+    cJSON_AddStringToObject(entry, "file", file);
+    cJSON_AddStringToObject(entry, "uniform", uniform);
+    cJSON_AddNumberToObject(entry, "width", width);
+    cJSON_AddNumberToObject(entry, "height", height);
+    cJSON_AddStringToObject(entry, "format", format);
+    cJSON_AddStringToObject(entry, "layout", layout);
+    cJSON_AddItemToArray(e->textures, entry);
+}
+
+/* A uniform's value: a number, or an array of `count` numbers. */
+static void uniform_value(export_object *e, const char *name, const float *values, int count) {
+    if (count == 1) {
+        cJSON_AddNumberToObject(e->uniforms, name, values[0]);
+        return;
+    }
+    cJSON *array = cJSON_AddArrayToObject(e->uniforms, name);
+    for (int i = 0; i < count; i++) cJSON_AddItemToArray(array, cJSON_CreateNumber(values[i]));
 }
 
 static meso_result path_of(export_object *e, const char *suffix, char *file, size_t file_size,
@@ -166,17 +132,12 @@ static meso_result export_vdm(export_object *e, const meso_object *object,
                      "E_MVM^i(c) at pixel (curvature index, 0); theta_MVM = sum_i W^i E_MVM^i "
                      "in radians");
     if (r == MESO_OK) {
-        json_printf(e->json,
-                    "\n      ],\n      \"vdm\": {\"u_tile_world\": %.9g, \"u_depth_tiles\": %.9g, "
-                    "\"u_curvature_range\": [%.9g, %.9g], \"u_vdm_chunks\": %d, "
-                    "\"k\": %d, \"m\": %d, \"compressed_bytes_as_exported\": %llu",
-                    t.tile_world, t.depth_tiles, v->curvature_min, v->curvature_max,
-                    t.lanes.lanes / 4, t.k, t.m,
-                    (unsigned long long)((size_t)v->width * v->height * v->num_phi * used * 2 +
-                                         ((size_t)v->num_theta * v->num_curvatures * t.k +
-                                          (size_t)v->num_curvatures * t.m) *
-                                             4));
-        json_printf(e->json, "}");
+        float range[2] = {v->curvature_min, v->curvature_max};
+        float chunks = (float)(t.lanes.lanes / 4);
+        uniform_value(e, "u_tile_world", &t.tile_world, 1);
+        uniform_value(e, "u_depth_tiles", &t.depth_tiles, 1);
+        uniform_value(e, "u_curvature_range", range, 2);
+        uniform_value(e, "u_vdm_chunks", &chunks, 1);
     }
     gl_vdm_table_release(&t);
     return r;
@@ -184,14 +145,14 @@ static meso_result export_vdm(export_object *e, const meso_object *object,
 
 static meso_result export_object_textures(meso_context *ctx, const meso_scene *scene, int index,
                                           const meso_render_desc *desc, const char *dir,
-                                          json_text *json) {
+                                          cJSON *objects) {
     const meso_object *object = &scene->objects[index];
     const meso_technique_info *info;
     double options[64];
     meso_result r = gl_resolve_technique(ctx, object, desc, &info);
     if (r == MESO_OK) r = meso_technique_options_values(ctx, scene, index, desc, info->name, options);
     if (r != MESO_OK) return r;
-    export_object e = {.ctx = ctx, .dir = dir, .json = json};
+    export_object e = {.ctx = ctx, .dir = dir};
     int n = snprintf(e.prefix, sizeof e.prefix, "%d-%s", index, object->name);
     for (int i = 0; i < n && i < (int)sizeof e.prefix; i++) {
         char c = e.prefix[i];
@@ -199,25 +160,34 @@ static meso_result export_object_textures(meso_context *ctx, const meso_scene *s
                     c == '-' || c == '_';
         if (!keep) e.prefix[i] = '_';
     }
-    json_printf(json, "%s\n    {\"object\": ", index ? "," : "");
-    json_string(json, object->name);
-    json_printf(json, ", \"technique\": \"%s\", \"vertex_shader\": \"meso.vert\", "
-                      "\"fragment_shader\": \"%s.frag\",\n      \"uniforms\": {",
-                info->name, info->name);
-    for (size_t k = 0; k < info->num_options; k++)
-        json_printf(json, "%s\"u_%s\": %.9g", k ? ", " : "", info->options[k].name, options[k]);
+    cJSON *entry = cJSON_CreateObject();
+    cJSON_AddItemToArray(objects, entry);
+    char shader[96];
+    snprintf(shader, sizeof shader, "%s.frag", info->name);
+    cJSON_AddStringToObject(entry, "object", object->name);
+    cJSON_AddStringToObject(entry, "technique", info->name);
+    cJSON_AddStringToObject(entry, "vertex_shader", "meso.vert");
+    cJSON_AddStringToObject(entry, "fragment_shader", shader);
+    e.uniforms = cJSON_AddObjectToObject(entry, "uniforms");
+    e.textures = cJSON_AddArrayToObject(entry, "textures");
+    for (size_t k = 0; k < info->num_options; k++) {
+        char name[80];
+        snprintf(name, sizeof name, "u_%s", info->options[k].name);
+        cJSON_AddNumberToObject(e.uniforms, name, options[k]);
+    }
     const meso_material *m = &object->material;
     const meso_heightfield *hf = object->mesostructure.height_field;
-    json_printf(json,
-                "%s\"u_depth\": %.9g, \"u_albedo\": [%.9g, %.9g, %.9g], \"u_specular\": [%.9g, "
-                "%.9g, %.9g], \"u_shininess\": %.9g, \"u_has_color_map\": %d, "
-                "\"u_color_map_clamp\": %d, \"u_height_size\": [%d, %d], \"u_height_clamp\": %d},"
-                "\n      \"textures\": [",
-                info->num_options ? ", " : "", object->mesostructure.depth, m->albedo.x,
-                m->albedo.y, m->albedo.z, m->specular.x, m->specular.y, m->specular.z,
-                m->shininess, m->color_map != NULL,
-                m->color_map && m->color_map->wrap == MESO_WRAP_CLAMP, hf ? hf->width : 0,
-                hf ? hf->height : 0, hf && hf->wrap == MESO_WRAP_CLAMP);
+    float size[2] = {hf ? (float)hf->width : 0.0f, hf ? (float)hf->height : 0.0f};
+    float flags[3] = {m->color_map != NULL, m->color_map && m->color_map->wrap == MESO_WRAP_CLAMP,
+                      hf && hf->wrap == MESO_WRAP_CLAMP};
+    uniform_value(&e, "u_depth", &object->mesostructure.depth, 1);
+    uniform_value(&e, "u_albedo", &m->albedo.x, 3);
+    uniform_value(&e, "u_specular", &m->specular.x, 3);
+    uniform_value(&e, "u_shininess", &m->shininess, 1);
+    uniform_value(&e, "u_has_color_map", &flags[0], 1);
+    uniform_value(&e, "u_color_map_clamp", &flags[1], 1);
+    uniform_value(&e, "u_height_size", size, 2);
+    uniform_value(&e, "u_height_clamp", &flags[2], 1);
     if (m->color_map)
         r = save_png16(&e, ".color.png", "u_color_map", m->color_map->levels[0]->width,
                        m->color_map->levels[0]->height, 3, m->color_map->levels[0]->pixels, 4,
@@ -226,10 +196,7 @@ static meso_result export_object_textures(meso_context *ctx, const meso_scene *s
         r = save_png16(&e, ".height.png", "u_height", hf->width, hf->height, 1, hf->heights, 1,
                        "h = value / 65535 (1 on the mesh, 0 at -depth); texture unit 1; row 0 "
                        "at v = 1");
-    bool vdm = strcmp(info->name, "vdm") == 0;
-    if (r == MESO_OK && vdm) r = export_vdm(&e, object, info, options);
-    if (r == MESO_OK && !vdm) json_printf(json, "\n      ]");
-    json_printf(json, "}");
+    if (r == MESO_OK && strcmp(info->name, "vdm") == 0) r = export_vdm(&e, object, info, options);
     return r;
 }
 
@@ -239,21 +206,22 @@ meso_result meso_gl_export_textures(meso_context *ctx, const meso_scene *scene,
     meso_render_desc d = desc ? *desc : (meso_render_desc){0};
     meso_result r = meso_technique_check_scene(ctx, scene);
     if (r != MESO_OK) return r;
-    json_text json = {0};
-    json_printf(&json, "{\n  \"scene\": ");
-    json_string(&json, scene->path);
-    json_printf(&json, ",\n  \"conventions\": \"DESIGN.md: texture space u right, v up (row 0 of "
-                       "every file at v = 1); heights inward (1 on the mesh); shaders/ document "
-                       "every uniform\",\n  \"objects\": [");
+    cJSON *manifest = cJSON_CreateObject();
+    cJSON_AddStringToObject(manifest, "scene", scene->path);
+    cJSON_AddStringToObject(manifest, "conventions",
+                            "DESIGN.md: texture space u right, v up (row 0 of every file at v = "
+                            "1); heights inward (1 on the mesh); shaders/ document every uniform");
+    cJSON *objects = cJSON_AddArrayToObject(manifest, "objects");
     for (int i = 0; i < scene->num_objects && r == MESO_OK; i++)
-        r = export_object_textures(ctx, scene, i, &d, dir, &json);
-    json_printf(&json, "\n  ]\n}\n");
-    if (r == MESO_OK && json.failed)
+        r = export_object_textures(ctx, scene, i, &d, dir, objects);
+    char *text = r == MESO_OK ? cJSON_Print(manifest) : NULL;
+    cJSON_Delete(manifest);
+    if (r == MESO_OK && !text)
         r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", dir);
     char path[4096];
     if (r == MESO_OK && snprintf(path, sizeof path, "%s/manifest.json", dir) >= (int)sizeof path)
         r = meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: path too long", dir);
-    if (r == MESO_OK) r = meso_file_write_atomic(ctx, path, json.data, json.length);
-    free(json.data);
+    if (r == MESO_OK) r = meso_file_write_atomic(ctx, path, text, strlen(text));
+    cJSON_free(text);
     return r;
 }

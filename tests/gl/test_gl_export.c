@@ -1,6 +1,7 @@
 /* meso bake -o: the OpenEXR writer round-trips (read back with OpenEXR's own C reader), and
  * the export writes what the manifest lists: 16-bit heights equal to the field within one
  * step of 1/65535, the VDM tables with the sizes the manifest says. No GL context needed. */
+#include <cjson/cJSON.h>
 #include <math.h>
 #include <openexr.h>
 #include <stdio.h>
@@ -98,11 +99,29 @@ static void test_export_vdm_scene(void **state) {
     assert_int_equal(meso_gl_export_textures(ctx, scene, &desc, dir), MESO_OK);
 
     size_t size;
-    char *manifest = test_read_file(test_path(dir, "manifest.json"), &size);
-    assert_non_null(strstr(manifest, "\"fragment_shader\": \"vdm.frag\""));
-    assert_non_null(strstr(manifest, "\"u_resolution\": 32"));
-    assert_non_null(strstr(manifest, "\"uniform\": \"u_vdm_weights\", \"width\": 256, \"height\": 32"));
-    free(manifest);
+    char *text = test_read_file(test_path(dir, "manifest.json"), &size);
+    cJSON *manifest = cJSON_Parse(text);
+    assert_non_null(manifest);
+    cJSON *object = cJSON_GetArrayItem(cJSON_GetObjectItem(manifest, "objects"), 0);
+    assert_string_equal(cJSON_GetObjectItem(object, "fragment_shader")->valuestring, "vdm.frag");
+    cJSON *uniforms = cJSON_GetObjectItem(object, "uniforms");
+    assert_int_equal(cJSON_GetObjectItem(uniforms, "u_resolution")->valueint, 32);
+    assert_true(cJSON_GetObjectItem(uniforms, "u_depth_tiles")->valuedouble > 0.0);
+    bool found = false;
+    cJSON *texture;
+    cJSON_ArrayForEach(texture, cJSON_GetObjectItem(object, "textures")) {
+        if (strcmp(cJSON_GetObjectItem(texture, "uniform")->valuestring, "u_vdm_weights") != 0)
+            continue;
+        found = true;
+        assert_int_equal(cJSON_GetObjectItem(texture, "width")->valueint, 32 * 8);
+        assert_int_equal(cJSON_GetObjectItem(texture, "height")->valueint, 32);
+        assert_int_equal(access(test_path(dir, cJSON_GetObjectItem(texture, "file")->valuestring),
+                                F_OK),
+                         0);
+    }
+    assert_true(found);
+    cJSON_Delete(manifest);
+    free(text);
 
     /* the heights, 16 bits: within half a step of the field */
     const meso_heightfield *hf = scene->objects[0].mesostructure.height_field;
