@@ -12,10 +12,16 @@ typedef struct app_backend {
 
 /* The two rows of a command's option table. */
 #define APP_BACKEND_OPTIONS(backend)                                                               \
-    {"--backend", NULL, APP_OPTION_STRING, &(backend).name, "cpu|gl",                              \
+    {"--backend",                                                                                  \
+     NULL,                                                                                         \
+     APP_OPTION_STRING,                                                                            \
+     &(backend).name,                                                                              \
+     "cpu|gl",                                                                                     \
      "cpu: meso's rasterizer; gl: the GLSL shaders on OpenGL 3.3 through EGL, headless "           \
      "(docs/gpu.md)",                                                                              \
-     "cpu", 0, 0},                                                                                 \
+     "cpu",                                                                                        \
+     0,                                                                                            \
+     0},                                                                                           \
     {                                                                                              \
         "--shader-dir", NULL, APP_OPTION_STRING, &(backend).shader_dir, "DIR",                     \
             "with --backend gl: read the shader files from DIR (edited copies of shaders/)",       \

@@ -41,8 +41,8 @@ int meso_cmd_bake(int argc, char **argv) {
     if (technique && !app_technique_known(technique)) {
         char known[1024];
         app_known_techniques(known, sizeof known);
-        app_error("%s: --technique: unknown technique '%s' (known: %s)", positionals[0],
-                  technique, known);
+        app_error("%s: --technique: unknown technique '%s' (known: %s)", positionals[0], technique,
+                  known);
         return APP_EXIT_BAD_INPUT;
     }
     meso_context *ctx = app_context_create(&globals);
@@ -52,9 +52,8 @@ int meso_cmd_bake(int argc, char **argv) {
     if (result != MESO_OK) {
         status = app_fail(ctx, result);
     } else {
-        meso_render_desc desc = {.technique = technique,
-                                 .options = settings.items,
-                                 .num_options = settings.count};
+        meso_render_desc desc = {
+            .technique = technique, .options = settings.items, .num_options = settings.count};
         result = app_make_dir(ctx, output);
         if (result == MESO_OK) result = meso_gl_export_textures(ctx, scene, &desc, output);
         status = result == MESO_OK ? APP_EXIT_OK : app_fail_in(ctx, result, scene->path);

@@ -63,9 +63,8 @@ typedef struct bench_scene {
 } bench_scene;
 
 /* Time frames of a prepared renderer: the median in ms, frames counted in *out_frames. */
-static meso_result time_frames(app_renderer *renderer, meso_framebuffer *fb,
-                               const bench_options *o, double *times, double *out_ms,
-                               int *out_frames) {
+static meso_result time_frames(app_renderer *renderer, meso_framebuffer *fb, const bench_options *o,
+                               double *times, double *out_ms, int *out_frames) {
     double warmup_start = meso_time_seconds();
     for (int i = 0; i < WARMUP_FRAMES && meso_time_seconds() - warmup_start < WARMUP_SECONDS; i++) {
         meso_result result = app_renderer_render(renderer, fb);
@@ -282,8 +281,8 @@ int meso_cmd_bench(int argc, char **argv) {
                 if (app_backend_is_gl(&backends[b]) && strcmp(o.techniques, "all") == 0 &&
                     !meso_gl_technique_supported(names[t]))
                     continue;
-                meso_result r = bench_one(ctx, &scenes[s], names[t], &backends[b], &o, times,
-                                          &rows[num_rows]);
+                meso_result r =
+                    bench_one(ctx, &scenes[s], names[t], &backends[b], &o, times, &rows[num_rows]);
                 if (r == MESO_OK)
                     num_rows++;
                 else if (r == MESO_ERROR_OUT_OF_MEMORY)

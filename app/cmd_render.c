@@ -89,12 +89,12 @@ static int render_one(meso_context *ctx, const meso_scene *scene, const render_o
         meso_render_stats stats = app_renderer_get_stats(&renderer);
         fprintf(stderr,
                 "meso: render: %s%s, %dx%d, prepare %.1f ms, frame %.1f ms, %llu triangles -> %s\n",
-                scene_technique(scene, o->technique),
-                app_backend_is_gl(&o->backend) ? " (gl)" : "", width, height, 1000.0 * stats.prepare_seconds,
-                1000.0 * stats.last_frame_seconds, (unsigned long long)stats.triangles, o->output);
+                scene_technique(scene, o->technique), app_backend_is_gl(&o->backend) ? " (gl)" : "",
+                width, height, 1000.0 * stats.prepare_seconds, 1000.0 * stats.last_frame_seconds,
+                (unsigned long long)stats.triangles, o->output);
     }
-    int status = result == MESO_OK ? APP_EXIT_OK
-                                    : app_fail_backend(ctx, result, scene->path, &o->backend);
+    int status =
+        result == MESO_OK ? APP_EXIT_OK : app_fail_backend(ctx, result, scene->path, &o->backend);
     meso_framebuffer_destroy(fb);
     app_renderer_destroy(&renderer);
     return status;

@@ -44,10 +44,10 @@ typedef struct meso_gl_desc {
 
 /* What the machine offers. */
 typedef struct meso_gl_info {
-    bool egl;              /* an EGL display could be initialised */
-    bool core33;           /* and an OpenGL 3.3 core context created on it */
-    char renderer[128];    /* GL_RENDERER ("llvmpipe (LLVM 15.0.6, 256 bits)") */
-    char version[128];     /* GL_VERSION */
+    bool egl;           /* an EGL display could be initialised */
+    bool core33;        /* and an OpenGL 3.3 core context created on it */
+    char renderer[128]; /* GL_RENDERER ("llvmpipe (LLVM 15.0.6, 256 bits)") */
+    char version[128];  /* GL_VERSION */
 } meso_gl_info;
 
 /* Try to create a context and describe it. MESO_OK when both egl and core33, else

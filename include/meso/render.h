@@ -148,8 +148,8 @@ uint64_t meso_render_memory_estimate(const meso_render_desc *desc, int width, in
  * technique's table (info->num_options entries; bools as 0 or 1). For other back ends that
  * draw the same techniques (the OpenGL one) with the same options. Thread-safe. */
 meso_result meso_technique_options_values(meso_context *ctx, const meso_scene *scene, int object,
-                                          const meso_render_desc *desc,
-                                          const char *technique, double *out_values);
+                                          const meso_render_desc *desc, const char *technique,
+                                          double *out_values);
 
 typedef struct meso_render_stats {
     double prepare_seconds;     /* meso_renderer_create */

@@ -40,9 +40,9 @@ meso_result meso_vdm_lanes_init(meso_context *ctx, const meso_vdm_view *v, int k
     out->level_width[0] = v->width;
     out->level_height[0] = v->height;
     for (size_t i = 0; i < rows * (size_t)lanes; i++) out->level_weights[0][i] = to_half(level[i]);
-    while (mipmap && out->num_levels < MESO_VDM_MAX_LEVELS &&
-           (out->level_width[out->num_levels - 1] > 1 ||
-            out->level_height[out->num_levels - 1] > 1)) {
+    while (
+        mipmap && out->num_levels < MESO_VDM_MAX_LEVELS &&
+        (out->level_width[out->num_levels - 1] > 1 || out->level_height[out->num_levels - 1] > 1)) {
         int l = out->num_levels, pw = out->level_width[l - 1], ph = out->level_height[l - 1];
         int w = pw > 1 ? pw / 2 : 1, h = ph > 1 ? ph / 2 : 1;
         size_t size = (size_t)w * h * v->num_phi * lanes;

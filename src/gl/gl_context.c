@@ -17,8 +17,8 @@ static EGLDisplay open_display(void) {
     if (!client) return EGL_NO_DISPLAY;
     bool platform_base = strstr(client, "EGL_EXT_platform_base") != NULL;
     if (platform_base && strstr(client, "EGL_MESA_platform_surfaceless")) {
-        EGLDisplay d = eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY,
-                                                NULL);
+        EGLDisplay d =
+            eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, NULL);
         if (d != EGL_NO_DISPLAY) return d;
     }
     if (platform_base && strstr(client, "EGL_EXT_platform_device") &&
@@ -40,8 +40,9 @@ meso_result gl_context_create(meso_context *ctx, gl_context *out, meso_gl_info *
     /* libepoxy aborts the process when an entry point has no provider: ask first whether
      * libEGL can be loaded at all. */
     if (!epoxy_has_egl()) {
-        meso_log_error(ctx, r, "OpenGL: no libEGL.so.1 (install libegl1 and Mesa: "
-                               "scripts/install-deps.sh)");
+        meso_log_error(ctx, r,
+                       "OpenGL: no libEGL.so.1 (install libegl1 and Mesa: "
+                       "scripts/install-deps.sh)");
         goto done;
     }
     EGLDisplay display = open_display();
@@ -64,9 +65,13 @@ meso_result gl_context_create(meso_context *ctx, gl_context *out, meso_gl_info *
         if (!eglChooseConfig(display, want, &config, 1, &count) || count < 1)
             config = EGL_NO_CONFIG_KHR;
     }
-    const EGLint attributes[] = {EGL_CONTEXT_MAJOR_VERSION, 3, EGL_CONTEXT_MINOR_VERSION, 3,
+    const EGLint attributes[] = {EGL_CONTEXT_MAJOR_VERSION,
+                                 3,
+                                 EGL_CONTEXT_MINOR_VERSION,
+                                 3,
                                  EGL_CONTEXT_OPENGL_PROFILE_MASK,
-                                 EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
+                                 EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+                                 EGL_NONE};
     if (!surfaceless || (!no_config && config == EGL_NO_CONFIG_KHR) ||
         !eglBindAPI(EGL_OPENGL_API) ||
         (out->context = eglCreateContext(display, config, EGL_NO_CONTEXT, attributes)) ==

@@ -53,21 +53,22 @@ static meso_result path_of(export_object *e, const char *suffix, char *file, siz
 }
 
 /* A 16-bit PNG of `channels` channels taken from `pixels` (stride `stride` floats a pixel). */
-static meso_result save_png16(export_object *e, const char *suffix, const char *uniform,
-                              int width, int height, int channels, const float *pixels,
-                              int stride, const char *layout) {
+static meso_result save_png16(export_object *e, const char *suffix, const char *uniform, int width,
+                              int height, int channels, const float *pixels, int stride,
+                              const char *layout) {
     char file[160], path[4096];
     meso_result r = path_of(e, suffix, file, sizeof file, path, sizeof path);
     meso_image *image = NULL;
     if (r == MESO_OK) r = meso_image_create(e->ctx, width, height, channels, &image);
     if (r != MESO_OK) return r;
     for (size_t i = 0; i < (size_t)width * height; i++)
-        for (int c = 0; c < channels; c++)
-            image->pixels[i * channels + c] = pixels[i * stride + c];
+        for (int c = 0; c < channels; c++) image->pixels[i * channels + c] = pixels[i * stride + c];
     meso_png_desc desc = {.bit_depth = 16, .encoding = MESO_ENCODING_LINEAR};
     r = meso_image_save_png(e->ctx, image, path, &desc);
     meso_image_destroy(image);
-    if (r == MESO_OK) texture_entry(e, file, uniform, width, height, channels == 1 ? "png16 grey" : "png16 rgb linear", layout);
+    if (r == MESO_OK)
+        texture_entry(e, file, uniform, width, height,
+                      channels == 1 ? "png16 grey" : "png16 rgb linear", layout);
     return r;
 }
 
@@ -150,7 +151,8 @@ static meso_result export_object_textures(meso_context *ctx, const meso_scene *s
     const meso_technique_info *info;
     double options[64];
     meso_result r = gl_resolve_technique(ctx, object, desc, &info);
-    if (r == MESO_OK) r = meso_technique_options_values(ctx, scene, index, desc, info->name, options);
+    if (r == MESO_OK)
+        r = meso_technique_options_values(ctx, scene, index, desc, info->name, options);
     if (r != MESO_OK) return r;
     export_object e = {.ctx = ctx, .dir = dir};
     int n = snprintf(e.prefix, sizeof e.prefix, "%d-%s", index, object->name);

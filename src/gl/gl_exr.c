@@ -27,8 +27,8 @@ meso_result meso_exr_write(meso_context *ctx, const char *path, int width, int h
                            int num_channels, const char *const *names, const float *pixels,
                            bool half) {
     if (width <= 0 || height <= 0 || num_channels <= 0 || num_channels > 1024)
-        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: %d x %d x %d channels",
-                              path, width, height, num_channels);
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: %d x %d x %d channels", path,
+                              width, height, num_channels);
     size_t count = (size_t)width * height * num_channels;
     /* planar copies in the file's type: channel c's plane at c * width * height */
     size_t element = half ? sizeof(uint16_t) : sizeof(float);

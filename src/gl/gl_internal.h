@@ -63,12 +63,11 @@ typedef struct gl_vdm_table {
     meso_vdm *vdm;
     meso_vdm_view view;
     meso_vdm_lanes lanes;
-    int k, m;                       /* eigenfunctions used */
-    float tile_world, depth_tiles;  /* world length of a tile; the shell depth in tiles */
+    int k, m;                      /* eigenfunctions used */
+    float tile_world, depth_tiles; /* world length of a tile; the shell depth in tiles */
 } gl_vdm_table;
 meso_result gl_vdm_bake(meso_context *ctx, const meso_object *object,
-                        const meso_technique_info *info, const double *options,
-                        gl_vdm_table *out);
+                        const meso_technique_info *info, const double *options, gl_vdm_table *out);
 void gl_vdm_table_release(gl_vdm_table *table);
 
 /* The table uploaded as textures units 2-4. */

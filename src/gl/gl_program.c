@@ -45,9 +45,10 @@ static void shader_files_release(shader_files *files) {
 static meso_result shader_files_add(meso_context *ctx, shader_files *files, const char *name,
                                     size_t name_length, const char *shader_dir) {
     if (files->count == GL_MAX_SHADER_FILES || name_length >= sizeof files->names[0])
-        return meso_log_error(ctx, MESO_ERROR_LIMIT, "shaders/%.*s: more than %d files or a name "
-                              "longer than 63 characters", (int)name_length, name,
-                              GL_MAX_SHADER_FILES);
+        return meso_log_error(ctx, MESO_ERROR_LIMIT,
+                              "shaders/%.*s: more than %d files or a name "
+                              "longer than 63 characters",
+                              (int)name_length, name, GL_MAX_SHADER_FILES);
     int k = files->count;
     memcpy(files->names[k], name, name_length);
     files->names[k][name_length] = 0;

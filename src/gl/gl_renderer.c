@@ -50,8 +50,7 @@ static unsigned accepts_bit(meso_mesostructure_kind kind) {
 }
 
 meso_result gl_resolve_technique(meso_context *ctx, const meso_object *object,
-                                     const meso_render_desc *desc,
-                                     const meso_technique_info **out) {
+                                 const meso_render_desc *desc, const meso_technique_info **out) {
     const char *own = object->technique[0] ? object->technique : "flat";
     const char *name = desc->technique ? desc->technique : own;
     const meso_technique_info *info = meso_technique_find(name);
@@ -69,8 +68,8 @@ meso_result gl_resolve_technique(meso_context *ctx, const meso_object *object,
                               object->name, name);
     if (!(info->accepts & kind))
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
-                              "%s: technique '%s' does not accept this mesostructure",
-                              object->name, info->name);
+                              "%s: technique '%s' does not accept this mesostructure", object->name,
+                              info->name);
     if (!meso_gl_technique_supported(info->name)) {
         char list[256] = "";
         size_t used = 0;
@@ -119,8 +118,9 @@ static meso_result upload_mesh(meso_gl_renderer *r, gl_object *o) {
     meso_result result = meso_memory_check(r->ctx, o->object->name, bytes);
     if (result != MESO_OK) return result;
     float *v = calloc(mesh->num_vertices, GL_FLOATS_PER_VERTEX * sizeof(float));
-    if (!v) return meso_log_error(r->ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory",
-                                  o->object->name);
+    if (!v)
+        return meso_log_error(r->ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory",
+                              o->object->name);
     for (size_t i = 0; i < mesh->num_vertices; i++) {
         float *p = v + i * GL_FLOATS_PER_VERTEX;
         memcpy(p, &mesh->positions[i], 3 * sizeof(float));
@@ -149,8 +149,8 @@ static meso_result upload_mesh(meso_gl_renderer *r, gl_object *o) {
     size_t offset = 0;
     for (GLuint k = 0; k < 9; k++) {
         glEnableVertexAttribArray(k);
-        glVertexAttribPointer(k, sizes[k], GL_FLOAT, GL_FALSE,
-                              GL_FLOATS_PER_VERTEX * sizeof(float), (const void *)offset);
+        glVertexAttribPointer(k, sizes[k], GL_FLOAT, GL_FALSE, GL_FLOATS_PER_VERTEX * sizeof(float),
+                              (const void *)offset);
         offset += (size_t)sizes[k] * sizeof(float);
     }
     glGenBuffers(1, &o->indices);
@@ -182,11 +182,10 @@ static meso_result upload_texture(meso_gl_renderer *r, const meso_object *object
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 0);
     r->stats.memory_bytes += (size_t)width * (size_t)height * bytes_per_texel;
-    return glGetError() == GL_NO_ERROR
-               ? MESO_OK
-               : meso_log_error(r->ctx, MESO_ERROR_OUT_OF_MEMORY,
-                                "%s: the GL could not store a %d x %d map", object->name, width,
-                                height);
+    return glGetError() == GL_NO_ERROR ? MESO_OK
+                                       : meso_log_error(r->ctx, MESO_ERROR_OUT_OF_MEMORY,
+                                                        "%s: the GL could not store a %d x %d map",
+                                                        object->name, width, height);
 }
 
 static meso_result prepare_object(meso_gl_renderer *r, int index, const meso_gl_desc *desc) {
@@ -201,10 +200,10 @@ static meso_result prepare_object(meso_gl_renderer *r, int index, const meso_gl_
         (result = upload_mesh(r, o)) != MESO_OK)
         return result;
     const meso_texture *color_map = object->material.color_map;
-    if (color_map && (result = upload_texture(r, object, color_map->levels[0]->width,
-                                              color_map->levels[0]->height, GL_RGBA32F, GL_RGBA,
-                                              color_map->levels[0]->pixels, 16,
-                                              &o->color_map)) != MESO_OK)
+    if (color_map &&
+        (result = upload_texture(r, object, color_map->levels[0]->width,
+                                 color_map->levels[0]->height, GL_RGBA32F, GL_RGBA,
+                                 color_map->levels[0]->pixels, 16, &o->color_map)) != MESO_OK)
         return result;
     const meso_heightfield *hf = object->mesostructure.height_field;
     if (hf && (result = upload_texture(r, object, hf->width, hf->height, GL_R32F, GL_RED,
@@ -231,9 +230,9 @@ meso_result meso_gl_renderer_create(meso_context *ctx, const meso_scene *scene,
         char where[160];
         snprintf(where, sizeof where, "render options: %s.%s", d.render.options[i].technique,
                  d.render.options[i].name);
-        result = meso_technique_check_option(ctx, d.render.options[i].technique,
-                                             d.render.options[i].name, d.render.options[i].value,
-                                             where);
+        result =
+            meso_technique_check_option(ctx, d.render.options[i].technique,
+                                        d.render.options[i].name, d.render.options[i].value, where);
     }
     if (result != MESO_OK) return result;
     double start = meso_time_seconds();

@@ -97,8 +97,7 @@ static meso_result upload(meso_context *ctx, const meso_object *object, const me
 }
 
 meso_result gl_vdm_bake(meso_context *ctx, const meso_object *object,
-                        const meso_technique_info *info, const double *options,
-                        gl_vdm_table *out) {
+                        const meso_technique_info *info, const double *options, gl_vdm_table *out) {
     memset(out, 0, sizeof *out);
     const meso_heightfield *hf = object->mesostructure.height_field;
     if (option_value(info, options, "compressed") == 0.0)
@@ -141,9 +140,8 @@ meso_result gl_vdm_bake(meso_context *ctx, const meso_object *object,
     meso_result r = meso_vdm_bake_cached(ctx, &desc, &out->vdm);
     if (r == MESO_OK) {
         out->view = meso_vdm_get_view(out->vdm);
-        r = meso_vdm_lanes_init(ctx, &out->view, k, m,
-                                option_value(info, options, "mipmap") != 0.0, object->name,
-                                &out->lanes);
+        r = meso_vdm_lanes_init(ctx, &out->view, k, m, option_value(info, options, "mipmap") != 0.0,
+                                object->name, &out->lanes);
     }
     if (r != MESO_OK) {
         gl_vdm_table_release(out);
@@ -163,8 +161,8 @@ void gl_vdm_table_release(gl_vdm_table *table) {
 }
 
 meso_result gl_vdm_create(meso_context *ctx, const meso_object *object,
-                          const meso_technique_info *info, const double *options,
-                          gl_vdm **out, size_t *memory) {
+                          const meso_technique_info *info, const double *options, gl_vdm **out,
+                          size_t *memory) {
     *out = NULL;
     gl_vdm_table table;
     meso_result r = gl_vdm_bake(ctx, object, info, options, &table);

@@ -35,7 +35,7 @@ static inline meso_scene *gl_load_example(meso_context *ctx, const char *name) {
 
 /* One frame of `scene` drawn with `technique` (options in desc) on the GL or the CPU. */
 static inline meso_framebuffer *gl_render(meso_context *ctx, const meso_scene *scene, bool gl,
-                                   const meso_render_desc *desc, int size) {
+                                          const meso_render_desc *desc, int size) {
     meso_framebuffer *fb = NULL;
     assert_int_equal(meso_framebuffer_create(ctx, size, size, &fb), MESO_OK);
     meso_result r;
@@ -51,8 +51,8 @@ static inline meso_framebuffer *gl_render(meso_context *ctx, const meso_scene *s
         if (r == MESO_OK) r = meso_renderer_render(renderer, fb);
         meso_renderer_destroy(renderer);
     }
-    if (r != MESO_OK) fail_msg("%s (%s): %s", scene->path, gl ? "gl" : "cpu",
-                               meso_context_last_error(ctx));
+    if (r != MESO_OK)
+        fail_msg("%s (%s): %s", scene->path, gl ? "gl" : "cpu", meso_context_last_error(ctx));
     return fb;
 }
 

@@ -55,8 +55,8 @@ static agreement check_agreement(const char *example, const char *technique,
                                  const meso_option *options, int num_options) {
     meso_context *ctx = test_context(2);
     meso_scene *scene = gl_load_example(ctx, example);
-    meso_render_desc desc = {.technique = technique, .options = options,
-                             .num_options = num_options};
+    meso_render_desc desc = {
+        .technique = technique, .options = options, .num_options = num_options};
     meso_framebuffer *gl = gl_render(ctx, scene, true, &desc, GL_TEST_SIZE);
     meso_framebuffer *cpu = gl_render(ctx, scene, false, &desc, GL_TEST_SIZE);
     agreement a = compare(gl, cpu);
@@ -84,9 +84,18 @@ static void run_technique(const char *technique, const meso_option *options, int
         check_agreement(examples[i], technique, options, num_options);
 }
 
-static void test_flat_agrees(void **state) { (void)state; run_technique("flat", NULL, 0); }
-static void test_relief_agrees(void **state) { (void)state; run_technique("relief", NULL, 0); }
-static void test_parallax_agrees(void **state) { (void)state; run_technique("parallax", NULL, 0); }
+static void test_flat_agrees(void **state) {
+    (void)state;
+    run_technique("flat", NULL, 0);
+}
+static void test_relief_agrees(void **state) {
+    (void)state;
+    run_technique("relief", NULL, 0);
+}
+static void test_parallax_agrees(void **state) {
+    (void)state;
+    run_technique("parallax", NULL, 0);
+}
 /* A 32 x 32 table bakes in a fraction of a second; both back ends read the same one. */
 static void test_vdm_agrees(void **state) {
     (void)state;
@@ -119,10 +128,8 @@ static void test_relief_options_agree(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_flat_agrees),
-        cmocka_unit_test(test_relief_agrees),
-        cmocka_unit_test(test_parallax_agrees),
-        cmocka_unit_test(test_vdm_agrees),
+        cmocka_unit_test(test_flat_agrees),          cmocka_unit_test(test_relief_agrees),
+        cmocka_unit_test(test_parallax_agrees),      cmocka_unit_test(test_vdm_agrees),
         cmocka_unit_test(test_relief_options_agree),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

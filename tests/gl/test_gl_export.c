@@ -12,8 +12,8 @@
 #include "test_util.h"
 
 /* Read every channel of a scanline EXR as floats, interleaved in the order of `names`. */
-static float *read_exr(const char *path, int num_channels, const char *const *names,
-                       int *out_width, int *out_height) {
+static float *read_exr(const char *path, int num_channels, const char *const *names, int *out_width,
+                       int *out_height) {
     exr_context_t exr = NULL;
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     assert_int_equal(exr_start_read(&exr, path, &init), EXR_ERR_SUCCESS);
@@ -72,7 +72,8 @@ static void test_exr_round_trip(void **state) {
         assert_int_equal(h, H);
         for (int i = 0; i < W * H * C; i++) {
             float expected = half ? (float)(_Float16)pixels[i] : pixels[i];
-            if (back[i] != expected) fail_msg("%s: value %d: %g, not %g", path, i, back[i], expected);
+            if (back[i] != expected)
+                fail_msg("%s: value %d: %g, not %g", path, i, back[i], expected);
         }
         free(back);
     }
@@ -115,9 +116,8 @@ static void test_export_vdm_scene(void **state) {
         found = true;
         assert_int_equal(cJSON_GetObjectItem(texture, "width")->valueint, 32 * 8);
         assert_int_equal(cJSON_GetObjectItem(texture, "height")->valueint, 32);
-        assert_int_equal(access(test_path(dir, cJSON_GetObjectItem(texture, "file")->valuestring),
-                                F_OK),
-                         0);
+        assert_int_equal(
+            access(test_path(dir, cJSON_GetObjectItem(texture, "file")->valuestring), F_OK), 0);
     }
     assert_true(found);
     cJSON_Delete(manifest);

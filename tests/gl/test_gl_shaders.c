@@ -63,7 +63,8 @@ static void test_glslang_validates_every_shader(void **state) {
         int status = system(command);
         if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
             fail_msg("glslangValidator rejects %s (exit %d; is glslang-tools installed? "
-                     "scripts/install-deps.sh)", e->d_name, WEXITSTATUS(status));
+                     "scripts/install-deps.sh)",
+                     e->d_name, WEXITSTATUS(status));
         checked++;
     }
     closedir(dir);
@@ -156,7 +157,7 @@ static void test_missing_gl_is_one_line(void **state) {
         assert_non_null(strstr(err, cases[i].says));
         assert_non_null(strstr(err, "--backend cpu works"));
         assert_ptr_equal(strchr(err, '\n'), err + strlen(err) - 1); /* one line */
-        assert_int_not_equal(access(out, F_OK), 0);                  /* nothing written */
+        assert_int_not_equal(access(out, F_OK), 0);                 /* nothing written */
     }
     snprintf(arguments, sizeof arguments, "render %s --backend gl --technique tessellation -o %s",
              scene, out);

@@ -39,7 +39,8 @@ typedef struct vdm_state {
     float *eigen_t, *mvm_t;
     /* §4: "VDM as a texture map is easily anti-aliased by mip-mapping": d = sum W E is linear
      * in W, so box-filtering W over (x, y) filters the reconstructed table exactly. Level 0 is
-     * W itself; the others are used when minified (and far less memory traffic: speed on busy textures). */
+     * W itself; the others are used when minified (and far less memory traffic: speed on busy
+     * textures). */
     bool mipmap;
     int num_levels;
     int level_width[MAX_LEVELS], level_height[MAX_LEVELS];
@@ -137,8 +138,8 @@ static void vdm_release(void *state) {
  * back end), moved into the state. */
 static meso_result relayout(meso_context *ctx, const meso_object *object, vdm_state *s) {
     meso_vdm_lanes l;
-    meso_result r = meso_vdm_lanes_init(ctx, &s->view, s->num_eigen, s->num_mvm, s->mipmap,
-                                        object->name, &l);
+    meso_result r =
+        meso_vdm_lanes_init(ctx, &s->view, s->num_eigen, s->num_mvm, s->mipmap, object->name, &l);
     if (r != MESO_OK) return r;
     s->lanes = l.lanes;
     s->num_levels = l.num_levels;
