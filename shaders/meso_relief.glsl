@@ -50,6 +50,62 @@ const float RELIEF_SHADOW_BIAS = 0.004;
 bool relief_search(relief_ray r, out float t);
 bool relief_shadow(relief_light_ray s);
 
+// Relief mapping's search (Policarpo et al. 2005; Policarpo & Oliveira 2006 App. A):
+// `linear_steps` uniform steps along the ray to the first sample below the surface, then
+// `binary_steps` halvings of that bracket, then one secant step between its ends (exact where
+// the surface is planar). t of the hit; false where the ray leaves the shell (silhouette).
+bool relief_linear_search(relief_ray r, int linear_steps, int binary_steps, out float t) {
+    // t = 0: a texel at full height is hit where the ray enters (h = 1: exactly the mesh).
+    float h = meso_height_at(r.start);
+    bool found = h >= 1.0 || r.flat_hit;
+    float t_lo = 0.0, t_hi = 0.0, f_lo = -1.0, f_hi = h - 1.0;
+    float t_prev = 0.0, f_prev = h - 1.0;
+    float inv_n = 1.0 / float(linear_steps);
+    for (int k = 1; k <= linear_steps && !found; ++k) {
+        float tk = r.t_end * (float(k) * inv_n);
+        float d = tk * (r.a - r.b * tk);
+        float fk = d + meso_height_at(r.start + r.step * tk) - 1.0; // >= 0: at or below
+        if (fk >= 0.0 || (k == linear_steps && r.floor_hit)) {   // d = 1 on the floor
+            t_lo = t_prev;
+            f_lo = f_prev;
+            t_hi = tk;
+            f_hi = max(fk, 0.0);
+            found = true;
+        }
+        t_prev = tk;
+        f_prev = fk;
+    }
+    for (int k = 0; k < binary_steps; ++k) {
+        float tk = (t_lo + t_hi) * 0.5;
+        float fk = tk * (r.a - r.b * tk) + meso_height_at(r.start + r.step * tk) - 1.0;
+        if (fk >= 0.0) {
+            t_hi = tk;
+            f_hi = fk;
+        } else {
+            t_lo = tk;
+            f_lo = fk;
+        }
+    }
+    // Secant between the bracket's ends, f_lo < 0 <= f_hi: exact where the surface is planar.
+    float span = f_hi - f_lo;
+    float w = span > 1e-12 ? -f_lo / max(span, 1e-12) : 1.0;
+    t = t_hi <= t_lo ? t_hi : t_lo + (t_hi - t_lo) * w;
+    return found;
+}
+
+// Self-shadowing by a second linear search toward the light (Policarpo & Oliveira 2006
+// §2.1): blocked where a sample lies below the surface.
+bool relief_linear_shadow(relief_light_ray s, int steps) {
+    float inv = 1.0 / float(steps);
+    // Sample k = steps is on the mesh (d = 0): nothing is above it.
+    for (int k = 1; k < steps; ++k) {
+        float frac = float(k) * inv;
+        float h = meso_height_at(s.start + s.step * frac);
+        if ((s.d + s.bulge * frac) * (1.0 - frac) + h - 1.0 > RELIEF_SHADOW_BIAS) return true;
+    }
+    return false;
+}
+
 // The surface at `entry` turned to the hit t V away on the curved mesh: the quadric surface
 // -(qa x^2 + qb y^2) has the normal N + 2 qa x T^ + 2 qb y B^ there, so n is turned by the
 // rotation taking N to it (small angle).

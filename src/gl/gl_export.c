@@ -7,6 +7,8 @@
 
 #include <cjson/cJSON.h>
 
+#include "meso/bake_minmax.h"
+
 #include "gl_internal.h"
 
 #define EXPORT_MAX_CHANNELS 64
@@ -144,6 +146,28 @@ static meso_result export_vdm(export_object *e, const meso_object *object,
     return r;
 }
 
+/* relief_exact's maximum mip-map, one float EXR per level (channel M00): the mip levels of
+ * u_max_mip. */
+static meso_result export_max_mip(export_object *e, const meso_object *object) {
+    meso_minmax_pyramid *pyramid = NULL;
+    meso_result r = meso_bake_minmax(e->ctx, object->mesostructure.height_field, &pyramid);
+    for (int l = 0; r == MESO_OK && l < pyramid->num_levels; l++) {
+        char suffix[32];
+        snprintf(suffix, sizeof suffix, ".max-mip-%d.exr", l);
+        const meso_minmax_level *level = &pyramid->levels[l];
+        r = save_exr(e, suffix, "u_max_mip", level->width, level->height, 'M', 1, level->max, 1,
+                     false, false,
+                     "mip level = the number in the name: per cell of 2^l x 2^l bilinear patches "
+                     "the highest h; row 0 at v = 1");
+    }
+    if (r == MESO_OK) {
+        float levels = (float)pyramid->num_levels;
+        uniform_value(e, "u_max_mip_levels", &levels, 1);
+    }
+    meso_minmax_pyramid_destroy(pyramid);
+    return r;
+}
+
 static meso_result export_object_textures(meso_context *ctx, const meso_scene *scene, int index,
                                           const meso_render_desc *desc, const char *dir,
                                           cJSON *objects) {
@@ -199,6 +223,7 @@ static meso_result export_object_textures(meso_context *ctx, const meso_scene *s
                        "h = value / 65535 (1 on the mesh, 0 at -depth); texture unit 1; row 0 "
                        "at v = 1");
     if (r == MESO_OK && strcmp(info->name, "vdm") == 0) r = export_vdm(&e, object, info, options);
+    if (r == MESO_OK && strcmp(info->name, "relief_exact") == 0) r = export_max_mip(&e, object);
     return r;
 }
 

@@ -57,6 +57,10 @@ meso_result gl_resolve_technique(meso_context *ctx, const meso_object *object,
 
 /* ---- Per-technique data (gl_<technique>.c) ------------------------------------------------ */
 
+/* relief_exact: the maximum mip-map as the mip levels of an R32F texture (unit 2). */
+meso_result gl_max_mip_create(meso_context *ctx, const meso_object *object, GLuint *out_texture,
+                              int *out_levels, size_t *memory);
+
 /* vdm: the bake (cached, the CPU technique's bake for the same options) laid out as the CPU
  * technique reads it; no GL needed (texture export uses it too). */
 typedef struct gl_vdm_table {

@@ -25,7 +25,9 @@ typedef struct gl_object {
     GLuint vao, vertices, indices;
     GLsizei index_count;
     GLuint color_map, height;
-    gl_vdm *vdm; /* technique vdm: its table */
+    gl_vdm *vdm;    /* technique vdm: its table */
+    GLuint max_mip; /* technique relief_exact: the maximum mip-map */
+    int max_mip_levels;
     double options[GL_MAX_OPTIONS];
 } gl_object;
 
@@ -208,6 +210,10 @@ static meso_result prepare_object(meso_gl_renderer *r, int index, const meso_gl_
     const meso_heightfield *hf = object->mesostructure.height_field;
     if (hf && (result = upload_texture(r, object, hf->width, hf->height, GL_R32F, GL_RED,
                                        hf->heights, 4, &o->height)) != MESO_OK)
+        return result;
+    if (strcmp(o->info->name, "relief_exact") == 0 &&
+        (result = gl_max_mip_create(r->ctx, object, &o->max_mip, &o->max_mip_levels,
+                                    &r->stats.memory_bytes)) != MESO_OK)
         return result;
     if (strcmp(o->info->name, "vdm") == 0 &&
         (result = gl_vdm_create(r->ctx, object, o->info, o->options, &o->vdm,
@@ -409,6 +415,12 @@ meso_result meso_gl_renderer_render(meso_gl_renderer *r, meso_framebuffer *fb) {
         glActiveTexture(GL_TEXTURE1);
         glBindTexture(GL_TEXTURE_2D, o->height);
         if (o->vdm) gl_vdm_bind(o->vdm, o->program, camera.pixel_size);
+        if (o->max_mip) {
+            glActiveTexture(GL_TEXTURE2);
+            glBindTexture(GL_TEXTURE_2D, o->max_mip);
+            glUniform1i(glGetUniformLocation(o->program, "u_max_mip"), 2);
+            glUniform1i(glGetUniformLocation(o->program, "u_max_mip_levels"), o->max_mip_levels);
+        }
         glBindVertexArray(o->vao);
         glDrawElements(GL_TRIANGLES, o->index_count, GL_UNSIGNED_INT, NULL);
         triangles += (uint64_t)o->index_count / 3;
@@ -469,6 +481,7 @@ void meso_gl_renderer_destroy(meso_gl_renderer *r) {
             if (o->color_map) glDeleteTextures(1, &o->color_map);
             if (o->height) glDeleteTextures(1, &o->height);
             gl_vdm_destroy(o->vdm);
+            if (o->max_mip) glDeleteTextures(1, &o->max_mip);
         }
         for (int i = 0; i < r->num_programs; i++) glDeleteProgram(r->programs[i].program);
     }

@@ -96,6 +96,10 @@ static void test_parallax_agrees(void **state) {
     (void)state;
     run_technique("parallax", NULL, 0);
 }
+static void test_relief_exact_agrees(void **state) {
+    (void)state;
+    run_technique("relief_exact", NULL, 0);
+}
 /* A 32 x 32 table bakes in a fraction of a second; both back ends read the same one. */
 static void test_vdm_agrees(void **state) {
     (void)state;
@@ -128,9 +132,9 @@ static void test_relief_options_agree(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_flat_agrees),          cmocka_unit_test(test_relief_agrees),
-        cmocka_unit_test(test_parallax_agrees),      cmocka_unit_test(test_vdm_agrees),
-        cmocka_unit_test(test_relief_options_agree),
+        cmocka_unit_test(test_flat_agrees),     cmocka_unit_test(test_relief_agrees),
+        cmocka_unit_test(test_parallax_agrees), cmocka_unit_test(test_relief_exact_agrees),
+        cmocka_unit_test(test_vdm_agrees),      cmocka_unit_test(test_relief_options_agree),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -104,14 +104,14 @@ static void test_compile_error_names_file_and_line(void **state) {
     assert_int_equal(system(command), 0);
     size_t size;
     char *text = test_read_file(test_path(dir, "relief.frag"), &size);
-    const char *needle = "float span = f_hi - f_lo;";
+    const char *needle = "return relief_linear_search(r, u_linear_steps, u_binary_steps, t);";
     char *at = strstr(text, needle);
     assert_non_null(at);
     int line = 1;
     for (const char *c = text; c < at; c++) line += *c == '\n';
     char *broken = malloc(size + 64);
-    sprintf(broken, "%.*sfloat span = f_hi - no_such_name;%s", (int)(at - text), text,
-            at + strlen(needle));
+    sprintf(broken, "%.*sreturn relief_linear_search(r, no_such_name, u_binary_steps, t);%s",
+            (int)(at - text), text, at + strlen(needle));
     test_write_file(test_path(dir, "relief.frag"), broken, strlen(broken));
     free(broken);
     free(text);
