@@ -81,7 +81,7 @@ static meso_result save_exr(export_object *e, const char *suffix, const char *un
     char file[160], path[4096];
     meso_result r = path_of(e, suffix, file, sizeof file, path, sizeof path);
     if (r != MESO_OK) return r;
-    char names_storage[EXPORT_MAX_CHANNELS][8];
+    char names_storage[EXPORT_MAX_CHANNELS][16];
     const char *names[EXPORT_MAX_CHANNELS];
     for (int c = 0; c < count; c++) {
         snprintf(names_storage[c], sizeof names_storage[c], "%c%02d", letter, c);
