@@ -160,10 +160,31 @@ static void test_export_vdm_scene(void **state) {
     meso_context_destroy(ctx);
 }
 
+/* meso bake's bad input: one line, status 2 (a technique without a shader is the user's
+ * choice here), nothing written. */
+static void test_bake_command_bad_input(void **state) {
+    (void)state;
+    const char *dir = test_path(test_temp_dir(), "bake-bad");
+    char arguments[2048];
+    const char *err = NULL;
+    snprintf(arguments, sizeof arguments, "bake %s/examples/bricks-plane.json", MESO_SOURCE_DIR);
+    assert_int_equal(test_run_meso(arguments, &err), 2);
+    assert_non_null(strstr(err, "missing -o DIR"));
+    snprintf(arguments, sizeof arguments, "bake %s/no-such-scene.json -o %s", MESO_SOURCE_DIR, dir);
+    assert_int_equal(test_run_meso(arguments, &err), 2);
+    snprintf(arguments, sizeof arguments,
+             "bake %s/examples/bricks-plane.json -o %s --technique bump", MESO_SOURCE_DIR, dir);
+    assert_int_equal(test_run_meso(arguments, &err), 2);
+    assert_non_null(strstr(err, "'bump' has no GL shader"));
+    assert_ptr_equal(strchr(err, '\n'), err + strlen(err) - 1);
+    assert_int_not_equal(access(test_path(dir, "manifest.json"), F_OK), 0);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_exr_round_trip),
         cmocka_unit_test(test_export_vdm_scene),
+        cmocka_unit_test(test_bake_command_bad_input),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
