@@ -149,14 +149,14 @@ struct meso_frame {
     bool ok;                                         // false: degenerate frame (no UVs)
 };
 
-meso_frame meso_frame_get() {
+// The frame of a point on the base mesh with normal N (unit), T and B.
+meso_frame meso_frame_make(vec3 position, vec3 normal, vec3 tangent, vec3 bitangent) {
     meso_frame f;
-    f.position = v_position;
-    float len2 = dot(v_normal, v_normal);
-    f.normal = len2 > 0.0 ? v_normal * (1.0 / sqrt(len2)) : v_normal;
-    f.tangent = v_tangent;
-    f.bitangent = v_bitangent;
-    f.view = v_position - u_eye;
+    f.position = position;
+    f.normal = normal;
+    f.tangent = tangent;
+    f.bitangent = bitangent;
+    f.view = position - u_eye;
     vec3 bn = cross(f.bitangent, f.normal), nt = cross(f.normal, f.tangent);
     vec3 tb = cross(f.tangent, f.bitangent);
     float det = dot(f.tangent, bn);
@@ -166,6 +166,13 @@ meso_frame meso_frame_get() {
     f.nt = nt * inv;
     f.tb = tb * inv;
     return f;
+}
+
+// The fragment's frame, from meso.vert's outputs.
+meso_frame meso_frame_get() {
+    float len2 = dot(v_normal, v_normal);
+    return meso_frame_make(v_position, len2 > 0.0 ? v_normal * (1.0 / sqrt(len2)) : v_normal,
+                           v_tangent, v_bitangent);
 }
 
 // The normal of the height-field surface P' = P - (1 - h) depth N over a point of frame f

@@ -31,6 +31,9 @@ uniform bool u_silhouettes;
 struct relief_ray {
     vec2 start, step;
     float a, b, t_end;
+    // curved_uv only (else 0): at depth d the texture coordinates advance 1 / (1 - lateral d)
+    // times faster than on the mesh (relief_lateral_scale)
+    float lateral;
     bool floor_hit; // the search ends on the floor: d = 1 at t_end
     bool flat_hit;  // no search: the ray does not enter the shell (hit at t = 0)
 };
@@ -49,6 +52,18 @@ const float RELIEF_SHADOW_BIAS = 0.004;
 
 bool relief_search(relief_ray r, out float t);
 bool relief_shadow(relief_light_ray s);
+vec3 relief_hit_normal(meso_frame f, relief_ray r, float t, vec2 hit, float hd);
+
+// The height field's own normal at the hit (texel-centre coordinates `hit`).
+vec3 relief_gradient_normal(meso_frame f, vec2 hit) {
+    return meso_relief_normal(f, u_depth, meso_height_gradient(hit));
+}
+
+// Beyond the papers (relief_layers' `curved`): on a curved mesh the shell at depth w is a
+// smaller (convex) or larger copy of the surface, so a ray's texture coordinates advance
+// faster there: by 1 / (1 - kappa w depth), averaged from 0 to the ray's depth d as
+// 1 / (1 - kappa d depth / 2), kappa the curvature along the ray (twice the quadric).
+float relief_lateral_scale(relief_ray r, float d) { return 1.0 / (1.0 - r.lateral * max(d, 0.0)); }
 
 // Relief mapping's search (Policarpo et al. 2005; Policarpo & Oliveira 2006 App. A):
 // `linear_steps` uniform steps along the ray to the first sample below the surface, then
@@ -124,8 +139,10 @@ vec2 relief_along_frame(meso_frame f, vec3 d) {
     return vec2(tl > 0.0 ? dot(d, f.tangent) / tl : 0.0, bl > 0.0 ? dot(d, f.bitangent) / bl : 0.0);
 }
 
-void relief_main() {
-    meso_frame f = meso_frame_get();
+// Shade the fragment of frame f at texture coordinates uv (the relief family's fragment):
+// the view ray, the search, depth correction, the normal at the hit, self-shadows.
+void relief_shade(meso_frame f, vec2 uv, vec2 quadric, bool silhouettes, bool shadows,
+                  bool curved_uv) {
     float depth = u_depth;
     vec2 size = vec2(u_height_size);
     // ---- the view ray
@@ -133,15 +150,20 @@ void relief_main() {
     bool enter = depth > 0.0 && cn < 0.0 && f.ok;
     if (!enter) cu = cv = 0.0;
     relief_ray r;
-    r.start = meso_height_texel(v_uv);
+    r.start = meso_height_texel(uv);
     r.step = vec2(cu * size.x, -cv * size.y);
     r.a = enter ? -cn / depth : 0.0;
     r.b = 0.0;
+    r.lateral = 0.0;
     vec2 q = vec2(0.0);
-    if (u_silhouettes) {
-        q = v_quadric;
+    if (silhouettes) {
+        q = quadric;
         vec2 xy = relief_along_frame(f, f.view);
         r.b = enter ? (q.x * xy.x * xy.x + q.y * xy.y * xy.y) / depth : 0.0;
+        float r2 = dot(xy, xy);
+        if (curved_uv && enter && r2 > 0.0) // kappa depth / 2 along the ray, within +-0.9
+            r.lateral = clamp((q.x * xy.x * xy.x + q.y * xy.y * xy.y) * depth / max(r2, 1e-30),
+                              -0.9, 0.9);
     }
     // d(t) = 1 at the smaller root of b t^2 - a t + 1 = 0 (stable for b -> 0); without a
     // real root the convex shell is left at t = a / b.
@@ -154,16 +176,17 @@ void relief_main() {
     if (!relief_search(r, t)) discard; // the ray left the curved shell: silhouette
     // ---- the hit: depth, position, texture coordinates, normal
     float hd = max(t * (r.a - r.b * t), 0.0);
-    vec2 hit = r.start + r.step * t;
+    float tt = curved_uv ? t * relief_lateral_scale(r, hd) : t;
+    vec2 hit = r.start + r.step * tt;
     vec3 hit_position = f.position + f.view * t;
-    vec2 hit_uv = v_uv + vec2(cu, cv) * t;
+    vec2 hit_uv = uv + vec2(cu, cv) * tt;
     float view_depth = dot(f.view, u_forward) * (1.0 + t);
-    vec3 n = meso_relief_normal(f, depth, meso_height_gradient(hit));
-    if (u_silhouettes) n = relief_curve_normal(f, q, t, n);
+    vec3 n = relief_hit_normal(f, r, t, hit, hd);
+    if (silhouettes) n = relief_curve_normal(f, q, t, n);
     // ---- self-shadows, one light ray per light
     float visibility[MESO_MAX_LIGHTS];
     meso_all_visible(visibility);
-    for (int i = 0; u_shadows && i < u_num_lights; ++i) {
+    for (int i = 0; shadows && i < u_num_lights; ++i) {
         vec3 l = meso_light_direction(i, hit_position);
         float lu = dot(l, f.bn), lv = dot(l, f.nt), ln = dot(l, f.tb);
         // The light ray leaves the shell where d(s) = hd - (ln s + ql s^2) / depth reaches 0
@@ -190,4 +213,9 @@ void relief_main() {
         if (dark) visibility[i] = 0.0;
     }
     meso_write(meso_shade(hit_position, n, hit_uv, visibility), view_depth);
+}
+
+// The fragment as drawn, with the technique's uniforms.
+void relief_main() {
+    relief_shade(meso_frame_get(), v_uv, v_quadric, u_silhouettes, u_shadows, false);
 }

@@ -22,4 +22,8 @@ bool relief_search(relief_ray r, out float t) {
 
 bool relief_shadow(relief_light_ray s) { return relief_linear_shadow(s, u_shadow_steps); }
 
+vec3 relief_hit_normal(meso_frame f, relief_ray r, float t, vec2 hit, float hd) {
+    return relief_gradient_normal(f, hit);
+}
+
 void main() { relief_main(); }

@@ -155,4 +155,8 @@ bool relief_shadow(relief_light_ray s) {
     return exact_trace(e, t);
 }
 
+vec3 relief_hit_normal(meso_frame f, relief_ray r, float t, vec2 hit, float hd) {
+    return relief_gradient_normal(f, hit);
+}
+
 void main() { relief_main(); }
