@@ -238,8 +238,7 @@ meso_result meso_gl_export_textures(meso_context *ctx, const meso_scene *scene,
         const meso_technique_info *info;
         double options[64];
         r = gl_resolve_technique(ctx, &scene->objects[i], &d, &info);
-        if (r == MESO_OK)
-            r = meso_technique_options_values(ctx, scene, i, &d, info->name, options);
+        if (r == MESO_OK) r = meso_technique_options_values(ctx, scene, i, &d, info->name, options);
     }
     if (r != MESO_OK) return r;
     cJSON *manifest = cJSON_CreateObject();

@@ -55,11 +55,24 @@ meso_result gl_program_build(meso_context *ctx, const char *technique, const cha
 meso_result gl_resolve_technique(meso_context *ctx, const meso_object *object,
                                  const meso_render_desc *desc, const meso_technique_info **out);
 
+/* The value of option `name` in `values` (meso_technique_options_values' order); 0 when the
+ * technique has no such option. */
+double gl_option_value(const meso_technique_info *info, const double *values, const char *name);
+
 /* ---- Per-technique data (gl_<technique>.c) ------------------------------------------------ */
 
 /* relief_exact: the maximum mip-map as the mip levels of an R32F texture (unit 2). */
 meso_result gl_max_mip_create(meso_context *ctx, const meso_object *object, GLuint *out_texture,
                               int *out_levels, size_t *memory);
+
+/* relief_layers: the multilayer map and, for solids, its mirror (back faces), as texture
+ * arrays (units 2-5), and the options' automatic values resolved. */
+typedef struct gl_layers gl_layers;
+meso_result gl_layers_create(meso_context *ctx, const meso_object *object,
+                             const meso_technique_info *info, const double *options,
+                             gl_layers **out, size_t *memory);
+void gl_layers_bind(const gl_layers *layers, GLuint program);
+void gl_layers_destroy(gl_layers *layers);
 
 /* vdm: the bake (cached, the CPU technique's bake for the same options) laid out as the CPU
  * technique reads it; no GL needed (texture export uses it too). */

@@ -25,8 +25,9 @@ typedef struct gl_object {
     GLuint vao, vertices, indices;
     GLsizei index_count;
     GLuint color_map, height;
-    gl_vdm *vdm;    /* technique vdm: its table */
-    GLuint max_mip; /* technique relief_exact: the maximum mip-map */
+    gl_vdm *vdm;       /* technique vdm: its table */
+    GLuint max_mip;    /* technique relief_exact: the maximum mip-map */
+    gl_layers *layers; /* technique relief_layers: its maps */
     int max_mip_levels;
     double options[GL_MAX_OPTIONS];
 } gl_object;
@@ -49,6 +50,11 @@ static unsigned accepts_bit(meso_mesostructure_kind kind) {
     return kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD ? MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD
            : kind == MESO_MESOSTRUCTURE_SOLID      ? MESO_TECHNIQUE_ACCEPTS_SOLID
                                                    : MESO_TECHNIQUE_ACCEPTS_NONE;
+}
+
+double gl_option_value(const meso_technique_info *info, const double *values, const char *name) {
+    const meso_technique_option *row = meso_technique_find_option(info, name);
+    return row ? values[row - info->options] : 0.0;
 }
 
 meso_result gl_resolve_technique(meso_context *ctx, const meso_object *object,
@@ -214,6 +220,10 @@ static meso_result prepare_object(meso_gl_renderer *r, int index, const meso_gl_
     if (strcmp(o->info->name, "relief_exact") == 0 &&
         (result = gl_max_mip_create(r->ctx, object, &o->max_mip, &o->max_mip_levels,
                                     &r->stats.memory_bytes)) != MESO_OK)
+        return result;
+    if (strcmp(o->info->name, "relief_layers") == 0 &&
+        (result = gl_layers_create(r->ctx, object, o->info, o->options, &o->layers,
+                                   &r->stats.memory_bytes)) != MESO_OK)
         return result;
     if (strcmp(o->info->name, "vdm") == 0 &&
         (result = gl_vdm_create(r->ctx, object, o->info, o->options, &o->vdm,
@@ -415,6 +425,13 @@ meso_result meso_gl_renderer_render(meso_gl_renderer *r, meso_framebuffer *fb) {
         glActiveTexture(GL_TEXTURE1);
         glBindTexture(GL_TEXTURE_2D, o->height);
         if (o->vdm) gl_vdm_bind(o->vdm, o->program, camera.pixel_size);
+        if (o->layers) gl_layers_bind(o->layers, o->program);
+        /* relief_layers draws back faces too: the far wall of a closed mesh through holes of
+         * the near one (render_internal.h, both_faces) */
+        if (o->layers)
+            glDisable(GL_CULL_FACE);
+        else
+            glEnable(GL_CULL_FACE);
         if (o->max_mip) {
             glActiveTexture(GL_TEXTURE2);
             glBindTexture(GL_TEXTURE_2D, o->max_mip);
@@ -482,6 +499,7 @@ void meso_gl_renderer_destroy(meso_gl_renderer *r) {
             if (o->height) glDeleteTextures(1, &o->height);
             gl_vdm_destroy(o->vdm);
             if (o->max_mip) glDeleteTextures(1, &o->max_mip);
+            gl_layers_destroy(o->layers);
         }
         for (int i = 0; i < r->num_programs; i++) glDeleteProgram(r->programs[i].program);
     }

@@ -18,12 +18,6 @@ struct gl_vdm {
     bool has_curvature;
 };
 
-static double option_value(const meso_technique_info *info, const double *values,
-                           const char *name) {
-    const meso_technique_option *row = meso_technique_find_option(info, name);
-    return row ? values[row - info->options] : 0.0;
-}
-
 static GLuint texture_2d(GLenum internal_format, int width, int height, GLenum type,
                          const void *data) {
     GLuint t;
@@ -100,7 +94,7 @@ meso_result gl_vdm_bake(meso_context *ctx, const meso_object *object,
                         const meso_technique_info *info, const double *options, gl_vdm_table *out) {
     memset(out, 0, sizeof *out);
     const meso_heightfield *hf = object->mesostructure.height_field;
-    if (option_value(info, options, "compressed") == 0.0)
+    if (gl_option_value(info, options, "compressed") == 0.0)
         return meso_log_error(ctx, MESO_ERROR_UNSUPPORTED,
                               "%s: vdm: compressed 0 (the raw 5D table) is drawn on the CPU only",
                               object->name);
@@ -116,16 +110,16 @@ meso_result gl_vdm_bake(meso_context *ctx, const meso_object *object,
                               object->name, object->mesostructure.depth, depth_tiles);
     /* the CPU technique's bake (vdm.c, vdm_prepare): at least the paper's 8 + 4 kept, so both
      * back ends and renders with fewer share one cached bake */
-    int k = (int)option_value(info, options, "eigenfunctions");
-    int m = (int)option_value(info, options, "mvm_eigenfunctions");
-    int resolution = (int)option_value(info, options, "resolution");
+    int k = (int)gl_option_value(info, options, "eigenfunctions");
+    int m = (int)gl_option_value(info, options, "mvm_eigenfunctions");
+    int resolution = (int)gl_option_value(info, options, "resolution");
     meso_vdm_desc desc = {.heightfield = hf,
                           .depth = depth_tiles,
                           .width = resolution,
                           .height = resolution,
-                          .num_theta = (int)option_value(info, options, "num_theta"),
-                          .num_phi = (int)option_value(info, options, "num_phi"),
-                          .num_curvatures = (int)option_value(info, options, "num_curvatures"),
+                          .num_theta = (int)gl_option_value(info, options, "num_theta"),
+                          .num_phi = (int)gl_option_value(info, options, "num_phi"),
+                          .num_curvatures = (int)gl_option_value(info, options, "num_curvatures"),
                           .vdm_eigenfunctions = k > 8 ? k : 8,
                           .mvm_eigenfunctions = m > 4 ? m : 4};
     int rank = desc.num_theta * desc.num_curvatures + desc.num_curvatures;
@@ -140,8 +134,9 @@ meso_result gl_vdm_bake(meso_context *ctx, const meso_object *object,
     meso_result r = meso_vdm_bake_cached(ctx, &desc, &out->vdm);
     if (r == MESO_OK) {
         out->view = meso_vdm_get_view(out->vdm);
-        r = meso_vdm_lanes_init(ctx, &out->view, k, m, option_value(info, options, "mipmap") != 0.0,
-                                object->name, &out->lanes);
+        r = meso_vdm_lanes_init(ctx, &out->view, k, m,
+                                gl_option_value(info, options, "mipmap") != 0.0, object->name,
+                                &out->lanes);
     }
     if (r != MESO_OK) {
         gl_vdm_table_release(out);
