@@ -168,6 +168,76 @@ static meso_result export_max_mip(export_object *e, const meso_object *object) {
     return r;
 }
 
+/* relief_layers' map (and its mirror, for back faces) as one float EXR each: channels D0k
+ * (depth of layer k, 1 = unused), X0k, Y0k (its normal's x, y) and C (layers held). */
+static meso_result export_layers(export_object *e, const meso_object *object,
+                                 const meso_technique_info *info, const double *options) {
+    gl_layers_maps maps;
+    meso_result r = gl_layers_bake(e->ctx, object, info, options, &maps);
+    if (r != MESO_OK) return r;
+    const meso_layers *sides[2] = {maps.map, maps.mirrored};
+    const char *suffixes[2] = {".layers.exr", ".layers-below.exr"};
+    const char *uniforms[2] = {"u_layer_maps", "u_layer_maps_below"};
+    int n = maps.num_layers, channels = 3 * n + 1;
+    for (int side = 0; side < 2 && r == MESO_OK && sides[side]; side++) {
+        const meso_layers *map = sides[side];
+        size_t texels = (size_t)map->width * map->height;
+        float *pixels = malloc(texels * (size_t)channels * sizeof(float));
+        char storage[3 * MESO_LAYERS_MAX + 1][16];
+        const char *names[3 * MESO_LAYERS_MAX + 1];
+        if (!pixels) {
+            r = meso_log_error(e->ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", e->dir);
+            break;
+        }
+        for (int k = 0; k < n; k++) {
+            snprintf(storage[k], sizeof storage[k], "D%02d", k);
+            snprintf(storage[n + k], sizeof storage[k], "X%02d", k);
+            snprintf(storage[2 * n + k], sizeof storage[k], "Y%02d", k);
+        }
+        snprintf(storage[3 * n], sizeof storage[0], "C");
+        for (int c = 0; c < channels; c++) names[c] = storage[c];
+        for (size_t i = 0; i < texels; i++) {
+            float *p = pixels + i * (size_t)channels;
+            for (int k = 0; k < n; k++) {
+                size_t slot = i * (size_t)map->num_layers + (size_t)k;
+                p[k] = map->depth[slot];
+                p[n + k] = map->normal_x ? map->normal_x[slot] : 0.0f;
+                p[2 * n + k] = map->normal_y ? map->normal_y[slot] : 0.0f;
+            }
+            p[3 * n] = (float)map->count[i];
+        }
+        char file[160], path[4096];
+        r = path_of(e, suffixes[side], file, sizeof file, path, sizeof path);
+        if (r == MESO_OK)
+            r = meso_exr_write(e->ctx, path, map->width, map->height, channels, names, pixels,
+                               false);
+        free(pixels);
+        if (r == MESO_OK)
+            texture_entry(e, file, uniforms[side], map->width, map->height,
+                          "exr float, channels D00.. X00.. Y00.. C",
+                          "per texel: layer depths (0 at the mesh, 1 at the bottom or unused), "
+                          "their normals' x, y in texture space (z = sqrt(1 - x^2 - y^2)), the "
+                          "count; the shader packs D, X, Y four to an RGBA array layer and C as "
+                          "u_layer_count; row 0 at v = 1");
+    }
+    if (r == MESO_OK) {
+        float values[6] = {(float)n,
+                           (float)maps.linear_steps,
+                           (float)maps.map->from_heightfield,
+                           (float)maps.impostor,
+                           (float)maps.enclosed,
+                           maps.mirrored != NULL};
+        const char *names[6] = {"u_num_layers", "u_linear_steps", "u_layer_heightfield",
+                                "u_impostor",   "u_enclosed",     "u_has_below"};
+        for (int i = 0; i < 6; i++) {
+            cJSON_DeleteItemFromObject(e->uniforms, names[i]); /* u_linear_steps: resolved */
+            uniform_value(e, names[i], &values[i], 1);
+        }
+    }
+    gl_layers_maps_release(&maps);
+    return r;
+}
+
 static meso_result export_object_textures(meso_context *ctx, const meso_scene *scene, int index,
                                           const meso_render_desc *desc, const char *dir,
                                           cJSON *objects) {
@@ -224,6 +294,8 @@ static meso_result export_object_textures(meso_context *ctx, const meso_scene *s
                        "at v = 1");
     if (r == MESO_OK && strcmp(info->name, "vdm") == 0) r = export_vdm(&e, object, info, options);
     if (r == MESO_OK && strcmp(info->name, "relief_exact") == 0) r = export_max_mip(&e, object);
+    if (r == MESO_OK && strcmp(info->name, "relief_layers") == 0)
+        r = export_layers(&e, object, info, options);
     return r;
 }
 

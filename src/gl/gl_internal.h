@@ -9,6 +9,7 @@
 #include <epoxy/egl.h>
 #include <epoxy/gl.h>
 
+#include "meso/bake_layers.h"
 #include "meso/bake_vdm.h"
 #include "meso/gl.h"
 
@@ -65,8 +66,20 @@ double gl_option_value(const meso_technique_info *info, const double *values, co
 meso_result gl_max_mip_create(meso_context *ctx, const meso_object *object, GLuint *out_texture,
                               int *out_levels, size_t *memory);
 
-/* relief_layers: the multilayer map and, for solids, its mirror (back faces), as texture
- * arrays (units 2-5), and the options' automatic values resolved. */
+/* relief_layers: the multilayer map (the CPU technique's bake) and, for solids, its mirror
+ * (back faces), with the options' automatic values resolved; no GL needed. */
+typedef struct gl_layers_maps {
+    meso_layers *map, *mirrored; /* mirrored: NULL for a height field */
+    int num_layers;              /* searched: the most a texel holds */
+    int linear_steps;
+    bool impostor, enclosed;
+} gl_layers_maps;
+meso_result gl_layers_bake(meso_context *ctx, const meso_object *object,
+                           const meso_technique_info *info, const double *options,
+                           gl_layers_maps *out);
+void gl_layers_maps_release(gl_layers_maps *maps);
+
+/* The maps as texture arrays (units 2-5). */
 typedef struct gl_layers gl_layers;
 meso_result gl_layers_create(meso_context *ctx, const meso_object *object,
                              const meso_technique_info *info, const double *options,

@@ -68,10 +68,10 @@ static meso_result upload_map(meso_context *ctx, const meso_object *object, cons
                                 "%s: relief_layers: the GL could not store the map", object->name);
 }
 
-meso_result gl_layers_create(meso_context *ctx, const meso_object *object,
-                             const meso_technique_info *info, const double *options,
-                             gl_layers **out, size_t *memory) {
-    *out = NULL;
+meso_result gl_layers_bake(meso_context *ctx, const meso_object *object,
+                           const meso_technique_info *info, const double *options,
+                           gl_layers_maps *out) {
+    memset(out, 0, sizeof *out);
     const meso_mesostructure *m = &object->mesostructure;
     bool solid = m->kind == MESO_MESOSTRUCTURE_SOLID && m->solid;
     /* relief_layers.c, prepare: an impostor (§4, a whole model on one quad) takes a finer map
@@ -100,30 +100,52 @@ meso_result gl_layers_create(meso_context *ctx, const meso_object *object,
                               "(relief_layers)",
                               object->name);
     }
+    meso_result r = meso_layers_bake_cached(ctx, &desc, &out->map);
+    if (r == MESO_OK && !out->map->from_heightfield)
+        r = meso_layers_mirror(ctx, out->map, &out->mirrored);
+    if (r != MESO_OK) {
+        gl_layers_maps_release(out);
+        return r;
+    }
+    if (solid && m->wrap == MESO_WRAP_CLAMP) out->map->wrap = MESO_WRAP_CLAMP;
+    out->num_layers = out->map->max_count > 0 ? out->map->max_count : 1;
+    out->linear_steps = linear_steps > 0 ? linear_steps : (impostor ? 64 : 32);
+    out->impostor = impostor;
+    out->enclosed = solid && !impostor;
+    return MESO_OK;
+}
+
+void gl_layers_maps_release(gl_layers_maps *maps) {
+    meso_layers_destroy(maps->map);
+    meso_layers_destroy(maps->mirrored);
+    memset(maps, 0, sizeof *maps);
+}
+
+meso_result gl_layers_create(meso_context *ctx, const meso_object *object,
+                             const meso_technique_info *info, const double *options,
+                             gl_layers **out, size_t *memory) {
+    *out = NULL;
+    gl_layers_maps maps;
+    meso_result r = gl_layers_bake(ctx, object, info, options, &maps);
+    if (r != MESO_OK) return r;
     gl_layers *g = calloc(1, sizeof *g);
-    meso_layers *map = NULL, *mirrored = NULL;
-    meso_result r = g ? meso_layers_bake_cached(ctx, &desc, &map)
-                      : meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "out of memory");
-    if (r == MESO_OK) {
-        if (solid && m->wrap == MESO_WRAP_CLAMP) map->wrap = MESO_WRAP_CLAMP;
-        g->num_layers = map->max_count > 0 ? map->max_count : 1;
-        g->groups = (g->num_layers + 3) / 4;
-        g->width = map->width;
-        g->height = map->height;
-        g->clamp = map->wrap == MESO_WRAP_CLAMP;
-        g->heightfield = map->from_heightfield;
-        g->linear_steps = linear_steps > 0 ? linear_steps : (impostor ? 64 : 32);
-        g->impostor = solid && impostor;
-        g->enclosed = solid && !impostor;
-        r = upload_map(ctx, object, map, g->num_layers, g->groups, &g->above, memory);
+    if (!g) {
+        gl_layers_maps_release(&maps);
+        return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
     }
-    if (r == MESO_OK && !map->from_heightfield) {
-        r = meso_layers_mirror(ctx, map, &mirrored);
-        if (r == MESO_OK)
-            r = upload_map(ctx, object, mirrored, g->num_layers, g->groups, &g->below, memory);
-    }
-    meso_layers_destroy(map);
-    meso_layers_destroy(mirrored);
+    g->num_layers = maps.num_layers;
+    g->groups = (g->num_layers + 3) / 4;
+    g->width = maps.map->width;
+    g->height = maps.map->height;
+    g->clamp = maps.map->wrap == MESO_WRAP_CLAMP;
+    g->heightfield = maps.map->from_heightfield;
+    g->linear_steps = maps.linear_steps;
+    g->impostor = maps.impostor;
+    g->enclosed = maps.enclosed;
+    r = upload_map(ctx, object, maps.map, g->num_layers, g->groups, &g->above, memory);
+    if (r == MESO_OK && maps.mirrored)
+        r = upload_map(ctx, object, maps.mirrored, g->num_layers, g->groups, &g->below, memory);
+    gl_layers_maps_release(&maps);
     if (r != MESO_OK) {
         gl_layers_destroy(g);
         return r;

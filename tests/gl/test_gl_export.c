@@ -160,6 +160,57 @@ static void test_export_vdm_scene(void **state) {
     meso_context_destroy(ctx);
 }
 
+/* relief_layers: the map and its mirror, with the channels the manifest's u_num_layers says,
+ * depths in [0, 1] and counts at most that many. */
+static void test_export_layers(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    meso_scene *scene = NULL;
+    assert_int_equal(meso_scene_load(ctx, MESO_SOURCE_DIR "/examples/weave-plane.json", &scene),
+                     MESO_OK);
+    const char *dir = test_path(test_temp_dir(), "export-layers");
+    char command[1200];
+    snprintf(command, sizeof command, "rm -rf %s && mkdir -p %s", dir, dir);
+    assert_int_equal(system(command), 0);
+    meso_option small = {.technique = "relief_layers", .name = "size", .value = 64};
+    meso_render_desc desc = {.technique = "relief_layers", .options = &small, .num_options = 1};
+    assert_int_equal(meso_gl_export_textures(ctx, scene, &desc, dir), MESO_OK);
+    size_t size;
+    char *text = test_read_file(test_path(dir, "manifest.json"), &size);
+    cJSON *manifest = cJSON_Parse(text);
+    cJSON *object = cJSON_GetArrayItem(cJSON_GetObjectItem(manifest, "objects"), 0);
+    cJSON *uniforms = cJSON_GetObjectItem(object, "uniforms");
+    int n = cJSON_GetObjectItem(uniforms, "u_num_layers")->valueint;
+    assert_true(n >= 1 && n <= 8);
+    assert_int_equal(cJSON_GetObjectItem(uniforms, "u_has_below")->valueint, 1);
+    char storage[25][16];
+    const char *names[25];
+    for (int k = 0; k < n; k++) {
+        snprintf(storage[k], 16, "D%02d", k);
+        snprintf(storage[n + k], 16, "X%02d", k);
+        snprintf(storage[2 * n + k], 16, "Y%02d", k);
+    }
+    snprintf(storage[3 * n], 16, "C");
+    for (int c = 0; c <= 3 * n; c++) names[c] = storage[c];
+    const char *files[2] = {"0-cloth.layers.exr", "0-cloth.layers-below.exr"};
+    for (int f = 0; f < 2; f++) {
+        int w, h;
+        float *pixels = read_exr(test_path(dir, files[f]), 3 * n + 1, names, &w, &h);
+        assert_int_equal(w, 64);
+        assert_int_equal(h, 64);
+        for (int i = 0; i < w * h; i++) {
+            const float *p = pixels + (size_t)i * (3 * n + 1);
+            assert_true(p[3 * n] >= 0.0f && p[3 * n] <= (float)n);
+            for (int k = 0; k < n; k++) assert_true(p[k] >= 0.0f && p[k] <= 1.0f);
+        }
+        free(pixels);
+    }
+    cJSON_Delete(manifest);
+    free(text);
+    meso_scene_destroy(scene);
+    meso_context_destroy(ctx);
+}
+
 /* meso bake's bad input: one line, status 2 (a technique without a shader is the user's
  * choice here), nothing written. */
 static void test_bake_command_bad_input(void **state) {
@@ -184,6 +235,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_exr_round_trip),
         cmocka_unit_test(test_export_vdm_scene),
+        cmocka_unit_test(test_export_layers),
         cmocka_unit_test(test_bake_command_bad_input),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
