@@ -119,8 +119,14 @@ bool layers_inside(vec2 p, float d, out float f) {
     bool odd = false;
     float nearest = 2.0;
     float dt = u_layer_heightfield ? d : min(d, 0.99999); // unused layers (1.0) at the floor
+    bool quads = !u_filter && !u_layer_heightfield; // nearest: a group of four in one fetch
+    vec4 group = vec4(1.0);
+    ivec2 at = layers_texel(c.nearest);
     for (int k = 0; k < u_num_layers; k++) {
-        float D = layers_plane(0, k, c);
+        if (quads && (k & 3) == 0)
+            group = g_below ? texelFetch(u_layer_maps_below, ivec3(at, k / 4), 0)
+                            : texelFetch(u_layer_maps, ivec3(at, k / 4), 0);
+        float D = quads ? group[k & 3] : layers_plane(0, k, c);
         if (dt >= D) odd = !odd;
         float gap = abs(d - D);
         bool present = u_layer_heightfield || D < 1.0;
