@@ -56,6 +56,11 @@ meso_result gl_program_build(meso_context *ctx, const char *technique, const cha
 meso_result gl_resolve_technique(meso_context *ctx, const meso_object *object,
                                  const meso_render_desc *desc, const meso_technique_info **out);
 
+/* A 2D texture of one level read with texelFetch only (GL_NEAREST): the shaders filter
+ * themselves (meso_common.glsl says why). */
+GLuint gl_texture_2d(GLenum internal_format, int width, int height, GLenum format, GLenum type,
+                     const void *data);
+
 /* The value of option `name` in `values` (meso_technique_options_values' order); 0 when the
  * technique has no such option. */
 double gl_option_value(const meso_technique_info *info, const double *values, const char *name);

@@ -53,12 +53,7 @@ static meso_result upload_map(meso_context *ctx, const meso_object *object, cons
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAX_LEVEL, 0);
-    glGenTextures(1, &out->count);
-    glBindTexture(GL_TEXTURE_2D, out->count);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_R32F, W, H, 0, GL_RED, GL_FLOAT, count);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 0);
+    out->count = gl_texture_2d(GL_R32F, W, H, GL_RED, GL_FLOAT, count);
     free(planes);
     free(count);
     *memory += texels * (4 * (size_t)(3 * groups) + 1) * sizeof(float);

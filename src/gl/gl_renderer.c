@@ -52,6 +52,19 @@ static unsigned accepts_bit(meso_mesostructure_kind kind) {
                                                    : MESO_TECHNIQUE_ACCEPTS_NONE;
 }
 
+GLuint gl_texture_2d(GLenum internal_format, int width, int height, GLenum format, GLenum type,
+                     const void *data) {
+    GLuint texture;
+    glGenTextures(1, &texture);
+    glBindTexture(GL_TEXTURE_2D, texture);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTexImage2D(GL_TEXTURE_2D, 0, (GLint)internal_format, width, height, 0, format, type, data);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 0);
+    return texture;
+}
+
 double gl_option_value(const meso_technique_info *info, const double *values, const char *name) {
     const meso_technique_option *row = meso_technique_find_option(info, name);
     return row ? values[row - info->options] : 0.0;
@@ -181,14 +194,7 @@ static meso_result upload_texture(meso_gl_renderer *r, const meso_object *object
         return meso_log_error(r->ctx, MESO_ERROR_LIMIT,
                               "%s: a %d x %d map exceeds the GL's largest texture, %d a side",
                               object->name, width, height, max_size);
-    glGenTextures(1, out);
-    glBindTexture(GL_TEXTURE_2D, *out);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-    glTexImage2D(GL_TEXTURE_2D, 0, (GLint)internal_format, width, height, 0, format, GL_FLOAT,
-                 data);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 0);
+    *out = gl_texture_2d(internal_format, width, height, format, GL_FLOAT, data);
     r->stats.memory_bytes += (size_t)width * (size_t)height * bytes_per_texel;
     return glGetError() == GL_NO_ERROR ? MESO_OK
                                        : meso_log_error(r->ctx, MESO_ERROR_OUT_OF_MEMORY,

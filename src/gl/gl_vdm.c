@@ -18,19 +18,6 @@ struct gl_vdm {
     bool has_curvature;
 };
 
-static GLuint texture_2d(GLenum internal_format, int width, int height, GLenum type,
-                         const void *data) {
-    GLuint t;
-    glGenTextures(1, &t);
-    glBindTexture(GL_TEXTURE_2D, t);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glTexImage2D(GL_TEXTURE_2D, 0, (GLint)internal_format, width, height, 0, GL_RGBA, type, data);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 0);
-    return t;
-}
-
 /* Upload the layout: W rows of every level one under the other. */
 static meso_result upload(meso_context *ctx, const meso_object *object, const meso_vdm_view *v,
                           const meso_vdm_lanes *l, gl_vdm *g, size_t *memory) {
@@ -59,7 +46,7 @@ static meso_result upload(meso_context *ctx, const meso_object *object, const me
                    l->level_weights[i] +
                        (size_t)y * l->level_width[i] * v->num_phi * (size_t)l->lanes,
                    (size_t)l->level_width[i] * v->num_phi * (size_t)l->lanes * sizeof(uint16_t));
-    g->weights = texture_2d(GL_RGBA16F, width, height, GL_HALF_FLOAT, atlas);
+    g->weights = gl_texture_2d(GL_RGBA16F, width, height, GL_RGBA, GL_HALF_FLOAT, atlas);
     free(atlas);
     /* E transposed is [column][lanes]: texel (column, j) wants lanes 4j..4j+3, so rows of
      * chunks: re-pack as [j][column][4] */
@@ -79,8 +66,8 @@ static meso_result upload(meso_context *ctx, const meso_object *object, const me
             memcpy(mvm + ((size_t)j * v->num_curvatures + c) * 4,
                    l->mvm_t + (size_t)c * l->lanes + 4 * j, 4 * sizeof(float));
     }
-    g->eigen = texture_2d(GL_RGBA32F, columns, g->chunks, GL_FLOAT, eigen);
-    g->mvm = texture_2d(GL_RGBA32F, v->num_curvatures, g->chunks, GL_FLOAT, mvm);
+    g->eigen = gl_texture_2d(GL_RGBA32F, columns, g->chunks, GL_RGBA, GL_FLOAT, eigen);
+    g->mvm = gl_texture_2d(GL_RGBA32F, v->num_curvatures, g->chunks, GL_RGBA, GL_FLOAT, mvm);
     free(eigen);
     free(mvm);
     *memory += (size_t)width * height * 8 + ((size_t)columns + v->num_curvatures) * l->lanes * 4;
