@@ -61,6 +61,10 @@ meso_result gl_resolve_technique(meso_context *ctx, const meso_object *object,
 GLuint gl_texture_2d(GLenum internal_format, int width, int height, GLenum format, GLenum type,
                      const void *data);
 
+/* MESO_OK when the GL reports no error, else MESO_ERROR_OUT_OF_MEMORY logged as
+ * "<object>: <technique>: the GL could not store <what>" (uploads fail for memory). */
+meso_result gl_check_upload(meso_context *ctx, const meso_object *object, const char *what);
+
 /* The value of option `name` in `values` (meso_technique_options_values' order); 0 when the
  * technique has no such option. */
 double gl_option_value(const meso_technique_info *info, const double *values, const char *name);

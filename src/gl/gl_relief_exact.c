@@ -35,9 +35,5 @@ meso_result gl_max_mip_create(meso_context *ctx, const meso_object *object, GLui
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, pyramid->num_levels - 1);
     *out_levels = pyramid->num_levels;
     meso_minmax_pyramid_destroy(pyramid);
-    return glGetError() == GL_NO_ERROR
-               ? MESO_OK
-               : meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY,
-                                "%s: relief_exact: the GL could not store the maximum mip-map",
-                                object->name);
+    return gl_check_upload(ctx, object, "relief_exact: the maximum mip-map");
 }

@@ -57,10 +57,7 @@ static meso_result upload_map(meso_context *ctx, const meso_object *object, cons
     free(planes);
     free(count);
     *memory += texels * (4 * (size_t)(3 * groups) + 1) * sizeof(float);
-    return glGetError() == GL_NO_ERROR
-               ? MESO_OK
-               : meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY,
-                                "%s: relief_layers: the GL could not store the map", object->name);
+    return gl_check_upload(ctx, object, "relief_layers: the map");
 }
 
 meso_result gl_layers_bake(meso_context *ctx, const meso_object *object,

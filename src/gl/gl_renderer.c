@@ -65,6 +65,13 @@ GLuint gl_texture_2d(GLenum internal_format, int width, int height, GLenum forma
     return texture;
 }
 
+meso_result gl_check_upload(meso_context *ctx, const meso_object *object, const char *what) {
+    return glGetError() == GL_NO_ERROR
+               ? MESO_OK
+               : meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: the GL could not store %s",
+                                object->name, what);
+}
+
 double gl_option_value(const meso_technique_info *info, const double *values, const char *name) {
     const meso_technique_option *row = meso_technique_find_option(info, name);
     return row ? values[row - info->options] : 0.0;
@@ -196,10 +203,7 @@ static meso_result upload_texture(meso_gl_renderer *r, const meso_object *object
                               object->name, width, height, max_size);
     *out = gl_texture_2d(internal_format, width, height, format, GL_FLOAT, data);
     r->stats.memory_bytes += (size_t)width * (size_t)height * bytes_per_texel;
-    return glGetError() == GL_NO_ERROR ? MESO_OK
-                                       : meso_log_error(r->ctx, MESO_ERROR_OUT_OF_MEMORY,
-                                                        "%s: the GL could not store a %d x %d map",
-                                                        object->name, width, height);
+    return gl_check_upload(r->ctx, object, "a map");
 }
 
 static meso_result prepare_object(meso_gl_renderer *r, int index, const meso_gl_desc *desc) {

@@ -71,10 +71,7 @@ static meso_result upload(meso_context *ctx, const meso_object *object, const me
     free(eigen);
     free(mvm);
     *memory += (size_t)width * height * 8 + ((size_t)columns + v->num_curvatures) * l->lanes * 4;
-    return glGetError() == GL_NO_ERROR
-               ? MESO_OK
-               : meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY,
-                                "%s: vdm: the GL could not store the table", object->name);
+    return gl_check_upload(ctx, object, "vdm: the table");
 }
 
 meso_result gl_vdm_bake(meso_context *ctx, const meso_object *object,

@@ -85,24 +85,35 @@ static void test_exr_round_trip(void **state) {
     meso_context_destroy(ctx);
 }
 
+/* Export `example` with one option set into a fresh folder; its parsed manifest (caller
+ * deletes) and the folder in *out_dir. */
+static cJSON *export_example(meso_context *ctx, const char *example, const meso_option *option,
+                             const char *folder, meso_scene **out_scene, const char **out_dir) {
+    char path[1024];
+    snprintf(path, sizeof path, "%s/examples/%s.json", MESO_SOURCE_DIR, example);
+    assert_int_equal(meso_scene_load(ctx, path, out_scene), MESO_OK);
+    const char *dir = test_path(test_temp_dir(), folder);
+    char command[1200];
+    snprintf(command, sizeof command, "rm -rf %s && mkdir -p %s", dir, dir);
+    assert_int_equal(system(command), 0);
+    meso_render_desc desc = {.technique = option->technique, .options = option, .num_options = 1};
+    assert_int_equal(meso_gl_export_textures(ctx, *out_scene, &desc, dir), MESO_OK);
+    size_t size;
+    char *text = test_read_file(test_path(dir, "manifest.json"), &size);
+    cJSON *manifest = cJSON_Parse(text);
+    free(text);
+    assert_non_null(manifest);
+    *out_dir = dir;
+    return manifest;
+}
+
 static void test_export_vdm_scene(void **state) {
     (void)state;
     meso_context *ctx = test_context(2);
     meso_scene *scene = NULL;
-    assert_int_equal(meso_scene_load(ctx, MESO_SOURCE_DIR "/examples/bumps-sphere.json", &scene),
-                     MESO_OK);
-    const char *dir = test_path(test_temp_dir(), "export");
-    char command[1200];
-    snprintf(command, sizeof command, "rm -rf %s && mkdir -p %s", dir, dir);
-    assert_int_equal(system(command), 0);
+    const char *dir = NULL;
     meso_option small = {.technique = "vdm", .name = "resolution", .value = 32};
-    meso_render_desc desc = {.technique = "vdm", .options = &small, .num_options = 1};
-    assert_int_equal(meso_gl_export_textures(ctx, scene, &desc, dir), MESO_OK);
-
-    size_t size;
-    char *text = test_read_file(test_path(dir, "manifest.json"), &size);
-    cJSON *manifest = cJSON_Parse(text);
-    assert_non_null(manifest);
+    cJSON *manifest = export_example(ctx, "bumps-sphere", &small, "export", &scene, &dir);
     cJSON *object = cJSON_GetArrayItem(cJSON_GetObjectItem(manifest, "objects"), 0);
     assert_string_equal(cJSON_GetObjectItem(object, "fragment_shader")->valuestring, "vdm.frag");
     cJSON *uniforms = cJSON_GetObjectItem(object, "uniforms");
@@ -121,7 +132,6 @@ static void test_export_vdm_scene(void **state) {
     }
     assert_true(found);
     cJSON_Delete(manifest);
-    free(text);
 
     /* the heights, 16 bits: within half a step of the field */
     const meso_heightfield *hf = scene->objects[0].mesostructure.height_field;
@@ -166,18 +176,9 @@ static void test_export_layers(void **state) {
     (void)state;
     meso_context *ctx = test_context(2);
     meso_scene *scene = NULL;
-    assert_int_equal(meso_scene_load(ctx, MESO_SOURCE_DIR "/examples/weave-plane.json", &scene),
-                     MESO_OK);
-    const char *dir = test_path(test_temp_dir(), "export-layers");
-    char command[1200];
-    snprintf(command, sizeof command, "rm -rf %s && mkdir -p %s", dir, dir);
-    assert_int_equal(system(command), 0);
+    const char *dir = NULL;
     meso_option small = {.technique = "relief_layers", .name = "size", .value = 64};
-    meso_render_desc desc = {.technique = "relief_layers", .options = &small, .num_options = 1};
-    assert_int_equal(meso_gl_export_textures(ctx, scene, &desc, dir), MESO_OK);
-    size_t size;
-    char *text = test_read_file(test_path(dir, "manifest.json"), &size);
-    cJSON *manifest = cJSON_Parse(text);
+    cJSON *manifest = export_example(ctx, "weave-plane", &small, "export-layers", &scene, &dir);
     cJSON *object = cJSON_GetArrayItem(cJSON_GetObjectItem(manifest, "objects"), 0);
     cJSON *uniforms = cJSON_GetObjectItem(object, "uniforms");
     int n = cJSON_GetObjectItem(uniforms, "u_num_layers")->valueint;
@@ -206,7 +207,6 @@ static void test_export_layers(void **state) {
         free(pixels);
     }
     cJSON_Delete(manifest);
-    free(text);
     meso_scene_destroy(scene);
     meso_context_destroy(ctx);
 }
