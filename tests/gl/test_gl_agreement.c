@@ -94,6 +94,10 @@ static void test_flat_agrees(void **state) {
     (void)state;
     run_technique("flat", NULL, 0);
 }
+static void test_bump_agrees(void **state) {
+    (void)state;
+    run_technique("bump", NULL, 0);
+}
 static void test_relief_agrees(void **state) {
     (void)state;
     run_technique("relief", NULL, 0);
@@ -162,7 +166,8 @@ static void test_relief_options_agree(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_flat_agrees),          cmocka_unit_test(test_relief_agrees),
+        cmocka_unit_test(test_flat_agrees),          cmocka_unit_test(test_bump_agrees),
+        cmocka_unit_test(test_relief_agrees),
         cmocka_unit_test(test_parallax_agrees),      cmocka_unit_test(test_relief_exact_agrees),
         cmocka_unit_test(test_relief_layers_agrees), cmocka_unit_test(test_vdm_agrees),
         cmocka_unit_test(test_relief_options_agree),

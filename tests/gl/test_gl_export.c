@@ -224,9 +224,9 @@ static void test_bake_command_bad_input(void **state) {
     snprintf(arguments, sizeof arguments, "bake %s/no-such-scene.json -o %s", MESO_SOURCE_DIR, dir);
     assert_int_equal(test_run_meso(arguments, &err), 2);
     snprintf(arguments, sizeof arguments,
-             "bake %s/examples/bricks-plane.json -o %s --technique bump", MESO_SOURCE_DIR, dir);
+             "bake %s/examples/bricks-plane.json -o %s --technique horizon", MESO_SOURCE_DIR, dir);
     assert_int_equal(test_run_meso(arguments, &err), 2);
-    assert_non_null(strstr(err, "'bump' has no GL shader"));
+    assert_non_null(strstr(err, "'horizon' has no GL shader"));
     assert_ptr_equal(strchr(err, '\n'), err + strlen(err) - 1);
     assert_int_not_equal(access(test_path(dir, "manifest.json"), F_OK), 0);
 }
