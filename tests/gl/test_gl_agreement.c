@@ -166,11 +166,10 @@ static void test_relief_options_agree(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_flat_agrees),          cmocka_unit_test(test_bump_agrees),
-        cmocka_unit_test(test_relief_agrees),
-        cmocka_unit_test(test_parallax_agrees),      cmocka_unit_test(test_relief_exact_agrees),
-        cmocka_unit_test(test_relief_layers_agrees), cmocka_unit_test(test_vdm_agrees),
-        cmocka_unit_test(test_relief_options_agree),
+        cmocka_unit_test(test_flat_agrees),         cmocka_unit_test(test_bump_agrees),
+        cmocka_unit_test(test_relief_agrees),       cmocka_unit_test(test_parallax_agrees),
+        cmocka_unit_test(test_relief_exact_agrees), cmocka_unit_test(test_relief_layers_agrees),
+        cmocka_unit_test(test_vdm_agrees),          cmocka_unit_test(test_relief_options_agree),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
