@@ -26,6 +26,7 @@ int meso_cmd_info(int argc, char **argv);
 int meso_cmd_demo(int argc, char **argv);
 int meso_cmd_bench(int argc, char **argv);
 int meso_cmd_cache(int argc, char **argv);
+int meso_cmd_bake(int argc, char **argv);
 int meso_cmd_compare(int argc, char **argv); /* app/cmd_compare.c (the compare helper's) */
 int meso_cmd_view(int argc, char **argv);    /* app/cmd_view.c: needs SDL2 */
 

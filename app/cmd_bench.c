@@ -1,5 +1,6 @@
 /* meso bench: median time per frame of techniques on scenes, and their thread scaling. */
 #include "app.h"
+#include "app_backend.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -26,10 +27,13 @@ static const app_command_help bench_help = {
         "the MEDIAN time per frame and frames per second, with every worker thread (--threads)\n"
         "and with one thread; scaling = time at 1 thread / time at N threads. Without SCENES\n"
         "the examples built into the program are used. Prints the machine and an aligned\n"
-        "table; --json writes the same numbers.",
+        "table; --json writes the same numbers. --backend gl (or cpu,gl: both, side by side)\n"
+        "times the GLSL shaders on OpenGL (docs/gpu.md), drawing and reading back the frame;\n"
+        "the GL uses its own threads, so it has no one-thread column.",
     .examples = "  meso bench\n"
                 "  meso bench examples/bricks-plane.json --techniques relief,parallax --frames 10\n"
-                "  meso bench --size 256x256 --seconds 1 --json bench.json\n",
+                "  meso bench --size 256x256 --seconds 1 --json bench.json\n"
+                "  meso bench examples/bricks-plane.json --techniques relief --backend cpu,gl\n",
 };
 
 typedef struct bench_options {
@@ -39,11 +43,14 @@ typedef struct bench_options {
     app_size size;
     const char *json;
     app_settings settings; /* --set */
+    const char *backends;  /* --backend: "cpu", "gl" or "cpu,gl" */
+    const char *shader_dir;
 } bench_options;
 
 typedef struct bench_row {
     char scene[MESO_NAME_MAX];
     char technique[MESO_NAME_MAX];
+    char backend[4];
     double prepare_ms;
     double ms;        /* median at the full thread count */
     double ms_single; /* median at one thread, NAN when not measured */
@@ -56,12 +63,11 @@ typedef struct bench_scene {
 } bench_scene;
 
 /* Time frames of a prepared renderer: the median in ms, frames counted in *out_frames. */
-static meso_result time_frames(meso_renderer *renderer, meso_framebuffer *fb,
-                               const bench_options *o, double *times, double *out_ms,
-                               int *out_frames) {
+static meso_result time_frames(app_renderer *renderer, meso_framebuffer *fb, const bench_options *o,
+                               double *times, double *out_ms, int *out_frames) {
     double warmup_start = meso_time_seconds();
     for (int i = 0; i < WARMUP_FRAMES && meso_time_seconds() - warmup_start < WARMUP_SECONDS; i++) {
-        meso_result result = meso_renderer_render(renderer, fb);
+        meso_result result = app_renderer_render(renderer, fb);
         if (result != MESO_OK) return result;
     }
     int limit = o->frames > 0 ? o->frames : o->seconds > 0.0 ? MAX_FRAMES : DEFAULT_FRAMES;
@@ -71,7 +77,7 @@ static meso_result time_frames(meso_renderer *renderer, meso_framebuffer *fb,
     while (count < limit &&
            (count == 0 || seconds <= 0.0 || meso_time_seconds() - start < seconds)) {
         double t = meso_time_seconds();
-        meso_result result = meso_renderer_render(renderer, fb);
+        meso_result result = app_renderer_render(renderer, fb);
         if (result != MESO_OK) return result;
         times[count++] = 1000.0 * (meso_time_seconds() - t);
     }
@@ -83,30 +89,33 @@ static meso_result time_frames(meso_renderer *renderer, meso_framebuffer *fb,
 /* One scene x technique. The renderer is made at the full thread count, so per-thread scratch
  * it sizes then stays valid when the count is lowered to one. */
 static meso_result bench_one(meso_context *ctx, const bench_scene *s, const char *technique,
-                             const bench_options *o, double *times, bench_row *row) {
+                             const app_backend *backend, const bench_options *o, double *times,
+                             bench_row *row) {
     *row = (bench_row){.ms_single = NAN};
     snprintf(row->scene, sizeof(row->scene), "%.*s", MESO_NAME_MAX - 1, s->name);
     snprintf(row->technique, sizeof(row->technique), "%s", technique);
+    snprintf(row->backend, sizeof(row->backend), "%s", app_backend_is_gl(backend) ? "gl" : "cpu");
     int threads = meso_context_num_threads(ctx);
-    meso_renderer *renderer = NULL;
+    app_renderer renderer = {0};
     meso_framebuffer *fb = NULL;
     meso_render_desc desc = {
         .technique = technique, .options = o->settings.items, .num_options = o->settings.count};
-    meso_result result = meso_renderer_create(ctx, s->scene, &desc, &renderer);
+    meso_result result = app_renderer_create(ctx, s->scene, &desc, backend, &renderer);
     if (result == MESO_OK)
         result = meso_framebuffer_create(ctx, o->size.width, o->size.height, &fb);
     if (result == MESO_OK) {
-        row->prepare_ms = 1000.0 * meso_renderer_get_stats(renderer).prepare_seconds;
-        result = time_frames(renderer, fb, o, times, &row->ms, &row->frames);
+        row->prepare_ms = 1000.0 * app_renderer_get_stats(&renderer).prepare_seconds;
+        result = time_frames(&renderer, fb, o, times, &row->ms, &row->frames);
     }
-    if (result == MESO_OK && threads > 1) {
+    /* the GL draws with its own threads (llvmpipe: LP_NUM_THREADS): no one-thread column */
+    if (result == MESO_OK && threads > 1 && !renderer.gl) {
         int frames = 0;
         meso_context_set_num_threads(ctx, 1);
-        result = time_frames(renderer, fb, o, times, &row->ms_single, &frames);
+        result = time_frames(&renderer, fb, o, times, &row->ms_single, &frames);
         meso_context_set_num_threads(ctx, threads);
     }
     meso_framebuffer_destroy(fb);
-    meso_renderer_destroy(renderer);
+    app_renderer_destroy(&renderer);
     return result;
 }
 
@@ -114,12 +123,12 @@ static void print_table(const bench_row *rows, size_t count, int threads) {
     char ms_n[32], ms_1[32];
     snprintf(ms_n, sizeof(ms_n), "ms (%d thr)", threads);
     snprintf(ms_1, sizeof(ms_1), "ms (1 thr)");
-    printf("%-20s %-14s %11s %12s %9s %12s %8s\n", "scene", "technique", "prepare ms", ms_n, "fps",
-           ms_1, "scaling");
+    printf("%-20s %-14s %-7s %11s %12s %9s %12s %8s\n", "scene", "technique", "backend",
+           "prepare ms", ms_n, "fps", ms_1, "scaling");
     for (size_t i = 0; i < count; i++) {
         const bench_row *r = &rows[i];
-        printf("%-20s %-14s %11.1f %12.2f %9.1f", r->scene, r->technique, r->prepare_ms, r->ms,
-               1000.0 / r->ms);
+        printf("%-20s %-14s %-7s %11.1f %12.2f %9.1f", r->scene, r->technique, r->backend,
+               r->prepare_ms, r->ms, 1000.0 / r->ms);
         if (isnan(r->ms_single))
             printf(" %12s %8s\n", "-", "-");
         else
@@ -147,6 +156,8 @@ static meso_result write_json(meso_context *ctx, const char *path, const bench_r
         app_text_json_string(&json, r->scene);
         app_text_printf(&json, ", \"technique\": ");
         app_text_json_string(&json, r->technique);
+        app_text_printf(&json, ", \"backend\": ");
+        app_text_json_string(&json, r->backend);
         app_text_printf(&json, ", \"frames\": %d, \"prepare_ms\": ", r->frames);
         app_text_json_number(&json, r->prepare_ms);
         app_text_printf(&json, ", \"median_ms\": ");
@@ -190,7 +201,7 @@ static meso_result load_scenes(meso_context *ctx, const char *const *paths, int 
 }
 
 int meso_cmd_bench(int argc, char **argv) {
-    bench_options o = {.techniques = "all", .size = {512, 512}};
+    bench_options o = {.techniques = "all", .size = {512, 512}, .backends = "cpu"};
     const app_option options[] = {
         {"--techniques", NULL, APP_OPTION_STRING, &o.techniques, "LIST",
          "'all' (every per-pixel and geometry technique) or comma-separated names", "all", 0, 0},
@@ -203,6 +214,11 @@ int meso_cmd_bench(int argc, char **argv) {
         {"--json", NULL, APP_OPTION_STRING, &o.json, "OUT.json", "also write the numbers as JSON",
          NULL, 0, 0},
         APP_SET_OPTION(&o.settings),
+        {"--backend", NULL, APP_OPTION_STRING, &o.backends, "cpu|gl|cpu,gl",
+         "the back end(s) to time: meso's rasterizer, the GLSL shaders on OpenGL, or both", "cpu",
+         0, 0},
+        {"--shader-dir", NULL, APP_OPTION_STRING, &o.shader_dir, "DIR",
+         "with --backend gl: read the shader files from DIR", "the built-in ones", 0, 0},
     };
     app_globals globals;
     const char *paths[MAX_SCENES];
@@ -215,6 +231,18 @@ int meso_cmd_bench(int argc, char **argv) {
     int num_names = app_parse_technique_list("bench", o.techniques, names_storage,
                                              sizeof(names_storage), names, MAX_TECHNIQUES);
     if (num_names < 0) return APP_EXIT_BAD_INPUT;
+    app_backend backends[2];
+    int num_backends = 0;
+    if (strcmp(o.backends, "cpu") == 0 || strcmp(o.backends, "gl") == 0) {
+        backends[num_backends++] = (app_backend){o.backends, o.shader_dir};
+    } else if (strcmp(o.backends, "cpu,gl") == 0 || strcmp(o.backends, "gl,cpu") == 0) {
+        backends[num_backends++] = (app_backend){"cpu", NULL};
+        backends[num_backends++] = (app_backend){"gl", o.shader_dir};
+    } else {
+        return app_usage_error("bench", "--backend: '%s' is not cpu, gl or cpu,gl", o.backends);
+    }
+    if (o.shader_dir && !strstr(o.backends, "gl"))
+        return app_usage_error("bench", "--shader-dir needs --backend gl");
 
     meso_context *ctx = app_context_create(&globals);
     if (!ctx) return APP_EXIT_FAILURE;
@@ -248,14 +276,21 @@ int meso_cmd_bench(int argc, char **argv) {
             const meso_technique_info *info = meso_technique_find(names[t]);
             meso_progress_advance(progress, 1);
             if (info && !app_technique_applies(info, scenes[s].scene)) continue;
-            meso_result r = bench_one(ctx, &scenes[s], names[t], &o, times, &rows[num_rows]);
-            if (r == MESO_OK)
-                num_rows++;
-            else if (r == MESO_ERROR_OUT_OF_MEMORY)
-                result = r;
-            else if (!globals.quiet)
-                fprintf(stderr, "meso: warning: %s: %s: %s\n", scenes[s].name, names[t],
-                        meso_context_last_error(ctx));
+            for (int b = 0; b < num_backends && result == MESO_OK; b++) {
+                /* with every technique, the GL times those it has a shader for */
+                if (app_backend_is_gl(&backends[b]) && strcmp(o.techniques, "all") == 0 &&
+                    !meso_gl_technique_supported(names[t]))
+                    continue;
+                meso_result r =
+                    bench_one(ctx, &scenes[s], names[t], &backends[b], &o, times, &rows[num_rows]);
+                if (r == MESO_OK)
+                    num_rows++;
+                else if (r == MESO_ERROR_OUT_OF_MEMORY)
+                    result = r;
+                else if (!globals.quiet)
+                    fprintf(stderr, "meso: warning: %s: %s (%s): %s\n", scenes[s].name, names[t],
+                            backends[b].name, meso_context_last_error(ctx));
+            }
         }
     }
     meso_progress_end(progress);

@@ -1,5 +1,6 @@
 /* meso render: one scene to a PNG, or every technique side by side against the reference. */
 #include "app.h"
+#include "app_backend.h"
 #include "render_camera.h"
 
 #include <math.h>
@@ -24,6 +25,7 @@ typedef struct render_options {
     app_settings settings; /* --set */
     int orbit;                  /* frames of a turntable into folder OUT (0: none) */
     app_camera_override camera; /* --eye, --target, --fov, --light */
+    app_backend backend;        /* --backend, --shader-dir */
 } render_options;
 
 static const app_command_help render_help = {
@@ -49,7 +51,8 @@ static const app_command_help render_help = {
                 "  meso render examples/bricks-plane.json --techniques all -o out/bricks\n"
                 "  meso render examples/*.json -o out --size 256x256\n"
                 "  meso render examples/bricks-teapot.json --technique relief --orbit 120 -o "
-                "orbit\n",
+                "orbit\n"
+                "  meso render examples/bricks-plane.json --backend gl -o gl.png\n",
 };
 
 /* "relief", or "mixed" when the objects use different techniques. */
@@ -63,7 +66,7 @@ static const char *scene_technique(const meso_scene *scene, const char *override
 
 static int render_one(meso_context *ctx, const meso_scene *scene, const render_options *o,
                       bool quiet) {
-    meso_renderer *renderer = NULL;
+    app_renderer renderer = {0};
     meso_framebuffer *fb = NULL;
     meso_render_desc desc = {.technique = o->technique,
                              .samples = o->samples,
@@ -78,22 +81,24 @@ static int render_one(meso_context *ctx, const meso_scene *scene, const render_o
     /* the frame's memory is checked before the renderer prepares (and bakes) anything */
     meso_result result =
         meso_memory_check(ctx, scene->path, meso_render_memory_estimate(&desc, width, height));
-    if (result == MESO_OK) result = meso_renderer_create(ctx, scene, &desc, &renderer);
+    if (result == MESO_OK) result = app_renderer_create(ctx, scene, &desc, &o->backend, &renderer);
     if (result == MESO_OK) result = meso_framebuffer_create(ctx, width, height, &fb);
-    if (result == MESO_OK) result = meso_renderer_render(renderer, fb);
+    if (result == MESO_OK) result = app_renderer_render(&renderer, fb);
     /* the output's extension chooses PNG or OpenEXR */
     meso_png_desc png = {.bit_depth = o->bits, .encoding = encoding};
     if (result == MESO_OK) result = meso_framebuffer_save(ctx, fb, &png, o->output, o->coverage);
     if (result == MESO_OK && !quiet) {
-        meso_render_stats stats = meso_renderer_get_stats(renderer);
+        meso_render_stats stats = app_renderer_get_stats(&renderer);
         fprintf(stderr,
-                "meso: render: %s, %dx%d, prepare %.1f ms, frame %.1f ms, %llu triangles -> %s\n",
-                scene_technique(scene, o->technique), width, height, 1000.0 * stats.prepare_seconds,
-                1000.0 * stats.last_frame_seconds, (unsigned long long)stats.triangles, o->output);
+                "meso: render: %s%s, %dx%d, prepare %.1f ms, frame %.1f ms, %llu triangles -> %s\n",
+                scene_technique(scene, o->technique), app_backend_is_gl(&o->backend) ? " (gl)" : "",
+                width, height, 1000.0 * stats.prepare_seconds, 1000.0 * stats.last_frame_seconds,
+                (unsigned long long)stats.triangles, o->output);
     }
-    int status = result == MESO_OK ? APP_EXIT_OK : app_fail_in(ctx, result, scene->path);
+    int status =
+        result == MESO_OK ? APP_EXIT_OK : app_fail_backend(ctx, result, scene->path, &o->backend);
     meso_framebuffer_destroy(fb);
-    meso_renderer_destroy(renderer);
+    app_renderer_destroy(&renderer);
     return status;
 }
 
@@ -255,6 +260,7 @@ int meso_cmd_render(int argc, char **argv) {
          "(OUT/frame-0000.png ...; with --techniques OUT/<technique>/frame-0000.png ...)",
          NULL, 1, 100000},
         APP_CAMERA_OVERRIDE_OPTIONS(o.camera),
+        APP_BACKEND_OPTIONS(o.backend),
     };
     app_globals globals;
     const char *positionals[MAX_BATCH_SCENES];
@@ -268,6 +274,10 @@ int meso_cmd_render(int argc, char **argv) {
     if ((status = app_check_bits("render", o.bits)) >= 0) return status;
     if (o.technique && o.techniques)
         return app_usage_error("render", "--technique and --techniques exclude each other");
+    if ((status = app_backend_check("render", &o.backend)) >= 0) return status;
+    if (app_backend_is_gl(&o.backend) && (o.techniques || o.orbit))
+        return app_usage_error("render", "--backend gl draws one image: not with %s",
+                               o.techniques ? "--techniques" : "--orbit");
     if (num_positionals > 1 && o.coverage)
         return app_usage_error("render", "--coverage takes one file: it needs one scene");
     if (num_positionals > 1 && (status = check_batch_names(positionals, num_positionals)) >= 0)

@@ -16,6 +16,7 @@ static const command commands[] = {
     {"info", meso_cmd_info, "describe a PNG, scene, mesh or bake file"},
     {"demo", meso_cmd_demo, "render the built-in examples with every technique"},
     {"bench", meso_cmd_bench, "time techniques per frame, and their thread scaling"},
+    {"bake", meso_cmd_bake, "export the textures the GLSL shaders read (docs/gpu.md)"},
     {"cache", meso_cmd_cache, "list, size or clear the bake cache"},
     {"view", meso_cmd_view, "an interactive window: orbit, switch techniques, compare"},
 };

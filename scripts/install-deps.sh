@@ -16,6 +16,10 @@ packages=(
     clang libclang-rt-14-dev libomp-dev   # make test-clang (UBSan, float-cast-overflow), fuzzing
     libsdl2-dev           # meso view (optional: without it the viewer is not built)
     python3-numpy python3-pil   # the docs' measuring scripts (scripts/error_bands.py)
+    libegl-dev libepoxy-dev     # the OpenGL back end: EGL headless, GL entry points
+    libegl-mesa0 libgl1-mesa-dri   # Mesa's EGL and llvmpipe: GL 3.3 core without a GPU
+    glslang-tools         # glslangValidator checks shaders/ in make test
+    libopenexr-dev        # meso bake -o: VDM tables as OpenEXR
 )
 
 missing=()

@@ -154,6 +154,11 @@ meso_result meso_mesh_compute_curvature(meso_context *ctx, meso_mesh *mesh);
  * frame (Oliveira & Policarpo 2005). Needs tangents. */
 meso_result meso_mesh_compute_quadrics(meso_context *ctx, meso_mesh *mesh);
 
+/* World length of one texture tile: sqrt(world area / uv area) over the mesh (uv_scale
+ * applied); 0 without UVs or area. VDM §3.2 asks for a locally uniform texture scale; this is
+ * its average. Pure. */
+float meso_mesh_tile_length(const meso_mesh *mesh);
+
 /* Axis-aligned bounds of the positions. */
 void meso_mesh_bounds(const meso_mesh *mesh, meso_vec3 *out_min, meso_vec3 *out_max);
 

@@ -87,6 +87,14 @@ bool meso_image_path_is_exr(const char *path);
  * file descriptor; `path` only names the file in messages. MESO_OK, MESO_ERROR_IO (logged). */
 meso_result meso_image_write_exr(meso_context *ctx, const meso_image *image, FILE *file,
                                  const char *path);
+/* Write an OpenEXR image (scanlines, ZIP) of num_channels (1..MESO_EXR_MAX_CHANNELS) channels
+ * named names[c], pixels interleaved [y][x][c] (row 0 at the top), stored as half floats when
+ * `half` else as floats; atomically. For tables with their own channel names (meso bake -o,
+ * docs/gpu.md); meso_image_save is the form for images. MESO_ERROR_IO naming the path. */
+#define MESO_EXR_MAX_CHANNELS 1024
+meso_result meso_exr_write(meso_context *ctx, const char *path, int width, int height,
+                           int num_channels, const char *const *names, const float *pixels,
+                           bool half);
 /* The same PNG written to an open stream (e.g. a meso_atomic_file's, so that several outputs
  * can be committed together); `path` only names the file in messages. Not flushed or closed. */
 meso_result meso_image_write_png(meso_context *ctx, const meso_image *image, FILE *file,

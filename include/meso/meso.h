@@ -10,6 +10,7 @@
  *   scene.h          scene files
  *   render.h         framebuffers, techniques, renderers (rasterizer and reference)
  *   compare.h        metrics, difference images, sheets
+ *   gl.h             the OpenGL back end (GLSL shaders, headless EGL)
  * Conventions: docs/design.md and DESIGN.md. Errors: see core.h.
  */
 #ifndef MESO_MESO_H
@@ -24,6 +25,7 @@
 #include "meso/scene.h"
 #include "meso/render.h"
 #include "meso/compare.h"
+#include "meso/gl.h"
 
 #define MESO_VERSION_STRING "0.1.0"
 

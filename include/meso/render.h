@@ -153,6 +153,15 @@ typedef struct meso_render_desc {
  * meso_framebuffer_create; meso_renderer_render checks it too. Pure. */
 uint64_t meso_render_memory_estimate(const meso_render_desc *desc, int width, int height);
 
+/* The values technique `technique` reads for scene->objects[object] when drawn with `desc`
+ * (may be NULL): its option table's defaults, then the object's settings, then desc->options,
+ * each checked as meso_renderer_create checks them. out_values[k] receives row k of the
+ * technique's table (info->num_options entries; bools as 0 or 1). For other back ends that
+ * draw the same techniques (the OpenGL one) with the same options. Thread-safe. */
+meso_result meso_technique_options_values(meso_context *ctx, const meso_scene *scene, int object,
+                                          const meso_render_desc *desc, const char *technique,
+                                          double *out_values);
+
 typedef struct meso_render_stats {
     double prepare_seconds;     /* meso_renderer_create */
     double last_frame_seconds;  /* the last meso_renderer_render */
@@ -160,6 +169,17 @@ typedef struct meso_render_stats {
     uint64_t fragments;         /* shaded in the last frame */
     size_t memory_bytes;        /* baked data, acceleration structures */
 } meso_render_stats;
+
+/* The camera of a frame of width x height pixels, as the rasterizer and the reference use it:
+ * eye, unit axis (view depth of P = dot(P - eye, forward)), OpenGL-style projection * view
+ * (column-major; the rasterizer's clip space) and its near and far planes. Pure. */
+typedef struct meso_render_camera {
+    meso_vec3 eye, forward;
+    meso_mat4 view_projection;
+    float z_near, z_far;
+    float pixel_size; /* world width of a pixel at view depth 1 */
+} meso_render_camera;
+meso_render_camera meso_render_camera_get(const meso_scene *scene, int width, int height);
 
 typedef struct meso_renderer meso_renderer;
 

@@ -46,11 +46,12 @@ static int64_t write_at(exr_const_context_t exr, void *user, const void *buffer,
 static const char *const channel_names[5][4] = {
     {NULL}, {"Y"}, {"Y", "A"}, {"R", "G", "B"}, {"R", "G", "B", "A"}};
 
-meso_result meso_image_write_exr(meso_context *ctx, const meso_image *image, FILE *file,
-                                 const char *path) {
-    if (!image || image->channels < 1 || image->channels > 4)
-        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: no image to write", path);
-    int channels = image->channels;
+/* The one OpenEXR encoder: num_channels interleaved float channels ([y][x][c], row 0 at the
+ * top) named names[c], stored as halves or floats, written to `file` from its start. */
+static meso_result write_exr_channels(meso_context *ctx, FILE *file, const char *path, int width,
+                                      int height, int num_channels, const char *const *names,
+                                      const float *pixels, bool half) {
+    size_t element = half ? sizeof(uint16_t) : sizeof(float);
     exr_stream stream = {.fd = fileno(file)};
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.user_data = &stream;
@@ -60,29 +61,32 @@ meso_result meso_image_write_exr(meso_context *ctx, const meso_image *image, FIL
     exr_encode_pipeline_t encoder = EXR_ENCODE_PIPELINE_INITIALIZER;
     bool encoder_started = false;
     int32_t lines_per_chunk = 0;
-    /* one chunk of half rows, interleaved as the image's floats are */
-    uint16_t *halves = NULL;
+    /* one chunk of rows in the file's type, interleaved as the pixels are */
+    unsigned char *chunk_values = NULL;
     int part = 0;
     exr_result_t e = exr_start_write(&exr, path, EXR_WRITE_FILE_DIRECTLY, &init);
     if (e == EXR_ERR_SUCCESS) e = exr_add_part(exr, "", EXR_STORAGE_SCANLINE, &part);
     if (e == EXR_ERR_SUCCESS)
-        e = exr_initialize_required_attr_simple(exr, part, image->width, image->height,
-                                                EXR_COMPRESSION_ZIP);
-    for (int c = 0; c < channels && e == EXR_ERR_SUCCESS; c++)
-        e = exr_add_channel(exr, part, channel_names[channels][c], EXR_PIXEL_HALF,
+        e = exr_initialize_required_attr_simple(exr, part, width, height, EXR_COMPRESSION_ZIP);
+    for (int c = 0; c < num_channels && e == EXR_ERR_SUCCESS; c++)
+        e = exr_add_channel(exr, part, names[c], half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT,
                             EXR_PERCEPTUALLY_LINEAR, 1, 1);
     if (e == EXR_ERR_SUCCESS) e = exr_write_header(exr);
     if (e == EXR_ERR_SUCCESS) e = exr_get_scanlines_per_chunk(exr, part, &lines_per_chunk);
-    size_t row_values = (size_t)image->width * (size_t)channels;
+    size_t row_values = (size_t)width * (size_t)num_channels;
     if (e == EXR_ERR_SUCCESS) {
-        halves = malloc(row_values * (size_t)lines_per_chunk * sizeof(uint16_t));
-        if (!halves) e = EXR_ERR_OUT_OF_MEMORY;
+        chunk_values = malloc(row_values * (size_t)lines_per_chunk * element);
+        if (!chunk_values) e = EXR_ERR_OUT_OF_MEMORY;
     }
-    for (int y = 0; y < image->height && e == EXR_ERR_SUCCESS; y += lines_per_chunk) {
-        int lines = image->height - y < lines_per_chunk ? image->height - y : lines_per_chunk;
-        const float *src = meso_image_at(image, 0, y);
-        for (size_t i = 0; i < row_values * (size_t)lines; i++)
-            halves[i] = meso_half_from_float(src[i]);
+    for (int y = 0; y < height && e == EXR_ERR_SUCCESS; y += lines_per_chunk) {
+        int lines = height - y < lines_per_chunk ? height - y : lines_per_chunk;
+        const float *src = pixels + (size_t)y * row_values;
+        size_t n = row_values * (size_t)lines;
+        if (half)
+            for (size_t i = 0; i < n; i++)
+                ((uint16_t *)chunk_values)[i] = meso_half_from_float(src[i]);
+        else
+            memcpy(chunk_values, src, n * sizeof(float));
         exr_chunk_info_t chunk;
         e = exr_write_scanline_chunk_info(exr, part, y, &chunk);
         if (e != EXR_ERR_SUCCESS) break;
@@ -93,13 +97,12 @@ meso_result meso_image_write_exr(meso_context *ctx, const meso_image *image, FIL
             exr_coding_channel_info_t *channel = &encoder.channels[c];
             /* the library orders channels by name: find each one's place in our pixels */
             int index = 0;
-            while (index < channels && strcmp(channel_names[channels][index], channel->channel_name))
-                index++;
-            channel->user_data_type = EXR_PIXEL_HALF;
-            channel->user_bytes_per_element = 2;
-            channel->user_pixel_stride = (int32_t)(channels * sizeof(uint16_t));
-            channel->user_line_stride = (int32_t)(row_values * sizeof(uint16_t));
-            channel->encode_from_ptr = (const uint8_t *)(halves + index);
+            while (index < num_channels && strcmp(names[index], channel->channel_name)) index++;
+            channel->user_data_type = half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT;
+            channel->user_bytes_per_element = (int16_t)element;
+            channel->user_pixel_stride = (int32_t)((size_t)num_channels * element);
+            channel->user_line_stride = (int32_t)(row_values * element);
+            channel->encode_from_ptr = chunk_values + (size_t)index * element;
         }
         if (!encoder_started) {
             e = exr_encoding_choose_default_routines(exr, part, &encoder);
@@ -110,7 +113,7 @@ meso_result meso_image_write_exr(meso_context *ctx, const meso_image *image, FIL
     if (encoder_started) exr_encoding_destroy(exr, &encoder);
     exr_result_t finished = exr ? exr_finish(&exr) : EXR_ERR_SUCCESS; /* writes the offsets */
     if (e == EXR_ERR_SUCCESS) e = finished;
-    free(halves);
+    free(chunk_values);
     if (e == EXR_ERR_OUT_OF_MEMORY)
         return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", path);
     if (e != EXR_ERR_SUCCESS)
@@ -118,6 +121,31 @@ meso_result meso_image_write_exr(meso_context *ctx, const meso_image *image, FIL
                               stream.message[0] ? stream.message
                                                 : exr_get_default_error_message(e));
     return MESO_OK;
+}
+
+meso_result meso_image_write_exr(meso_context *ctx, const meso_image *image, FILE *file,
+                                 const char *path) {
+    if (!image || image->channels < 1 || image->channels > 4)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: no image to write", path);
+    return write_exr_channels(ctx, file, path, image->width, image->height, image->channels,
+                              channel_names[image->channels], meso_image_at(image, 0, 0), true);
+}
+
+meso_result meso_exr_write(meso_context *ctx, const char *path, int width, int height,
+                           int num_channels, const char *const *names, const float *pixels,
+                           bool half) {
+    if (width <= 0 || height <= 0 || num_channels <= 0 || num_channels > MESO_EXR_MAX_CHANNELS)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: %d x %d x %d channels", path,
+                              width, height, num_channels);
+    meso_atomic_file out;
+    meso_result r = meso_atomic_file_open(ctx, path, &out);
+    if (r != MESO_OK) return r;
+    r = write_exr_channels(ctx, out.file, path, width, height, num_channels, names, pixels, half);
+    if (r != MESO_OK) {
+        meso_atomic_file_abort(&out);
+        return r;
+    }
+    return meso_atomic_file_commit(ctx, &out);
 }
 
 bool meso_image_path_is_exr(const char *path) {

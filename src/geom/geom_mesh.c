@@ -384,3 +384,19 @@ meso_vec3 geom_any_perpendicular(meso_vec3 n) {
     float b = n.x * n.y * a;
     return meso_vec3_normalize(meso_vec3_make(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x));
 }
+
+float meso_mesh_tile_length(const meso_mesh *mesh) {
+    if (!mesh || !mesh->uvs) return 0.0f;
+    double world = 0.0, uv = 0.0;
+    for (size_t t = 0; t < mesh->num_triangles; t++) {
+        uint32_t a = mesh->indices[3 * t], b = mesh->indices[3 * t + 1],
+                 c = mesh->indices[3 * t + 2];
+        meso_vec3 e1 = meso_vec3_sub(mesh->positions[b], mesh->positions[a]);
+        meso_vec3 e2 = meso_vec3_sub(mesh->positions[c], mesh->positions[a]);
+        world += 0.5 * meso_vec3_length(meso_vec3_cross(e1, e2));
+        meso_vec2 f1 = {mesh->uvs[b].x - mesh->uvs[a].x, mesh->uvs[b].y - mesh->uvs[a].y};
+        meso_vec2 f2 = {mesh->uvs[c].x - mesh->uvs[a].x, mesh->uvs[c].y - mesh->uvs[a].y};
+        uv += 0.5 * fabs((double)f1.x * f2.y - (double)f1.y * f2.x);
+    }
+    return uv > 0.0 && world > 0.0 ? (float)sqrt(world / uv) : 0.0f;
+}

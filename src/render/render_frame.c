@@ -48,3 +48,14 @@ void meso_frame_init(meso_frame *frame, const meso_scene *scene, int width, int 
     frame->corner = meso_vec3_add(
         f, meso_vec3_add(meso_vec3_scale(s, -aspect * tan_half), meso_vec3_scale(u, tan_half)));
 }
+
+meso_render_camera meso_render_camera_get(const meso_scene *scene, int width, int height) {
+    meso_frame frame;
+    meso_frame_init(&frame, scene, width, height);
+    return (meso_render_camera){.eye = frame.eye,
+                                .forward = frame.forward,
+                                .view_projection = frame.view_projection,
+                                .z_near = frame.z_near,
+                                .z_far = frame.z_far,
+                                .pixel_size = meso_vec3_length(frame.pixel_right)};
+}

@@ -122,6 +122,12 @@ meso_result meso_technique_options_read(meso_context *ctx, const meso_scene *sce
                                         const meso_object *object,
                                         const meso_technique_info *technique, void *values);
 
+/* Add desc's options to `object` (a copy the caller owns), replacing its own setting of the
+ * same technique and name: what meso_renderer_create draws. MESO_ERROR_LIMIT past
+ * MESO_OPTIONS_MAX settings. */
+meso_result meso_object_merge_options(meso_context *ctx, const meso_scene *scene,
+                                      meso_object *object, const meso_render_desc *desc);
+
 /* ---- Shading (shared by every technique and the reference) -------------------------------- */
 
 /* Unit direction from `position` toward the light. */

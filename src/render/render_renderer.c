@@ -148,22 +148,9 @@ static meso_result make_scene_view(meso_context *ctx, const meso_scene *scene,
     *rd->scene_view = *scene;
     rd->scene_view->objects = rd->view_objects;
     for (int o = 0; o < count; o++) {
-        meso_object *object = &rd->view_objects[o];
-        *object = scene->objects[o];
-        for (int i = 0; i < desc->num_options; i++) {
-            const meso_option *setting = &desc->options[i];
-            int slot = 0;
-            while (slot < object->num_options &&
-                   !(strcmp(object->options[slot].technique, setting->technique) == 0 &&
-                     strcmp(object->options[slot].name, setting->name) == 0))
-                slot++;
-            if (slot == MESO_OPTIONS_MAX)
-                return meso_log_error(ctx, MESO_ERROR_LIMIT,
-                                      "%s: %s: more than %d technique options with the render's",
-                                      scene->path, object->name, MESO_OPTIONS_MAX);
-            object->options[slot] = *setting;
-            if (slot == object->num_options) object->num_options++;
-        }
+        rd->view_objects[o] = scene->objects[o];
+        meso_result r = meso_object_merge_options(ctx, scene, &rd->view_objects[o], desc);
+        if (r != MESO_OK) return r;
     }
     return MESO_OK;
 }

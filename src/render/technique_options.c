@@ -4,6 +4,7 @@
  * reads options. */
 #include <math.h>
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -136,6 +137,66 @@ meso_result meso_technique_options_read(meso_context *ctx, const meso_scene *sce
                                         const meso_technique_info *technique, void *values) {
     meso_technique_options_defaults(technique, values);
     return meso_technique_options_apply(ctx, scene, object, technique, values);
+}
+
+meso_result meso_object_merge_options(meso_context *ctx, const meso_scene *scene,
+                                      meso_object *object, const meso_render_desc *desc) {
+    for (int i = 0; desc && i < desc->num_options; i++) {
+        const meso_option *setting = &desc->options[i];
+        int slot = 0;
+        while (slot < object->num_options &&
+               !(strcmp(object->options[slot].technique, setting->technique) == 0 &&
+                 strcmp(object->options[slot].name, setting->name) == 0))
+            slot++;
+        if (slot == MESO_OPTIONS_MAX)
+            return meso_log_error(ctx, MESO_ERROR_LIMIT,
+                                  "%s: %s: more than %d technique options with the render's",
+                                  scene->path, object->name, MESO_OPTIONS_MAX);
+        object->options[slot] = *setting;
+        if (slot == object->num_options) object->num_options++;
+    }
+    return MESO_OK;
+}
+
+/* Room for any technique's option struct, read back row by row as doubles. */
+#define OPTION_VALUES_BYTES 1024
+
+meso_result meso_technique_options_values(meso_context *ctx, const meso_scene *scene, int object,
+                                          const meso_render_desc *desc, const char *technique,
+                                          double *out_values) {
+    const meso_technique_info *info = meso_technique_find(technique);
+    if (!scene || object < 0 || object >= scene->num_objects || !info)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "options: no object %d or no technique '%s'", object,
+                              technique ? technique : "(null)");
+    _Alignas(max_align_t) unsigned char values[OPTION_VALUES_BYTES];
+    for (size_t k = 0; k < info->num_options; k++)
+        if (info->options[k].offset + sizeof(double) > sizeof values)
+            return meso_log_error(ctx, MESO_ERROR_INTERNAL, "%s: option table too large",
+                                  technique);
+    /* The object the renderer would draw: a copy carrying the desc's settings, read by the one
+     * reader the techniques use, so every back end gets the same values and messages. */
+    meso_object copy = scene->objects[object];
+    meso_result r = meso_object_merge_options(ctx, scene, &copy, desc);
+    if (r == MESO_OK) r = meso_technique_options_read(ctx, scene, &copy, info, values);
+    if (r != MESO_OK) return r;
+    for (size_t k = 0; k < info->num_options; k++) {
+        const meso_technique_option *option = &info->options[k];
+        const unsigned char *at = values + option->offset;
+        switch (option->type) {
+        case MESO_OPTION_BOOL:
+            out_values[k] = *(const bool *)at ? 1.0 : 0.0;
+            break;
+        case MESO_OPTION_INT:
+            out_values[k] = *(const int *)at;
+            break;
+        case MESO_OPTION_FLOAT:
+        default:
+            out_values[k] = *(const float *)at;
+            break;
+        }
+    }
+    return MESO_OK;
 }
 
 meso_result meso_technique_check_scene(meso_context *ctx, const meso_scene *scene) {

@@ -16,7 +16,7 @@
 
 #define HALF_PI_F 1.57079632679f
 #define TWO_PI_F 6.28318530718f
-#define MAX_LEVELS 12
+#define MAX_LEVELS MESO_VDM_MAX_LEVELS
 
 typedef struct vdm_state {
     meso_vdm *vdm;
@@ -32,14 +32,15 @@ typedef struct vdm_state {
     float tile_world;  /* world length of one tile: curvature and offsets */
     float shadow_bias; /* shell depths */
     bool clamp;
-    /* The compressed data re-laid for 8-wide loads (§3.3 reconstruction as dot products):
-     * weights [row][lanes], eigen_t [column][lanes] (E_VDM transposed, zero past k),
+    /* The compressed data re-laid for 8-wide loads (§3.3 reconstruction as dot products,
+     * meso_vdm_lanes): eigen_t [column][lanes] (E_VDM transposed, zero past k),
      * mvm_t [c][lanes] (E_MVM transposed, zero past m); lanes = max(k, m) rounded up to 8. */
     int lanes;
-    float *weights, *eigen_t, *mvm_t;
+    float *eigen_t, *mvm_t;
     /* §4: "VDM as a texture map is easily anti-aliased by mip-mapping": d = sum W E is linear
      * in W, so box-filtering W over (x, y) filters the reconstructed table exactly. Level 0 is
-     * `weights`; used when minified (and far less memory traffic: speed on busy textures). */
+     * W itself; the others are used when minified (and far less memory traffic: speed on busy
+     * textures). */
     bool mipmap;
     int num_levels;
     int level_width[MAX_LEVELS], level_height[MAX_LEVELS];
@@ -67,7 +68,6 @@ static inline v8f load8h(const uint16_t *p) {
     return out;
 #endif
 }
-static inline uint16_t to_half(float x) { return meso_half_from_float(x); }
 static inline float sum8(v8f v) {
     return ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]));
 }
@@ -125,95 +125,27 @@ static void vdm_release(void *state) {
     if (!s) return;
     meso_vdm_destroy(s->vdm);
     for (int l = 0; l < s->num_levels; l++) free(s->level_weights[l]);
-    free(s->weights);
     free(s->eigen_t);
     free(s->mvm_t);
     free(s);
 }
 
-/* World length of one tile: sqrt(world area / uv area) over the mesh (uv_scale applied). VDM
- * §3.2 asks for a locally uniform texture scale; this is its average. */
-static float tile_world_length(const meso_mesh *mesh) {
-    double world = 0.0, uv = 0.0;
-    for (size_t t = 0; t < mesh->num_triangles; t++) {
-        uint32_t a = mesh->indices[3 * t], b = mesh->indices[3 * t + 1],
-                 c = mesh->indices[3 * t + 2];
-        meso_vec3 e1 = meso_vec3_sub(mesh->positions[b], mesh->positions[a]);
-        meso_vec3 e2 = meso_vec3_sub(mesh->positions[c], mesh->positions[a]);
-        world += 0.5 * meso_vec3_length(meso_vec3_cross(e1, e2));
-        meso_vec2 f1 = {mesh->uvs[b].x - mesh->uvs[a].x, mesh->uvs[b].y - mesh->uvs[a].y};
-        meso_vec2 f2 = {mesh->uvs[c].x - mesh->uvs[a].x, mesh->uvs[c].y - mesh->uvs[a].y};
-        uv += 0.5 * fabs((double)f1.x * f2.y - (double)f1.y * f2.x);
-    }
-    return uv > 0.0 && world > 0.0 ? (float)sqrt(world / uv) : 0.0f;
-}
-
-/* Pad and transpose the compressed arrays for the 8-wide lookups (see vdm_state). */
+/* The compressed arrays laid out for the 8-wide lookups (meso_vdm_lanes, shared with the GL
+ * back end), moved into the state. */
 static meso_result relayout(meso_context *ctx, const meso_object *object, vdm_state *s) {
-    const meso_vdm_view *v = &s->view;
-    int used = s->num_eigen > s->num_mvm ? s->num_eigen : s->num_mvm;
-    int lanes = (used + 7) / 8 * 8;
-    size_t rows = (size_t)v->width * v->height * v->num_phi;
-    int vdm_columns = v->num_theta * v->num_curvatures;
-    s->lanes = lanes;
-    s->weights = calloc(rows * (size_t)lanes, sizeof(float));
-    s->eigen_t = calloc((size_t)vdm_columns * lanes, sizeof(float));
-    s->mvm_t = calloc((size_t)v->num_curvatures * lanes, sizeof(float));
-    if (!s->weights || !s->eigen_t || !s->mvm_t)
-        return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
-    int copy = used < v->num_weights ? used : v->num_weights;
-    for (size_t r = 0; r < rows; r++)
-        memcpy(s->weights + r * lanes, v->weights + r * v->num_weights, sizeof(float) * copy);
-    /* the mip pyramid of W: 2 x 2 box filter (in float), wrapping odd sizes; stored as halves */
-    s->num_levels = 1;
-    s->level_width[0] = v->width;
-    s->level_height[0] = v->height;
-    float *level = s->weights;
-    size_t level_size = rows * (size_t)lanes;
-    s->level_weights[0] = malloc(level_size * sizeof(uint16_t));
-    if (!s->level_weights[0])
-        return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
-    for (size_t i = 0; i < level_size; i++) s->level_weights[0][i] = to_half(level[i]);
-    while (s->mipmap && s->num_levels < MAX_LEVELS &&
-           (s->level_width[s->num_levels - 1] > 1 || s->level_height[s->num_levels - 1] > 1)) {
-        int l = s->num_levels, pw = s->level_width[l - 1], ph = s->level_height[l - 1];
-        int w = pw > 1 ? pw / 2 : 1, h = ph > 1 ? ph / 2 : 1;
-        size_t size = (size_t)w * h * v->num_phi * lanes;
-        float *dst = calloc(size, sizeof(float));
-        uint16_t *half = malloc(size * sizeof(uint16_t));
-        if (!dst || !half) {
-            free(dst);
-            free(half);
-            if (level != s->weights) free(level);
-            return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
-        }
-        for (int j = 0; j < h; j++)
-            for (int i = 0; i < w; i++)
-                for (int p = 0; p < v->num_phi; p++) {
-                    float *out = dst + (((size_t)j * w + i) * v->num_phi + p) * lanes;
-                    for (int q = 0; q < 4; q++) {
-                        int si = (2 * i + (q & 1)) % pw, sj = (2 * j + (q >> 1)) % ph;
-                        const float *in = level + (((size_t)sj * pw + si) * v->num_phi + p) * lanes;
-                        for (int k = 0; k < lanes; k++) out[k] += 0.25f * in[k];
-                    }
-                }
-        for (size_t i = 0; i < size; i++) half[i] = to_half(dst[i]);
-        if (level != s->weights) free(level);
-        level = dst;
-        s->level_weights[l] = half;
-        s->level_width[l] = w;
-        s->level_height[l] = h;
-        s->num_levels++;
+    meso_vdm_lanes l;
+    meso_result r =
+        meso_vdm_lanes_init(ctx, &s->view, s->num_eigen, s->num_mvm, s->mipmap, object->name, &l);
+    if (r != MESO_OK) return r;
+    s->lanes = l.lanes;
+    s->num_levels = l.num_levels;
+    for (int i = 0; i < l.num_levels; i++) {
+        s->level_width[i] = l.level_width[i];
+        s->level_height[i] = l.level_height[i];
+        s->level_weights[i] = l.level_weights[i];
     }
-    if (level != s->weights) free(level);
-    free(s->weights); /* only the halves are read */
-    s->weights = NULL;
-    for (int i = 0; i < s->num_eigen && i < v->num_vdm; i++)
-        for (int col = 0; col < vdm_columns; col++)
-            s->eigen_t[(size_t)col * lanes + i] = v->eigen_vdm[(size_t)i * vdm_columns + col];
-    for (int i = 0; i < s->num_mvm && i < v->num_mvm; i++)
-        for (int c = 0; c < v->num_curvatures; c++)
-            s->mvm_t[(size_t)c * lanes + i] = v->eigen_mvm[(size_t)i * v->num_curvatures + c];
+    s->eigen_t = l.eigen_t;
+    s->mvm_t = l.mvm_t;
     return MESO_OK;
 }
 
@@ -250,7 +182,7 @@ static meso_result vdm_prepare(meso_context *ctx, const meso_scene *scene,
     /* Interpolated d errs by a good part of a shell depth at jumps; refined, by far less. */
     double bias = options.shadow_bias >= 0.0f ? options.shadow_bias
                                               : (refine_steps > 0 ? 0.05 : 0.2);
-    float tile = tile_world_length(object->mesh);
+    float tile = meso_mesh_tile_length(object->mesh);
     if (!(tile > 0.0f))
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "%s: vdm: the texture coordinates cover no area", object->name);
