@@ -787,3 +787,276 @@ meso_vec3 meso_gdm_normal(const meso_gdm *gdm, meso_vec3 uvw) {
     float length = meso_vec3_length(n);
     return length > 1e-12f ? meso_vec3_scale(n, 1.0f / length) : (meso_vec3){0.0f, 0.0f, -1.0f};
 }
+
+/* ---- Bake files --------------------------------------------------------------------------- */
+
+/* report: rmse[16], num_rmse, rmse_stored, bake_seconds, 0 */
+#define REPORT_FLOATS (MESO_GDM_RMSE_COUNT + 4)
+
+static int write_params(const meso_gdm *gdm, char *buffer, size_t size) {
+    const meso_gdm_desc *d = &gdm->desc;
+    const meso_gdm_compression *c = &gdm->compression;
+    return snprintf(buffer, size,
+                    "{\"width\": %d, \"height\": %d, \"layers\": %d, \"num_theta\": %d, "
+                    "\"num_phi\": %d, \"eigenmaps\": %d, \"float_weights\": %d, "
+                    "\"heightfield\": %d, \"max_ray_length\": %.9g, \"raw_bytes\": %llu, "
+                    "\"compressed_bytes\": %llu, \"bake_seconds\": %.3f, "
+                    "\"units\": \"d and normals in texture space (u, v, w): a tile and the "
+                    "shell's depth are 1\"}",
+                    d->width, d->height, d->layers, d->num_theta, d->num_phi, d->eigenmaps,
+                    d->float_weights ? 1 : 0, gdm->from_heightfield ? 1 : 0,
+                    (double)MESO_GDM_MAX_RAY_LENGTH, (unsigned long long)c->raw_bytes,
+                    (unsigned long long)c->compressed_bytes, c->bake_seconds);
+}
+
+static meso_bake_file to_bake_file(const meso_gdm *gdm, char *params, size_t params_size,
+                                   float *report) {
+    const meso_gdm_desc *d = &gdm->desc;
+    write_params(gdm, params, params_size);
+    const meso_gdm_compression *c = &gdm->compression;
+    for (int i = 0; i < MESO_GDM_RMSE_COUNT; i++) report[i] = c->rmse[i];
+    report[MESO_GDM_RMSE_COUNT] = (float)c->num_rmse;
+    report[MESO_GDM_RMSE_COUNT + 1] = c->rmse_stored;
+    report[MESO_GDM_RMSE_COUNT + 2] = (float)c->bake_seconds;
+    report[MESO_GDM_RMSE_COUNT + 3] = 0.0f;
+    meso_bake_file bake = {.kind = MESO_GDM_KIND,
+                           .kind_version = MESO_GDM_KIND_VERSION,
+                           .source_hash = gdm->source_hash,
+                           .params_json = params,
+                           .num_arrays = 5};
+    uint64_t h = (uint64_t)d->height, w = (uint64_t)d->width, p = (uint64_t)d->num_phi;
+    uint64_t l = (uint64_t)d->layers, t = (uint64_t)d->num_theta;
+    bake.arrays[0] = (meso_bake_array){
+        .name = "weights",
+        .type = gdm->weights_half ? MESO_BAKE_F16 : MESO_BAKE_F32,
+        .num_dims = 4,
+        .dims = {h, w, p, (uint64_t)d->eigenmaps},
+        .data = gdm->weights_half ? (void *)gdm->weights_half : (void *)gdm->weights};
+    bake.arrays[1] = (meso_bake_array){.name = "eigen",
+                                       .type = MESO_BAKE_F32,
+                                       .num_dims = 3,
+                                       .dims = {(uint64_t)d->eigenmaps, l, t},
+                                       .data = gdm->eigen};
+    bake.arrays[2] = (meso_bake_array){.name = "singular_values",
+                                       .type = MESO_BAKE_F32,
+                                       .num_dims = 1,
+                                       .dims = {(uint64_t)gdm->num_sv},
+                                       .data = gdm->singular};
+    bake.arrays[3] = (meso_bake_array){.name = "normals",
+                                       .type = MESO_BAKE_F32,
+                                       .num_dims = 4,
+                                       .dims = {l, h, w, 3},
+                                       .data = gdm->normals};
+    bake.arrays[4] = (meso_bake_array){.name = "report",
+                                       .type = MESO_BAKE_F32,
+                                       .num_dims = 1,
+                                       .dims = {REPORT_FLOATS},
+                                       .data = report};
+    if (gdm->raw) {
+        bake.arrays[5] = (meso_bake_array){.name = "raw",
+                                           .type = MESO_BAKE_F32,
+                                           .num_dims = 5,
+                                           .dims = {h, w, p, l, t},
+                                           .data = gdm->raw};
+        bake.num_arrays = 6;
+    }
+    return bake;
+}
+
+meso_result meso_gdm_save(meso_context *ctx, const meso_gdm *gdm, const char *path) {
+    if (!gdm || !path)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "gdm: NULL map or path");
+    char params[1024];
+    float report[REPORT_FLOATS];
+    meso_bake_file bake = to_bake_file(gdm, params, sizeof(params), report);
+    return meso_bake_file_save(ctx, &bake, path);
+}
+
+static float *copy_floats(const float *source, size_t count) {
+    float *copy = malloc(sizeof(float) * (count ? count : 1));
+    if (copy) memcpy(copy, source, sizeof(float) * count);
+    return copy;
+}
+
+/* The params every loader and `meso info` read. */
+static const char *const param_keys[] = {"width",     "height",        "layers",     "num_theta",
+                                         "num_phi",   "eigenmaps",     "float_weights",
+                                         "heightfield"};
+#define NUM_PARAM_KEYS (int)(sizeof(param_keys) / sizeof(param_keys[0]))
+
+meso_result meso_gdm_from_bake_file(meso_context *ctx, const meso_bake_file *bake, const char *name,
+                                    meso_gdm **out_gdm) {
+    if (out_gdm) *out_gdm = NULL;
+    if (!bake || !out_gdm)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "gdm: NULL argument");
+    name = name ? name : "gdm";
+    if (strcmp(bake->kind, MESO_GDM_KIND) != 0 || bake->kind_version != MESO_GDM_KIND_VERSION)
+        return meso_log_error(ctx, MESO_ERROR_FORMAT,
+                              "%s: kind %s version %u is not gdm version %u", name, bake->kind,
+                              bake->kind_version, MESO_GDM_KIND_VERSION);
+    double v[NUM_PARAM_KEYS];
+    for (int i = 0; i < NUM_PARAM_KEYS; i++)
+        if (!meso_bake_params_number(bake->params_json, param_keys[i], &v[i]) ||
+            fabs(v[i]) > 1e6)
+            return meso_log_error(ctx, MESO_ERROR_FORMAT,
+                                  "%s: params: %s: missing, not a number or out of range", name,
+                                  param_keys[i]);
+    meso_gdm_desc d = {.width = (int)v[0],
+                       .height = (int)v[1],
+                       .layers = (int)v[2],
+                       .num_theta = (int)v[3],
+                       .num_phi = (int)v[4],
+                       .eigenmaps = (int)v[5],
+                       .float_weights = v[6] != 0.0};
+    /* the limits first, so nothing below allocates for a file that claims a huge table */
+    meso_result result = check_desc(ctx, name, &d);
+    if (result != MESO_OK) return result == MESO_ERROR_LIMIT ? result : MESO_ERROR_FORMAT;
+    size_t rows = rows_of(&d), voxels = voxels_of(&d);
+    int columns = columns_of(&d), k = d.eigenmaps;
+    int rank = (size_t)columns < rows ? columns : (int)rows;
+    uint64_t h = (uint64_t)d.height, w = (uint64_t)d.width, p = (uint64_t)d.num_phi;
+    uint64_t l = (uint64_t)d.layers, t = (uint64_t)d.num_theta;
+    uint64_t weights_dims[4] = {h, w, p, (uint64_t)k}, eigen_dims[3] = {(uint64_t)k, l, t};
+    uint64_t singular_dims[1] = {(uint64_t)rank}, normals_dims[4] = {l, h, w, 3};
+    uint64_t report_dims[1] = {REPORT_FLOATS}, raw_dims[5] = {h, w, p, l, t};
+    const void *weights = meso_bake_file_expect(bake, "weights",
+                                                d.float_weights ? MESO_BAKE_F32 : MESO_BAKE_F16,
+                                                4, weights_dims);
+    const float *eigen = meso_bake_file_expect(bake, "eigen", MESO_BAKE_F32, 3, eigen_dims);
+    const float *singular =
+        meso_bake_file_expect(bake, "singular_values", MESO_BAKE_F32, 1, singular_dims);
+    const float *normals = meso_bake_file_expect(bake, "normals", MESO_BAKE_F32, 4, normals_dims);
+    const float *report = meso_bake_file_expect(bake, "report", MESO_BAKE_F32, 1, report_dims);
+    const float *raw = meso_bake_file_expect(bake, "raw", MESO_BAKE_F32, 5, raw_dims);
+    if (!weights || !eigen || !singular || !normals || !report)
+        return meso_log_error(ctx, MESO_ERROR_FORMAT,
+                              "%s: arrays weights (%s), eigen, singular_values, normals, report "
+                              "missing or of the wrong type or shape for the params",
+                              name, d.float_weights ? "f32" : "f16");
+    if (meso_bake_file_find(bake, "raw") && !raw)
+        return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: array \"raw\": wrong type or shape",
+                              name);
+    /* Values, not only shapes: a valid checksum does not make Inf or NaN usable. Eigen-maps
+     * and normals are unit vectors (|x| <= 1); weights within half precision's range; d
+     * within [0, the longest ray]; the report's RMSEs >= 0 (rmse_stored -1: not measured). */
+    static const struct {
+        const char *array;
+        double min, max;
+    } ranges[] = {{"weights", -65504.0, 65504.0},
+                  {"eigen", -1.001, 1.001},
+                  {"singular_values", 0.0, 3.4e38},
+                  {"normals", -1.001, 1.001},
+                  {"report", -1.0, 3.4e38},
+                  {"raw", 0.0, (double)MESO_GDM_MAX_RAY_LENGTH}};
+    for (size_t i = 0; i < sizeof(ranges) / sizeof(ranges[0]); i++) {
+        const meso_bake_array *a = meso_bake_file_find(bake, ranges[i].array);
+        if (a && (result = meso_bake_array_check_values(ctx, name, a, ranges[i].min,
+                                                        ranges[i].max)) != MESO_OK)
+            return result;
+    }
+    meso_gdm *gdm = calloc(1, sizeof(*gdm));
+    if (!gdm) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", name);
+    gdm->desc = d;
+    gdm->desc.keep_raw = raw != NULL;
+    gdm->source_hash = bake->source_hash;
+    gdm->from_heightfield = v[7] != 0.0;
+    gdm->num_sv = rank;
+    size_t num_weights = rows * (size_t)k;
+    if (d.float_weights) {
+        gdm->weights = copy_floats(weights, num_weights);
+    } else {
+        gdm->weights = malloc(sizeof(float) * num_weights);
+        gdm->weights_half = malloc(sizeof(uint16_t) * num_weights);
+        if (gdm->weights && gdm->weights_half) {
+            memcpy(gdm->weights_half, weights, sizeof(uint16_t) * num_weights);
+            meso_bake_halves_to_floats(gdm->weights_half, gdm->weights, num_weights);
+        }
+    }
+    gdm->eigen = copy_floats(eigen, (size_t)k * (size_t)columns);
+    gdm->singular = copy_floats(singular, (size_t)rank);
+    gdm->normals = copy_floats(normals, 3u * voxels);
+    gdm->raw = raw ? copy_floats(raw, rows * (size_t)columns) : NULL;
+    if (!gdm->weights || (!d.float_weights && !gdm->weights_half) || !gdm->eigen ||
+        !gdm->singular || !gdm->normals || (raw && !gdm->raw)) {
+        meso_gdm_destroy(gdm);
+        return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", name);
+    }
+    fill_compression(gdm);
+    gdm->compression.rmse_stored = report[MESO_GDM_RMSE_COUNT + 1];
+    gdm->compression.bake_seconds = 0.0;
+    *out_gdm = gdm;
+    return MESO_OK;
+}
+
+meso_result meso_gdm_load(meso_context *ctx, const char *path, meso_gdm **out_gdm) {
+    if (out_gdm) *out_gdm = NULL;
+    meso_bake_file *bake = NULL;
+    meso_result result = meso_bake_file_load(ctx, path, &bake);
+    if (result != MESO_OK) return result;
+    result = meso_gdm_from_bake_file(ctx, bake, path, out_gdm);
+    meso_bake_file_destroy(bake);
+    return result;
+}
+
+meso_result meso_gdm_bake_cached(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm **out_gdm) {
+    if (out_gdm) *out_gdm = NULL;
+    if (!desc || !out_gdm)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "gdm: NULL desc or out_gdm");
+    meso_gdm_desc d = meso_query_gdm_defaults(desc);
+    meso_result result = check_source(ctx, &d);
+    if (result != MESO_OK) return result;
+    uint64_t key = meso_gdm_cache_key(&d);
+    meso_bake_file *cached = NULL;
+    result = meso_bake_cache_load(ctx, MESO_GDM_KIND, MESO_GDM_KIND_VERSION, key,
+                                  source_hash_of(&d), &cached);
+    if (result != MESO_OK) return result;
+    if (cached) {
+        result = meso_gdm_from_bake_file(ctx, cached, "gdm cache entry", out_gdm);
+        meso_bake_file_destroy(cached);
+        if (result == MESO_OK) return MESO_OK;
+        meso_log_warning(ctx, "gdm: cache entry unusable, baking again: %s",
+                         meso_context_last_error(ctx));
+    }
+    if ((result = meso_bake_gdm(ctx, &d, out_gdm)) != MESO_OK) return result;
+    char params[1024];
+    float report[REPORT_FLOATS];
+    meso_bake_file bake = to_bake_file(*out_gdm, params, sizeof(params), report);
+    if (meso_bake_cache_save(ctx, &bake, key) != MESO_OK)
+        meso_log_warning(ctx, "gdm: could not store the bake in the cache: %s",
+                         meso_context_last_error(ctx));
+    return MESO_OK;
+}
+
+size_t meso_gdm_describe(const meso_bake_file *bake, char *buffer, size_t size) {
+    if (!bake || strcmp(bake->kind, MESO_GDM_KIND) != 0 || !bake->params_json) return 0;
+    uint64_t report_dims[1] = {REPORT_FLOATS};
+    const float *r = meso_bake_file_expect(bake, "report", MESO_BAKE_F32, 1, report_dims);
+    if (!r) return 0;
+    double v[NUM_PARAM_KEYS], raw_bytes = 0.0, compressed_bytes = 0.0, seconds = 0.0;
+    for (int i = 0; i < NUM_PARAM_KEYS; i++)
+        if (!meso_bake_params_number(bake->params_json, param_keys[i], &v[i])) return 0;
+    if (!meso_bake_params_number(bake->params_json, "raw_bytes", &raw_bytes) ||
+        !meso_bake_params_number(bake->params_json, "compressed_bytes", &compressed_bytes) ||
+        !meso_bake_params_number(bake->params_json, "bake_seconds", &seconds))
+        return 0;
+    char text[4096];
+    int n = snprintf(text, sizeof(text),
+                     "gdm: %.0f x %.0f x %.0f voxels, %.0f x %.0f directions, from a %s\n"
+                     "raw %.2f MiB, compressed (k=%.0f, weights %s) %.3f MiB, ratio %.1f:1, "
+                     "baked in %.1f s\n"
+                     "reconstruction RMSE of d (texture units; the shell's depth is 1):\n",
+                     v[0], v[1], v[2], v[3], v[4], v[7] != 0.0 ? "height field" : "solid",
+                     raw_bytes / 1048576.0, v[5], v[6] != 0.0 ? "float32" : "IEEE halves",
+                     compressed_bytes / 1048576.0,
+                     compressed_bytes > 0.0 ? raw_bytes / compressed_bytes : 0.0, seconds);
+    for (int k = 1; k <= MESO_GDM_RMSE_COUNT && n > 0 && (size_t)n < sizeof(text); k++)
+        n += snprintf(text + n, sizeof(text) - (size_t)n, "  k=%2d  %.5f%s\n", k, r[k - 1],
+                      k == (int)v[5] ? "  (kept)" : "");
+    if (n > 0 && (size_t)n < sizeof(text) && r[MESO_GDM_RMSE_COUNT + 1] >= 0.0f)
+        n += snprintf(text + n, sizeof(text) - (size_t)n,
+                      "as stored (k=%.0f, weights %s), measured over every entry: %.5f\n", v[5],
+                      v[6] != 0.0 ? "float32" : "IEEE halves", r[MESO_GDM_RMSE_COUNT + 1]);
+    if (n < 0) return 0;
+    if (buffer && size) snprintf(buffer, size, "%s", text);
+    return (size_t)n;
+}
