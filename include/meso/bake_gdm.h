@@ -34,7 +34,21 @@ extern "C" {
 #endif
 
 #define MESO_GDM_KIND "gdm"
+#define MESO_GDM_KIND_VERSION 1u
 #define MESO_GDM_RMSE_COUNT 16
+/* Limits, checked before allocating (MESO_ERROR_LIMIT naming the field). */
+#define MESO_GDM_MAX_SIDE 512
+#define MESO_GDM_MAX_LAYERS 256
+#define MESO_GDM_MAX_THETA 64
+#define MESO_GDM_MAX_PHI 128
+#define MESO_GDM_MAX_EIGEN 64
+/* The table A (rows x columns) is streamed through the SVD, never held whole unless it fits
+ * the memory budget; its size bounds the bake's time. keep_raw keeps it: at most 1 GiB. */
+#define MESO_GDM_MAX_TABLE_ENTRIES (UINT64_C(1) << 31)
+#define MESO_GDM_MAX_RAW_FLOATS (UINT64_C(1) << 28)
+/* A ray that neither meets the solid nor leaves the slab (theta = pi/2 exactly, or nearly so)
+ * stops after this distance (texture units): d is at most this. */
+#define MESO_GDM_MAX_RAY_LENGTH 16.0f
 
 /* Zero fields take the defaults of meso_query_gdm_defaults(). Exactly one of heightfield and
  * solid is set. */
@@ -45,6 +59,7 @@ typedef struct meso_gdm_desc {
     int num_theta, num_phi;              /* directions (16 x 32) */
     int eigenmaps;                       /* k, the eigen-maps kept */
     bool keep_raw;                       /* keep the uncompressed table (comparison renders) */
+    bool float_weights; /* W as float32; default: rounded to IEEE halves and stored so */
 } meso_gdm_desc;
 
 meso_gdm_desc meso_query_gdm_defaults(const meso_gdm_desc *desc);
@@ -65,7 +80,9 @@ typedef struct meso_gdm_compression {
     uint64_t raw_bytes, compressed_bytes;
     int num_rmse;
     float rmse[MESO_GDM_RMSE_COUNT]; /* of d over every entry, k = 1..16, in texture units */
-    double bake_seconds;             /* 0 when loaded */
+    float rmse_stored; /* of the map as stored (k kept, weights as halves unless float_weights),
+                          measured over every entry; -1 when the bake streamed the table */
+    double bake_seconds; /* 0 when loaded */
 } meso_gdm_compression;
 
 meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm **out_gdm);
