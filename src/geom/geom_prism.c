@@ -234,13 +234,16 @@ meso_vec3 meso_prism_layer_face_uvw(const meso_prism_layer *layer, size_t face, 
 /* The ray parameter from which the ray stays outside the plane's half-space for good: 0 when
  * it starts outside (beyond `tolerance`) and does not come back, INFINITY when it never
  * leaves. A line meets a half-space's outside in one interval [t, inf) or not at all, so the
- * exit of an intersection of half-spaces is the least such t, of a union the largest. */
+ * exit of an intersection of half-spaces is the least such t, of a union the largest.
+ * `partner`: the plane is the other triangle of the fin the ray entered through; the origin is
+ * on that fin, so "outside" there is the fin's own rounding (a flat fin's two planes differ in
+ * their last bits), not a concave fold the ray starts beyond. */
 static inline float leave_time(const meso_prism_plane *pl, meso_vec3 o, meso_vec3 d,
-                               float tolerance) {
+                               float tolerance, bool partner) {
     float dn = meso_vec3_dot(pl->normal, d);
     float s0 = meso_vec3_dot(pl->normal, o) - pl->offset;
     if (dn > 0.0f) return s0 >= 0.0f ? 0.0f : -s0 / dn;
-    return s0 > tolerance ? 0.0f : INFINITY; /* a zero normal (degenerate face) never bounds */
+    return s0 > tolerance && !partner ? 0.0f : INFINITY; /* a zero normal never bounds */
 }
 
 bool meso_prism_layer_exit(const meso_prism_layer *layer, size_t prism, meso_vec3 origin,
@@ -248,20 +251,23 @@ bool meso_prism_layer_exit(const meso_prism_layer *layer, size_t prism, meso_vec
     const meso_prism_plane *pl = layer->planes + prism * MESO_PRISM_NUM_FACES;
     /* the origin lies on the entry face: a point of another face's plane through the same edge
      * may round to either side of it; beyond this it is really outside (a concave fin) */
-    float tolerance = 1e-6f * (fabsf(origin.x) + fabsf(origin.y) + fabsf(origin.z) + layer->depth);
+    float tolerance = 1e-5f * (fabsf(origin.x) + fabsf(origin.y) + fabsf(origin.z) + layer->depth);
     float best = INFINITY;
     int best_slot = -1;
     for (int slot = 0; slot < MESO_PRISM_NUM_FACES; slot += slot < MESO_PRISM_FIN ? 1 : 2) {
         float t;
         int which = slot;
         if (slot < MESO_PRISM_FIN) {
-            t = slot == entry_slot ? INFINITY : leave_time(&pl[slot], origin, direction, tolerance);
+            t = slot == entry_slot ? INFINITY
+                                   : leave_time(&pl[slot], origin, direction, tolerance, false);
         } else {
             float t1 = slot == entry_slot ? INFINITY
-                                          : leave_time(&pl[slot], origin, direction, tolerance);
+                                          : leave_time(&pl[slot], origin, direction, tolerance,
+                                                       slot + 1 == entry_slot);
             float t2 = slot + 1 == entry_slot
                            ? INFINITY
-                           : leave_time(&pl[slot + 1], origin, direction, tolerance);
+                           : leave_time(&pl[slot + 1], origin, direction, tolerance,
+                                        slot == entry_slot);
             bool convex = layer->fin_convex[3 * prism + (size_t)(slot - MESO_PRISM_FIN) / 2];
             /* Fig. 5: a convex fin bounds the intersection of its two half-spaces (the nearer
              * plane), a concave one their union (the farther) */
