@@ -24,7 +24,9 @@ typedef struct gdm_state {
     int num_eigen;
     bool raw, shadows, baked_normals;
     int refine_steps, shadow_steps;
-    float shadow_bias; /* texture units along the light */
+    float shadow_bias; /* voxels off the surface */
+    meso_vec3 voxel;   /* a voxel's sides in texture units */
+    float refine_window; /* texture units: 3 layers */
     float hit_margin;  /* d < dt - hit_margin is a hit */
 } gdm_state;
 
@@ -50,9 +52,9 @@ static const meso_technique_option gdm_option_table[] = {
                     "bake: azimuthal directions", gdm_options, num_phi),
     MESO_OPTION_ROW(MESO_OPTION_BOOL, shadows, 0, 1, 1,
                     "self-shadows by a lookup along the light (§3.2)", gdm_options, shadows),
-    MESO_OPTION_ROW(MESO_OPTION_FLOAT, shadow_bias, 0.0, 1.0, 0.05,
-                    "shadow lookup starts this far along the light (texture units) and needs "
-                    "d_L this much short of the slab's boundary",
+    MESO_OPTION_ROW(MESO_OPTION_FLOAT, shadow_bias, 0.0, 16.0, 1.5,
+                    "the shadow lookup starts this many voxels off the surface (along its "
+                    "normal) and needs d_L this much short of the slab's boundary",
                     gdm_options, shadow_bias),
     MESO_OPTION_ROW(MESO_OPTION_INT, shadow_steps, 1, 256, 24,
                     "with refine_steps: probes of the mesostructure along the light ray",
@@ -64,9 +66,9 @@ static const meso_technique_option gdm_option_table[] = {
                     "1: shade with the bake's per-voxel normals; 0: the mesostructure's own "
                     "gradient (height field or solid), as the reference",
                     gdm_options, baked_normals),
-    MESO_OPTION_ROW(MESO_OPTION_INT, refine_steps, 0, 32, 0,
-                    "beyond the paper: check the hit on the mesostructure and bisect this many "
-                    "times; 0: the paper's d < |T_out - T_in|",
+    MESO_OPTION_ROW(MESO_OPTION_INT, refine_steps, 0, 32, 6,
+                    "beyond the paper: check the hit (and a shadow) on the mesostructure and "
+                    "bisect this many times; 0: the paper's d < |T_out - T_in| and d_L",
                     gdm_options, refine_steps),
 };
 
@@ -123,6 +125,9 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
     s->shadow_steps = options.shadow_steps;
     s->shadow_bias = options.shadow_bias;
     s->hit_margin = options.hit_margin;
+    s->refine_window = 3.0f / (float)(options.layers - 1);
+    s->voxel = (meso_vec3){1.0f / (float)options.resolution, 1.0f / (float)options.resolution,
+                           1.0f / (float)(options.layers - 1)};
     if ((r = meso_prism_layer_create(ctx, object->mesh, ms->depth, object->name, &s->layer)) !=
         MESO_OK)
         goto fail;
@@ -227,36 +232,43 @@ static inline bool inside_mesostructure(const gdm_state *s, meso_vec3 uvw) {
 }
 
 /* Beyond the paper (docs/techniques/gdm.md): d interpolated across an occluding edge lands
- * between the two surfaces (VDM's lesson, docs/design.md). The segment's points at d and
- * around it are checked against the mesostructure: the first inside point among a few probes
- * up to max(d, dt) brackets the first crossing, which `steps` bisections close in on.
- * Returns the hit's distance along V_t, or a negative number for none. */
-static float refine_hit(const gdm_state *s, meso_vec3 t_in, meso_vec3 vt, float d, float dt) {
-    if (inside_mesostructure(s, t_in)) return 0.0f;
-    const int probes = 8;
+ * between the two surfaces (VDM's lesson, docs/design.md), and the compressed table errs by
+ * a tenth of the shell on a weave. The table's answer is checked on the mesostructure: when
+ * the ray is outside a window before it and inside just past it, the crossing lies there (the
+ * table says nothing is nearer) and `steps` bisections close in on it -- two samples and the
+ * bisection where the table is right. Otherwise (the table was wrong here) a few probes
+ * from the entry find the first inside point. The segment's end on a solid floor counts as
+ * inside whatever its rounding. Returns the hit's distance along V_t, negative for none. */
+static float refine_hit(const gdm_state *s, meso_vec3 t_in, meso_vec3 vt, float d, float dt,
+                        bool solid_floor) {
+#define INSIDE(x) ((solid_floor && (x) >= dt) || inside_mesostructure(s, meso_vec3_madd(t_in, vt, (x))))
+    float window = s->refine_window;
+    float guess = fminf(fmaxf(d, 0.0f), dt);
+    float before = fmaxf(guess - window, 0.0f), after = fminf(guess + 0.5f * window, dt);
     float lo = 0.0f, hi = -1.0f;
-    float guess = d < dt ? d : dt;
-    /* first: is the ray inside just past the table's answer? then look for an earlier entry */
-    for (int k = 1; k <= probes && hi < 0.0f; k++) {
-        float x = dt * (float)k / (float)probes;
-        if (guess > 0.0f && x > guess && lo < guess &&
-            inside_mesostructure(s, meso_vec3_madd(t_in, vt, guess))) {
-            hi = guess;
-            break;
+    if (!INSIDE(before) && INSIDE(after)) {
+        lo = before;
+        hi = after;
+    } else {
+        if (INSIDE(0.0f)) return 0.0f;
+        const int probes = 8;
+        for (int k = 1; k <= probes && hi < 0.0f; k++) {
+            float x = dt * (float)k / (float)probes;
+            if (INSIDE(x))
+                hi = x;
+            else
+                lo = x;
         }
-        if (inside_mesostructure(s, meso_vec3_madd(t_in, vt, x)))
-            hi = x;
-        else
-            lo = x;
+        if (hi < 0.0f) return -1.0f;
     }
-    if (hi < 0.0f) return -1.0f;
     for (int k = 0; k < s->refine_steps; k++) {
         float mid = 0.5f * (lo + hi);
-        if (inside_mesostructure(s, meso_vec3_madd(t_in, vt, mid)))
+        if (INSIDE(mid))
             hi = mid;
         else
             lo = mid;
     }
+#undef INSIDE
     return hi;
 }
 
@@ -280,26 +292,39 @@ static meso_vec3 texture_normal(const gdm_state *s, meso_vec3 uvw) {
 /* Is the light, seen from T along the unit texture direction lt, blocked before the slab's
  * boundary? §3.2: "if d_GDM(T, L) is not equal to d_max" -- d_max being the distance to the
  * boundary since §4.1 replaced it. */
-static bool shadowed(const gdm_state *s, meso_vec3 t, meso_vec3 lt) {
+static bool shadowed(const gdm_state *s, meso_vec3 t, meso_vec3 normal_t, meso_vec3 lt) {
     if (lt.z == 0.0f) return false;
+    float bias = s->shadow_bias;
+    /* from a point `bias` voxels off the surface: at the surface d is interpolated with the
+     * voxels inside the solid (d = 0) and would shadow every point (the floor of a height
+     * field most of all). A height field's solid lies below its surface, so straight up
+     * leaves it wherever the point is; a solid's along its normal. (A height field's normal
+     * at the foot of a steep cone already leans toward it: a sideways step lands inside.) */
+    meso_vec3 offset = s->heightfield ? (meso_vec3){0.0f, 0.0f, -1.0f} : normal_t;
+    t = meso_vec3_add(t, meso_vec3_mul(offset, meso_vec3_scale(s->voxel, bias)));
+    t.z = fminf(fmaxf(t.z, 0.0f), 1.0f);
     float boundary = lt.z < 0.0f ? t.z / -lt.z : (1.0f - t.z) / lt.z;
     boundary = fminf(boundary, MESO_GDM_MAX_RAY_LENGTH);
-    float bias = s->shadow_bias;
-    if (boundary <= 2.0f * bias) return false;
+    float margin = bias * s->voxel.z;
+    if (boundary <= margin) return false;
+    float d = lookup(s, t, lt);
     if (s->refine_steps > 0) {
-        /* beyond the paper, with the refined hit: the light ray probed against the
-         * mesostructure itself, as VDM's refinement does where its table is ambiguous (the
+        /* beyond the paper, with the refined hit: where the table says the light is blocked,
+         * the blocker is looked for on the mesostructure -- just past d_L, else by probes
+         * along the light ray, as VDM's refinement does where its table is ambiguous (the
          * table's error, 0.1 of the shell for a weave at k = 7, is larger than the gaps a
          * light ray threads through) */
+        if (d >= boundary - margin) return false;
+        if (inside_mesostructure(s, meso_vec3_madd(t, lt, d + 0.5f * s->refine_window)))
+            return true;
         for (int k = 0; k < s->shadow_steps; k++) {
-            float x = bias + (boundary - bias) * ((float)k + 0.5f) / (float)s->shadow_steps;
+            float x = boundary * ((float)k + 0.5f) / (float)s->shadow_steps;
             if (inside_mesostructure(s, meso_vec3_madd(t, lt, x))) return true;
         }
         return false;
     }
-    meso_vec3 start = meso_vec3_madd(t, lt, bias);
-    float d = lookup(s, start, lt);
-    return d < boundary - 2.0f * bias;
+    /* §3.2 with §4.1's d_max: lit when d_L reaches the boundary, within the table's error */
+    return d < boundary - margin;
 }
 
 /* One fragment: false when the ray leaves its prism without meeting the mesostructure. Fills
@@ -321,15 +346,17 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
     if (!meso_prism_layer_exit(layer, prism_index, f->position, view, slot, &t, &exit_slot) ||
         !isfinite(t))
         return false;
-    meso_vec3 t_out = meso_prism_layer_face_uvw(
-        layer, meso_prism_layer_face(layer, prism_index, exit_slot), meso_vec3_madd(f->position, view, t));
+    meso_vec3 p_out = meso_vec3_madd(f->position, view, t);
+    meso_vec3 t_out =
+        meso_prism_layer_face_uvw(layer, meso_prism_layer_face(layer, prism_index, exit_slot), p_out);
     meso_vec3 segment = meso_vec3_sub(t_out, t_in);
     float dt = meso_vec3_length(segment);
     if (!(dt > 1e-7f)) return false;
     meso_vec3 vt = meso_vec3_scale(segment, 1.0f / dt);
     float d = lookup(s, t_in, vt);
     if (s->refine_steps > 0) {
-        d = refine_hit(s, t_in, vt, d, dt);
+        d = refine_hit(s, t_in, vt, d, dt,
+                       exit_slot == MESO_PRISM_BOTTOM && floor_is_solid(s, t_out));
         if (d < 0.0f) return false;
     } else if (!(d < dt - s->hit_margin)) {
         /* §3.2: the ray passes through the prism -- unless it leaves through the bottom into
@@ -342,16 +369,24 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
     d = d > 0.0f ? d : 0.0f;
     meso_vec3 hit = meso_vec3_madd(t_in, vt, d);
     meso_vec3 position = meso_prism_map(prism, mesh, s->depth, hit, -1);
+    /* Between the entry's depth (the contract: never nearer) and the exit's: the hit lies on
+     * the segment, though mapped from texture space it may land a little past the exit --
+     * behind the neighbour prism's entry, whose fragment would then win the depth test with
+     * that prism's own (wrong) answer. */
     float depth = meso_vec3_dot(meso_vec3_sub(position, frame->eye), frame->forward);
-    f->out_depth = depth > f->depth ? depth : f->depth; /* the contract: never nearer */
+    float exit_depth = meso_vec3_dot(meso_vec3_sub(p_out, frame->eye), frame->forward);
+    depth = depth < exit_depth ? depth : exit_depth;
+    f->out_depth = depth > f->depth ? depth : f->depth;
     texture_frame tf = frame_at(mesh, prism, (meso_vec2){hit.x, hit.y}, s->depth);
-    meso_vec3 normal;
+    meso_vec3 normal, normal_t = texture_normal(s, hit);
     if (s->heightfield && !s->baked_normals) /* as the reference and the other techniques */
         normal = meso_displaced_normal(
             tf.normal, tf.tangent, tf.bitangent, s->depth,
             meso_heightfield_gradient(s->heightfield, hit.x, hit.y));
     else
-        normal = world_normal(&tf, texture_normal(s, hit));
+        normal = world_normal(&tf, normal_t);
+    float length_t = meso_vec3_length(normal_t);
+    normal_t = length_t > 0.0f ? meso_vec3_scale(normal_t, 1.0f / length_t) : (meso_vec3){0, 0, -1};
     f->position = position;
     f->normal = normal;
     f->uv = (meso_vec2){hit.x, hit.y};
@@ -362,7 +397,7 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
         meso_vec3 l = meso_light_direction(&scene->lights[li], position);
         if (meso_vec3_dot(l, normal) <= 0.0f) continue; /* unlit anyway */
         meso_vec3 lt = texture_direction(&tf, l);
-        if (shadowed(s, hit, lt)) visibility[li] = 0.0f;
+        if (shadowed(s, hit, normal_t, lt)) visibility[li] = 0.0f;
     }
     return true;
 }
