@@ -269,7 +269,7 @@ static float refine_hit(const gdm_state *s, meso_vec3 t_in, meso_vec3 vt, float 
             lo = mid;
     }
 #undef INSIDE
-    return hi;
+    return 0.5f * (lo + hi); /* the bracket's middle: half its width off, either way */
 }
 
 /* Solid where a ray leaves the slab's bottom at T (height fields: always). */
