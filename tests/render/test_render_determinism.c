@@ -17,6 +17,8 @@ static const char *const examples[] = {"bricks-plane",    "bricks-teapot", "bump
 static const meso_option small_bakes[] = {
     {"vdm", "resolution", 32},         {"vdm", "num_theta", 16},
     {"vdm", "num_curvatures", 4},      {"relief_layers", "size", 64},
+    {"gdm", "resolution", 16},         {"gdm", "layers", 8},
+    {"gdm", "num_theta", 8},           {"gdm", "num_phi", 8},
 };
 
 static meso_framebuffer *render(const meso_scene *scene, const char *technique, int threads) {

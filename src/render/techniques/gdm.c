@@ -293,7 +293,10 @@ static meso_vec3 texture_normal(const gdm_state *s, meso_vec3 uvw) {
  * boundary? §3.2: "if d_GDM(T, L) is not equal to d_max" -- d_max being the distance to the
  * boundary since §4.1 replaced it. */
 static bool shadowed(const gdm_state *s, meso_vec3 t, meso_vec3 normal_t, meso_vec3 lt) {
-    if (lt.z == 0.0f) return false;
+    /* A light toward the slab's bottom lies under the base surface: the object's own body is
+     * between (the far wall of a torus seen through the holes of the near one). §3.2's local
+     * test cannot see that; this much of the base geometry's shadow it can. */
+    if (lt.z >= 0.0f) return true;
     float bias = s->shadow_bias;
     /* from a point `bias` voxels off the surface: at the surface d is interpolated with the
      * voxels inside the solid (d = 0) and would shadow every point (the floor of a height
