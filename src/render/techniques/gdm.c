@@ -14,15 +14,22 @@
 #include "meso/prism.h"
 #include "render_internal.h"
 
+#define GDM_DEPTH_BUCKETS 1024 /* gdm_geometry's sort */
+
 typedef struct gdm_state {
     meso_gdm *gdm;
+    /* the faces in this frame's drawing order (gdm_geometry): drawn shares the layer's
+     * vertex arrays and has its own indices; drawn triangle i is layer face drawn_face[i] */
+    meso_mesh drawn;
+    uint32_t *drawn_indices, *drawn_face, *sort_counts;
+    float *sort_keys;
     gdm_lookup_table table; /* the compressed map laid out 8-wide (unless raw) */
     meso_prism_layer *layer;
     const meso_heightfield *heightfield; /* one of these two */
     const meso_solid *solid;
     float depth; /* world units */
     int num_eigen;
-    bool raw, shadows, baked_normals;
+    bool raw, shadows, baked_normals; /* baked_normals: the "normals" option resolved */
     int refine_steps, shadow_steps;
     float shadow_bias; /* voxels off the surface */
     meso_vec3 voxel;   /* a voxel's sides in texture units */
@@ -31,8 +38,8 @@ typedef struct gdm_state {
 } gdm_state;
 
 typedef struct gdm_options {
-    bool compressed, shadows, baked_normals;
-    int eigenmaps, resolution, layers, num_theta, num_phi, refine_steps, shadow_steps;
+    bool compressed, shadows;
+    int normals, eigenmaps, resolution, layers, num_theta, num_phi, refine_steps, shadow_steps;
     float shadow_bias, hit_margin;
 } gdm_options;
 
@@ -62,11 +69,12 @@ static const meso_technique_option gdm_option_table[] = {
     MESO_OPTION_ROW(MESO_OPTION_FLOAT, hit_margin, 0.0, 1.0, 0.0,
                     "a hit needs d < |T_out - T_in| - hit_margin (texture units; 0: the paper)",
                     gdm_options, hit_margin),
-    MESO_OPTION_ROW(MESO_OPTION_BOOL, baked_normals, 0, 1, 0,
-                    "1: shade with the bake's per-voxel normals; 0: the mesostructure's own "
-                    "gradient (height field or solid), as the reference",
-                    gdm_options, baked_normals),
-    MESO_OPTION_ROW(MESO_OPTION_INT, refine_steps, 0, 32, 6,
+    MESO_OPTION_ROW(MESO_OPTION_INT, normals, 0, 2, 0,
+                    "shading normal: 0 the height field's gradient or a solid's baked normals "
+                    "(measured best for each); 1 the bake's normals; 2 the mesostructure's own "
+                    "gradient (a solid's: six distance samples)",
+                    gdm_options, normals),
+    MESO_OPTION_ROW(MESO_OPTION_INT, refine_steps, 0, 32, 4,
                     "beyond the paper: check the hit (and a shadow) on the mesostructure and "
                     "bisect this many times; 0: the paper's d < |T_out - T_in| and d_L",
                     gdm_options, refine_steps),
@@ -78,6 +86,10 @@ static void gdm_release(void *state) {
     meso_gdm_destroy(s->gdm);
     gdm_lookup_table_deinit(&s->table);
     meso_prism_layer_destroy(s->layer);
+    free(s->drawn_indices);
+    free(s->drawn_face);
+    free(s->sort_counts);
+    free(s->sort_keys);
     free(s);
 }
 
@@ -120,7 +132,7 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
     s->num_eigen = options.eigenmaps;
     s->raw = !options.compressed;
     s->shadows = options.shadows;
-    s->baked_normals = options.baked_normals;
+    s->baked_normals = options.normals == 1 || (options.normals == 0 && desc.solid);
     s->refine_steps = options.refine_steps;
     s->shadow_steps = options.shadow_steps;
     s->shadow_bias = options.shadow_bias;
@@ -131,6 +143,17 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
     if ((r = meso_prism_layer_create(ctx, object->mesh, ms->depth, object->name, &s->layer)) !=
         MESO_OK)
         goto fail;
+    size_t faces = s->layer->faces->num_triangles ? s->layer->faces->num_triangles : 1;
+    s->drawn_indices = malloc(3 * faces * sizeof(uint32_t));
+    s->drawn_face = malloc(faces * sizeof(uint32_t));
+    s->sort_counts = malloc((GDM_DEPTH_BUCKETS + 1) * sizeof(uint32_t));
+    s->sort_keys = malloc(faces * sizeof(float));
+    if (!s->drawn_indices || !s->drawn_face || !s->sort_counts || !s->sort_keys) {
+        r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: gdm", object->name);
+        goto fail;
+    }
+    s->drawn = *s->layer->faces;
+    s->drawn.indices = s->drawn_indices;
     if ((r = meso_gdm_bake_cached(ctx, &desc, &s->gdm)) != MESO_OK) goto fail;
     s->raw = s->raw && meso_gdm_get_view(s->gdm).raw;
     if (!s->raw) {
@@ -147,12 +170,45 @@ fail:
     return r;
 }
 
-/* The prisms do not depend on the view: made once in prepare. */
+/* The prisms do not depend on the view (made once in prepare), their drawing order does:
+ * every face gets its fragments shaded unless a nearer hit is already in the depth buffer, and
+ * a ray crosses several fins, so fins drawn back to front are each shaded for nothing (on
+ * bumps-sphere 5.5 fin fragments a top one). Each frame the faces are drawn tops first, then
+ * fins, then bottoms, each group front to back by a counting sort of their centroids' view
+ * depth into GDM_DEPTH_BUCKETS (linear, O(faces), fixed order within a bucket: deterministic). */
 static meso_result gdm_geometry(meso_context *ctx, void *state, const meso_frame *frame,
                                 const meso_mesh **out_mesh) {
-    (void)ctx, (void)frame;
-    const gdm_state *s = state;
-    *out_mesh = s->layer->faces;
+    (void)ctx;
+    gdm_state *s = state;
+    const meso_mesh *faces = s->layer->faces;
+    size_t n = s->layer->num_prisms, total = faces->num_triangles;
+    float *keys = s->sort_keys;
+    float lo = INFINITY, hi = -INFINITY;
+    for (size_t f = 0; f < total; f++) {
+        const uint32_t *idx = faces->indices + 3 * f;
+        meso_vec3 c = meso_vec3_add(meso_vec3_add(faces->positions[idx[0]], faces->positions[idx[1]]),
+                                    faces->positions[idx[2]]);
+        float k = meso_vec3_dot(meso_vec3_sub(meso_vec3_scale(c, 1.0f / 3.0f), frame->eye),
+                                frame->forward);
+        keys[f] = isfinite(k) ? k : 0.0f;
+        lo = fminf(lo, keys[f]);
+        hi = fmaxf(hi, keys[f]);
+    }
+    float scale = hi > lo ? (float)(GDM_DEPTH_BUCKETS - 1) / (hi - lo) : 0.0f;
+    size_t group_start[4] = {0, n, 7 * n, 8 * n}; /* tops, fins, bottoms */
+    for (int g = 0; g < 3; g++) {
+        uint32_t *count = s->sort_counts;
+        memset(count, 0, sizeof(uint32_t) * (GDM_DEPTH_BUCKETS + 1));
+        for (size_t f = group_start[g]; f < group_start[g + 1]; f++)
+            count[1 + (int)((keys[f] - lo) * scale)]++;
+        for (int b = 0; b < GDM_DEPTH_BUCKETS; b++) count[b + 1] += count[b];
+        for (size_t f = group_start[g]; f < group_start[g + 1]; f++) {
+            size_t slot = group_start[g] + count[(int)((keys[f] - lo) * scale)]++;
+            s->drawn_face[slot] = (uint32_t)f;
+            memcpy(s->drawn_indices + 3 * slot, faces->indices + 3 * f, 3 * sizeof(uint32_t));
+        }
+    }
+    *out_mesh = &s->drawn;
     return MESO_OK;
 }
 
@@ -337,9 +393,10 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
     const meso_prism_layer *layer = s->layer;
     const meso_mesh *mesh = object->mesh;
     int slot;
-    size_t prism_index = meso_prism_layer_face_prism(layer, f->triangle, &slot);
+    size_t face = s->drawn_face[f->triangle];
+    size_t prism_index = meso_prism_layer_face_prism(layer, face, &slot);
     const meso_prism *prism = &layer->prisms[prism_index];
-    const uint32_t *idx = layer->faces->indices + 3 * (size_t)f->triangle;
+    const uint32_t *idx = layer->faces->indices + 3 * face;
     /* the entry point T_in: the face's (u, v, w), perspective-correct */
     meso_vec3 t_in = meso_vec3_barycentric(layer->uvws[idx[0]], layer->uvws[idx[1]],
                                            layer->uvws[idx[2]], f->b0, f->b1, f->b2);
@@ -441,7 +498,8 @@ static size_t gdm_memory(const void *state) {
     meso_gdm_view v = meso_gdm_get_view(s->gdm);
     size_t normals = (size_t)v.width * (size_t)v.height * (size_t)v.layers * 3 * sizeof(float);
     return (size_t)c.compressed_bytes + (v.raw ? (size_t)c.raw_bytes : 0) + normals +
-           gdm_lookup_table_bytes(&s->table) + meso_prism_layer_memory(s->layer);
+           gdm_lookup_table_bytes(&s->table) + meso_prism_layer_memory(s->layer) +
+           s->layer->faces->num_triangles * (4 * sizeof(uint32_t) + sizeof(float));
 }
 
 const meso_technique meso_technique_gdm = {
