@@ -74,7 +74,7 @@ static const meso_technique_option gdm_option_table[] = {
                     "(measured best for each); 1 the bake's normals; 2 the mesostructure's own "
                     "gradient (a solid's: six distance samples)",
                     gdm_options, normals),
-    MESO_OPTION_ROW(MESO_OPTION_INT, refine_steps, 0, 32, 4,
+    MESO_OPTION_ROW(MESO_OPTION_INT, refine_steps, 0, 32, 6,
                     "beyond the paper: check the hit (and a shadow) on the mesostructure and "
                     "bisect this many times; 0: the paper's d < |T_out - T_in| and d_L",
                     gdm_options, refine_steps),
@@ -351,7 +351,9 @@ static meso_vec3 texture_normal(const gdm_state *s, meso_vec3 uvw) {
 static bool shadowed(const gdm_state *s, meso_vec3 t, meso_vec3 normal_t, meso_vec3 lt) {
     /* A light toward the slab's bottom lies under the base surface: the object's own body is
      * between (the far wall of a torus seen through the holes of the near one). §3.2's local
-     * test cannot see that; this much of the base geometry's shadow it can. */
+     * test cannot see that; this much of the base geometry's shadow it can. Measured on an
+     * open mesh too: inside grid-vase (lit only through its rim) it is 2.4 dB nearer the truth
+     * than letting such light through. */
     if (lt.z >= 0.0f) return true;
     float bias = s->shadow_bias;
     /* from a point `bias` voxels off the surface: at the surface d is interpolated with the
