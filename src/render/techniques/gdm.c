@@ -60,8 +60,9 @@ static const meso_technique_option gdm_option_table[] = {
     MESO_OPTION_ROW(MESO_OPTION_BOOL, shadows, 0, 1, 1,
                     "self-shadows by a lookup along the light (§3.2)", gdm_options, shadows),
     MESO_OPTION_ROW(MESO_OPTION_FLOAT, shadow_bias, 0.0, 16.0, 1.5,
-                    "the shadow lookup starts this many voxels off the surface (along its "
-                    "normal) and needs d_L this much short of the slab's boundary",
+                    "the shadow lookup starts this many voxels off the surface (up for height "
+                    "fields, along the normal for solids) and needs d_L this much short of "
+                    "the slab's boundary",
                     gdm_options, shadow_bias),
     MESO_OPTION_ROW(MESO_OPTION_INT, shadow_steps, 1, 256, 24,
                     "with refine_steps: probes of the mesostructure along the light ray",
