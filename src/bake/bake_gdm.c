@@ -536,6 +536,9 @@ static void fill_compression(meso_gdm *gdm) {
     c->compressed_bytes = (uint64_t)rows * (uint64_t)d->eigenmaps * (d->float_weights ? 4u : 2u) +
                           (uint64_t)d->eigenmaps * (uint64_t)columns * 4u;
     c->num_rmse = MESO_GDM_RMSE_COUNT;
+    double energy = 0.0;
+    for (int i = 0; i < gdm->num_sv; i++) energy += (double)gdm->singular[i] * gdm->singular[i];
+    c->rms = (float)sqrt(energy / ((double)rows * (double)columns));
     for (int k = 1; k <= MESO_GDM_RMSE_COUNT; k++) {
         double sum = 0.0;
         for (int i = k; i < gdm->num_sv; i++) sum += (double)gdm->singular[i] * gdm->singular[i];
@@ -617,6 +620,7 @@ meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm
         goto out_of_memory;
 
     if ((result = surface_build(ctx, &d, &surface)) != MESO_OK) goto fail;
+    double surface_seconds = meso_time_seconds() - start;
     for (int p = 0; p < d.num_phi; p++)
         for (int t = 0; t < d.num_theta; t++)
             directions[(size_t)p * d.num_theta + t] = direction_of(theta_of(&d, t), phi_of(&d, p));
@@ -653,6 +657,8 @@ meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm
     fill_compression(gdm);
     gdm->compression.rmse_stored = table ? stored_rmse(ctx, gdm, table) : -1.0f;
     gdm->compression.bake_seconds = meso_time_seconds() - start;
+    meso_log_info(ctx, "gdm: %zu triangles traced, surface and BVH %.2f s, bake %.2f s", surface.num_triangles,
+                  surface_seconds, gdm->compression.bake_seconds);
     if (table != gdm->raw) free(table);
     surface_release(&surface);
     free(directions);
@@ -790,7 +796,7 @@ meso_vec3 meso_gdm_normal(const meso_gdm *gdm, meso_vec3 uvw) {
 
 /* ---- Bake files --------------------------------------------------------------------------- */
 
-/* report: rmse[16], num_rmse, rmse_stored, bake_seconds, 0 */
+/* report: rmse[16], num_rmse, rmse_stored, bake_seconds, rms */
 #define REPORT_FLOATS (MESO_GDM_RMSE_COUNT + 4)
 
 static int write_params(const meso_gdm *gdm, char *buffer, size_t size) {
@@ -818,7 +824,7 @@ static meso_bake_file to_bake_file(const meso_gdm *gdm, char *params, size_t par
     report[MESO_GDM_RMSE_COUNT] = (float)c->num_rmse;
     report[MESO_GDM_RMSE_COUNT + 1] = c->rmse_stored;
     report[MESO_GDM_RMSE_COUNT + 2] = (float)c->bake_seconds;
-    report[MESO_GDM_RMSE_COUNT + 3] = 0.0f;
+    report[MESO_GDM_RMSE_COUNT + 3] = c->rms;
     meso_bake_file bake = {.kind = MESO_GDM_KIND,
                            .kind_version = MESO_GDM_KIND_VERSION,
                            .source_hash = gdm->source_hash,
@@ -1044,11 +1050,13 @@ size_t meso_gdm_describe(const meso_bake_file *bake, char *buffer, size_t size) 
                      "gdm: %.0f x %.0f x %.0f voxels, %.0f x %.0f directions, from a %s\n"
                      "raw %.2f MiB, compressed (k=%.0f, weights %s) %.3f MiB, ratio %.1f:1, "
                      "baked in %.1f s\n"
-                     "reconstruction RMSE of d (texture units; the shell's depth is 1):\n",
+                     "reconstruction RMSE of d (texture units; the shell's depth is 1; RMS of d "
+                     "itself %.4f):\n",
                      v[0], v[1], v[2], v[3], v[4], v[7] != 0.0 ? "height field" : "solid",
                      raw_bytes / 1048576.0, v[5], v[6] != 0.0 ? "float32" : "IEEE halves",
                      compressed_bytes / 1048576.0,
-                     compressed_bytes > 0.0 ? raw_bytes / compressed_bytes : 0.0, seconds);
+                     compressed_bytes > 0.0 ? raw_bytes / compressed_bytes : 0.0, seconds,
+                     (double)r[MESO_GDM_RMSE_COUNT + 3]);
     for (int k = 1; k <= MESO_GDM_RMSE_COUNT && n > 0 && (size_t)n < sizeof(text); k++)
         n += snprintf(text + n, sizeof(text) - (size_t)n, "  k=%2d  %.5f%s\n", k, r[k - 1],
                       k == (int)v[5] ? "  (kept)" : "");
