@@ -147,6 +147,58 @@ static void test_constant_height_field_gives_the_analytic_distances(void **state
     meso_context_destroy(ctx);
 }
 
+/* A tile mesh (a solid given as triangles, converted to a distance grid): a closed box over
+ * u, v in [0.25, 0.75], z in [0.3, 0.7], so w in [0.3, 0.7]. Rays straight down onto its top
+ * from above its middle, and up from below it (to its bottom face), are analytic. */
+static void test_tile_mesh_box_gives_the_analytic_distances(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    const float lo = 0.25f, hi = 0.75f, bottom = 0.3f, top = 0.7f;
+    meso_vec3 corners[8];
+    for (int c = 0; c < 8; c++)
+        corners[c] = (meso_vec3){c & 1 ? hi : lo, c & 2 ? hi : lo, c & 4 ? top : bottom};
+    /* two outward triangles per face */
+    static const uint32_t indices[36] = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
+                                         2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
+    meso_solid *solid = NULL;
+    assert_int_equal(meso_solid_create_from_triangles(ctx, corners, 8, indices, 12, "box", 0,
+                                                      &solid),
+                     MESO_OK);
+    meso_gdm_desc desc = small_desc();
+    desc.solid = solid;
+    meso_gdm *gdm = NULL;
+    assert_int_equal(meso_bake_gdm(ctx, &desc, &gdm), MESO_OK);
+    meso_gdm_view v = meso_gdm_get_view(gdm);
+    int checked = 0;
+    for (int j = 6; j <= 9; j++)     /* v in [0.41, 0.59] */
+        for (int i = 6; i <= 9; i++) /* u likewise */
+            for (int l = 0; l < v.layers; l++)
+                for (int p = 0; p < v.num_phi; p++) {
+                    meso_vec3 o = voxel_at(&v, i, j, l);
+                    float w_top = 1.0f - top, w_bottom = 1.0f - bottom;
+                    /* the most vertical sampled directions: theta_0 up, theta_{T-1} down */
+                    meso_vec3 up = direction_at(&v, 0, p), down = direction_at(&v, v.num_theta - 1, p);
+                    float d_up = raw_entry(&v, i, j, l, 0, p);
+                    float d_down = raw_entry(&v, i, j, l, v.num_theta - 1, p);
+                    if (o.z < w_top - 0.02f) { /* above the box: down onto its top */
+                        assert_float_equal(d_down, (w_top - o.z) / down.z, 0.01f);
+                        assert_float_equal(d_up, o.z / -up.z, 1e-4f);
+                        checked++;
+                    } else if (o.z > w_bottom + 0.02f) { /* below: up onto its bottom */
+                        assert_float_equal(d_up, (o.z - w_bottom) / -up.z, 0.01f);
+                        assert_float_equal(d_down, (1.0f - o.z) / down.z, 1e-4f);
+                        checked++;
+                    } else if (o.z > w_top + 0.02f && o.z < w_bottom - 0.02f) {
+                        assert_float_equal(d_up, 0.0f, 0.0f); /* inside */
+                        checked++;
+                    }
+                }
+    assert_true(checked > 300);
+    meso_gdm_destroy(gdm);
+    meso_solid_destroy(solid);
+    meso_context_destroy(ctx);
+}
+
 /* ---- Against a brute-force march ---------------------------------------------------------- */
 
 static bool inside_source(const meso_solid *solid, const meso_heightfield *hf, meso_vec3 p) {
@@ -481,6 +533,7 @@ int main(void) {
         cmocka_unit_test(test_defaults_are_the_papers),
         cmocka_unit_test(test_slab_solid_gives_the_analytic_distances),
         cmocka_unit_test(test_constant_height_field_gives_the_analytic_distances),
+        cmocka_unit_test(test_tile_mesh_box_gives_the_analytic_distances),
         cmocka_unit_test(test_weave_entries_match_a_brute_force_march),
         cmocka_unit_test(test_height_field_entries_match_a_brute_force_march),
         cmocka_unit_test(test_compression_error_falls_with_k),
