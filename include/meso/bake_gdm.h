@@ -84,9 +84,9 @@ typedef struct meso_gdm_compression {
     uint64_t raw_bytes, compressed_bytes;
     int num_rmse;
     float rmse[MESO_GDM_RMSE_COUNT]; /* of d over every entry, k = 1..16, in texture units */
-    float rmse_stored; /* of the map as stored (k kept, weights as halves unless float_weights),
-                          measured over every entry; -1 when the bake streamed the table */
-    float rms;         /* of d itself over every entry: the scale the RMSEs compare with */
+    float rmse_stored;   /* of the map as stored (k kept, weights as halves unless float_weights),
+                            measured over every entry; -1 when the bake streamed the table */
+    float rms;           /* of d itself over every entry: the scale the RMSEs compare with */
     double bake_seconds; /* 0 when loaded */
 } meso_gdm_compression;
 

@@ -11,7 +11,6 @@
  * into a hit at distance 0. */
 #include <embree3/rtcore.h>
 #include <math.h>
-#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -31,7 +30,7 @@
 #define SURFACE_MAX_TEXELS 1024
 /* The tile and its 8 neighbours: every triangle of a copy that reaches into the column. */
 #define COPIES 9
-/* Rows filled by one job when the normals and the inside flags are computed. */
+/* Voxels classified (inside flag, normal) by one job. */
 #define VOXELS_PER_JOB 4096
 
 struct meso_gdm {
@@ -101,8 +100,9 @@ static meso_result check_desc(meso_context *ctx, const char *name, const meso_gd
  * source never share a key. */
 static uint64_t source_hash_of(const meso_gdm_desc *d) {
     uint64_t tag = d->heightfield ? 1u : d->solid ? 2u : 0u;
-    uint64_t source = d->heightfield ? d->heightfield->hash : d->solid ? meso_solid_hash(d->solid)
-                                                                       : 0u;
+    uint64_t source = d->heightfield ? d->heightfield->hash
+                      : d->solid     ? meso_solid_hash(d->solid)
+                                     : 0u;
     return meso_hash64(&source, sizeof(source), meso_hash64(&tag, sizeof(tag), MESO_HASH_SEED));
 }
 
@@ -211,8 +211,8 @@ static bool add_isosurface(gdm_surface *s, const meso_isosurface *iso) {
                 lo_u = fminf(lo_u, p.x + dx), hi_u = fmaxf(hi_u, p.x + dx);
                 lo_v = fminf(lo_v, p.y + dy), hi_v = fmaxf(hi_v, p.y + dy);
             }
-            keep[t] = !(hi_u < -margin || lo_u > 1.0f + margin || hi_v < -margin ||
-                        lo_v > 1.0f + margin);
+            keep[t] =
+                !(hi_u < -margin || lo_u > 1.0f + margin || hi_v < -margin || lo_v > 1.0f + margin);
             if (!keep[t]) continue;
             nt++;
             for (int c = 0; c < 3; c++)
@@ -236,7 +236,8 @@ static bool add_isosurface(gdm_surface *s, const meso_isosurface *iso) {
         size_t k = 0;
         for (size_t t = 0; t < iso->num_triangles; t++)
             if (keep[t]) {
-                for (int c = 0; c < 3; c++) indices[3 * k + (size_t)c] = remap[iso->indices[3 * t + (size_t)c]];
+                for (int c = 0; c < 3; c++)
+                    indices[3 * k + (size_t)c] = remap[iso->indices[3 * t + (size_t)c]];
                 k++;
             }
         finish_part(s, g, copy, vertices, indices, nt);
@@ -319,10 +320,10 @@ static meso_result surface_build(meso_context *ctx, const meso_gdm_desc *d, gdm_
     enum RTCError error = rtcGetDeviceError(s->device);
     if (!ok || error != RTC_ERROR_NONE) {
         surface_release(s);
-        return meso_log_error(ctx, ok && error != RTC_ERROR_OUT_OF_MEMORY ? MESO_ERROR_INTERNAL
-                                                                          : MESO_ERROR_OUT_OF_MEMORY,
-                              "gdm: the ray-tracing structure could not be built (Embree error %d)",
-                              (int)error);
+        return meso_log_error(
+            ctx,
+            ok && error != RTC_ERROR_OUT_OF_MEMORY ? MESO_ERROR_INTERNAL : MESO_ERROR_OUT_OF_MEMORY,
+            "gdm: the ray-tracing structure could not be built (Embree error %d)", (int)error);
     }
     return MESO_OK;
 }
@@ -332,9 +333,9 @@ static meso_result surface_build(meso_context *ctx, const meso_gdm_desc *d, gdm_
 typedef struct bake_job {
     meso_gdm_desc desc;
     const gdm_surface *surface;
-    const uint8_t *inside;  /* [layers][height][width]: the voxel lies in the solid */
-    meso_vec3 *directions;  /* [num_phi][num_theta] */
-    float *normals;         /* [layers][height][width][3] */
+    const uint8_t *inside; /* [layers][height][width]: the voxel lies in the solid */
+    meso_vec3 *directions; /* [num_phi][num_theta] */
+    float *normals;        /* [layers][height][width][3] */
 } bake_job;
 
 /* The source's own inside test and outward normal. */
@@ -551,8 +552,8 @@ static meso_result check_source(meso_context *ctx, const meso_gdm_desc *d) {
     if ((d->heightfield != NULL) == (d->solid != NULL))
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "gdm: exactly one of heightfield and solid must be given");
-    if (d->heightfield && (!d->heightfield->heights || d->heightfield->width < 1 ||
-                           d->heightfield->height < 1))
+    if (d->heightfield &&
+        (!d->heightfield->heights || d->heightfield->width < 1 || d->heightfield->height < 1))
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "gdm: heightfield: empty");
     if (d->solid && !meso_solid_is_periodic(d->solid))
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
@@ -642,8 +643,8 @@ meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm
         .user = &job,
         .progress = meso_progress_begin(ctx, "gdm bake", (table ? 1u : 2u) * (uint64_t)rows)};
     /* §4.1: A = U S E^T, W = U S: weight maps W_i(x, y, phi), eigen-maps E_i(z, theta) */
-    result = meso_bake_svd_streamed(ctx, "gdm", &source, k, gdm->singular, vectors, gdm->weights,
-                                    table);
+    result =
+        meso_bake_svd_streamed(ctx, "gdm", &source, k, gdm->singular, vectors, gdm->weights, table);
     meso_progress_end(source.progress);
     if (result != MESO_OK) goto fail;
     if (!d.float_weights) {
@@ -657,8 +658,8 @@ meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm
     fill_compression(gdm);
     gdm->compression.rmse_stored = table ? stored_rmse(ctx, gdm, table) : -1.0f;
     gdm->compression.bake_seconds = meso_time_seconds() - start;
-    meso_log_info(ctx, "gdm: %zu triangles traced, surface and BVH %.2f s, bake %.2f s", surface.num_triangles,
-                  surface_seconds, gdm->compression.bake_seconds);
+    meso_log_info(ctx, "gdm: %zu triangles traced, surface and BVH %.2f s, bake %.2f s",
+                  surface.num_triangles, surface_seconds, gdm->compression.bake_seconds);
     if (table != gdm->raw) free(table);
     surface_release(&surface);
     free(directions);
@@ -785,9 +786,9 @@ meso_vec3 meso_gdm_normal(const meso_gdm *gdm, meso_vec3 uvw) {
         float w = corner_weight(a.x, corner & 1) * corner_weight(a.y, corner & 2) *
                   corner_weight(a.z, corner & 4);
         if (w == 0.0f) continue;
-        const float *v = gdm->normals +
-                         3u * (((size_t)iz * (size_t)d->height + (size_t)iy) * (size_t)d->width +
-                               (size_t)ix);
+        const float *v =
+            gdm->normals +
+            3u * (((size_t)iz * (size_t)d->height + (size_t)iy) * (size_t)d->width + (size_t)ix);
         n = meso_vec3_add(n, (meso_vec3){w * v[0], w * v[1], w * v[2]});
     }
     float length = meso_vec3_length(n);
@@ -832,12 +833,12 @@ static meso_bake_file to_bake_file(const meso_gdm *gdm, char *params, size_t par
                            .num_arrays = 5};
     uint64_t h = (uint64_t)d->height, w = (uint64_t)d->width, p = (uint64_t)d->num_phi;
     uint64_t l = (uint64_t)d->layers, t = (uint64_t)d->num_theta;
-    bake.arrays[0] = (meso_bake_array){
-        .name = "weights",
-        .type = gdm->weights_half ? MESO_BAKE_F16 : MESO_BAKE_F32,
-        .num_dims = 4,
-        .dims = {h, w, p, (uint64_t)d->eigenmaps},
-        .data = gdm->weights_half ? (void *)gdm->weights_half : (void *)gdm->weights};
+    bake.arrays[0] = (meso_bake_array){.name = "weights",
+                                       .type = gdm->weights_half ? MESO_BAKE_F16 : MESO_BAKE_F32,
+                                       .num_dims = 4,
+                                       .dims = {h, w, p, (uint64_t)d->eigenmaps},
+                                       .data = gdm->weights_half ? (void *)gdm->weights_half
+                                                                 : (void *)gdm->weights};
     bake.arrays[1] = (meso_bake_array){.name = "eigen",
                                        .type = MESO_BAKE_F32,
                                        .num_dims = 3,
@@ -885,9 +886,8 @@ static float *copy_floats(const float *source, size_t count) {
 }
 
 /* The params every loader and `meso info` read. */
-static const char *const param_keys[] = {"width",     "height",        "layers",     "num_theta",
-                                         "num_phi",   "eigenmaps",     "float_weights",
-                                         "heightfield"};
+static const char *const param_keys[] = {"width",   "height",    "layers",        "num_theta",
+                                         "num_phi", "eigenmaps", "float_weights", "heightfield"};
 #define NUM_PARAM_KEYS (int)(sizeof(param_keys) / sizeof(param_keys[0]))
 
 meso_result meso_gdm_from_bake_file(meso_context *ctx, const meso_bake_file *bake, const char *name,
@@ -902,8 +902,7 @@ meso_result meso_gdm_from_bake_file(meso_context *ctx, const meso_bake_file *bak
                               bake->kind_version, MESO_GDM_KIND_VERSION);
     double v[NUM_PARAM_KEYS];
     for (int i = 0; i < NUM_PARAM_KEYS; i++)
-        if (!meso_bake_params_number(bake->params_json, param_keys[i], &v[i]) ||
-            fabs(v[i]) > 1e6)
+        if (!meso_bake_params_number(bake->params_json, param_keys[i], &v[i]) || fabs(v[i]) > 1e6)
             return meso_log_error(ctx, MESO_ERROR_FORMAT,
                                   "%s: params: %s: missing, not a number or out of range", name,
                                   param_keys[i]);
@@ -925,9 +924,8 @@ meso_result meso_gdm_from_bake_file(meso_context *ctx, const meso_bake_file *bak
     uint64_t weights_dims[4] = {h, w, p, (uint64_t)k}, eigen_dims[3] = {(uint64_t)k, l, t};
     uint64_t singular_dims[1] = {(uint64_t)rank}, normals_dims[4] = {l, h, w, 3};
     uint64_t report_dims[1] = {REPORT_FLOATS}, raw_dims[5] = {h, w, p, l, t};
-    const void *weights = meso_bake_file_expect(bake, "weights",
-                                                d.float_weights ? MESO_BAKE_F32 : MESO_BAKE_F16,
-                                                4, weights_dims);
+    const void *weights = meso_bake_file_expect(
+        bake, "weights", d.float_weights ? MESO_BAKE_F32 : MESO_BAKE_F16, 4, weights_dims);
     const float *eigen = meso_bake_file_expect(bake, "eigen", MESO_BAKE_F32, 3, eigen_dims);
     const float *singular =
         meso_bake_file_expect(bake, "singular_values", MESO_BAKE_F32, 1, singular_dims);
@@ -948,12 +946,9 @@ meso_result meso_gdm_from_bake_file(meso_context *ctx, const meso_bake_file *bak
     static const struct {
         const char *array;
         double min, max;
-    } ranges[] = {{"weights", -65504.0, 65504.0},
-                  {"eigen", -1.001, 1.001},
-                  {"singular_values", 0.0, 3.4e38},
-                  {"normals", -1.001, 1.001},
-                  {"report", -1.0, 3.4e38},
-                  {"raw", 0.0, (double)MESO_GDM_MAX_RAY_LENGTH}};
+    } ranges[] = {{"weights", -65504.0, 65504.0},   {"eigen", -1.001, 1.001},
+                  {"singular_values", 0.0, 3.4e38}, {"normals", -1.001, 1.001},
+                  {"report", -1.0, 3.4e38},         {"raw", 0.0, (double)MESO_GDM_MAX_RAY_LENGTH}};
     for (size_t i = 0; i < sizeof(ranges) / sizeof(ranges[0]); i++) {
         const meso_bake_array *a = meso_bake_file_find(bake, ranges[i].array);
         if (a && (result = meso_bake_array_check_values(ctx, name, a, ranges[i].min,

@@ -13,8 +13,8 @@
 /* A small table: 16 x 16 x 8 voxels, 8 x 8 directions (the surface is still extracted at its
  * floor of 128 x 128 x 64 cells, as for the defaults). */
 static meso_gdm_desc small_desc(void) {
-    return (meso_gdm_desc){.width = 16, .layers = 8, .num_theta = 8, .num_phi = 8,
-                           .eigenmaps = 4, .keep_raw = true};
+    return (meso_gdm_desc){
+        .width = 16, .layers = 8, .num_theta = 8, .num_phi = 8, .eigenmaps = 4, .keep_raw = true};
 }
 
 static meso_heightfield *make_constant(float value) {
@@ -112,10 +112,10 @@ static void test_slab_solid_gives_the_analytic_distances(void **state) {
     (void)state;
     meso_context *ctx = test_context(2);
     meso_solid *solid = NULL;
-    assert_int_equal(meso_solid_create_procedural(
-                         ctx, &(meso_solid_desc){.kind = MESO_SOLID_SLAB, .thickness = 0.4f},
-                         &solid),
-                     MESO_OK);
+    assert_int_equal(
+        meso_solid_create_procedural(
+            ctx, &(meso_solid_desc){.kind = MESO_SOLID_SLAB, .thickness = 0.4f}, &solid),
+        MESO_OK);
     meso_gdm_desc desc = small_desc();
     desc.solid = solid;
     meso_gdm *gdm = NULL;
@@ -161,9 +161,8 @@ static void test_tile_mesh_box_gives_the_analytic_distances(void **state) {
     static const uint32_t indices[36] = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
                                          2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
     meso_solid *solid = NULL;
-    assert_int_equal(meso_solid_create_from_triangles(ctx, corners, 8, indices, 12, "box", 0,
-                                                      &solid),
-                     MESO_OK);
+    assert_int_equal(
+        meso_solid_create_from_triangles(ctx, corners, 8, indices, 12, "box", 0, &solid), MESO_OK);
     meso_gdm_desc desc = small_desc();
     desc.solid = solid;
     meso_gdm *gdm = NULL;
@@ -177,7 +176,8 @@ static void test_tile_mesh_box_gives_the_analytic_distances(void **state) {
                     meso_vec3 o = voxel_at(&v, i, j, l);
                     float w_top = 1.0f - top, w_bottom = 1.0f - bottom;
                     /* the most vertical sampled directions: theta_0 up, theta_{T-1} down */
-                    meso_vec3 up = direction_at(&v, 0, p), down = direction_at(&v, v.num_theta - 1, p);
+                    meso_vec3 up = direction_at(&v, 0, p),
+                              down = direction_at(&v, v.num_theta - 1, p);
                     float d_up = raw_entry(&v, i, j, l, 0, p);
                     float d_down = raw_entry(&v, i, j, l, v.num_theta - 1, p);
                     if (o.z < w_top - 0.02f) { /* above the box: down onto its top */
@@ -243,8 +243,8 @@ static int compare_floats(const void *a, const void *b) {
 /* Every 7th entry of the table against the march: the error of the traced surface (surface
  * nets for solids, texel-centre triangles for height fields) against the source itself. */
 static void expect_close_to_march(meso_gdm *gdm, const meso_solid *solid,
-                                  const meso_heightfield *hf, float median_limit,
-                                  float p95_limit, float far_fraction_limit) {
+                                  const meso_heightfield *hf, float median_limit, float p95_limit,
+                                  float far_fraction_limit) {
     meso_gdm_view v = meso_gdm_get_view(gdm);
     size_t total = (size_t)v.width * v.height * v.num_phi * v.layers * v.num_theta;
     size_t count = 0;
@@ -326,7 +326,8 @@ static double lookup_rmse(meso_gdm *gdm, int k) {
                 for (int p = 0; p < v.num_phi; p++)
                     for (int t = 0; t < v.num_theta; t++) {
                         meso_vec3 o = voxel_at(&v, i, j, l), dir = direction_at(&v, t, p);
-                        double e = meso_gdm_lookup(gdm, o, dir, k, false) - raw_entry(&v, i, j, l, t, p);
+                        double e =
+                            meso_gdm_lookup(gdm, o, dir, k, false) - raw_entry(&v, i, j, l, t, p);
                         sum += e * e;
                         count++;
                     }
@@ -434,8 +435,8 @@ static void test_corrupted_file_is_refused_naming_it(void **state) {
     (void)state;
     meso_context *ctx = test_context(2);
     meso_heightfield *hf = make_bumps(16);
-    meso_gdm_desc desc = {.heightfield = hf, .width = 8, .layers = 4, .num_theta = 4,
-                          .num_phi = 4, .eigenmaps = 2};
+    meso_gdm_desc desc = {
+        .heightfield = hf, .width = 8, .layers = 4, .num_theta = 4, .num_phi = 4, .eigenmaps = 2};
     meso_gdm *gdm = NULL;
     assert_int_equal(meso_bake_gdm(ctx, &desc, &gdm), MESO_OK);
     const char *path = test_path(test_temp_dir(), "corrupt.mesobake");
@@ -462,8 +463,8 @@ static void test_cached_bake_is_found_again_and_keyed_by_every_parameter(void **
     meso_context *ctx = test_context(2);
     setenv("MESO_CACHE_DIR", test_path(test_temp_dir(), "gdm_cache"), 1);
     meso_heightfield *hf = make_bumps(16);
-    meso_gdm_desc desc = {.heightfield = hf, .width = 8, .layers = 4, .num_theta = 4,
-                          .num_phi = 4, .eigenmaps = 2};
+    meso_gdm_desc desc = {
+        .heightfield = hf, .width = 8, .layers = 4, .num_theta = 4, .num_phi = 4, .eigenmaps = 2};
     meso_gdm *first = NULL, *second = NULL;
     assert_int_equal(meso_gdm_bake_cached(ctx, &desc, &first), MESO_OK);
     assert_true(meso_gdm_get_compression(first).bake_seconds > 0.0);
@@ -505,12 +506,16 @@ static void test_bad_descs_are_refused_before_allocating(void **state) {
     meso_gdm_desc wide = {.heightfield = hf, .width = MESO_GDM_MAX_SIDE + 1};
     assert_int_equal(meso_bake_gdm(ctx, &wide, &gdm), MESO_ERROR_LIMIT);
     assert_non_null(strstr(meso_context_last_error(ctx), "width"));
-    meso_gdm_desc huge = {.heightfield = hf, .width = 512, .layers = 256, .num_theta = 64,
-                          .num_phi = 128};
+    meso_gdm_desc huge = {
+        .heightfield = hf, .width = 512, .layers = 256, .num_theta = 64, .num_phi = 128};
     assert_int_equal(meso_bake_gdm(ctx, &huge, &gdm), MESO_ERROR_LIMIT);
     assert_non_null(strstr(meso_context_last_error(ctx), "table"));
-    meso_gdm_desc many = {.heightfield = hf, .width = 4, .layers = 2, .num_theta = 2,
-                          .num_phi = 1, .eigenmaps = 5}; /* rank 4 */
+    meso_gdm_desc many = {.heightfield = hf,
+                          .width = 4,
+                          .layers = 2,
+                          .num_theta = 2,
+                          .num_phi = 1,
+                          .eigenmaps = 5}; /* rank 4 */
     assert_int_equal(meso_bake_gdm(ctx, &many, &gdm), MESO_ERROR_INVALID_ARGUMENT);
     assert_non_null(strstr(meso_context_last_error(ctx), "eigenmaps"));
     /* the default bake within a budget of 64 MiB: refused by the estimate, not by malloc */
