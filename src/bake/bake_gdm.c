@@ -247,12 +247,20 @@ static bool add_isosurface(gdm_surface *s, const meso_isosurface *iso) {
     return ok;
 }
 
+/* The texels a side of a height field's surface grid. */
+static int surface_texels(int texels) {
+    return texels < SURFACE_MAX_TEXELS ? texels : SURFACE_MAX_TEXELS;
+}
+static uint64_t heightfield_triangles(const meso_heightfield *hf) {
+    return 2u * (uint64_t)(surface_texels(hf->width) + 1) *
+           (uint64_t)(surface_texels(hf->height) + 1);
+}
+
 /* The height field's surface w = 1 - h through its texel centres, from the texel left of
  * u = 0 to the one right of u = 1 (and the same in v), so it covers the column. A field
  * finer than SURFACE_MAX_TEXELS is sampled bilinearly on a coarser grid. */
 static bool add_heightfield(gdm_surface *s, const meso_heightfield *hf) {
-    int gw = hf->width < SURFACE_MAX_TEXELS ? hf->width : SURFACE_MAX_TEXELS;
-    int gh = hf->height < SURFACE_MAX_TEXELS ? hf->height : SURFACE_MAX_TEXELS;
+    int gw = surface_texels(hf->width), gh = surface_texels(hf->height);
     bool native = gw == hf->width && gh == hf->height;
     size_t cw = (size_t)gw + 2, ch = (size_t)gh + 2; /* grid points: i = -1 .. gw */
     float *vertices = NULL;
@@ -295,7 +303,13 @@ static meso_isosurface_desc surface_cells_of(const meso_gdm_desc *d) {
 
 /* Embree's BVH, built on one thread: the same tree, hence the same hits, for any number of
  * the context's threads (rays are traced from the context's own pool). */
-static meso_result surface_build(meso_context *ctx, const meso_gdm_desc *d, gdm_surface *s) {
+/* Bytes of the traced surface per triangle: Embree's BVH and the vertex and index buffers,
+ * measured (peak resident size: 130 bytes a triangle for the weave's 172 k). */
+#define SURFACE_BYTES_PER_TRIANGLE 130u
+
+/* `needed`: the bake's other memory, for the budget check once the triangles are counted. */
+static meso_result surface_build(meso_context *ctx, const meso_gdm_desc *d, uint64_t needed,
+                                 gdm_surface *s) {
     *s = (gdm_surface){0};
     s->device = rtcNewDevice("threads=1");
     if (!s->device) return meso_log_error(ctx, MESO_ERROR_INTERNAL, "gdm: Embree could not start");
@@ -311,8 +325,15 @@ static meso_result surface_build(meso_context *ctx, const meso_gdm_desc *d, gdm_
             surface_release(s);
             return result;
         }
-        ok = add_isosurface(s, iso);
+        /* the copies add the triangles along the tile's sides: a few per cent */
+        result = meso_memory_check(
+            ctx, "gdm bake", needed + iso->num_triangles * 9u / 8u * SURFACE_BYTES_PER_TRIANGLE);
+        ok = result == MESO_OK && add_isosurface(s, iso);
         meso_isosurface_destroy(iso);
+        if (result != MESO_OK) {
+            surface_release(s);
+            return result;
+        }
     } else {
         ok = add_heightfield(s, d->heightfield);
     }
@@ -577,21 +598,22 @@ meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm
     int rank = (size_t)columns < rows ? columns : (int)rows;
     /* The memory budget, before allocating: W (float, then halves), normals and inside flags,
      * the SVD's blocks and Gram matrix (bake_svd.c: 8192 rows as float and double), the
-     * surface (about 100 bytes a triangle in Embree; surface nets make at most about 4
-     * triangles per cell the surface crosses, bounded here by 4 per column cell of the
-     * surface grid and layer), the raw table when kept. Holding A between the passes is
-     * extra, taken only if it fits. */
+     * surface, the raw table when kept. Holding A between the passes is extra, taken only if
+     * it fits. */
     uint64_t table_bytes = (uint64_t)rows * (uint64_t)columns * sizeof(float);
+    /* The surface: a height field's triangles are known now; a solid's surface nets need
+     * their node grid (a float and a vertex index a node), and their triangles are checked
+     * once counted (surface_build). */
     meso_isosurface_desc cells = surface_cells_of(&d);
-    uint64_t surface_triangles =
-        d.solid ? 4u * (uint64_t)cells.resolution_u * (uint64_t)cells.resolution_v *
-                      (uint64_t)cells.resolution_w / 4u
-                : (uint64_t)(SURFACE_MAX_TEXELS + 2) * (SURFACE_MAX_TEXELS + 2) * 2u;
+    uint64_t surface_bytes =
+        d.solid ? 8u * (uint64_t)(cells.resolution_u + 1) * (uint64_t)(cells.resolution_v + 1) *
+                      (uint64_t)(cells.resolution_w + 3)
+                : heightfield_triangles(d.heightfield) * SURFACE_BYTES_PER_TRIANGLE;
     uint64_t needed = (uint64_t)rows * (uint64_t)k * (sizeof(float) + sizeof(uint16_t)) +
                       (uint64_t)voxels * (3u * sizeof(float) + 1u) +
                       UINT64_C(8192) * (uint64_t)columns * (sizeof(float) + sizeof(double)) +
-                      3u * (uint64_t)columns * (uint64_t)columns * sizeof(double) +
-                      surface_triangles * 100u + (d.keep_raw ? table_bytes : 0);
+                      3u * (uint64_t)columns * (uint64_t)columns * sizeof(double) + surface_bytes +
+                      (d.keep_raw ? table_bytes : 0);
     if ((result = meso_memory_check(ctx, "gdm bake", needed)) != MESO_OK) return result;
     bool hold_table = !d.keep_raw && table_bytes <= (UINT64_C(1) << 31) &&
                       needed + table_bytes <= meso_context_memory_limit(ctx);
@@ -620,7 +642,7 @@ meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm
         !gdm->normals || (d.keep_raw && !gdm->raw))
         goto out_of_memory;
 
-    if ((result = surface_build(ctx, &d, &surface)) != MESO_OK) goto fail;
+    if ((result = surface_build(ctx, &d, needed - surface_bytes, &surface)) != MESO_OK) goto fail;
     double surface_seconds = meso_time_seconds() - start;
     for (int p = 0; p < d.num_phi; p++)
         for (int t = 0; t < d.num_theta; t++)
