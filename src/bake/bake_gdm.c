@@ -924,9 +924,10 @@ meso_result meso_gdm_from_bake_file(meso_context *ctx, const meso_bake_file *bak
                               bake->kind_version, MESO_GDM_KIND_VERSION);
     double v[NUM_PARAM_KEYS];
     for (int i = 0; i < NUM_PARAM_KEYS; i++)
-        if (!meso_bake_params_number(bake->params_json, param_keys[i], &v[i]) || fabs(v[i]) > 1e6)
+        if (!meso_bake_params_number(bake->params_json, param_keys[i], &v[i]) || fabs(v[i]) > 1e6 ||
+            v[i] != floor(v[i]))
             return meso_log_error(ctx, MESO_ERROR_FORMAT,
-                                  "%s: params: %s: missing, not a number or out of range", name,
+                                  "%s: params: %s: missing, not an integer or out of range", name,
                                   param_keys[i]);
     meso_gdm_desc d = {.width = (int)v[0],
                        .height = (int)v[1],
