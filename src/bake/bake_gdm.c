@@ -144,16 +144,10 @@ static meso_vec3 direction_of(double theta, double phi) {
 
 /* ---- The surface the rays are traced against ---------------------------------------------- */
 
-typedef struct surface_part {
-    const float *vertices;   /* 3 floats a vertex: (u, v, w) */
-    const uint32_t *indices; /* 3 a triangle, outward = (p1 - p0) x (p2 - p0) */
-} surface_part;
-
+/* Triangles in (u, v, w), each facing out of the solid: (p1 - p0) x (p2 - p0) points outward. */
 typedef struct gdm_surface {
     RTCDevice device;
     RTCScene scene;
-    int num_parts;
-    surface_part parts[COPIES];
     size_t num_triangles;
 } gdm_surface;
 
@@ -180,14 +174,11 @@ static RTCGeometry new_part(gdm_surface *s, size_t num_vertices, size_t num_tria
     return g;
 }
 
-/* Commit a filled part and attach it as geometry `id` (recorded in s->parts[id]). */
-static void finish_part(gdm_surface *s, RTCGeometry g, unsigned id, const float *vertices,
-                        const uint32_t *indices, size_t num_triangles) {
+/* Commit a filled part and attach it to the scene as geometry `id`. */
+static void finish_part(gdm_surface *s, RTCGeometry g, unsigned id, size_t num_triangles) {
     rtcCommitGeometry(g);
     rtcAttachGeometryByID(s->scene, g, id);
     rtcReleaseGeometry(g); /* the scene holds it */
-    s->parts[id] = (surface_part){vertices, indices};
-    if ((int)id + 1 > s->num_parts) s->num_parts = (int)id + 1;
     s->num_triangles += num_triangles;
 }
 
@@ -240,7 +231,7 @@ static bool add_isosurface(gdm_surface *s, const meso_isosurface *iso) {
                     indices[3 * k + (size_t)c] = remap[iso->indices[3 * t + (size_t)c]];
                 k++;
             }
-        finish_part(s, g, copy, vertices, indices, nt);
+        finish_part(s, g, copy, nt);
     }
     free(keep);
     free(remap);
@@ -287,7 +278,7 @@ static bool add_heightfield(gdm_surface *s, const meso_heightfield *hf) {
             t[0] = p00, t[1] = p10, t[2] = p01;
             t[3] = p10, t[4] = p11, t[5] = p01;
         }
-    finish_part(s, g, 0, vertices, indices, num_triangles);
+    finish_part(s, g, 0, num_triangles);
     return true;
 }
 
@@ -397,18 +388,6 @@ static void classify_voxels(void *user, size_t job_index, int thread_index) {
     }
 }
 
-/* Whether the ray along `direction` enters the solid through triangle prim of part geom. */
-static bool enters(const gdm_surface *s, unsigned geom, unsigned prim, meso_vec3 direction) {
-    const surface_part *part = &s->parts[geom];
-    const uint32_t *tri = part->indices + 3 * (size_t)prim;
-    const float *a = part->vertices + 3 * (size_t)tri[0];
-    const float *b = part->vertices + 3 * (size_t)tri[1];
-    const float *c = part->vertices + 3 * (size_t)tri[2];
-    meso_vec3 e1 = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    meso_vec3 e2 = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    return meso_vec3_dot(meso_vec3_cross(e1, e2), direction) < 0.0f;
-}
-
 /* d from a voxel outside the solid at `origin` (u, v in [0, 1)) along the unit `direction`:
  * the distance to where the ray first enters the surface, the ray wrapped across the column's
  * sides; where it enters none before leaving the slab 0 <= w <= 1, the distance to that face
@@ -448,8 +427,10 @@ static float trace(const gdm_surface *s, meso_vec3 origin, meso_vec3 direction) 
             rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
             rtcIntersect1(s->scene, &context, &rh);
             if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
-            if (enters(s, rh.hit.geomID, rh.hit.primID, direction))
-                return fminf(travelled + rh.ray.tfar, limit);
+            /* Embree's Ng is (p1 - p0) x (p2 - p0), the outward side of both surfaces */
+            float facing =
+                rh.hit.Ng_x * direction.x + rh.hit.Ng_y * direction.y + rh.hit.Ng_z * direction.z;
+            if (facing < 0.0f) return fminf(travelled + rh.ray.tfar, limit);
             /* leaving a surface the ray never entered (it bulges past the source here) */
             tnear = rh.ray.tfar + 1e-6f * (1.0f + rh.ray.tfar);
         }
