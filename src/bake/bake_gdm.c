@@ -564,13 +564,20 @@ static meso_result check_source(meso_context *ctx, const meso_gdm_desc *d) {
     return MESO_OK;
 }
 
-meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm **out_gdm) {
+/* The arguments of a bake checked, the desc with its defaults into out_desc. */
+static meso_result begin_bake(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm **out_gdm,
+                              meso_gdm_desc *out_desc) {
     if (out_gdm) *out_gdm = NULL;
     if (!out_gdm || !desc)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "gdm: NULL desc or out_gdm");
-    meso_gdm_desc d = meso_query_gdm_defaults(desc);
-    meso_result result = check_source(ctx, &d);
-    if (result == MESO_OK) result = check_desc(ctx, "gdm", &d);
+    *out_desc = meso_query_gdm_defaults(desc);
+    meso_result result = check_source(ctx, out_desc);
+    return result == MESO_OK ? check_desc(ctx, "gdm", out_desc) : result;
+}
+
+meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm **out_gdm) {
+    meso_gdm_desc d;
+    meso_result result = begin_bake(ctx, desc, out_gdm, &d);
     if (result != MESO_OK) return result;
 
     double start = meso_time_seconds();
@@ -600,7 +607,7 @@ meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm
                       needed + table_bytes <= meso_context_memory_limit(ctx);
 
     gdm_surface surface = {0};
-    float *vectors = NULL, *table = NULL;
+    float *vectors = NULL, *held_table = NULL;
     uint8_t *inside = NULL;
     meso_vec3 *directions = NULL;
     meso_gdm *gdm = calloc(1, sizeof(*gdm));
@@ -623,7 +630,7 @@ meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm
         !gdm->normals || (d.keep_raw && !gdm->raw))
         goto out_of_memory;
 
-    if ((result = surface_build(ctx, &d, needed - surface_bytes, &surface)) != MESO_OK) goto fail;
+    if ((result = surface_build(ctx, &d, needed - surface_bytes, &surface)) != MESO_OK) goto done;
     double surface_seconds = meso_time_seconds() - start;
     for (int p = 0; p < d.num_phi; p++)
         for (int t = 0; t < d.num_theta; t++)
@@ -637,8 +644,8 @@ meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm
 
     /* A table within 2 GiB and the budget (the defaults: 256 MiB) is held between the passes
      * instead of traced again: half the bake, and the stored map's error can be measured. */
-    table = gdm->raw;
-    if (hold_table) table = malloc(table_bytes);
+    held_table = hold_table ? malloc(table_bytes) : NULL;
+    float *table = held_table ? held_table : gdm->raw;
     meso_bake_rows source = {
         .rows = rows,
         .columns = columns,
@@ -649,7 +656,7 @@ meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm
     result =
         meso_bake_svd_streamed(ctx, "gdm", &source, k, gdm->singular, vectors, gdm->weights, table);
     meso_progress_end(source.progress);
-    if (result != MESO_OK) goto fail;
+    if (result != MESO_OK) goto done;
     if (!d.float_weights) {
         gdm->weights_half = malloc(sizeof(uint16_t) * rows * (size_t)k);
         if (!gdm->weights_half) goto out_of_memory;
@@ -663,18 +670,14 @@ meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm
     gdm->compression.bake_seconds = meso_time_seconds() - start;
     meso_log_info(ctx, "gdm: %zu triangles traced, surface and BVH %.2f s, bake %.2f s",
                   surface.num_triangles, surface_seconds, gdm->compression.bake_seconds);
-    if (table != gdm->raw) free(table);
-    surface_release(&surface);
-    free(directions);
-    free(inside);
-    free(vectors);
     *out_gdm = gdm;
-    return MESO_OK;
+    gdm = NULL;
+    goto done;
 out_of_memory:
     result = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "gdm: out of memory for %zu x %d table",
                             rows, columns);
-fail:
-    if (table != gdm->raw) free(table);
+done:
+    free(held_table);
     surface_release(&surface);
     free(directions);
     free(inside);
@@ -1004,11 +1007,8 @@ meso_result meso_gdm_load(meso_context *ctx, const char *path, meso_gdm **out_gd
 }
 
 meso_result meso_gdm_bake_cached(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm **out_gdm) {
-    if (out_gdm) *out_gdm = NULL;
-    if (!desc || !out_gdm)
-        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "gdm: NULL desc or out_gdm");
-    meso_gdm_desc d = meso_query_gdm_defaults(desc);
-    meso_result result = check_source(ctx, &d);
+    meso_gdm_desc d;
+    meso_result result = begin_bake(ctx, desc, out_gdm, &d);
     if (result != MESO_OK) return result;
     uint64_t key = meso_gdm_cache_key(&d);
     meso_bake_file *cached = NULL;
