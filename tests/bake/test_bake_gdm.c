@@ -533,6 +533,34 @@ static void test_bad_descs_are_refused_before_allocating(void **state) {
     meso_context_destroy(ctx);
 }
 
+static bool cancel_at_once(void *user, const char *label, double fraction) {
+    (void)label;
+    (void)fraction;
+    ++*(int *)user;
+    return true;
+}
+
+static void test_a_cancelled_bake_returns_cancelled_and_no_map(void **state) {
+    (void)state;
+    int calls = 0;
+    meso_context *ctx = NULL;
+    assert_int_equal(meso_context_create(&(meso_context_desc){.num_threads = 2,
+                                                              .progress = MESO_PROGRESS_NEVER,
+                                                              .on_progress = cancel_at_once,
+                                                              .progress_user = &calls},
+                                         &ctx),
+                     MESO_OK);
+    meso_heightfield *hf = make_bumps(16);
+    meso_gdm_desc desc = small_desc();
+    desc.heightfield = hf;
+    meso_gdm *gdm = NULL;
+    assert_int_equal(meso_bake_gdm(ctx, &desc, &gdm), MESO_ERROR_CANCELLED);
+    assert_null(gdm);
+    assert_true(calls > 0);
+    free_heightfield(hf);
+    meso_context_destroy(ctx);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_defaults_are_the_papers),
@@ -547,6 +575,7 @@ int main(void) {
         cmocka_unit_test(test_corrupted_file_is_refused_naming_it),
         cmocka_unit_test(test_cached_bake_is_found_again_and_keyed_by_every_parameter),
         cmocka_unit_test(test_bad_descs_are_refused_before_allocating),
+        cmocka_unit_test(test_a_cancelled_bake_returns_cancelled_and_no_map),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
