@@ -442,6 +442,10 @@ static void test_corrupted_file_is_refused_naming_it(void **state) {
     const char *path = test_path(test_temp_dir(), "corrupt.mesobake");
     assert_int_equal(meso_gdm_save(ctx, gdm, path), MESO_OK);
     meso_gdm_destroy(gdm);
+    char arguments[1200];
+    snprintf(arguments, sizeof(arguments), "info %s", path);
+    const char *err = NULL;
+    assert_int_equal(test_run_meso(arguments, &err), 0);
     size_t size = 0;
     char *bytes = test_read_file(path, &size);
     bytes[size - 40] ^= 0x10; /* in the payload, before the checksum */
@@ -449,11 +453,64 @@ static void test_corrupted_file_is_refused_naming_it(void **state) {
     assert_int_equal(meso_gdm_load(ctx, path, &gdm), MESO_ERROR_FORMAT);
     assert_null(gdm);
     assert_non_null(strstr(meso_context_last_error(ctx), path));
+    /* the program: one line naming the file, status 2 */
+    assert_int_equal(test_run_meso(arguments, &err), 2);
+    char expected[1200];
+    snprintf(expected, sizeof(expected), "meso: %s: ", path);
+    assert_true(strncmp(err, expected, strlen(expected)) == 0);
+    assert_non_null(strchr(err, '\n'));
+    assert_true(strchr(err, '\n')[1] == 0);
     /* a valid file of another kind is refused too */
     test_write_file(path, bytes, 0);
     assert_int_equal(meso_gdm_load(ctx, path, &gdm), MESO_ERROR_FORMAT);
     assert_non_null(strstr(meso_context_last_error(ctx), path));
     free(bytes);
+    free_heightfield(hf);
+    meso_context_destroy(ctx);
+}
+
+/* Files with a valid checksum whose contents do not fit: params against the arrays, values. */
+static void test_inconsistent_files_with_valid_checksums_are_refused(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    meso_heightfield *hf = make_bumps(16);
+    meso_gdm_desc desc = {
+        .heightfield = hf, .width = 8, .layers = 4, .num_theta = 4, .num_phi = 4, .eigenmaps = 2};
+    meso_gdm *gdm = NULL;
+    assert_int_equal(meso_bake_gdm(ctx, &desc, &gdm), MESO_OK);
+    const char *path = test_path(test_temp_dir(), "inconsistent.mesobake");
+    assert_int_equal(meso_gdm_save(ctx, gdm, path), MESO_OK);
+    meso_gdm_destroy(gdm);
+    meso_bake_file *bake = NULL;
+    assert_int_equal(meso_bake_file_load(ctx, path, &bake), MESO_OK);
+    /* params that claim another width: the arrays no longer fit them */
+    char *params = strdup(bake->params_json);
+    char *width = strstr(params, "\"width\": 8");
+    assert_non_null(width);
+    width[9] = '9'; /* "width": 9 */
+    char *original = bake->params_json;
+    bake->params_json = params;
+    const char *edited = test_path(test_temp_dir(), "inconsistent_width.mesobake");
+    assert_int_equal(meso_bake_file_save(ctx, bake, edited), MESO_OK);
+    assert_int_equal(meso_gdm_load(ctx, edited, &gdm), MESO_ERROR_FORMAT);
+    assert_non_null(strstr(meso_context_last_error(ctx), "wrong type or shape"));
+    /* a NaN in an eigen-map, an out-of-range normal */
+    bake->params_json = original;
+    const meso_bake_array *eigen = meso_bake_file_find(bake, "eigen");
+    float saved = ((float *)eigen->data)[5], nan_value = NAN;
+    memcpy((float *)eigen->data + 5, &nan_value, sizeof(float));
+    assert_int_equal(meso_bake_file_save(ctx, bake, edited), MESO_OK);
+    assert_int_equal(meso_gdm_load(ctx, edited, &gdm), MESO_ERROR_FORMAT);
+    assert_non_null(strstr(meso_context_last_error(ctx), "array \"eigen\": element 5 is nan"));
+    ((float *)eigen->data)[5] = saved;
+    const meso_bake_array *normals = meso_bake_file_find(bake, "normals");
+    ((float *)normals->data)[7] = 1.5f;
+    assert_int_equal(meso_bake_file_save(ctx, bake, edited), MESO_OK);
+    assert_int_equal(meso_gdm_load(ctx, edited, &gdm), MESO_ERROR_FORMAT);
+    assert_non_null(strstr(meso_context_last_error(ctx), "array \"normals\": element 7"));
+    assert_null(gdm);
+    free(params);
+    meso_bake_file_destroy(bake);
     free_heightfield(hf);
     meso_context_destroy(ctx);
 }
@@ -573,6 +630,7 @@ int main(void) {
         cmocka_unit_test(test_same_bytes_for_one_and_two_threads),
         cmocka_unit_test(test_save_load_round_trip_and_describe),
         cmocka_unit_test(test_corrupted_file_is_refused_naming_it),
+        cmocka_unit_test(test_inconsistent_files_with_valid_checksums_are_refused),
         cmocka_unit_test(test_cached_bake_is_found_again_and_keyed_by_every_parameter),
         cmocka_unit_test(test_bad_descs_are_refused_before_allocating),
         cmocka_unit_test(test_a_cancelled_bake_returns_cancelled_and_no_map),
