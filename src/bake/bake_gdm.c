@@ -740,6 +740,17 @@ static lookup_axes axes_of(const meso_gdm_desc *d, meso_vec3 uvw, meso_vec3 dire
 /* Weight of corner bit `bit` set or not along one axis. */
 static float corner_weight(meso_bake_axis axis, int set) { return set ? axis.w : 1.0f - axis.w; }
 
+/* Corner `corner` (bits: a, b, c) of a trilinear interpolation over three axes: its indices
+ * and its weight. */
+static float trilinear_corner(int corner, meso_bake_axis a, meso_bake_axis b, meso_bake_axis c,
+                              int *out_a, int *out_b, int *out_c) {
+    *out_a = corner & 1 ? a.i1 : a.i0;
+    *out_b = corner & 2 ? b.i1 : b.i0;
+    *out_c = corner & 4 ? c.i1 : c.i0;
+    return corner_weight(a, corner & 1) * corner_weight(b, corner & 2) *
+           corner_weight(c, corner & 4);
+}
+
 float meso_gdm_lookup(const meso_gdm *gdm, meso_vec3 uvw, meso_vec3 direction, int num_eigen,
                       bool raw) {
     const meso_gdm_desc *d = &gdm->desc;
@@ -758,10 +769,8 @@ float meso_gdm_lookup(const meso_gdm *gdm, meso_vec3 uvw, meso_vec3 direction, i
     float sum = 0.0f;
     /* trilinear over the eight (x, y, phi) rows */
     for (int corner = 0; corner < 8; corner++) {
-        int ix = corner & 1 ? a.x.i1 : a.x.i0, iy = corner & 2 ? a.y.i1 : a.y.i0;
-        int ip = corner & 4 ? a.phi.i1 : a.phi.i0;
-        float w = corner_weight(a.x, corner & 1) * corner_weight(a.y, corner & 2) *
-                  corner_weight(a.phi, corner & 4);
+        int ix, iy, ip;
+        float w = trilinear_corner(corner, a.x, a.y, a.phi, &ix, &iy, &ip);
         if (w == 0.0f) continue;
         size_t row = ((size_t)iy * (size_t)d->width + (size_t)ix) * (size_t)d->num_phi + (size_t)ip;
         float value = 0.0f;
@@ -787,10 +796,8 @@ meso_vec3 meso_gdm_normal(const meso_gdm *gdm, meso_vec3 uvw) {
     lookup_axes a = axes_of(d, uvw, (meso_vec3){0.0f, 0.0f, -1.0f});
     meso_vec3 n = {0.0f, 0.0f, 0.0f};
     for (int corner = 0; corner < 8; corner++) {
-        int ix = corner & 1 ? a.x.i1 : a.x.i0, iy = corner & 2 ? a.y.i1 : a.y.i0;
-        int iz = corner & 4 ? a.z.i1 : a.z.i0;
-        float w = corner_weight(a.x, corner & 1) * corner_weight(a.y, corner & 2) *
-                  corner_weight(a.z, corner & 4);
+        int ix, iy, iz;
+        float w = trilinear_corner(corner, a.x, a.y, a.z, &ix, &iy, &iz);
         if (w == 0.0f) continue;
         const float *v =
             gdm->normals +

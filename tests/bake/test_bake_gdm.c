@@ -431,17 +431,24 @@ static void test_save_load_round_trip_and_describe(void **state) {
     meso_context_destroy(ctx);
 }
 
-static void test_corrupted_file_is_refused_naming_it(void **state) {
-    (void)state;
-    meso_context *ctx = test_context(2);
-    meso_heightfield *hf = make_bumps(16);
+/* A tiny bake of hf saved in the test's folder as `name`; its path. */
+static const char *save_tiny_bake(meso_context *ctx, meso_heightfield *hf, const char *name) {
     meso_gdm_desc desc = {
         .heightfield = hf, .width = 8, .layers = 4, .num_theta = 4, .num_phi = 4, .eigenmaps = 2};
     meso_gdm *gdm = NULL;
     assert_int_equal(meso_bake_gdm(ctx, &desc, &gdm), MESO_OK);
-    const char *path = test_path(test_temp_dir(), "corrupt.mesobake");
+    const char *path = test_path(test_temp_dir(), name);
     assert_int_equal(meso_gdm_save(ctx, gdm, path), MESO_OK);
     meso_gdm_destroy(gdm);
+    return path;
+}
+
+static void test_corrupted_file_is_refused_naming_it(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    meso_heightfield *hf = make_bumps(16);
+    const char *path = save_tiny_bake(ctx, hf, "corrupt.mesobake");
+    meso_gdm *gdm = NULL;
     char arguments[1200];
     snprintf(arguments, sizeof(arguments), "info %s", path);
     const char *err = NULL;
@@ -474,13 +481,8 @@ static void test_inconsistent_files_with_valid_checksums_are_refused(void **stat
     (void)state;
     meso_context *ctx = test_context(2);
     meso_heightfield *hf = make_bumps(16);
-    meso_gdm_desc desc = {
-        .heightfield = hf, .width = 8, .layers = 4, .num_theta = 4, .num_phi = 4, .eigenmaps = 2};
+    const char *path = save_tiny_bake(ctx, hf, "inconsistent.mesobake");
     meso_gdm *gdm = NULL;
-    assert_int_equal(meso_bake_gdm(ctx, &desc, &gdm), MESO_OK);
-    const char *path = test_path(test_temp_dir(), "inconsistent.mesobake");
-    assert_int_equal(meso_gdm_save(ctx, gdm, path), MESO_OK);
-    meso_gdm_destroy(gdm);
     meso_bake_file *bake = NULL;
     assert_int_equal(meso_bake_file_load(ctx, path, &bake), MESO_OK);
     /* params that claim another width: the arrays no longer fit them */
