@@ -11,7 +11,6 @@
  * into a hit at distance 0. */
 #include <embree3/rtcore.h>
 #include <math.h>
-#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -31,7 +30,7 @@
 #define SURFACE_MAX_TEXELS 1024
 /* The tile and its 8 neighbours: every triangle of a copy that reaches into the column. */
 #define COPIES 9
-/* Rows filled by one job when the normals and the inside flags are computed. */
+/* Voxels classified (inside flag, normal) by one job. */
 #define VOXELS_PER_JOB 4096
 
 struct meso_gdm {
@@ -101,8 +100,9 @@ static meso_result check_desc(meso_context *ctx, const char *name, const meso_gd
  * source never share a key. */
 static uint64_t source_hash_of(const meso_gdm_desc *d) {
     uint64_t tag = d->heightfield ? 1u : d->solid ? 2u : 0u;
-    uint64_t source = d->heightfield ? d->heightfield->hash : d->solid ? meso_solid_hash(d->solid)
-                                                                       : 0u;
+    uint64_t source = d->heightfield ? d->heightfield->hash
+                      : d->solid     ? meso_solid_hash(d->solid)
+                                     : 0u;
     return meso_hash64(&source, sizeof(source), meso_hash64(&tag, sizeof(tag), MESO_HASH_SEED));
 }
 
@@ -144,16 +144,10 @@ static meso_vec3 direction_of(double theta, double phi) {
 
 /* ---- The surface the rays are traced against ---------------------------------------------- */
 
-typedef struct surface_part {
-    const float *vertices;   /* 3 floats a vertex: (u, v, w) */
-    const uint32_t *indices; /* 3 a triangle, outward = (p1 - p0) x (p2 - p0) */
-} surface_part;
-
+/* Triangles in (u, v, w), each facing out of the solid: (p1 - p0) x (p2 - p0) points outward. */
 typedef struct gdm_surface {
     RTCDevice device;
     RTCScene scene;
-    int num_parts;
-    surface_part parts[COPIES];
     size_t num_triangles;
 } gdm_surface;
 
@@ -180,14 +174,11 @@ static RTCGeometry new_part(gdm_surface *s, size_t num_vertices, size_t num_tria
     return g;
 }
 
-/* Commit a filled part and attach it as geometry `id` (recorded in s->parts[id]). */
-static void finish_part(gdm_surface *s, RTCGeometry g, unsigned id, const float *vertices,
-                        const uint32_t *indices, size_t num_triangles) {
+/* Commit a filled part and attach it to the scene as geometry `id`. */
+static void finish_part(gdm_surface *s, RTCGeometry g, unsigned id, size_t num_triangles) {
     rtcCommitGeometry(g);
     rtcAttachGeometryByID(s->scene, g, id);
     rtcReleaseGeometry(g); /* the scene holds it */
-    s->parts[id] = (surface_part){vertices, indices};
-    if ((int)id + 1 > s->num_parts) s->num_parts = (int)id + 1;
     s->num_triangles += num_triangles;
 }
 
@@ -211,8 +202,8 @@ static bool add_isosurface(gdm_surface *s, const meso_isosurface *iso) {
                 lo_u = fminf(lo_u, p.x + dx), hi_u = fmaxf(hi_u, p.x + dx);
                 lo_v = fminf(lo_v, p.y + dy), hi_v = fmaxf(hi_v, p.y + dy);
             }
-            keep[t] = !(hi_u < -margin || lo_u > 1.0f + margin || hi_v < -margin ||
-                        lo_v > 1.0f + margin);
+            keep[t] =
+                !(hi_u < -margin || lo_u > 1.0f + margin || hi_v < -margin || lo_v > 1.0f + margin);
             if (!keep[t]) continue;
             nt++;
             for (int c = 0; c < 3; c++)
@@ -236,22 +227,31 @@ static bool add_isosurface(gdm_surface *s, const meso_isosurface *iso) {
         size_t k = 0;
         for (size_t t = 0; t < iso->num_triangles; t++)
             if (keep[t]) {
-                for (int c = 0; c < 3; c++) indices[3 * k + (size_t)c] = remap[iso->indices[3 * t + (size_t)c]];
+                for (int c = 0; c < 3; c++)
+                    indices[3 * k + (size_t)c] = remap[iso->indices[3 * t + (size_t)c]];
                 k++;
             }
-        finish_part(s, g, copy, vertices, indices, nt);
+        finish_part(s, g, copy, nt);
     }
     free(keep);
     free(remap);
     return ok;
 }
 
+/* The texels a side of a height field's surface grid. */
+static int surface_texels(int texels) {
+    return texels < SURFACE_MAX_TEXELS ? texels : SURFACE_MAX_TEXELS;
+}
+static uint64_t heightfield_triangles(const meso_heightfield *hf) {
+    return 2u * (uint64_t)(surface_texels(hf->width) + 1) *
+           (uint64_t)(surface_texels(hf->height) + 1);
+}
+
 /* The height field's surface w = 1 - h through its texel centres, from the texel left of
  * u = 0 to the one right of u = 1 (and the same in v), so it covers the column. A field
  * finer than SURFACE_MAX_TEXELS is sampled bilinearly on a coarser grid. */
 static bool add_heightfield(gdm_surface *s, const meso_heightfield *hf) {
-    int gw = hf->width < SURFACE_MAX_TEXELS ? hf->width : SURFACE_MAX_TEXELS;
-    int gh = hf->height < SURFACE_MAX_TEXELS ? hf->height : SURFACE_MAX_TEXELS;
+    int gw = surface_texels(hf->width), gh = surface_texels(hf->height);
     bool native = gw == hf->width && gh == hf->height;
     size_t cw = (size_t)gw + 2, ch = (size_t)gh + 2; /* grid points: i = -1 .. gw */
     float *vertices = NULL;
@@ -278,7 +278,7 @@ static bool add_heightfield(gdm_surface *s, const meso_heightfield *hf) {
             t[0] = p00, t[1] = p10, t[2] = p01;
             t[3] = p10, t[4] = p11, t[5] = p01;
         }
-    finish_part(s, g, 0, vertices, indices, num_triangles);
+    finish_part(s, g, 0, num_triangles);
     return true;
 }
 
@@ -294,7 +294,13 @@ static meso_isosurface_desc surface_cells_of(const meso_gdm_desc *d) {
 
 /* Embree's BVH, built on one thread: the same tree, hence the same hits, for any number of
  * the context's threads (rays are traced from the context's own pool). */
-static meso_result surface_build(meso_context *ctx, const meso_gdm_desc *d, gdm_surface *s) {
+/* Bytes of the traced surface per triangle: Embree's BVH and the vertex and index buffers,
+ * measured (peak resident size: 130 bytes a triangle for the weave's 172 k). */
+#define SURFACE_BYTES_PER_TRIANGLE 130u
+
+/* `needed`: the bake's other memory, for the budget check once the triangles are counted. */
+static meso_result surface_build(meso_context *ctx, const meso_gdm_desc *d, uint64_t needed,
+                                 gdm_surface *s) {
     *s = (gdm_surface){0};
     s->device = rtcNewDevice("threads=1");
     if (!s->device) return meso_log_error(ctx, MESO_ERROR_INTERNAL, "gdm: Embree could not start");
@@ -310,8 +316,15 @@ static meso_result surface_build(meso_context *ctx, const meso_gdm_desc *d, gdm_
             surface_release(s);
             return result;
         }
-        ok = add_isosurface(s, iso);
+        /* the copies add the triangles along the tile's sides: a few per cent */
+        result = meso_memory_check(
+            ctx, "gdm bake", needed + iso->num_triangles * 9u / 8u * SURFACE_BYTES_PER_TRIANGLE);
+        ok = result == MESO_OK && add_isosurface(s, iso);
         meso_isosurface_destroy(iso);
+        if (result != MESO_OK) {
+            surface_release(s);
+            return result;
+        }
     } else {
         ok = add_heightfield(s, d->heightfield);
     }
@@ -319,10 +332,10 @@ static meso_result surface_build(meso_context *ctx, const meso_gdm_desc *d, gdm_
     enum RTCError error = rtcGetDeviceError(s->device);
     if (!ok || error != RTC_ERROR_NONE) {
         surface_release(s);
-        return meso_log_error(ctx, ok && error != RTC_ERROR_OUT_OF_MEMORY ? MESO_ERROR_INTERNAL
-                                                                          : MESO_ERROR_OUT_OF_MEMORY,
-                              "gdm: the ray-tracing structure could not be built (Embree error %d)",
-                              (int)error);
+        return meso_log_error(
+            ctx,
+            ok && error != RTC_ERROR_OUT_OF_MEMORY ? MESO_ERROR_INTERNAL : MESO_ERROR_OUT_OF_MEMORY,
+            "gdm: the ray-tracing structure could not be built (Embree error %d)", (int)error);
     }
     return MESO_OK;
 }
@@ -332,9 +345,9 @@ static meso_result surface_build(meso_context *ctx, const meso_gdm_desc *d, gdm_
 typedef struct bake_job {
     meso_gdm_desc desc;
     const gdm_surface *surface;
-    const uint8_t *inside;  /* [layers][height][width]: the voxel lies in the solid */
-    meso_vec3 *directions;  /* [num_phi][num_theta] */
-    float *normals;         /* [layers][height][width][3] */
+    const uint8_t *inside; /* [layers][height][width]: the voxel lies in the solid */
+    meso_vec3 *directions; /* [num_phi][num_theta] */
+    float *normals;        /* [layers][height][width][3] */
 } bake_job;
 
 /* The source's own inside test and outward normal. */
@@ -373,18 +386,6 @@ static void classify_voxels(void *user, size_t job_index, int thread_index) {
         job->normals[3 * voxel + 1] = n.y;
         job->normals[3 * voxel + 2] = n.z;
     }
-}
-
-/* Whether the ray along `direction` enters the solid through triangle prim of part geom. */
-static bool enters(const gdm_surface *s, unsigned geom, unsigned prim, meso_vec3 direction) {
-    const surface_part *part = &s->parts[geom];
-    const uint32_t *tri = part->indices + 3 * (size_t)prim;
-    const float *a = part->vertices + 3 * (size_t)tri[0];
-    const float *b = part->vertices + 3 * (size_t)tri[1];
-    const float *c = part->vertices + 3 * (size_t)tri[2];
-    meso_vec3 e1 = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    meso_vec3 e2 = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    return meso_vec3_dot(meso_vec3_cross(e1, e2), direction) < 0.0f;
 }
 
 /* d from a voxel outside the solid at `origin` (u, v in [0, 1)) along the unit `direction`:
@@ -426,8 +427,10 @@ static float trace(const gdm_surface *s, meso_vec3 origin, meso_vec3 direction) 
             rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
             rtcIntersect1(s->scene, &context, &rh);
             if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
-            if (enters(s, rh.hit.geomID, rh.hit.primID, direction))
-                return fminf(travelled + rh.ray.tfar, limit);
+            /* Embree's Ng is (p1 - p0) x (p2 - p0), the outward side of both surfaces */
+            float facing =
+                rh.hit.Ng_x * direction.x + rh.hit.Ng_y * direction.y + rh.hit.Ng_z * direction.z;
+            if (facing < 0.0f) return fminf(travelled + rh.ray.tfar, limit);
             /* leaving a surface the ray never entered (it bulges past the source here) */
             tnear = rh.ray.tfar + 1e-6f * (1.0f + rh.ray.tfar);
         }
@@ -536,6 +539,9 @@ static void fill_compression(meso_gdm *gdm) {
     c->compressed_bytes = (uint64_t)rows * (uint64_t)d->eigenmaps * (d->float_weights ? 4u : 2u) +
                           (uint64_t)d->eigenmaps * (uint64_t)columns * 4u;
     c->num_rmse = MESO_GDM_RMSE_COUNT;
+    double energy = 0.0;
+    for (int i = 0; i < gdm->num_sv; i++) energy += (double)gdm->singular[i] * gdm->singular[i];
+    c->rms = (float)sqrt(energy / ((double)rows * (double)columns));
     for (int k = 1; k <= MESO_GDM_RMSE_COUNT; k++) {
         double sum = 0.0;
         for (int i = k; i < gdm->num_sv; i++) sum += (double)gdm->singular[i] * gdm->singular[i];
@@ -548,8 +554,8 @@ static meso_result check_source(meso_context *ctx, const meso_gdm_desc *d) {
     if ((d->heightfield != NULL) == (d->solid != NULL))
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "gdm: exactly one of heightfield and solid must be given");
-    if (d->heightfield && (!d->heightfield->heights || d->heightfield->width < 1 ||
-                           d->heightfield->height < 1))
+    if (d->heightfield &&
+        (!d->heightfield->heights || d->heightfield->width < 1 || d->heightfield->height < 1))
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "gdm: heightfield: empty");
     if (d->solid && !meso_solid_is_periodic(d->solid))
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
@@ -558,13 +564,20 @@ static meso_result check_source(meso_context *ctx, const meso_gdm_desc *d) {
     return MESO_OK;
 }
 
-meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm **out_gdm) {
+/* The arguments of a bake checked, the desc with its defaults into out_desc. */
+static meso_result begin_bake(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm **out_gdm,
+                              meso_gdm_desc *out_desc) {
     if (out_gdm) *out_gdm = NULL;
     if (!out_gdm || !desc)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "gdm: NULL desc or out_gdm");
-    meso_gdm_desc d = meso_query_gdm_defaults(desc);
-    meso_result result = check_source(ctx, &d);
-    if (result == MESO_OK) result = check_desc(ctx, "gdm", &d);
+    *out_desc = meso_query_gdm_defaults(desc);
+    meso_result result = check_source(ctx, out_desc);
+    return result == MESO_OK ? check_desc(ctx, "gdm", out_desc) : result;
+}
+
+meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm **out_gdm) {
+    meso_gdm_desc d;
+    meso_result result = begin_bake(ctx, desc, out_gdm, &d);
     if (result != MESO_OK) return result;
 
     double start = meso_time_seconds();
@@ -573,27 +586,28 @@ meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm
     int rank = (size_t)columns < rows ? columns : (int)rows;
     /* The memory budget, before allocating: W (float, then halves), normals and inside flags,
      * the SVD's blocks and Gram matrix (bake_svd.c: 8192 rows as float and double), the
-     * surface (about 100 bytes a triangle in Embree; surface nets make at most about 4
-     * triangles per cell the surface crosses, bounded here by 4 per column cell of the
-     * surface grid and layer), the raw table when kept. Holding A between the passes is
-     * extra, taken only if it fits. */
+     * surface, the raw table when kept. Holding A between the passes is extra, taken only if
+     * it fits. */
     uint64_t table_bytes = (uint64_t)rows * (uint64_t)columns * sizeof(float);
+    /* The surface: a height field's triangles are known now; a solid's surface nets need
+     * their node grid (a float and a vertex index a node), and their triangles are checked
+     * once counted (surface_build). */
     meso_isosurface_desc cells = surface_cells_of(&d);
-    uint64_t surface_triangles =
-        d.solid ? 4u * (uint64_t)cells.resolution_u * (uint64_t)cells.resolution_v *
-                      (uint64_t)cells.resolution_w / 4u
-                : (uint64_t)(SURFACE_MAX_TEXELS + 2) * (SURFACE_MAX_TEXELS + 2) * 2u;
+    uint64_t surface_bytes =
+        d.solid ? 8u * (uint64_t)(cells.resolution_u + 1) * (uint64_t)(cells.resolution_v + 1) *
+                      (uint64_t)(cells.resolution_w + 3)
+                : heightfield_triangles(d.heightfield) * SURFACE_BYTES_PER_TRIANGLE;
     uint64_t needed = (uint64_t)rows * (uint64_t)k * (sizeof(float) + sizeof(uint16_t)) +
                       (uint64_t)voxels * (3u * sizeof(float) + 1u) +
                       UINT64_C(8192) * (uint64_t)columns * (sizeof(float) + sizeof(double)) +
-                      3u * (uint64_t)columns * (uint64_t)columns * sizeof(double) +
-                      surface_triangles * 100u + (d.keep_raw ? table_bytes : 0);
+                      3u * (uint64_t)columns * (uint64_t)columns * sizeof(double) + surface_bytes +
+                      (d.keep_raw ? table_bytes : 0);
     if ((result = meso_memory_check(ctx, "gdm bake", needed)) != MESO_OK) return result;
     bool hold_table = !d.keep_raw && table_bytes <= (UINT64_C(1) << 31) &&
                       needed + table_bytes <= meso_context_memory_limit(ctx);
 
     gdm_surface surface = {0};
-    float *vectors = NULL, *table = NULL;
+    float *vectors = NULL, *held_table = NULL;
     uint8_t *inside = NULL;
     meso_vec3 *directions = NULL;
     meso_gdm *gdm = calloc(1, sizeof(*gdm));
@@ -616,7 +630,8 @@ meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm
         !gdm->normals || (d.keep_raw && !gdm->raw))
         goto out_of_memory;
 
-    if ((result = surface_build(ctx, &d, &surface)) != MESO_OK) goto fail;
+    if ((result = surface_build(ctx, &d, needed - surface_bytes, &surface)) != MESO_OK) goto done;
+    double surface_seconds = meso_time_seconds() - start;
     for (int p = 0; p < d.num_phi; p++)
         for (int t = 0; t < d.num_theta; t++)
             directions[(size_t)p * d.num_theta + t] = direction_of(theta_of(&d, t), phi_of(&d, p));
@@ -629,8 +644,8 @@ meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm
 
     /* A table within 2 GiB and the budget (the defaults: 256 MiB) is held between the passes
      * instead of traced again: half the bake, and the stored map's error can be measured. */
-    table = gdm->raw;
-    if (hold_table) table = malloc(table_bytes);
+    held_table = hold_table ? malloc(table_bytes) : NULL;
+    float *table = held_table ? held_table : gdm->raw;
     meso_bake_rows source = {
         .rows = rows,
         .columns = columns,
@@ -638,10 +653,10 @@ meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm
         .user = &job,
         .progress = meso_progress_begin(ctx, "gdm bake", (table ? 1u : 2u) * (uint64_t)rows)};
     /* §4.1: A = U S E^T, W = U S: weight maps W_i(x, y, phi), eigen-maps E_i(z, theta) */
-    result = meso_bake_svd_streamed(ctx, "gdm", &source, k, gdm->singular, vectors, gdm->weights,
-                                    table);
+    result =
+        meso_bake_svd_streamed(ctx, "gdm", &source, k, gdm->singular, vectors, gdm->weights, table);
     meso_progress_end(source.progress);
-    if (result != MESO_OK) goto fail;
+    if (result != MESO_OK) goto done;
     if (!d.float_weights) {
         gdm->weights_half = malloc(sizeof(uint16_t) * rows * (size_t)k);
         if (!gdm->weights_half) goto out_of_memory;
@@ -653,18 +668,16 @@ meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm
     fill_compression(gdm);
     gdm->compression.rmse_stored = table ? stored_rmse(ctx, gdm, table) : -1.0f;
     gdm->compression.bake_seconds = meso_time_seconds() - start;
-    if (table != gdm->raw) free(table);
-    surface_release(&surface);
-    free(directions);
-    free(inside);
-    free(vectors);
+    meso_log_info(ctx, "gdm: %zu triangles traced, surface and BVH %.2f s, bake %.2f s",
+                  surface.num_triangles, surface_seconds, gdm->compression.bake_seconds);
     *out_gdm = gdm;
-    return MESO_OK;
+    gdm = NULL;
+    goto done;
 out_of_memory:
     result = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "gdm: out of memory for %zu x %d table",
                             rows, columns);
-fail:
-    if (table != gdm->raw) free(table);
+done:
+    free(held_table);
     surface_release(&surface);
     free(directions);
     free(inside);
@@ -727,6 +740,17 @@ static lookup_axes axes_of(const meso_gdm_desc *d, meso_vec3 uvw, meso_vec3 dire
 /* Weight of corner bit `bit` set or not along one axis. */
 static float corner_weight(meso_bake_axis axis, int set) { return set ? axis.w : 1.0f - axis.w; }
 
+/* Corner `corner` (bits: a, b, c) of a trilinear interpolation over three axes: its indices
+ * and its weight. */
+static float trilinear_corner(int corner, meso_bake_axis a, meso_bake_axis b, meso_bake_axis c,
+                              int *out_a, int *out_b, int *out_c) {
+    *out_a = corner & 1 ? a.i1 : a.i0;
+    *out_b = corner & 2 ? b.i1 : b.i0;
+    *out_c = corner & 4 ? c.i1 : c.i0;
+    return corner_weight(a, corner & 1) * corner_weight(b, corner & 2) *
+           corner_weight(c, corner & 4);
+}
+
 float meso_gdm_lookup(const meso_gdm *gdm, meso_vec3 uvw, meso_vec3 direction, int num_eigen,
                       bool raw) {
     const meso_gdm_desc *d = &gdm->desc;
@@ -745,10 +769,8 @@ float meso_gdm_lookup(const meso_gdm *gdm, meso_vec3 uvw, meso_vec3 direction, i
     float sum = 0.0f;
     /* trilinear over the eight (x, y, phi) rows */
     for (int corner = 0; corner < 8; corner++) {
-        int ix = corner & 1 ? a.x.i1 : a.x.i0, iy = corner & 2 ? a.y.i1 : a.y.i0;
-        int ip = corner & 4 ? a.phi.i1 : a.phi.i0;
-        float w = corner_weight(a.x, corner & 1) * corner_weight(a.y, corner & 2) *
-                  corner_weight(a.phi, corner & 4);
+        int ix, iy, ip;
+        float w = trilinear_corner(corner, a.x, a.y, a.phi, &ix, &iy, &ip);
         if (w == 0.0f) continue;
         size_t row = ((size_t)iy * (size_t)d->width + (size_t)ix) * (size_t)d->num_phi + (size_t)ip;
         float value = 0.0f;
@@ -774,14 +796,12 @@ meso_vec3 meso_gdm_normal(const meso_gdm *gdm, meso_vec3 uvw) {
     lookup_axes a = axes_of(d, uvw, (meso_vec3){0.0f, 0.0f, -1.0f});
     meso_vec3 n = {0.0f, 0.0f, 0.0f};
     for (int corner = 0; corner < 8; corner++) {
-        int ix = corner & 1 ? a.x.i1 : a.x.i0, iy = corner & 2 ? a.y.i1 : a.y.i0;
-        int iz = corner & 4 ? a.z.i1 : a.z.i0;
-        float w = corner_weight(a.x, corner & 1) * corner_weight(a.y, corner & 2) *
-                  corner_weight(a.z, corner & 4);
+        int ix, iy, iz;
+        float w = trilinear_corner(corner, a.x, a.y, a.z, &ix, &iy, &iz);
         if (w == 0.0f) continue;
-        const float *v = gdm->normals +
-                         3u * (((size_t)iz * (size_t)d->height + (size_t)iy) * (size_t)d->width +
-                               (size_t)ix);
+        const float *v =
+            gdm->normals +
+            3u * (((size_t)iz * (size_t)d->height + (size_t)iy) * (size_t)d->width + (size_t)ix);
         n = meso_vec3_add(n, (meso_vec3){w * v[0], w * v[1], w * v[2]});
     }
     float length = meso_vec3_length(n);
@@ -790,7 +810,7 @@ meso_vec3 meso_gdm_normal(const meso_gdm *gdm, meso_vec3 uvw) {
 
 /* ---- Bake files --------------------------------------------------------------------------- */
 
-/* report: rmse[16], num_rmse, rmse_stored, bake_seconds, 0 */
+/* report: rmse[16], num_rmse, rmse_stored, bake_seconds, rms */
 #define REPORT_FLOATS (MESO_GDM_RMSE_COUNT + 4)
 
 static int write_params(const meso_gdm *gdm, char *buffer, size_t size) {
@@ -818,7 +838,7 @@ static meso_bake_file to_bake_file(const meso_gdm *gdm, char *params, size_t par
     report[MESO_GDM_RMSE_COUNT] = (float)c->num_rmse;
     report[MESO_GDM_RMSE_COUNT + 1] = c->rmse_stored;
     report[MESO_GDM_RMSE_COUNT + 2] = (float)c->bake_seconds;
-    report[MESO_GDM_RMSE_COUNT + 3] = 0.0f;
+    report[MESO_GDM_RMSE_COUNT + 3] = c->rms;
     meso_bake_file bake = {.kind = MESO_GDM_KIND,
                            .kind_version = MESO_GDM_KIND_VERSION,
                            .source_hash = gdm->source_hash,
@@ -826,12 +846,12 @@ static meso_bake_file to_bake_file(const meso_gdm *gdm, char *params, size_t par
                            .num_arrays = 5};
     uint64_t h = (uint64_t)d->height, w = (uint64_t)d->width, p = (uint64_t)d->num_phi;
     uint64_t l = (uint64_t)d->layers, t = (uint64_t)d->num_theta;
-    bake.arrays[0] = (meso_bake_array){
-        .name = "weights",
-        .type = gdm->weights_half ? MESO_BAKE_F16 : MESO_BAKE_F32,
-        .num_dims = 4,
-        .dims = {h, w, p, (uint64_t)d->eigenmaps},
-        .data = gdm->weights_half ? (void *)gdm->weights_half : (void *)gdm->weights};
+    bake.arrays[0] = (meso_bake_array){.name = "weights",
+                                       .type = gdm->weights_half ? MESO_BAKE_F16 : MESO_BAKE_F32,
+                                       .num_dims = 4,
+                                       .dims = {h, w, p, (uint64_t)d->eigenmaps},
+                                       .data = gdm->weights_half ? (void *)gdm->weights_half
+                                                                 : (void *)gdm->weights};
     bake.arrays[1] = (meso_bake_array){.name = "eigen",
                                        .type = MESO_BAKE_F32,
                                        .num_dims = 3,
@@ -879,9 +899,8 @@ static float *copy_floats(const float *source, size_t count) {
 }
 
 /* The params every loader and `meso info` read. */
-static const char *const param_keys[] = {"width",     "height",        "layers",     "num_theta",
-                                         "num_phi",   "eigenmaps",     "float_weights",
-                                         "heightfield"};
+static const char *const param_keys[] = {"width",   "height",    "layers",        "num_theta",
+                                         "num_phi", "eigenmaps", "float_weights", "heightfield"};
 #define NUM_PARAM_KEYS (int)(sizeof(param_keys) / sizeof(param_keys[0]))
 
 meso_result meso_gdm_from_bake_file(meso_context *ctx, const meso_bake_file *bake, const char *name,
@@ -896,10 +915,10 @@ meso_result meso_gdm_from_bake_file(meso_context *ctx, const meso_bake_file *bak
                               bake->kind_version, MESO_GDM_KIND_VERSION);
     double v[NUM_PARAM_KEYS];
     for (int i = 0; i < NUM_PARAM_KEYS; i++)
-        if (!meso_bake_params_number(bake->params_json, param_keys[i], &v[i]) ||
-            fabs(v[i]) > 1e6)
+        if (!meso_bake_params_number(bake->params_json, param_keys[i], &v[i]) || fabs(v[i]) > 1e6 ||
+            v[i] != floor(v[i]))
             return meso_log_error(ctx, MESO_ERROR_FORMAT,
-                                  "%s: params: %s: missing, not a number or out of range", name,
+                                  "%s: params: %s: missing, not an integer or out of range", name,
                                   param_keys[i]);
     meso_gdm_desc d = {.width = (int)v[0],
                        .height = (int)v[1],
@@ -919,9 +938,8 @@ meso_result meso_gdm_from_bake_file(meso_context *ctx, const meso_bake_file *bak
     uint64_t weights_dims[4] = {h, w, p, (uint64_t)k}, eigen_dims[3] = {(uint64_t)k, l, t};
     uint64_t singular_dims[1] = {(uint64_t)rank}, normals_dims[4] = {l, h, w, 3};
     uint64_t report_dims[1] = {REPORT_FLOATS}, raw_dims[5] = {h, w, p, l, t};
-    const void *weights = meso_bake_file_expect(bake, "weights",
-                                                d.float_weights ? MESO_BAKE_F32 : MESO_BAKE_F16,
-                                                4, weights_dims);
+    const void *weights = meso_bake_file_expect(
+        bake, "weights", d.float_weights ? MESO_BAKE_F32 : MESO_BAKE_F16, 4, weights_dims);
     const float *eigen = meso_bake_file_expect(bake, "eigen", MESO_BAKE_F32, 3, eigen_dims);
     const float *singular =
         meso_bake_file_expect(bake, "singular_values", MESO_BAKE_F32, 1, singular_dims);
@@ -942,12 +960,9 @@ meso_result meso_gdm_from_bake_file(meso_context *ctx, const meso_bake_file *bak
     static const struct {
         const char *array;
         double min, max;
-    } ranges[] = {{"weights", -65504.0, 65504.0},
-                  {"eigen", -1.001, 1.001},
-                  {"singular_values", 0.0, 3.4e38},
-                  {"normals", -1.001, 1.001},
-                  {"report", -1.0, 3.4e38},
-                  {"raw", 0.0, (double)MESO_GDM_MAX_RAY_LENGTH}};
+    } ranges[] = {{"weights", -65504.0, 65504.0},   {"eigen", -1.001, 1.001},
+                  {"singular_values", 0.0, 3.4e38}, {"normals", -1.001, 1.001},
+                  {"report", -1.0, 3.4e38},         {"raw", 0.0, (double)MESO_GDM_MAX_RAY_LENGTH}};
     for (size_t i = 0; i < sizeof(ranges) / sizeof(ranges[0]); i++) {
         const meso_bake_array *a = meso_bake_file_find(bake, ranges[i].array);
         if (a && (result = meso_bake_array_check_values(ctx, name, a, ranges[i].min,
@@ -999,11 +1014,8 @@ meso_result meso_gdm_load(meso_context *ctx, const char *path, meso_gdm **out_gd
 }
 
 meso_result meso_gdm_bake_cached(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm **out_gdm) {
-    if (out_gdm) *out_gdm = NULL;
-    if (!desc || !out_gdm)
-        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "gdm: NULL desc or out_gdm");
-    meso_gdm_desc d = meso_query_gdm_defaults(desc);
-    meso_result result = check_source(ctx, &d);
+    meso_gdm_desc d;
+    meso_result result = begin_bake(ctx, desc, out_gdm, &d);
     if (result != MESO_OK) return result;
     uint64_t key = meso_gdm_cache_key(&d);
     meso_bake_file *cached = NULL;
@@ -1044,11 +1056,13 @@ size_t meso_gdm_describe(const meso_bake_file *bake, char *buffer, size_t size) 
                      "gdm: %.0f x %.0f x %.0f voxels, %.0f x %.0f directions, from a %s\n"
                      "raw %.2f MiB, compressed (k=%.0f, weights %s) %.3f MiB, ratio %.1f:1, "
                      "baked in %.1f s\n"
-                     "reconstruction RMSE of d (texture units; the shell's depth is 1):\n",
+                     "reconstruction RMSE of d (texture units; the shell's depth is 1; RMS of d "
+                     "itself %.4f):\n",
                      v[0], v[1], v[2], v[3], v[4], v[7] != 0.0 ? "height field" : "solid",
                      raw_bytes / 1048576.0, v[5], v[6] != 0.0 ? "float32" : "IEEE halves",
                      compressed_bytes / 1048576.0,
-                     compressed_bytes > 0.0 ? raw_bytes / compressed_bytes : 0.0, seconds);
+                     compressed_bytes > 0.0 ? raw_bytes / compressed_bytes : 0.0, seconds,
+                     (double)r[MESO_GDM_RMSE_COUNT + 3]);
     for (int k = 1; k <= MESO_GDM_RMSE_COUNT && n > 0 && (size_t)n < sizeof(text); k++)
         n += snprintf(text + n, sizeof(text) - (size_t)n, "  k=%2d  %.5f%s\n", k, r[k - 1],
                       k == (int)v[5] ? "  (kept)" : "");

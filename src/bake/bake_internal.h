@@ -41,8 +41,8 @@ meso_result meso_bake_svd_streamed(meso_context *ctx, const char *name,
  * false when the key is absent or its value is not a finite number. Pure. */
 bool meso_bake_params_number(const char *json, const char *key, double *out);
 /* The array `name` of `type` with exactly num_dims and dims, or NULL. Pure. */
-const void *meso_bake_file_expect(const meso_bake_file *bake, const char *name,
-                                  meso_bake_type type, int num_dims, const uint64_t *dims);
+const void *meso_bake_file_expect(const meso_bake_file *bake, const char *name, meso_bake_type type,
+                                  int num_dims, const uint64_t *dims);
 /* Round count values to IEEE halves in place and write the halves to out_halves, so that a
  * fresh bake and one loaded from its file hold the same values. */
 void meso_bake_round_to_halves(float *values, uint16_t *out_halves, size_t count);

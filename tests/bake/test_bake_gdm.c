@@ -13,8 +13,8 @@
 /* A small table: 16 x 16 x 8 voxels, 8 x 8 directions (the surface is still extracted at its
  * floor of 128 x 128 x 64 cells, as for the defaults). */
 static meso_gdm_desc small_desc(void) {
-    return (meso_gdm_desc){.width = 16, .layers = 8, .num_theta = 8, .num_phi = 8,
-                           .eigenmaps = 4, .keep_raw = true};
+    return (meso_gdm_desc){
+        .width = 16, .layers = 8, .num_theta = 8, .num_phi = 8, .eigenmaps = 4, .keep_raw = true};
 }
 
 static meso_heightfield *make_constant(float value) {
@@ -112,10 +112,10 @@ static void test_slab_solid_gives_the_analytic_distances(void **state) {
     (void)state;
     meso_context *ctx = test_context(2);
     meso_solid *solid = NULL;
-    assert_int_equal(meso_solid_create_procedural(
-                         ctx, &(meso_solid_desc){.kind = MESO_SOLID_SLAB, .thickness = 0.4f},
-                         &solid),
-                     MESO_OK);
+    assert_int_equal(
+        meso_solid_create_procedural(
+            ctx, &(meso_solid_desc){.kind = MESO_SOLID_SLAB, .thickness = 0.4f}, &solid),
+        MESO_OK);
     meso_gdm_desc desc = small_desc();
     desc.solid = solid;
     meso_gdm *gdm = NULL;
@@ -144,6 +144,58 @@ static void test_constant_height_field_gives_the_analytic_distances(void **state
     assert_float_equal(n.z, -1.0f, 1e-5f);
     meso_gdm_destroy(gdm);
     free_heightfield(hf);
+    meso_context_destroy(ctx);
+}
+
+/* A tile mesh (a solid given as triangles, converted to a distance grid): a closed box over
+ * u, v in [0.25, 0.75], z in [0.3, 0.7], so w in [0.3, 0.7]. Rays straight down onto its top
+ * from above its middle, and up from below it (to its bottom face), are analytic. */
+static void test_tile_mesh_box_gives_the_analytic_distances(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    const float lo = 0.25f, hi = 0.75f, bottom = 0.3f, top = 0.7f;
+    meso_vec3 corners[8];
+    for (int c = 0; c < 8; c++)
+        corners[c] = (meso_vec3){c & 1 ? hi : lo, c & 2 ? hi : lo, c & 4 ? top : bottom};
+    /* two outward triangles per face */
+    static const uint32_t indices[36] = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
+                                         2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
+    meso_solid *solid = NULL;
+    assert_int_equal(
+        meso_solid_create_from_triangles(ctx, corners, 8, indices, 12, "box", 0, &solid), MESO_OK);
+    meso_gdm_desc desc = small_desc();
+    desc.solid = solid;
+    meso_gdm *gdm = NULL;
+    assert_int_equal(meso_bake_gdm(ctx, &desc, &gdm), MESO_OK);
+    meso_gdm_view v = meso_gdm_get_view(gdm);
+    int checked = 0;
+    for (int j = 6; j <= 9; j++)     /* v in [0.41, 0.59] */
+        for (int i = 6; i <= 9; i++) /* u likewise */
+            for (int l = 0; l < v.layers; l++)
+                for (int p = 0; p < v.num_phi; p++) {
+                    meso_vec3 o = voxel_at(&v, i, j, l);
+                    float w_top = 1.0f - top, w_bottom = 1.0f - bottom;
+                    /* the most vertical sampled directions: theta_0 up, theta_{T-1} down */
+                    meso_vec3 up = direction_at(&v, 0, p),
+                              down = direction_at(&v, v.num_theta - 1, p);
+                    float d_up = raw_entry(&v, i, j, l, 0, p);
+                    float d_down = raw_entry(&v, i, j, l, v.num_theta - 1, p);
+                    if (o.z < w_top - 0.02f) { /* above the box: down onto its top */
+                        assert_float_equal(d_down, (w_top - o.z) / down.z, 0.01f);
+                        assert_float_equal(d_up, o.z / -up.z, 1e-4f);
+                        checked++;
+                    } else if (o.z > w_bottom + 0.02f) { /* below: up onto its bottom */
+                        assert_float_equal(d_up, (o.z - w_bottom) / -up.z, 0.01f);
+                        assert_float_equal(d_down, (1.0f - o.z) / down.z, 1e-4f);
+                        checked++;
+                    } else if (o.z > w_top + 0.02f && o.z < w_bottom - 0.02f) {
+                        assert_float_equal(d_up, 0.0f, 0.0f); /* inside */
+                        checked++;
+                    }
+                }
+    assert_true(checked > 300);
+    meso_gdm_destroy(gdm);
+    meso_solid_destroy(solid);
     meso_context_destroy(ctx);
 }
 
@@ -191,8 +243,8 @@ static int compare_floats(const void *a, const void *b) {
 /* Every 7th entry of the table against the march: the error of the traced surface (surface
  * nets for solids, texel-centre triangles for height fields) against the source itself. */
 static void expect_close_to_march(meso_gdm *gdm, const meso_solid *solid,
-                                  const meso_heightfield *hf, float median_limit,
-                                  float p95_limit, float far_fraction_limit) {
+                                  const meso_heightfield *hf, float median_limit, float p95_limit,
+                                  float far_fraction_limit) {
     meso_gdm_view v = meso_gdm_get_view(gdm);
     size_t total = (size_t)v.width * v.height * v.num_phi * v.layers * v.num_theta;
     size_t count = 0;
@@ -274,7 +326,8 @@ static double lookup_rmse(meso_gdm *gdm, int k) {
                 for (int p = 0; p < v.num_phi; p++)
                     for (int t = 0; t < v.num_theta; t++) {
                         meso_vec3 o = voxel_at(&v, i, j, l), dir = direction_at(&v, t, p);
-                        double e = meso_gdm_lookup(gdm, o, dir, k, false) - raw_entry(&v, i, j, l, t, p);
+                        double e =
+                            meso_gdm_lookup(gdm, o, dir, k, false) - raw_entry(&v, i, j, l, t, p);
                         sum += e * e;
                         count++;
                     }
@@ -378,17 +431,28 @@ static void test_save_load_round_trip_and_describe(void **state) {
     meso_context_destroy(ctx);
 }
 
+/* A tiny bake of hf saved in the test's folder as `name`; its path. */
+static const char *save_tiny_bake(meso_context *ctx, meso_heightfield *hf, const char *name) {
+    meso_gdm_desc desc = {
+        .heightfield = hf, .width = 8, .layers = 4, .num_theta = 4, .num_phi = 4, .eigenmaps = 2};
+    meso_gdm *gdm = NULL;
+    assert_int_equal(meso_bake_gdm(ctx, &desc, &gdm), MESO_OK);
+    const char *path = test_path(test_temp_dir(), name);
+    assert_int_equal(meso_gdm_save(ctx, gdm, path), MESO_OK);
+    meso_gdm_destroy(gdm);
+    return path;
+}
+
 static void test_corrupted_file_is_refused_naming_it(void **state) {
     (void)state;
     meso_context *ctx = test_context(2);
     meso_heightfield *hf = make_bumps(16);
-    meso_gdm_desc desc = {.heightfield = hf, .width = 8, .layers = 4, .num_theta = 4,
-                          .num_phi = 4, .eigenmaps = 2};
+    const char *path = save_tiny_bake(ctx, hf, "corrupt.mesobake");
     meso_gdm *gdm = NULL;
-    assert_int_equal(meso_bake_gdm(ctx, &desc, &gdm), MESO_OK);
-    const char *path = test_path(test_temp_dir(), "corrupt.mesobake");
-    assert_int_equal(meso_gdm_save(ctx, gdm, path), MESO_OK);
-    meso_gdm_destroy(gdm);
+    char arguments[1200];
+    snprintf(arguments, sizeof(arguments), "info %s", path);
+    const char *err = NULL;
+    assert_int_equal(test_run_meso(arguments, &err), 0);
     size_t size = 0;
     char *bytes = test_read_file(path, &size);
     bytes[size - 40] ^= 0x10; /* in the payload, before the checksum */
@@ -396,6 +460,13 @@ static void test_corrupted_file_is_refused_naming_it(void **state) {
     assert_int_equal(meso_gdm_load(ctx, path, &gdm), MESO_ERROR_FORMAT);
     assert_null(gdm);
     assert_non_null(strstr(meso_context_last_error(ctx), path));
+    /* the program: one line naming the file, status 2 */
+    assert_int_equal(test_run_meso(arguments, &err), 2);
+    char expected[1200];
+    snprintf(expected, sizeof(expected), "meso: %s: ", path);
+    assert_true(strncmp(err, expected, strlen(expected)) == 0);
+    assert_non_null(strchr(err, '\n'));
+    assert_true(strchr(err, '\n')[1] == 0);
     /* a valid file of another kind is refused too */
     test_write_file(path, bytes, 0);
     assert_int_equal(meso_gdm_load(ctx, path, &gdm), MESO_ERROR_FORMAT);
@@ -405,13 +476,54 @@ static void test_corrupted_file_is_refused_naming_it(void **state) {
     meso_context_destroy(ctx);
 }
 
+/* Files with a valid checksum whose contents do not fit: params against the arrays, values. */
+static void test_inconsistent_files_with_valid_checksums_are_refused(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    meso_heightfield *hf = make_bumps(16);
+    const char *path = save_tiny_bake(ctx, hf, "inconsistent.mesobake");
+    meso_gdm *gdm = NULL;
+    meso_bake_file *bake = NULL;
+    assert_int_equal(meso_bake_file_load(ctx, path, &bake), MESO_OK);
+    /* params that claim another width: the arrays no longer fit them */
+    char *params = strdup(bake->params_json);
+    char *width = strstr(params, "\"width\": 8");
+    assert_non_null(width);
+    width[9] = '9'; /* "width": 9 */
+    char *original = bake->params_json;
+    bake->params_json = params;
+    const char *edited = test_path(test_temp_dir(), "inconsistent_width.mesobake");
+    assert_int_equal(meso_bake_file_save(ctx, bake, edited), MESO_OK);
+    assert_int_equal(meso_gdm_load(ctx, edited, &gdm), MESO_ERROR_FORMAT);
+    assert_non_null(strstr(meso_context_last_error(ctx), "wrong type or shape"));
+    /* a NaN in an eigen-map, an out-of-range normal */
+    bake->params_json = original;
+    const meso_bake_array *eigen = meso_bake_file_find(bake, "eigen");
+    float saved = ((float *)eigen->data)[5], nan_value = NAN;
+    memcpy((float *)eigen->data + 5, &nan_value, sizeof(float));
+    assert_int_equal(meso_bake_file_save(ctx, bake, edited), MESO_OK);
+    assert_int_equal(meso_gdm_load(ctx, edited, &gdm), MESO_ERROR_FORMAT);
+    assert_non_null(strstr(meso_context_last_error(ctx), "array \"eigen\": element 5 is nan"));
+    ((float *)eigen->data)[5] = saved;
+    const meso_bake_array *normals = meso_bake_file_find(bake, "normals");
+    ((float *)normals->data)[7] = 1.5f;
+    assert_int_equal(meso_bake_file_save(ctx, bake, edited), MESO_OK);
+    assert_int_equal(meso_gdm_load(ctx, edited, &gdm), MESO_ERROR_FORMAT);
+    assert_non_null(strstr(meso_context_last_error(ctx), "array \"normals\": element 7"));
+    assert_null(gdm);
+    free(params);
+    meso_bake_file_destroy(bake);
+    free_heightfield(hf);
+    meso_context_destroy(ctx);
+}
+
 static void test_cached_bake_is_found_again_and_keyed_by_every_parameter(void **state) {
     (void)state;
     meso_context *ctx = test_context(2);
     setenv("MESO_CACHE_DIR", test_path(test_temp_dir(), "gdm_cache"), 1);
     meso_heightfield *hf = make_bumps(16);
-    meso_gdm_desc desc = {.heightfield = hf, .width = 8, .layers = 4, .num_theta = 4,
-                          .num_phi = 4, .eigenmaps = 2};
+    meso_gdm_desc desc = {
+        .heightfield = hf, .width = 8, .layers = 4, .num_theta = 4, .num_phi = 4, .eigenmaps = 2};
     meso_gdm *first = NULL, *second = NULL;
     assert_int_equal(meso_gdm_bake_cached(ctx, &desc, &first), MESO_OK);
     assert_true(meso_gdm_get_compression(first).bake_seconds > 0.0);
@@ -453,12 +565,16 @@ static void test_bad_descs_are_refused_before_allocating(void **state) {
     meso_gdm_desc wide = {.heightfield = hf, .width = MESO_GDM_MAX_SIDE + 1};
     assert_int_equal(meso_bake_gdm(ctx, &wide, &gdm), MESO_ERROR_LIMIT);
     assert_non_null(strstr(meso_context_last_error(ctx), "width"));
-    meso_gdm_desc huge = {.heightfield = hf, .width = 512, .layers = 256, .num_theta = 64,
-                          .num_phi = 128};
+    meso_gdm_desc huge = {
+        .heightfield = hf, .width = 512, .layers = 256, .num_theta = 64, .num_phi = 128};
     assert_int_equal(meso_bake_gdm(ctx, &huge, &gdm), MESO_ERROR_LIMIT);
     assert_non_null(strstr(meso_context_last_error(ctx), "table"));
-    meso_gdm_desc many = {.heightfield = hf, .width = 4, .layers = 2, .num_theta = 2,
-                          .num_phi = 1, .eigenmaps = 5}; /* rank 4 */
+    meso_gdm_desc many = {.heightfield = hf,
+                          .width = 4,
+                          .layers = 2,
+                          .num_theta = 2,
+                          .num_phi = 1,
+                          .eigenmaps = 5}; /* rank 4 */
     assert_int_equal(meso_bake_gdm(ctx, &many, &gdm), MESO_ERROR_INVALID_ARGUMENT);
     assert_non_null(strstr(meso_context_last_error(ctx), "eigenmaps"));
     /* the default bake within a budget of 64 MiB: refused by the estimate, not by malloc */
@@ -476,19 +592,50 @@ static void test_bad_descs_are_refused_before_allocating(void **state) {
     meso_context_destroy(ctx);
 }
 
+static bool cancel_at_once(void *user, const char *label, double fraction) {
+    (void)label;
+    (void)fraction;
+    ++*(int *)user;
+    return true;
+}
+
+static void test_a_cancelled_bake_returns_cancelled_and_no_map(void **state) {
+    (void)state;
+    int calls = 0;
+    meso_context *ctx = NULL;
+    assert_int_equal(meso_context_create(&(meso_context_desc){.num_threads = 2,
+                                                              .progress = MESO_PROGRESS_NEVER,
+                                                              .on_progress = cancel_at_once,
+                                                              .progress_user = &calls},
+                                         &ctx),
+                     MESO_OK);
+    meso_heightfield *hf = make_bumps(16);
+    meso_gdm_desc desc = small_desc();
+    desc.heightfield = hf;
+    meso_gdm *gdm = NULL;
+    assert_int_equal(meso_bake_gdm(ctx, &desc, &gdm), MESO_ERROR_CANCELLED);
+    assert_null(gdm);
+    assert_true(calls > 0);
+    free_heightfield(hf);
+    meso_context_destroy(ctx);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_defaults_are_the_papers),
         cmocka_unit_test(test_slab_solid_gives_the_analytic_distances),
         cmocka_unit_test(test_constant_height_field_gives_the_analytic_distances),
+        cmocka_unit_test(test_tile_mesh_box_gives_the_analytic_distances),
         cmocka_unit_test(test_weave_entries_match_a_brute_force_march),
         cmocka_unit_test(test_height_field_entries_match_a_brute_force_march),
         cmocka_unit_test(test_compression_error_falls_with_k),
         cmocka_unit_test(test_same_bytes_for_one_and_two_threads),
         cmocka_unit_test(test_save_load_round_trip_and_describe),
         cmocka_unit_test(test_corrupted_file_is_refused_naming_it),
+        cmocka_unit_test(test_inconsistent_files_with_valid_checksums_are_refused),
         cmocka_unit_test(test_cached_bake_is_found_again_and_keyed_by_every_parameter),
         cmocka_unit_test(test_bad_descs_are_refused_before_allocating),
+        cmocka_unit_test(test_a_cancelled_bake_returns_cancelled_and_no_map),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
