@@ -61,7 +61,7 @@ typedef struct meso_prism_edge {
 typedef struct meso_prism {
     uint32_t vertices[3]; /* mesh vertices, in the triangle's order */
     meso_vec2 uv[3];
-    float uv_inverse[4]; /* uv -> (b1, b2) = [i0 i1; i2 i3] (uv - uv[0]) */
+    float uv_inverse[4];      /* uv -> (b1, b2) = [i0 i1; i2 i3] (uv - uv[0]) */
     meso_prism_edge edges[3]; /* edge e joins vertices e and e + 1 */
     bool valid;               /* false: degenerate UV triangle (nothing is mapped into it) */
 } meso_prism;
@@ -84,8 +84,8 @@ meso_vec3 meso_prism_shell_point(const meso_mesh *mesh, uint32_t vertex, float w
  * vertices only (canonical order), so both prisms of the edge give the same bits; -1 finds
  * out (an exact zero of the side function). Points outside the UV triangle are extrapolated
  * linearly. Pure. */
-meso_vec3 meso_prism_map(const meso_prism *prism, const meso_mesh *mesh, float depth,
-                         meso_vec3 uvw, int on_edge);
+meso_vec3 meso_prism_map(const meso_prism *prism, const meso_mesh *mesh, float depth, meso_vec3 uvw,
+                         int on_edge);
 
 /* Barycentric weights of uv in the prism's UV triangle (the b_i of the overview). Pure. */
 static inline void meso_prism_weights(const meso_prism *prism, meso_vec2 uv, float out[3]) {
@@ -119,10 +119,10 @@ typedef struct meso_prism_layer {
      * (bottom); positions, normals (the base's) and uvs are filled; tangents are not.
      * Prisms that are not valid have degenerate faces (never drawn). */
     meso_mesh *faces;
-    meso_vec3 *uvws;     /* per vertex of `faces`: (u, v, 0) top, (u, v, 1) bottom */
-    meso_prism *prisms;  /* per base triangle */
+    meso_vec3 *uvws;          /* per vertex of `faces`: (u, v, 0) top, (u, v, 1) bottom */
+    meso_prism *prisms;       /* per base triangle */
     meso_prism_plane *planes; /* MESO_PRISM_NUM_FACES per prism, in the face slots' order */
-    uint8_t *fin_convex; /* 3 per prism: the fin's two triangles bound a convex side */
+    uint8_t *fin_convex;      /* 3 per prism: the fin's two triangles bound a convex side */
     size_t num_prisms;
     float depth;
 } meso_prism_layer;

@@ -44,8 +44,8 @@ meso_vec3 meso_prism_shell_point(const meso_mesh *mesh, uint32_t vertex, float w
     return meso_vec3_madd(mesh->positions[vertex], mesh->normals[vertex], -w * depth);
 }
 
-meso_vec3 meso_prism_map(const meso_prism *prism, const meso_mesh *mesh, float depth,
-                         meso_vec3 uvw, int on_edge) {
+meso_vec3 meso_prism_map(const meso_prism *prism, const meso_mesh *mesh, float depth, meso_vec3 uvw,
+                         int on_edge) {
     meso_vec2 uv = {uvw.x, uvw.y};
     if (on_edge < 0)
         for (int e = 0; e < 3 && on_edge < 0; e++)
@@ -149,8 +149,8 @@ meso_result meso_prism_layer_create(meso_context *ctx, const meso_mesh *mesh, fl
                               "%s: the shell's prisms need texture coordinates", name);
     if (!(depth > 0.0f) || !isfinite(depth))
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
-                              "%s: mesostructure.depth: %g, the shell needs a positive depth",
-                              name, (double)depth);
+                              "%s: mesostructure.depth: %g, the shell needs a positive depth", name,
+                              (double)depth);
     uint64_t nv = 2 * (uint64_t)mesh->num_vertices, nt = 8 * (uint64_t)mesh->num_triangles;
     meso_result r = geom_check_counts(ctx, name, nv, nt);
     if (r != MESO_OK) return r;
@@ -210,8 +210,8 @@ size_t meso_prism_layer_memory(const meso_prism_layer *layer) {
     size_t nv = layer->faces->num_vertices, nt = layer->faces->num_triangles;
     return nv * (2 * sizeof(meso_vec3) + sizeof(meso_vec2) + sizeof(meso_vec3)) +
            nt * 3 * sizeof(uint32_t) +
-           layer->num_prisms * (sizeof(meso_prism) +
-                                MESO_PRISM_NUM_FACES * sizeof(meso_prism_plane) + 3);
+           layer->num_prisms *
+               (sizeof(meso_prism) + MESO_PRISM_NUM_FACES * sizeof(meso_prism_plane) + 3);
 }
 
 meso_vec3 meso_prism_layer_face_uvw(const meso_prism_layer *layer, size_t face, meso_vec3 x) {
@@ -264,10 +264,9 @@ bool meso_prism_layer_exit(const meso_prism_layer *layer, size_t prism, meso_vec
             float t1 = slot == entry_slot ? INFINITY
                                           : leave_time(&pl[slot], origin, direction, tolerance,
                                                        slot + 1 == entry_slot);
-            float t2 = slot + 1 == entry_slot
-                           ? INFINITY
-                           : leave_time(&pl[slot + 1], origin, direction, tolerance,
-                                        slot == entry_slot);
+            float t2 = slot + 1 == entry_slot ? INFINITY
+                                              : leave_time(&pl[slot + 1], origin, direction,
+                                                           tolerance, slot == entry_slot);
             bool convex = layer->fin_convex[3 * prism + (size_t)(slot - MESO_PRISM_FIN) / 2];
             /* Fig. 5: a convex fin bounds the intersection of its two half-spaces (the nearer
              * plane), a concave one their union (the farther) */

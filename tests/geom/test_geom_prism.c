@@ -38,8 +38,7 @@ static void test_closed_mesh_fins_have_bit_identical_twins(void **state) {
                 for (size_t q = 0; q < layer->num_prisms && !found; q++) {
                     if (q == p || !layer->prisms[q].valid) continue;
                     for (int s = MESO_PRISM_FIN; s < MESO_PRISM_NUM_FACES && !found; s++) {
-                        const uint32_t *b =
-                            faces->indices + 3 * meso_prism_layer_face(layer, q, s);
+                        const uint32_t *b = faces->indices + 3 * meso_prism_layer_face(layer, q, s);
                         for (int r = 0; r < 3 && !found; r++) /* reversed, any rotation */
                             found = same_point(faces->positions[a[0]],
                                                faces->positions[b[(r + 2) % 3]]) &&
@@ -71,9 +70,10 @@ static void test_faces_face_out_of_their_prism(void **state) {
         assert_true(prism->valid);
         meso_vec3 centre = {0};
         for (int i = 0; i < 3; i++)
-            centre = meso_vec3_add(centre, meso_vec3_add(mesh->positions[prism->vertices[i]],
-                                                         meso_prism_shell_point(
-                                                             mesh, prism->vertices[i], 1.0f, 0.08f)));
+            centre = meso_vec3_add(
+                centre,
+                meso_vec3_add(mesh->positions[prism->vertices[i]],
+                              meso_prism_shell_point(mesh, prism->vertices[i], 1.0f, 0.08f)));
         centre = meso_vec3_scale(centre, 1.0f / 6.0f);
         for (int slot = 0; slot < MESO_PRISM_NUM_FACES; slot++) {
             const meso_prism_plane *pl = &layer->planes[p * MESO_PRISM_NUM_FACES + (size_t)slot];
@@ -107,10 +107,10 @@ static void test_map_reaches_the_extruded_vertices(void **state) {
         for (int i = 0; i < 3; i++) {
             uint32_t v = prism.vertices[i];
             uvw.x += mesh->uvs[v].x / 3.0f, uvw.y += mesh->uvs[v].y / 3.0f;
-            expect = meso_vec3_add(expect, meso_vec3_scale(meso_vec3_madd(mesh->positions[v],
-                                                                          mesh->normals[v],
-                                                                          -0.5f * depth),
-                                                           1.0f / 3.0f));
+            expect = meso_vec3_add(
+                expect,
+                meso_vec3_scale(meso_vec3_madd(mesh->positions[v], mesh->normals[v], -0.5f * depth),
+                                1.0f / 3.0f));
         }
         meso_vec3 p = meso_prism_map(&prism, mesh, depth, uvw, -1);
         assert_float_equal(meso_vec3_length(meso_vec3_sub(p, expect)), 0.0f, 1e-5f);
@@ -131,8 +131,7 @@ static void test_exit_on_a_plane_is_exact(void **state) {
     for (size_t p = 0; p < layer->num_prisms; p++) {
         const meso_prism *prism = &layer->prisms[p];
         meso_vec2 uv = {0.0f, 0.0f};
-        for (int i = 0; i < 3; i++)
-            uv.x += prism->uv[i].x / 3.0f, uv.y += prism->uv[i].y / 3.0f;
+        for (int i = 0; i < 3; i++) uv.x += prism->uv[i].x / 3.0f, uv.y += prism->uv[i].y / 3.0f;
         meso_vec3 origin = meso_prism_map(prism, mesh, depth, (meso_vec3){uv.x, uv.y, 0.0f}, -1);
         float t;
         int slot;
@@ -141,7 +140,8 @@ static void test_exit_on_a_plane_is_exact(void **state) {
         assert_int_equal(slot, MESO_PRISM_BOTTOM);
         assert_float_equal(t, depth, 1e-6f);
         meso_vec3 exit = meso_vec3_madd(origin, (meso_vec3){0.0f, -1.0f, 0.0f}, t);
-        meso_vec3 uvw = meso_prism_layer_face_uvw(layer, meso_prism_layer_face(layer, p, slot), exit);
+        meso_vec3 uvw =
+            meso_prism_layer_face_uvw(layer, meso_prism_layer_face(layer, p, slot), exit);
         assert_float_equal(uvw.x, uv.x, 1e-6f);
         assert_float_equal(uvw.y, uv.y, 1e-6f);
         assert_float_equal(uvw.z, 1.0f, 1e-6f);
@@ -203,8 +203,7 @@ static void test_rays_along_fins_stay_in_their_prism(void **state) {
                 meso_vec3 dir = meso_vec3_normalize(meso_vec3_sub(bottom, top));
                 float t;
                 int slot;
-                assert_true(
-                    meso_prism_layer_exit(layer, p, top, dir, MESO_PRISM_TOP, &t, &slot));
+                assert_true(meso_prism_layer_exit(layer, p, top, dir, MESO_PRISM_TOP, &t, &slot));
                 assert_true(t >= 0.0f && t < 2.0f * depth + 1.0f);
                 meso_vec3 uvw = meso_prism_layer_face_uvw(
                     layer, meso_prism_layer_face(layer, p, slot), meso_vec3_madd(top, dir, t));

@@ -12,7 +12,9 @@
 #include "render_test_scene.h"
 
 static const meso_option small_bake[] = {
-    {"gdm", "resolution", 32}, {"gdm", "layers", 16}, {"gdm", "num_theta", 8},
+    {"gdm", "resolution", 32},
+    {"gdm", "layers", 16},
+    {"gdm", "num_theta", 8},
     {"gdm", "num_phi", 16},
 };
 #define NUM_SMALL_BAKE (int)(sizeof small_bake / sizeof small_bake[0])
@@ -26,8 +28,8 @@ static meso_heightfield *bumps(meso_context *ctx, int resolution) {
 
 static meso_framebuffer *render(meso_context *ctx, const meso_scene *scene, const char *technique,
                                 const meso_option *options, int num_options) {
-    meso_render_desc desc = {.technique = technique, .options = options,
-                             .num_options = num_options};
+    meso_render_desc desc = {
+        .technique = technique, .options = options, .num_options = num_options};
     meso_framebuffer *fb = NULL;
     if (meso_render_scene(ctx, scene, &desc, &fb) != MESO_OK)
         fail_msg("%s: %s", technique, meso_context_last_error(ctx));
@@ -38,8 +40,8 @@ static meso_framebuffer *render(meso_context *ctx, const meso_scene *scene, cons
 static void test_lookup8_equals_the_bakes_lookup(void **state) {
     meso_context *ctx = test_context(2);
     meso_heightfield *hf = bumps(ctx, 64);
-    meso_gdm_desc desc = {.heightfield = hf, .width = 16, .layers = 8, .num_theta = 8,
-                          .num_phi = 8, .eigenmaps = 12};
+    meso_gdm_desc desc = {
+        .heightfield = hf, .width = 16, .layers = 8, .num_theta = 8, .num_phi = 8, .eigenmaps = 12};
     meso_gdm *gdm = NULL;
     assert_int_equal(meso_bake_gdm(ctx, &desc, &gdm), MESO_OK);
     meso_gdm_view view = meso_gdm_get_view(gdm);
@@ -65,8 +67,8 @@ static void test_lookup8_equals_the_bakes_lookup(void **state) {
             double error = fabs((double)got - expected);
             worst = error > worst ? error : worst;
             if (error > 1e-5 * (1.0 + fabs(expected)))
-                fail_msg("k %d at (%g, %g, %g) along (%g, %g, %g): %g, the bake's %g", ks[c],
-                         uvw.x, uvw.y, uvw.z, dir.x, dir.y, dir.z, got, expected);
+                fail_msg("k %d at (%g, %g, %g) along (%g, %g, %g): %g, the bake's %g", ks[c], uvw.x,
+                         uvw.y, uvw.z, dir.x, dir.y, dir.z, got, expected);
         }
         print_message("k = %d: largest difference %.3g\n", ks[c], worst);
         gdm_lookup_table_deinit(&table);
@@ -84,9 +86,8 @@ static void test_closed_mesh_with_a_constant_height_field_has_no_gap(void **stat
     test_scene ts;
     test_scene_init(&ts, 96, 96);
     ts.scene.camera = (meso_camera){{0.3f, 0.9f, 2.8f}, {0.0f, 0.0f, 0.0f}, {0, 1, 0}, 45.0f};
-    meso_object *o = test_scene_add(&ts, test_shape(ctx, MESO_SHAPE_SPHERE, 1.0f, 24,
-                                                    (meso_vec3){0, 0, 0}),
-                                    "gdm");
+    meso_object *o = test_scene_add(
+        &ts, test_shape(ctx, MESO_SHAPE_SPHERE, 1.0f, 24, (meso_vec3){0, 0, 0}), "gdm");
     meso_heightfield *hf = NULL;
     assert_int_equal(meso_heightfield_create_constant(ctx, 8, 8, 0.5f, &hf), MESO_OK);
     o->mesostructure.kind = MESO_MESOSTRUCTURE_HEIGHT_FIELD;
@@ -109,8 +110,8 @@ static void test_closed_mesh_with_a_constant_height_field_has_no_gap(void **stat
                 covered += c && pass == 0;
             }
             if (runs > 1)
-                fail_msg("%s %d: %d runs of covered pixels (a gap)", pass ? "column" : "row",
-                         line, runs);
+                fail_msg("%s %d: %d runs of covered pixels (a gap)", pass ? "column" : "row", line,
+                         runs);
         }
     /* the inner sphere of radius 0.9 at distance D covers a disc of radius
      * tan(asin(0.9 / D)) / tan(fov / 2) half-images (the mesh's 24 segments a little less) */
@@ -143,9 +144,8 @@ static void test_slab_solid_equals_the_translated_base_mesh(void **state) {
         test_scene ts, flat;
         test_scene_init(&ts, 64, 64);
         ts.scene.camera = (meso_camera){eyes[e], {0, -0.2f, 0}, {0, 1, 0}, 50.0f};
-        meso_object *o =
-            test_scene_add(&ts, test_shape(ctx, MESO_SHAPE_PLANE, 2.0f, 1, (meso_vec3){0, 0, 0}),
-                           "gdm");
+        meso_object *o = test_scene_add(
+            &ts, test_shape(ctx, MESO_SHAPE_PLANE, 2.0f, 1, (meso_vec3){0, 0, 0}), "gdm");
         meso_solid *solid = slab(ctx, thickness);
         o->mesostructure.kind = MESO_MESOSTRUCTURE_SOLID;
         o->mesostructure.solid = solid;
@@ -201,9 +201,8 @@ static void test_height_field_matches_relief_exact_on_a_plane(void **state) {
     test_scene ts;
     test_scene_init(&ts, 64, 64);
     ts.scene.camera = (meso_camera){{0.3f, 0.8f, 0.9f}, {0, -0.05f, -0.1f}, {0, 1, 0}, 40.0f};
-    meso_object *o =
-        test_scene_add(&ts, test_shape(ctx, MESO_SHAPE_PLANE, 4.0f, 1, (meso_vec3){0, 0, 0}),
-                       "gdm");
+    meso_object *o = test_scene_add(
+        &ts, test_shape(ctx, MESO_SHAPE_PLANE, 4.0f, 1, (meso_vec3){0, 0, 0}), "gdm");
     meso_mesh_scale_uvs(o->mesh, (meso_vec2){2.0f, 2.0f});
     assert_int_equal(meso_mesh_compute_tangents(ctx, o->mesh), MESO_OK);
     o->mesostructure.kind = MESO_MESOSTRUCTURE_HEIGHT_FIELD;

@@ -31,10 +31,10 @@ typedef struct gdm_state {
     int num_eigen;
     bool raw, shadows, baked_normals; /* baked_normals: the "normals" option resolved */
     int refine_steps, shadow_steps;
-    float shadow_bias; /* voxels off the surface */
-    meso_vec3 voxel;   /* a voxel's sides in texture units */
+    float shadow_bias;   /* voxels off the surface */
+    meso_vec3 voxel;     /* a voxel's sides in texture units */
     float refine_window; /* texture units: 3 layers */
-    float hit_margin;  /* d < dt - hit_margin is a hit */
+    float hit_margin;    /* d < dt - hit_margin is a hit */
 } gdm_state;
 
 typedef struct gdm_options {
@@ -55,8 +55,8 @@ static const meso_technique_option gdm_option_table[] = {
                     "bake: voxels in depth (w)", gdm_options, layers),
     MESO_OPTION_ROW(MESO_OPTION_INT, num_theta, 2, MESO_GDM_MAX_THETA, 16,
                     "bake: polar directions over the whole sphere", gdm_options, num_theta),
-    MESO_OPTION_ROW(MESO_OPTION_INT, num_phi, 1, MESO_GDM_MAX_PHI, 32,
-                    "bake: azimuthal directions", gdm_options, num_phi),
+    MESO_OPTION_ROW(MESO_OPTION_INT, num_phi, 1, MESO_GDM_MAX_PHI, 32, "bake: azimuthal directions",
+                    gdm_options, num_phi),
     MESO_OPTION_ROW(MESO_OPTION_BOOL, shadows, 0, 1, 1,
                     "self-shadows by a lookup along the light (§3.2)", gdm_options, shadows),
     MESO_OPTION_ROW(MESO_OPTION_FLOAT, shadow_bias, 0.0, 16.0, 1.5,
@@ -187,8 +187,9 @@ static meso_result gdm_geometry(meso_context *ctx, void *state, const meso_frame
     float lo = INFINITY, hi = -INFINITY;
     for (size_t f = 0; f < total; f++) {
         const uint32_t *idx = faces->indices + 3 * f;
-        meso_vec3 c = meso_vec3_add(meso_vec3_add(faces->positions[idx[0]], faces->positions[idx[1]]),
-                                    faces->positions[idx[2]]);
+        meso_vec3 c =
+            meso_vec3_add(meso_vec3_add(faces->positions[idx[0]], faces->positions[idx[1]]),
+                          faces->positions[idx[2]]);
         float k = meso_vec3_dot(meso_vec3_sub(meso_vec3_scale(c, 1.0f / 3.0f), frame->eye),
                                 frame->forward);
         keys[f] = isfinite(k) ? k : 0.0f;
@@ -260,8 +261,9 @@ static texture_frame frame_at(const meso_mesh *mesh, const meso_prism *prism, me
 
 /* A texture-space normal (u, v, w) to a world one: J^-T n, unit; the base normal if degenerate. */
 static inline meso_vec3 world_normal(const texture_frame *f, meso_vec3 n) {
-    meso_vec3 m = meso_vec3_add(meso_vec3_add(meso_vec3_scale(f->cu, n.x), meso_vec3_scale(f->cv, n.y)),
-                                meso_vec3_scale(f->cw, n.z));
+    meso_vec3 m =
+        meso_vec3_add(meso_vec3_add(meso_vec3_scale(f->cu, n.x), meso_vec3_scale(f->cv, n.y)),
+                      meso_vec3_scale(f->cw, n.z));
     if (f->det < 0.0f) m = meso_vec3_negate(m);
     float len2 = meso_vec3_dot(m, m);
     return len2 > 0.0f && isfinite(len2) ? meso_vec3_scale(m, 1.0f / sqrtf(len2)) : f->normal;
@@ -284,7 +286,8 @@ static inline meso_vec3 tile_point(meso_vec3 uvw) {
 
 /* Inside the solid (height field: w >= 1 - h(u, v), DESIGN.md). */
 static inline bool inside_mesostructure(const gdm_state *s, meso_vec3 uvw) {
-    if (s->heightfield) return uvw.z >= 1.0f - meso_heightfield_sample(s->heightfield, uvw.x, uvw.y);
+    if (s->heightfield)
+        return uvw.z >= 1.0f - meso_heightfield_sample(s->heightfield, uvw.x, uvw.y);
     return meso_solid_distance(s->solid, tile_point(uvw)) <= 0.0f;
 }
 
@@ -298,7 +301,8 @@ static inline bool inside_mesostructure(const gdm_state *s, meso_vec3 uvw) {
  * inside whatever its rounding. Returns the hit's distance along V_t, negative for none. */
 static float refine_hit(const gdm_state *s, meso_vec3 t_in, meso_vec3 vt, float d, float dt,
                         bool solid_floor) {
-#define INSIDE(x) ((solid_floor && (x) >= dt) || inside_mesostructure(s, meso_vec3_madd(t_in, vt, (x))))
+#define INSIDE(x)                                                                                  \
+    ((solid_floor && (x) >= dt) || inside_mesostructure(s, meso_vec3_madd(t_in, vt, (x))))
     float window = s->refine_window;
     float guess = fminf(fmaxf(d, 0.0f), dt);
     float before = fmaxf(guess - window, 0.0f), after = fminf(guess + 0.5f * window, dt);
@@ -365,8 +369,7 @@ static bool shadowed(const gdm_state *s, meso_vec3 t, meso_vec3 normal_t, meso_v
     meso_vec3 offset = s->heightfield ? (meso_vec3){0.0f, 0.0f, -1.0f} : normal_t;
     t = meso_vec3_add(t, meso_vec3_mul(offset, meso_vec3_scale(s->voxel, bias)));
     t.z = fminf(fmaxf(t.z, 0.0f), 1.0f);
-    float boundary = lt.z < 0.0f ? t.z / -lt.z : (1.0f - t.z) / lt.z;
-    boundary = fminf(boundary, MESO_GDM_MAX_RAY_LENGTH);
+    float boundary = fminf(t.z / -lt.z, MESO_GDM_MAX_RAY_LENGTH); /* to the top (lt.z < 0) */
     float margin = bias * s->voxel.z;
     if (boundary <= margin) return false;
     float d = lookup(s, t, lt);
@@ -410,8 +413,8 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
         !isfinite(t))
         return false;
     meso_vec3 p_out = meso_vec3_madd(f->position, view, t);
-    meso_vec3 t_out =
-        meso_prism_layer_face_uvw(layer, meso_prism_layer_face(layer, prism_index, exit_slot), p_out);
+    meso_vec3 t_out = meso_prism_layer_face_uvw(
+        layer, meso_prism_layer_face(layer, prism_index, exit_slot), p_out);
     meso_vec3 segment = meso_vec3_sub(t_out, t_in);
     float dt = meso_vec3_length(segment);
     if (!(dt > 1e-7f)) return false;
@@ -443,9 +446,8 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
     texture_frame tf = frame_at(mesh, prism, (meso_vec2){hit.x, hit.y}, s->depth);
     meso_vec3 normal, normal_t = texture_normal(s, hit);
     if (s->heightfield && !s->baked_normals) /* as the reference and the other techniques */
-        normal = meso_displaced_normal(
-            tf.normal, tf.tangent, tf.bitangent, s->depth,
-            meso_heightfield_gradient(s->heightfield, hit.x, hit.y));
+        normal = meso_displaced_normal(tf.normal, tf.tangent, tf.bitangent, s->depth,
+                                       meso_heightfield_gradient(s->heightfield, hit.x, hit.y));
     else
         normal = world_normal(&tf, normal_t);
     float length_t = meso_vec3_length(normal_t);

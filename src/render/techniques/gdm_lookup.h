@@ -19,10 +19,10 @@
 
 typedef struct gdm_lookup_table {
     int width, height, layers, num_theta, num_phi;
-    int num_eigen;   /* k used (<= the map's) */
-    int chunks;      /* groups of 8 eigen-maps */
-    float *weights;  /* [height][width][num_phi][8 chunks], zero past k */
-    float *eigen;    /* [layers][num_theta][8 chunks]: E transposed, zero past k */
+    int num_eigen;  /* k used (<= the map's) */
+    int chunks;     /* groups of 8 eigen-maps */
+    float *weights; /* [height][width][num_phi][8 chunks], zero past k */
+    float *eigen;   /* [layers][num_theta][8 chunks]: E transposed, zero past k */
 } gdm_lookup_table;
 
 /* Lay out the view's first num_eigen eigen-maps (0 or more than stored: all). false when out
@@ -58,8 +58,8 @@ static inline void gdm_lookup_table_deinit(gdm_lookup_table *t) {
 
 static inline size_t gdm_lookup_table_bytes(const gdm_lookup_table *t) {
     size_t lanes = 8 * (size_t)t->chunks;
-    return ((size_t)t->width * t->height * t->num_phi + (size_t)t->layers * t->num_theta) *
-           lanes * sizeof(float);
+    return ((size_t)t->width * t->height * t->num_phi + (size_t)t->layers * t->num_theta) * lanes *
+           sizeof(float);
 }
 
 typedef struct gdm_axis {
@@ -129,8 +129,10 @@ static inline float gdm_lookup8(const gdm_lookup_table *t, meso_vec3 uvw, meso_v
         v8f wsum = v8_splat(0.0f);
         for (int corner = 0; corner < 8; corner++) {
             float cw = wx[corner & 1] * wy[(corner >> 1) & 1] * wp[corner >> 2];
-            size_t row = ((size_t)iy[(corner >> 1) & 1] * (size_t)t->width +
-                          (size_t)ix[corner & 1]) * (size_t)t->num_phi + (size_t)ip[corner >> 2];
+            size_t row =
+                ((size_t)iy[(corner >> 1) & 1] * (size_t)t->width + (size_t)ix[corner & 1]) *
+                    (size_t)t->num_phi +
+                (size_t)ip[corner >> 2];
             wsum += v8_splat(cw) * gdm_load8(t->weights + row * (size_t)lanes + o);
         }
         v8f p = wsum * e;
