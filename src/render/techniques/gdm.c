@@ -59,10 +59,10 @@ static const meso_technique_option gdm_option_table[] = {
                     gdm_options, num_phi),
     MESO_OPTION_ROW(MESO_OPTION_BOOL, shadows, 0, 1, 1,
                     "self-shadows by a lookup along the light (§3.2)", gdm_options, shadows),
-    MESO_OPTION_ROW(MESO_OPTION_FLOAT, shadow_bias, 0.0, 16.0, 1.5,
-                    "the shadow lookup starts this many voxels off the surface (up for height "
+    MESO_OPTION_ROW(MESO_OPTION_FLOAT, shadow_bias, -1.0, 16.0, -1.0,
+                    "the shadow test starts this many voxels off the surface (up for height "
                     "fields, along the normal for solids) and needs d_L this much short of "
-                    "the slab's boundary",
+                    "the slab's boundary; -1: 0.25, or 1.5 with refine_steps 0",
                     gdm_options, shadow_bias),
     MESO_OPTION_ROW(MESO_OPTION_INT, shadow_steps, 1, 256, 24,
                     "with refine_steps: probes of the mesostructure along the light ray",
@@ -136,7 +136,12 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
     s->baked_normals = options.normals == 1 || (options.normals == 0 && desc.solid);
     s->refine_steps = options.refine_steps;
     s->shadow_steps = options.shadow_steps;
-    s->shadow_bias = options.shadow_bias;
+    /* The table's d next to the surface is blended with the solid voxels' 0: read from the
+     * table alone, a shadow ray must start well off it; probed on the mesostructure (the
+     * refinement), a quarter voxel keeps it off the surface and misses fewer near blockers
+     * (weave-plane 27.6 -> 31.4 dB, cones-plane 34.9 -> 38.5; docs/techniques/gdm.md). */
+    s->shadow_bias = options.shadow_bias >= 0.0f ? options.shadow_bias
+                                                 : (options.refine_steps > 0 ? 0.25f : 1.5f);
     s->hit_margin = options.hit_margin;
     s->refine_window = 3.0f / (float)(options.layers - 1);
     s->voxel = (meso_vec3){1.0f / (float)options.resolution, 1.0f / (float)options.resolution,
