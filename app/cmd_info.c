@@ -245,6 +245,16 @@ static meso_result info_bake(meso_context *ctx, const char *path) {
             return result;
         }
     }
+    if (!strcmp(bake->kind, MESO_GDM_KIND)) {
+        /* GDM (Wang et al. 2004 §4.1): checked as the technique reads it, the same way */
+        meso_gdm *gdm = NULL;
+        result = meso_gdm_from_bake_file(ctx, bake, path, &gdm);
+        meso_gdm_destroy(gdm);
+        if (result != MESO_OK) {
+            meso_bake_file_destroy(bake);
+            return result;
+        }
+    }
     printf("bake: %s\n", path);
     printf("kind: %s (version %u), source hash %016llx\n", bake->kind, bake->kind_version,
            (unsigned long long)bake->source_hash);
@@ -275,6 +285,11 @@ static meso_result info_bake(meso_context *ctx, const char *path) {
             fputs(report, stdout);
             free(report);
         }
+    }
+    if (!strcmp(bake->kind, MESO_GDM_KIND)) {
+        /* GDM §4.1: sizes and the reconstruction error for k = 1..16 eigen-maps */
+        char report[4096];
+        if (meso_gdm_describe(bake, report, sizeof(report))) fputs(report, stdout);
     }
     if (!strcmp(bake->kind, MESO_LAYERS_KIND)) {
         /* sizes beside the paper's three 256x256 RGBA8 maps, and what the layer limit clips */

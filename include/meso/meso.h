@@ -20,6 +20,7 @@
 #include "meso/math.h"
 #include "meso/image.h"
 #include "meso/geom.h"
+#include "meso/prism.h"
 #include "meso/mesostructure.h"
 #include "meso/bake.h"
 #include "meso/scene.h"

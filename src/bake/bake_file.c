@@ -2,7 +2,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "meso/bake_file.h"
+#include "bake_internal.h"
 #include "meso/math.h"
 
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
@@ -365,4 +365,39 @@ meso_result meso_bake_array_check_values(meso_context *ctx, const char *name,
                                   name, array->name, (unsigned long long)i, value, min, max);
     }
     return MESO_OK;
+}
+
+/* ---- Helpers shared by the kinds (bake_internal.h) ---------------------------------------- */
+
+bool meso_bake_params_number(const char *json, const char *key, double *out) {
+    if (!json) return false;
+    char pattern[64];
+    snprintf(pattern, sizeof(pattern), "\"%s\":", key);
+    const char *p = strstr(json, pattern);
+    if (!p) return false;
+    char *end = NULL;
+    double v = strtod(p + strlen(pattern), &end);
+    if (end == p + strlen(pattern) || !isfinite(v)) return false;
+    *out = v;
+    return true;
+}
+
+const void *meso_bake_file_expect(const meso_bake_file *bake, const char *name,
+                                  meso_bake_type type, int num_dims, const uint64_t *dims) {
+    const meso_bake_array *a = meso_bake_file_find(bake, name);
+    if (!a || a->type != type || a->num_dims != num_dims) return NULL;
+    for (int i = 0; i < num_dims; i++)
+        if (a->dims[i] != dims[i]) return NULL;
+    return a->data;
+}
+
+void meso_bake_round_to_halves(float *values, uint16_t *out_halves, size_t count) {
+    for (size_t i = 0; i < count; i++) {
+        out_halves[i] = meso_half_from_float(values[i]);
+        values[i] = meso_half_to_float(out_halves[i]);
+    }
+}
+
+void meso_bake_halves_to_floats(const uint16_t *halves, float *out_values, size_t count) {
+    for (size_t i = 0; i < count; i++) out_values[i] = meso_half_to_float(halves[i]);
 }

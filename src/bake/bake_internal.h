@@ -2,6 +2,8 @@
 #ifndef MESO_BAKE_INTERNAL_H
 #define MESO_BAKE_INTERNAL_H
 
+#include <math.h>
+
 #include "meso/bake.h"
 
 /* A tall table streamed by rows: fill(user, first, count, out) writes rows [first, first +
@@ -32,5 +34,40 @@ typedef struct meso_bake_rows {
 meso_result meso_bake_svd_streamed(meso_context *ctx, const char *name,
                                    const meso_bake_rows *source, int keep, float *out_singular,
                                    float *out_vectors, float *out_weights, float *out_raw);
+
+/* ---- Helpers shared by the kinds' loaders and lookups ------------------------------------- */
+
+/* The number after "key": in a bake's params (flat JSON objects the kinds write themselves);
+ * false when the key is absent or its value is not a finite number. Pure. */
+bool meso_bake_params_number(const char *json, const char *key, double *out);
+/* The array `name` of `type` with exactly num_dims and dims, or NULL. Pure. */
+const void *meso_bake_file_expect(const meso_bake_file *bake, const char *name, meso_bake_type type,
+                                  int num_dims, const uint64_t *dims);
+/* Round count values to IEEE halves in place and write the halves to out_halves, so that a
+ * fresh bake and one loaded from its file hold the same values. */
+void meso_bake_round_to_halves(float *values, uint16_t *out_halves, size_t count);
+/* Widen count IEEE halves to floats. */
+void meso_bake_halves_to_floats(const uint16_t *halves, float *out_values, size_t count);
+
+/* One axis of a multilinear lookup: lower index, upper index, weight of the upper. */
+typedef struct meso_bake_axis {
+    int i0, i1;
+    float w;
+} meso_bake_axis;
+
+/* Sample position x in [0, n - 1] clamped at both ends. */
+static inline meso_bake_axis meso_bake_axis_clamp(float x, int n) {
+    if (n <= 1 || x <= 0.0f) return (meso_bake_axis){0, 0, 0.0f};
+    if (x >= (float)(n - 1)) return (meso_bake_axis){n - 1, n - 1, 0.0f};
+    int i = (int)x;
+    return (meso_bake_axis){i, i + 1, x - (float)i};
+}
+/* Sample position x wrapped with period n (x finite, |x| far below 2^31). */
+static inline meso_bake_axis meso_bake_axis_wrap(float x, int n) {
+    float f = floorf(x);
+    int i = (int)f % n;
+    i += i < 0 ? n : 0;
+    return (meso_bake_axis){i, i + 1 == n ? 0 : i + 1, x - f};
+}
 
 #endif

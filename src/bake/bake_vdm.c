@@ -343,10 +343,7 @@ static bool make_half_weights(meso_vdm *vdm) {
     free(vdm->weights_half);
     vdm->weights_half = malloc(count * sizeof(uint16_t));
     if (!vdm->weights_half) return false;
-    for (size_t i = 0; i < count; i++) {
-        vdm->weights_half[i] = meso_half_from_float(vdm->weights[i]);
-        vdm->weights[i] = meso_half_to_float(vdm->weights_half[i]);
-    }
+    meso_bake_round_to_halves(vdm->weights, vdm->weights_half, count);
     return true;
 }
 
@@ -539,27 +536,8 @@ meso_vdm_view meso_vdm_get_view(const meso_vdm *vdm) {
                            .raw_columns = columns_of(d)};
 }
 
-/* One interpolation axis: lower index, upper index, weight of the upper. */
-typedef struct axis {
-    int i0, i1;
-    float w;
-} axis;
-
-static axis axis_clamp(float x, int n) {
-    if (n <= 1 || x <= 0.0f) return (axis){0, 0, 0.0f};
-    if (x >= (float)(n - 1)) return (axis){n - 1, n - 1, 0.0f};
-    int i = (int)x;
-    return (axis){i, i + 1, x - (float)i};
-}
-static axis axis_wrap(float x, int n) {
-    float f = floorf(x);
-    int i = (int)f % n;
-    i += i < 0 ? n : 0;
-    return (axis){i, i + 1 == n ? 0 : i + 1, x - f};
-}
-
 typedef struct lookup_axes {
-    axis x, y, phi, theta, c;
+    meso_bake_axis x, y, phi, theta, c;
 } lookup_axes;
 
 static lookup_axes axes_of(const meso_vdm *vdm, float u, float v, float theta, float phi, float c) {
@@ -567,19 +545,19 @@ static lookup_axes axes_of(const meso_vdm *vdm, float u, float v, float theta, f
     lookup_axes a;
     float x = u * (float)d->width - 0.5f, y = (1.0f - v) * (float)d->height - 0.5f;
     if (vdm->wrap == MESO_WRAP_CLAMP) {
-        a.x = axis_clamp(x, d->width);
-        a.y = axis_clamp(y, d->height);
+        a.x = meso_bake_axis_clamp(x, d->width);
+        a.y = meso_bake_axis_clamp(y, d->height);
     } else {
-        a.x = axis_wrap(x, d->width);
-        a.y = axis_wrap(y, d->height);
+        a.x = meso_bake_axis_wrap(x, d->width);
+        a.y = meso_bake_axis_wrap(y, d->height);
     }
-    a.phi = axis_wrap(phi * (float)d->num_phi / (float)TWO_PI, d->num_phi);
-    a.theta = axis_clamp(theta * (float)d->num_theta / (float)HALF_PI - 0.5f, d->num_theta);
+    a.phi = meso_bake_axis_wrap(phi * (float)d->num_phi / (float)TWO_PI, d->num_phi);
+    a.theta = meso_bake_axis_clamp(theta * (float)d->num_theta / (float)HALF_PI - 0.5f, d->num_theta);
     float cn = d->num_curvatures > 1
                    ? (c - d->curvature_min) / (d->curvature_max - d->curvature_min) *
                          (float)(d->num_curvatures - 1)
                    : 0.0f;
-    a.c = axis_clamp(cn, d->num_curvatures);
+    a.c = meso_bake_axis_clamp(cn, d->num_curvatures);
     return a;
 }
 
@@ -682,18 +660,6 @@ static int write_params(const meso_vdm *vdm, char *buffer, size_t size) {
                     (unsigned long long)c->compressed_bytes, c->bake_seconds);
 }
 
-static bool json_number(const char *json, const char *key, double *out) {
-    char pattern[64];
-    snprintf(pattern, sizeof(pattern), "\"%s\":", key);
-    const char *p = strstr(json, pattern);
-    if (!p) return false;
-    char *end = NULL;
-    double v = strtod(p + strlen(pattern), &end);
-    if (end == p + strlen(pattern) || !isfinite(v)) return false;
-    *out = v;
-    return true;
-}
-
 static meso_bake_file to_bake_file(const meso_vdm *vdm, char *params, size_t params_size,
                                    float *report) {
     const meso_vdm_desc *d = &vdm->desc;
@@ -761,24 +727,10 @@ meso_result meso_vdm_save(meso_context *ctx, const meso_vdm *vdm, const char *pa
     return meso_bake_file_save(ctx, &bake, path);
 }
 
-/* The array `name` of `type` with exactly the dims given, or NULL. */
-static const void *expect_typed(const meso_bake_file *bake, const char *name, meso_bake_type type,
-                                int num_dims, const uint64_t *dims) {
-    const meso_bake_array *a = meso_bake_file_find(bake, name);
-    if (!a || a->type != type || a->num_dims != num_dims) return NULL;
-    for (int i = 0; i < num_dims; i++)
-        if (a->dims[i] != dims[i]) return NULL;
-    return a->data;
-}
-
 /* The array `name` of type f32 with exactly the dims given, or NULL. */
 static const float *expect_array(const meso_bake_file *bake, const char *name, int num_dims,
                                  const uint64_t *dims) {
-    const meso_bake_array *a = meso_bake_file_find(bake, name);
-    if (!a || a->type != MESO_BAKE_F32 || a->num_dims != num_dims) return NULL;
-    for (int i = 0; i < num_dims; i++)
-        if (a->dims[i] != dims[i]) return NULL;
-    return a->data;
+    return meso_bake_file_expect(bake, name, MESO_BAKE_F32, num_dims, dims);
 }
 
 static float *copy_floats(const float *src, size_t count) {
@@ -813,7 +765,7 @@ meso_result meso_vdm_from_bake_file(meso_context *ctx, const meso_bake_file *bak
                             "mvm_eigenfunctions",
                             "wrap"};
     for (int i = 0; i < 13; i++)
-        if (!bake->params_json || !json_number(bake->params_json, keys[i], &v[i]))
+        if (!bake->params_json || !meso_bake_params_number(bake->params_json, keys[i], &v[i]))
             return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: params: %s: missing or not a number",
                                   name, keys[i]);
     for (int i = 0; i < 13; i++)
@@ -849,7 +801,7 @@ meso_result meso_vdm_from_bake_file(meso_context *ctx, const meso_bake_file *bak
     if (half != !d.float_weights)
         return meso_log_error(ctx, MESO_ERROR_FORMAT,
                               "%s: array \"weights\": type does not match float_weights", name);
-    const void *weights = half ? expect_typed(bake, "weights", MESO_BAKE_F16, 4, wd)
+    const void *weights = half ? meso_bake_file_expect(bake, "weights", MESO_BAKE_F16, 4, wd)
                                : (const void *)expect_array(bake, "weights", 4, wd);
     const float *eigen_vdm = expect_array(bake, "eigen_vdm", 3, ed);
     const float *eigen_mvm = expect_array(bake, "eigen_mvm", 2, md);
@@ -892,8 +844,7 @@ meso_result meso_vdm_from_bake_file(meso_context *ctx, const meso_bake_file *bak
         vdm->weights_half = malloc(sizeof(uint16_t) * rows * (size_t)kw);
         if (vdm->weights && vdm->weights_half) {
             memcpy(vdm->weights_half, weights, sizeof(uint16_t) * rows * (size_t)kw);
-            for (size_t i = 0; i < rows * (size_t)kw; i++)
-                vdm->weights[i] = meso_half_to_float(vdm->weights_half[i]);
+            meso_bake_halves_to_floats(vdm->weights_half, vdm->weights, rows * (size_t)kw);
         }
     } else {
         vdm->weights = copy_floats(weights, rows * (size_t)kw);
@@ -970,7 +921,7 @@ size_t meso_vdm_describe(const meso_bake_file *bake, char *buffer, size_t size) 
         "raw_bytes", "compressed_bytes", "vdm_eigenfunctions", "mvm_eigenfunctions",
         "depth",     "bake_seconds"};
     for (int i = 0; i < 6; i++)
-        if (!json_number(bake->params_json, keys[i], &v[i])) return 0;
+        if (!meso_bake_params_number(bake->params_json, keys[i], &v[i])) return 0;
     char text[4096];
     int n = snprintf(text, sizeof(text),
                      "vdm: raw VDM+MVM %.2f MB, compressed (k=%d, m=%d) %.2f MB, ratio %.1f:1, "

@@ -1,41 +1,29 @@
 /* The reference tracer's solids: the solid's texture-space isosurface (bake_isosurface.c)
  * mapped into the shell prism of every base triangle.
  *
- * Mapping (issue 3, GDM §3.1's shell): a point (u, v, w) inside base triangle t's prism goes
- * to sum_i b_i(u, v) (P_i - w depth N_i), b the barycentric weights of (u, v) in the
- * triangle's UV triangle (uv_scale applied, tiles repeat with period 1).
+ * Mapping (issue 3, GDM §3.1's shell): meso_prism_map (meso/prism.h, src/geom/geom_prism.c),
+ * the one definition the gdm technique uses too: a point (u, v, w) inside base triangle t's
+ * prism goes to sum_i b_i(u, v) (P_i - w depth N_i), b the barycentric weights of (u, v) in
+ * the triangle's UV triangle (uv_scale applied, tiles repeat with period 1).
  *
  * Clipping: the isosurface is bucketed by grid column; a column whose (grown) cell is fully
  * inside the UV triangle is copied, one fully outside an edge is skipped, the others have each
  * iso-triangle clipped
  * to the triangle (Sutherland-Hodgman, in the uv plane, w carried along). So that neighbouring
  * prisms meet without a gap, every point on a base edge is computed the same way from both
- * sides: edges are oriented canonically (lower mesh vertex first), the side test is the same
- * cross product, a cut through a part of an original iso-edge is computed from that edge's
+ * sides: edges are oriented canonically (lower mesh vertex first, meso_prism_edge), the side
+ * test is the same cross product, a cut through a part of an original iso-edge is computed from that edge's
  * end points in a canonical order, and points on an edge are mapped with the edge's two
  * vertices only (the third weight exactly 0).
  */
 #include <stdlib.h>
 #include <string.h>
 
+#include "meso/prism.h"
 #include "reference_internal.h"
 
 /* The tiles are added to the iso-mesh's local coordinates: every copy of a vertex is
  * tile + local, exact for the small integers of a tile index. */
-
-typedef struct solid_edge {
-    uint32_t lo, hi;  /* mesh vertices, lo < hi */
-    meso_vec2 uv_lo, uv_hi;
-    float sign;       /* +1 or -1: inside of the triangle is sign * side(x) >= 0 */
-} solid_edge;
-
-typedef struct solid_triangle {
-    solid_edge edges[3];
-    meso_vec2 uv[3];
-    uint32_t v[3];
-    float inverse[4]; /* UV -> (b1, b2): [i0 i1; i2 i3] (uv - uv[0]) */
-    bool valid;
-} solid_triangle;
 
 typedef struct solid_build {
     const meso_mesh *mesh;
@@ -55,7 +43,7 @@ typedef struct solid_build {
 
 typedef struct emitter {
     const solid_build *b;
-    const solid_triangle *st;
+    const meso_prism *st; /* the base triangle's prism (meso/prism.h: edges, UV inverse) */
     bool write;
     uint64_t num_triangles, num_vertices; /* primitives and vertices in the base triangle's block */
     uint64_t real_triangles;
@@ -63,74 +51,16 @@ typedef struct emitter {
     uint32_t *remap, *stamp, current;
 } emitter;
 
-static float side(const solid_edge *e, meso_vec2 x) {
-    float ax = e->uv_hi.x - e->uv_lo.x, ay = e->uv_hi.y - e->uv_lo.y;
-    return ax * (x.y - e->uv_lo.y) - ay * (x.x - e->uv_lo.x);
+static inline float side(const meso_prism_edge *e, meso_vec2 x) {
+    return meso_prism_edge_side(e, x);
 }
 
-static bool setup_triangle(const meso_mesh *mesh, size_t t, solid_triangle *st) {
-    memset(st, 0, sizeof *st);
-    for (int i = 0; i < 3; i++) {
-        st->v[i] = mesh->indices[3 * t + (size_t)i];
-        st->uv[i] = mesh->uvs[st->v[i]];
-    }
-    float e1x = st->uv[1].x - st->uv[0].x, e1y = st->uv[1].y - st->uv[0].y;
-    float e2x = st->uv[2].x - st->uv[0].x, e2y = st->uv[2].y - st->uv[0].y;
-    float det = e1x * e2y - e1y * e2x;
-    if (!(fabsf(det) > 1e-12f)) return false;
-    st->inverse[0] = e2y / det;
-    st->inverse[1] = -e2x / det;
-    st->inverse[2] = -e1y / det;
-    st->inverse[3] = e1x / det;
-    for (int e = 0; e < 3; e++) {
-        uint32_t a = st->v[e], c = st->v[(e + 1) % 3];
-        solid_edge *edge = &st->edges[e];
-        edge->lo = a < c ? a : c;
-        edge->hi = a < c ? c : a;
-        edge->uv_lo = mesh->uvs[edge->lo];
-        edge->uv_hi = mesh->uvs[edge->hi];
-        float s = side(edge, st->uv[(e + 2) % 3]);
-        if (s == 0.0f) return false;
-        edge->sign = s > 0.0f ? 1.0f : -1.0f;
-    }
-    st->valid = true;
-    return true;
-}
-
-/* ---- Mapping into the prism --------------------------------------------------------------- */
-
-static meso_vec3 shell_point(const meso_mesh *mesh, uint32_t v, float w, float depth) {
-    return meso_vec3_madd(mesh->positions[v], mesh->normals[v], -w * depth);
-}
-
-/* World position of a texture-space point; on_edge >= 0 forces the edge formula. */
-static meso_vec3 map_point(const emitter *em, meso_vec3 x, int on_edge) {
-    const solid_triangle *st = em->st;
-    const meso_mesh *mesh = em->b->mesh;
-    meso_vec2 uv = {x.x, x.y};
-    if (on_edge < 0)
-        for (int e = 0; e < 3 && on_edge < 0; e++)
-            if (side(&st->edges[e], uv) == 0.0f) on_edge = e;
-    if (on_edge >= 0) {
-        const solid_edge *e = &st->edges[on_edge];
-        float ax = e->uv_hi.x - e->uv_lo.x, ay = e->uv_hi.y - e->uv_lo.y;
-        float t = (ax * (uv.x - e->uv_lo.x) + ay * (uv.y - e->uv_lo.y)) / (ax * ax + ay * ay);
-        return meso_vec3_lerp(shell_point(mesh, e->lo, x.z, em->b->depth),
-                              shell_point(mesh, e->hi, x.z, em->b->depth), t);
-    }
-    float dx = uv.x - st->uv[0].x, dy = uv.y - st->uv[0].y;
-    float b1 = st->inverse[0] * dx + st->inverse[1] * dy;
-    float b2 = st->inverse[2] * dx + st->inverse[3] * dy;
-    return meso_vec3_barycentric(shell_point(mesh, st->v[0], x.z, em->b->depth),
-                                 shell_point(mesh, st->v[1], x.z, em->b->depth),
-                                 shell_point(mesh, st->v[2], x.z, em->b->depth), 1.0f - b1 - b2,
-                                 b1, b2);
-}
+/* ---- Mapping into the prism (meso_prism_map: one definition for every user) -------------- */
 
 static uint32_t new_vertex(emitter *em, meso_vec3 x, int on_edge) {
     uint64_t index = em->vertex_base + em->num_vertices++;
     if (em->write) {
-        meso_vec3 p = map_point(em, x, on_edge);
+        meso_vec3 p = meso_prism_map(em->st, em->b->mesh, em->b->depth, x, on_edge);
         float *out = em->b->vertices + 3 * index;
         out[0] = p.x;
         out[1] = p.y;
@@ -179,7 +109,7 @@ static bool lex_less(meso_vec3 a, meso_vec3 b) {
 
 /* The point where segment (p, q) crosses base edge e, computed the same way from both sides of
  * the edge: end points in lexicographic order, the canonical side function. */
-static meso_vec3 cut(const solid_edge *e, meso_vec3 p, meso_vec3 q) {
+static meso_vec3 cut(const meso_prism_edge *e, meso_vec3 p, meso_vec3 q) {
     if (lex_less(q, p)) {
         meso_vec3 s = p;
         p = q;
@@ -215,7 +145,7 @@ static void clip_triangle(emitter *em, const uint32_t iso_tri[3], meso_vec3 tile
     }
     for (int e = 0; e < 3; e++) {
         if (!clip_edge[e]) continue;
-        const solid_edge *edge = &em->st->edges[e];
+        const meso_prism_edge *edge = &em->st->edges[e];
         const poly_vertex *in = poly[which];
         poly_vertex *out = poly[1 - which];
         int n_out = 0;
@@ -254,7 +184,7 @@ static void clip_triangle(emitter *em, const uint32_t iso_tri[3], meso_vec3 tile
 static long floor_div(long a, long b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
 static void process_triangle(emitter *em) {
-    const solid_triangle *st = em->st;
+    const meso_prism *st = em->st;
     const meso_isosurface *iso = em->b->iso;
     int ru = iso->resolution_u, rv = iso->resolution_v;
     float umin = st->uv[0].x, umax = umin, vmin = st->uv[0].y, vmax = vmin;
@@ -334,8 +264,8 @@ static void triangle_job(void *user, size_t job, int thread_index) {
     size_t end = (job + 1) * 8;
     if (end > b->mesh->num_triangles) end = b->mesh->num_triangles;
     for (size_t t = job * 8; t < end; t++) {
-        solid_triangle st;
-        if (!setup_triangle(b->mesh, t, &st)) {
+        meso_prism st;
+        if (!meso_prism_init(&st, b->mesh, t)) {
             if (!pass->write) b->triangle_counts[t] = b->vertex_counts[t] = b->real_counts[t] = 0;
             continue;
         }

@@ -1,6 +1,6 @@
 /* Bake files that pass the container's checks but must still not be trusted (issue 15): values
  * that are not finite, entries made from another source; and every truncation and single-bit
- * flip of a real VDM file refused. */
+ * flip of a real VDM, relief layers and GDM file refused. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -175,6 +175,14 @@ static bool layers_accepts(meso_context *ctx, const char *path) {
     return r == MESO_OK;
 }
 
+static bool gdm_accepts(meso_context *ctx, const char *path) {
+    meso_gdm *gdm = NULL;
+    meso_result r = meso_gdm_load(ctx, path, &gdm);
+    assert_true(r == MESO_OK || gdm == NULL);
+    meso_gdm_destroy(gdm);
+    return r == MESO_OK;
+}
+
 /* The file truncated at every byte of its first 2,048 (header, parameters, array table) and
  * at 1,000 random lengths, and with 1,000 single bits flipped: every one refused by the kind's
  * loader (the checksum and the container's checks), none crashing; the file itself loads. */
@@ -232,6 +240,22 @@ static void test_every_truncation_and_bit_flip_of_a_layers_file_is_refused(void 
     meso_context_destroy(ctx);
 }
 
+static void test_every_truncation_and_bit_flip_of_a_gdm_file_is_refused(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    meso_heightfield *hf = make_bumps(8);
+    meso_gdm_desc desc = {.heightfield = hf, .width = 4, .layers = 3, .num_theta = 4,
+                          .num_phi = 2, .eigenmaps = 2, .keep_raw = true};
+    meso_gdm *gdm = NULL;
+    assert_int_equal(meso_bake_gdm(ctx, &desc, &gdm), MESO_OK);
+    const char *path = test_path(test_temp_dir(), "gdm.mesobake");
+    assert_int_equal(meso_gdm_save(ctx, gdm, path), MESO_OK);
+    meso_gdm_destroy(gdm);
+    expect_every_mutation_refused(ctx, path, gdm_accepts);
+    free_heightfield(hf);
+    meso_context_destroy(ctx);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_non_finite_values_with_a_valid_checksum_are_refused_and_rebaked),
@@ -239,6 +263,7 @@ int main(void) {
         cmocka_unit_test(test_a_fifo_in_the_cache_is_skipped_without_blocking),
         cmocka_unit_test(test_every_truncation_and_bit_flip_of_a_vdm_file_is_refused),
         cmocka_unit_test(test_every_truncation_and_bit_flip_of_a_layers_file_is_refused),
+        cmocka_unit_test(test_every_truncation_and_bit_flip_of_a_gdm_file_is_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,6 +1,7 @@
 /* Fuzz target: the bake container (meso_bake_file_load) and every kind's loader that reads
- * one: VDM (meso_vdm_from_bake_file, meso_vdm_describe) and relief layers
- * (meso_layers_from_bake_file, meso_layers_describe). */
+ * one: VDM (meso_vdm_from_bake_file, meso_vdm_describe), relief layers
+ * (meso_layers_from_bake_file, meso_layers_describe) and GDM (meso_gdm_from_bake_file,
+ * meso_gdm_describe). */
 #include "fuzz_target.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
@@ -13,9 +14,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     meso_layers *layers = NULL;
     if (meso_layers_from_bake_file(ctx, bake, "fuzz", &layers) == MESO_OK)
         meso_layers_destroy(layers);
+    meso_gdm *gdm = NULL;
+    if (meso_gdm_from_bake_file(ctx, bake, "fuzz", &gdm) == MESO_OK) meso_gdm_destroy(gdm);
     char text[256];
     meso_vdm_describe(bake, text, sizeof text);
     meso_layers_describe(bake, text, sizeof text);
+    meso_gdm_describe(bake, text, sizeof text);
     meso_bake_file_destroy(bake);
     return 0;
 }

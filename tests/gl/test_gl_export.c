@@ -71,7 +71,7 @@ static void test_exr_round_trip(void **state) {
         assert_int_equal(w, W);
         assert_int_equal(h, H);
         for (int i = 0; i < W * H * C; i++) {
-            float expected = half ? (float)(_Float16)pixels[i] : pixels[i];
+            float expected = half ? meso_half_to_float(meso_half_from_float(pixels[i])) : pixels[i];
             if (back[i] != expected)
                 fail_msg("%s: value %d: %g, not %g", path, i, back[i], expected);
         }

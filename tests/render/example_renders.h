@@ -11,6 +11,8 @@
 static const meso_option example_small_bakes[] = {
     {"vdm", "resolution", 32},         {"vdm", "num_theta", 16},
     {"vdm", "num_curvatures", 4},      {"relief_layers", "size", 64},
+    {"gdm", "resolution", 16},         {"gdm", "layers", 8},
+    {"gdm", "num_theta", 8},           {"gdm", "num_phi", 8},
 };
 
 /* examples/<name>.json, its image made side x side. */

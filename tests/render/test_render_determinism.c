@@ -21,6 +21,10 @@ static void test_every_example_and_technique_is_identical_for_1_2_and_7_threads(
         meso_scene *scene = example_scene_load(ctx, examples[e], 48);
         for (size_t t = 0; t < meso_technique_count(); t++) {
             const meso_technique_info *technique = meso_technique_get(t);
+            /* GDM's bake needs a solid that tiles; the impostor's model is refused with a
+             * message (docs/techniques/gdm.md) */
+            if (strcmp(technique->name, "gdm") == 0 && strcmp(examples[e], "teapot-impostor") == 0)
+                continue;
             /* with fallback, an object the technique cannot draw uses its own technique */
             meso_framebuffer *one = example_render(scene, technique->name, 1);
             size_t bytes = sizeof(float) * 3 * (size_t)one->width * (size_t)one->height;

@@ -1,0 +1,159 @@
+/* The shell's prisms (GDM §3.1 Fig. 3, §3.2 Fig. 5): one definition of the extrusion of a
+ * mesh into a shell of thickness `depth` and of the mapping between object space and a
+ * prism's texture space (u, v, w), for the reference tracer, the `gdm` technique and anything
+ * else that needs them.
+ *
+ * Overview
+ *   Base triangle t with vertices P_i, unit vertex normals N_i and texture coordinates uv_i
+ *   (uv_scale applied) is extruded into a prism: its top is the triangle itself (w = 0), its
+ *   bottom the triangle of P_i - depth N_i (w = 1), DESIGN.md's "depth runs inward". A point
+ *   (u, v, w) of the prism's texture volume, (u, v) inside the UV triangle, is the object-space
+ *   point  sum_i b_i(u, v) (P_i - w depth N_i),  b the barycentric weights of (u, v) in the UV
+ *   triangle (meso_prism_map). Its three sides ("fins") are bilinear patches; each is drawn as
+ *   two triangles (§3.1: "approximated by two mesh triangles").
+ *
+ *   meso_prism_layer_create extrudes a whole mesh into a drawable mesh of 8 triangles a prism
+ *   (top, bottom, 3 fins x 2), each wound counter-clockwise seen from outside its prism, with
+ *   (u, v, w) per vertex. A fin is shared by the two prisms of an edge: both draw it from the
+ *   same vertices (bit-identical positions, the same split diagonal chosen from the positions,
+ *   not from vertex numbers, so UV seams agree too), wound oppositely, so back-face culling
+ *   keeps exactly the copy of the prism the view ray enters and adjacent prisms meet without
+ *   gaps or overlaps.
+ *
+ *   meso_prism_layer_exit gives, for a ray entering a prism, where it leaves: the nearest of
+ *   the ray-plane intersections with the prism's face planes, where a fin's two planes count
+ *   as one face -- the nearer of the two where the fin is convex, the farther where it is
+ *   concave (§3.2 Fig. 5). meso_prism_layer_face_uvw maps a point of a face's plane to (u, v, w)
+ *   by the face's own linear interpolation (the drawn triangles' attributes, extended over the
+ *   plane).
+ *
+ * Usage
+ *   meso_prism_layer *layer;
+ *   meso_prism_layer_create(ctx, mesh, depth, name, &layer);  -> draw layer->faces
+ *   per fragment of face f:  prism = meso_prism_layer_face_prism(layer, f, &slot);
+ *                            meso_prism_layer_exit(layer, prism, P_in, V, slot, &t, &exit_slot);
+ *                            T_out = meso_prism_layer_face_uvw(layer,
+ *                                     meso_prism_layer_face(layer, prism, exit_slot), P_in + t V);
+ *                            P = meso_prism_map(&layer->prisms[prism], mesh, depth, T, -1);
+ *
+ * Ownership: the layer owns its arrays; the mesh it was made from must outlive it (prisms
+ * index its vertices). Threads: creation is single-threaded per layer; every query is pure
+ * and thread-safe.
+ */
+#ifndef MESO_PRISM_H
+#define MESO_PRISM_H
+
+#include "meso/geom.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* An edge of a prism's base triangle in canonical orientation (lower mesh vertex first), so
+ * that both triangles of the edge compute the same side function. */
+typedef struct meso_prism_edge {
+    uint32_t lo, hi; /* mesh vertices, lo < hi */
+    meso_vec2 uv_lo, uv_hi;
+    float sign; /* +1 or -1: the triangle's inside is sign * meso_prism_edge_side(e, uv) >= 0 */
+} meso_prism_edge;
+
+/* One base triangle's prism: what the texture <-> object mapping needs. */
+typedef struct meso_prism {
+    uint32_t vertices[3]; /* mesh vertices, in the triangle's order */
+    meso_vec2 uv[3];
+    float uv_inverse[4];      /* uv -> (b1, b2) = [i0 i1; i2 i3] (uv - uv[0]) */
+    meso_prism_edge edges[3]; /* edge e joins vertices e and e + 1 */
+    bool valid;               /* false: degenerate UV triangle (nothing is mapped into it) */
+} meso_prism;
+
+/* Set up the prism of mesh triangle `triangle` (the mesh has UVs). Returns prism->valid. */
+bool meso_prism_init(meso_prism *prism, const meso_mesh *mesh, size_t triangle);
+
+/* The edge's side function at uv: twice the signed area of (lo, hi, uv) in the UV plane. */
+static inline float meso_prism_edge_side(const meso_prism_edge *edge, meso_vec2 uv) {
+    float ax = edge->uv_hi.x - edge->uv_lo.x, ay = edge->uv_hi.y - edge->uv_lo.y;
+    return ax * (uv.y - edge->uv_lo.y) - ay * (uv.x - edge->uv_lo.x);
+}
+
+/* Vertex v of the mesh moved w shell depths inward: P_v - w depth N_v. Not inline on purpose:
+ * its rounding is part of the mapping's bits (the reference's images), whoever calls it. */
+meso_vec3 meso_prism_shell_point(const meso_mesh *mesh, uint32_t vertex, float w, float depth);
+
+/* The object-space point of texture point uvw = (u, v, w) of the prism (see the overview).
+ * on_edge in 0..2 says the point lies on that edge: it is then mapped from the edge's two
+ * vertices only (canonical order), so both prisms of the edge give the same bits; -1 finds
+ * out (an exact zero of the side function). Points outside the UV triangle are extrapolated
+ * linearly. Pure. */
+meso_vec3 meso_prism_map(const meso_prism *prism, const meso_mesh *mesh, float depth, meso_vec3 uvw,
+                         int on_edge);
+
+/* Barycentric weights of uv in the prism's UV triangle (the b_i of the overview). Pure. */
+static inline void meso_prism_weights(const meso_prism *prism, meso_vec2 uv, float out[3]) {
+    float dx = uv.x - prism->uv[0].x, dy = uv.y - prism->uv[0].y;
+    out[1] = prism->uv_inverse[0] * dx + prism->uv_inverse[1] * dy;
+    out[2] = prism->uv_inverse[2] * dx + prism->uv_inverse[3] * dy;
+    out[0] = 1.0f - out[1] - out[2];
+}
+
+/* ---- The drawable layer ------------------------------------------------------------------ */
+
+/* Faces of a prism, in the order of meso_prism_layer_face. */
+enum {
+    MESO_PRISM_TOP = 0,
+    MESO_PRISM_BOTTOM = 1,
+    MESO_PRISM_FIN = 2, /* fin e's triangles are MESO_PRISM_FIN + 2 e and + 2 e + 1 */
+    MESO_PRISM_NUM_FACES = 8,
+};
+
+/* A face's plane: dot(normal, x) = offset, normal pointing out of the prism (zero when the
+ * face is degenerate: it then bounds nothing). */
+typedef struct meso_prism_plane {
+    meso_vec3 normal;
+    float offset;
+} meso_prism_plane;
+
+typedef struct meso_prism_layer {
+    /* 8 triangles a prism. Face order: every prism's top first, then their fins, then their
+     * bottoms, so that a renderer drawing in order meets the nearest layer first (early depth
+     * rejection). Vertex v of the base mesh is vertex v here (top) and num_vertices + v
+     * (bottom); positions, normals (the base's) and uvs are filled; tangents are not.
+     * Prisms that are not valid have degenerate faces (never drawn). */
+    meso_mesh *faces;
+    meso_vec3 *uvws;          /* per vertex of `faces`: (u, v, 0) top, (u, v, 1) bottom */
+    meso_prism *prisms;       /* per base triangle */
+    meso_prism_plane *planes; /* MESO_PRISM_NUM_FACES per prism, in the face slots' order */
+    uint8_t *fin_convex;      /* 3 per prism: the fin's two triangles bound a convex side */
+    size_t num_prisms;
+    float depth;
+} meso_prism_layer;
+
+/* Extrude `mesh` (with UVs and unit normals) into a shell of thickness depth > 0.
+ * MESO_ERROR_INVALID_ARGUMENT (no UVs, depth not positive and finite), MESO_ERROR_LIMIT (8
+ * triangles a prism over MESO_MESH_MAX_TRIANGLES, checked before allocating),
+ * MESO_ERROR_OUT_OF_MEMORY. `name` names the object in messages. */
+meso_result meso_prism_layer_create(meso_context *ctx, const meso_mesh *mesh, float depth,
+                                    const char *name, meso_prism_layer **out_layer);
+void meso_prism_layer_destroy(meso_prism_layer *layer);
+/* Bytes held by the layer. */
+size_t meso_prism_layer_memory(const meso_prism_layer *layer);
+
+/* Face index (a triangle of layer->faces) of a prism's face slot, and back. Pure. */
+size_t meso_prism_layer_face(const meso_prism_layer *layer, size_t prism, int slot);
+size_t meso_prism_layer_face_prism(const meso_prism_layer *layer, size_t face, int *out_slot);
+
+/* The (u, v, w) of point x of face `face`'s plane: the face's vertex attributes interpolated
+ * linearly (exact on the face; extended over its plane). Pure. */
+meso_vec3 meso_prism_layer_face_uvw(const meso_prism_layer *layer, size_t face, meso_vec3 x);
+
+/* Where the ray origin + t direction, entering the prism through face slot entry_slot (origin
+ * on that face; -1: none, origin inside), leaves it (§3.2 Fig. 5, see the overview): *out_t >= 0
+ * (direction's units), *out_slot the face slot of the exit plane. Returns false when no face
+ * bounds the ray (a degenerate prism). Pure. */
+bool meso_prism_layer_exit(const meso_prism_layer *layer, size_t prism, meso_vec3 origin,
+                           meso_vec3 direction, int entry_slot, float *out_t, int *out_slot);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

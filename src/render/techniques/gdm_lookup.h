@@ -1,0 +1,144 @@
+/* The gdm technique's 8-wide lookup of a compressed GDM (private to src/render/techniques and
+ * its test): the same d as meso_gdm_lookup (bake_gdm.h: axes, interpolation over x, y, z,
+ * theta and phi, §4.1's d = sum_i W_i(x, y, phi) E_i(z, theta)), from a copy of the view laid
+ * out for vector loads: W padded to whole groups of 8 eigen-maps a row, E transposed so that
+ * one (z, theta) column's k values are adjacent. The W of the 8 (x, y, phi) corners are
+ * blended first and dotted once with the blended E: 8 + 4 vector multiply-adds and one
+ * horizontal sum instead of 8 x (4 + 1) k scalar ones. */
+#ifndef MESO_GDM_LOOKUP_H
+#define MESO_GDM_LOOKUP_H
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "meso/bake_gdm.h"
+#include "render_simd.h"
+
+#define GDM_LOOKUP_MAX_CHUNKS (MESO_GDM_MAX_EIGEN / 8)
+
+typedef struct gdm_lookup_table {
+    int width, height, layers, num_theta, num_phi;
+    int num_eigen;  /* k used (<= the map's) */
+    int chunks;     /* groups of 8 eigen-maps */
+    float *weights; /* [height][width][num_phi][8 chunks], zero past k */
+    float *eigen;   /* [layers][num_theta][8 chunks]: E transposed, zero past k */
+} gdm_lookup_table;
+
+/* Lay out the view's first num_eigen eigen-maps (0 or more than stored: all). false when out
+ * of memory. */
+static inline bool gdm_lookup_table_init(gdm_lookup_table *t, const meso_gdm_view *v,
+                                         int num_eigen) {
+    memset(t, 0, sizeof *t);
+    int k = num_eigen <= 0 || num_eigen > v->num_eigen ? v->num_eigen : num_eigen;
+    t->width = v->width, t->height = v->height, t->layers = v->layers;
+    t->num_theta = v->num_theta, t->num_phi = v->num_phi;
+    t->num_eigen = k;
+    t->chunks = (k + 7) / 8;
+    int lanes = 8 * t->chunks;
+    size_t rows = (size_t)v->width * (size_t)v->height * (size_t)v->num_phi;
+    size_t columns = (size_t)v->layers * (size_t)v->num_theta;
+    t->weights = calloc(rows * (size_t)lanes, sizeof(float));
+    t->eigen = calloc(columns * (size_t)lanes, sizeof(float));
+    if (!t->weights || !t->eigen) return false;
+    for (size_t r = 0; r < rows; r++)
+        memcpy(t->weights + r * (size_t)lanes, v->weights + r * (size_t)v->num_eigen,
+               sizeof(float) * (size_t)k);
+    for (int e = 0; e < k; e++)
+        for (size_t c = 0; c < columns; c++)
+            t->eigen[c * (size_t)lanes + (size_t)e] = v->eigen[(size_t)e * columns + c];
+    return true;
+}
+
+static inline void gdm_lookup_table_deinit(gdm_lookup_table *t) {
+    free(t->weights);
+    free(t->eigen);
+    memset(t, 0, sizeof *t);
+}
+
+static inline size_t gdm_lookup_table_bytes(const gdm_lookup_table *t) {
+    size_t lanes = 8 * (size_t)t->chunks;
+    return ((size_t)t->width * t->height * t->num_phi + (size_t)t->layers * t->num_theta) * lanes *
+           sizeof(float);
+}
+
+typedef struct gdm_axis {
+    int i0, i1;
+    float w;
+} gdm_axis;
+
+/* bake_gdm.h's sampling: clamped (z, theta) and wrapped (x, y, phi) sample positions. */
+static inline gdm_axis gdm_axis_clamp(float x, int n) {
+    if (n <= 1 || x <= 0.0f) return (gdm_axis){0, 0, 0.0f};
+    if (x >= (float)(n - 1)) return (gdm_axis){n - 1, n - 1, 0.0f};
+    int i = (int)x;
+    return (gdm_axis){i, i + 1, x - (float)i};
+}
+static inline gdm_axis gdm_axis_wrap(float x, int n) {
+    float f = floorf(x);
+    int i = (int)f % n;
+    i += i < 0 ? n : 0;
+    return (gdm_axis){i, i + 1 == n ? 0 : i + 1, x - f};
+}
+static inline float gdm_tile_fraction(float x) {
+    if (!isfinite(x)) return 0.0f;
+    float f = x - floorf(x);
+    return f < 1.0f ? f : 0.0f;
+}
+
+static inline v8f gdm_load8(const float *p) {
+    v8f v;
+    memcpy(&v, p, sizeof v);
+    return v;
+}
+
+/* d at uvw along the unit (u, v, w) direction: meso_gdm_lookup's value (compressed, k of the
+ * table) up to the order of the additions. Pure. */
+static inline float gdm_lookup8(const gdm_lookup_table *t, meso_vec3 uvw, meso_vec3 direction) {
+    const float two_pi = 6.28318530717958647692f, pi = 3.14159265358979323846f;
+    float u = gdm_tile_fraction(uvw.x), v = gdm_tile_fraction(uvw.y);
+    float w = isfinite(uvw.z) ? fminf(fmaxf(uvw.z, 0.0f), 1.0f) : 0.0f;
+    gdm_axis ax = gdm_axis_wrap(u * (float)t->width - 0.5f, t->width);
+    gdm_axis ay = gdm_axis_wrap((1.0f - v) * (float)t->height - 0.5f, t->height);
+    gdm_axis az = gdm_axis_clamp(w * (float)(t->layers - 1), t->layers);
+    float length = meso_vec3_length(direction);
+    bool valid = length > 0.0f && isfinite(length);
+    float cos_theta = valid ? -direction.z / length : 1.0f;
+    cos_theta = fminf(fmaxf(cos_theta, -1.0f), 1.0f);
+    float theta = acosf(cos_theta);
+    float phi = valid ? atan2f(direction.y, direction.x) : 0.0f;
+    if (phi < 0.0f) phi += two_pi;
+    gdm_axis at = gdm_axis_clamp(theta * (float)t->num_theta / pi - 0.5f, t->num_theta);
+    gdm_axis ap = gdm_axis_wrap(phi * (float)t->num_phi / two_pi, t->num_phi);
+    int lanes = 8 * t->chunks;
+    /* E(z, theta), bilinear */
+    const float *e00 = t->eigen + ((size_t)az.i0 * t->num_theta + (size_t)at.i0) * lanes;
+    const float *e01 = t->eigen + ((size_t)az.i0 * t->num_theta + (size_t)at.i1) * lanes;
+    const float *e10 = t->eigen + ((size_t)az.i1 * t->num_theta + (size_t)at.i0) * lanes;
+    const float *e11 = t->eigen + ((size_t)az.i1 * t->num_theta + (size_t)at.i1) * lanes;
+    float c00 = (1.0f - az.w) * (1.0f - at.w), c01 = (1.0f - az.w) * at.w;
+    float c10 = az.w * (1.0f - at.w), c11 = az.w * at.w;
+    /* W(x, y, phi), trilinear */
+    int ix[2] = {ax.i0, ax.i1}, iy[2] = {ay.i0, ay.i1}, ip[2] = {ap.i0, ap.i1};
+    float wx[2] = {1.0f - ax.w, ax.w}, wy[2] = {1.0f - ay.w, ay.w}, wp[2] = {1.0f - ap.w, ap.w};
+    float d = 0.0f;
+    for (int chunk = 0; chunk < t->chunks; chunk++) {
+        size_t o = 8 * (size_t)chunk;
+        v8f e = v8_splat(c00) * gdm_load8(e00 + o) + v8_splat(c01) * gdm_load8(e01 + o) +
+                v8_splat(c10) * gdm_load8(e10 + o) + v8_splat(c11) * gdm_load8(e11 + o);
+        v8f wsum = v8_splat(0.0f);
+        for (int corner = 0; corner < 8; corner++) {
+            float cw = wx[corner & 1] * wy[(corner >> 1) & 1] * wp[corner >> 2];
+            size_t row =
+                ((size_t)iy[(corner >> 1) & 1] * (size_t)t->width + (size_t)ix[corner & 1]) *
+                    (size_t)t->num_phi +
+                (size_t)ip[corner >> 2];
+            wsum += v8_splat(cw) * gdm_load8(t->weights + row * (size_t)lanes + o);
+        }
+        v8f p = wsum * e;
+        d += ((p[0] + p[1]) + (p[2] + p[3])) + ((p[4] + p[5]) + (p[6] + p[7]));
+    }
+    return d;
+}
+
+#endif

@@ -1,0 +1,256 @@
+/* The shell's prisms (meso/prism.h): shared fins without cracks, the texture <-> object
+ * mapping, Fig. 5's exit point, and a ray along a fin that stays in its own prism. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "test_util.h"
+
+static meso_mesh *make_shape(meso_context *ctx, meso_shape_kind kind, int segments) {
+    meso_mesh *mesh = NULL;
+    meso_shape_desc desc = {.kind = kind, .segments = segments};
+    assert_int_equal(meso_mesh_create_shape(ctx, &desc, &mesh), MESO_OK);
+    return mesh;
+}
+
+static bool same_point(meso_vec3 a, meso_vec3 b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
+
+/* Every drawn fin triangle of a closed mesh has a twin: the same three positions, bit for bit,
+ * wound the other way (the neighbour prism's copy), so the two prisms meet without a crack and
+ * back-face culling keeps exactly one of them. */
+static void test_closed_mesh_fins_have_bit_identical_twins(void **state) {
+    meso_context *ctx = test_context(1);
+    meso_shape_kind kinds[] = {MESO_SHAPE_SPHERE, MESO_SHAPE_TORUS};
+    for (size_t k = 0; k < 2; k++) {
+        meso_mesh *mesh = make_shape(ctx, kinds[k], 12);
+        meso_prism_layer *layer = NULL;
+        assert_int_equal(meso_prism_layer_create(ctx, mesh, 0.1f, "shape", &layer), MESO_OK);
+        const meso_mesh *faces = layer->faces;
+        assert_int_equal(faces->num_triangles, 8 * mesh->num_triangles);
+        size_t fins = 0, twins = 0;
+        for (size_t p = 0; p < layer->num_prisms; p++) {
+            if (!layer->prisms[p].valid) continue;
+            for (int slot = MESO_PRISM_FIN; slot < MESO_PRISM_NUM_FACES; slot++) {
+                size_t f = meso_prism_layer_face(layer, p, slot);
+                const uint32_t *a = faces->indices + 3 * f;
+                fins++;
+                bool found = false;
+                for (size_t q = 0; q < layer->num_prisms && !found; q++) {
+                    if (q == p || !layer->prisms[q].valid) continue;
+                    for (int s = MESO_PRISM_FIN; s < MESO_PRISM_NUM_FACES && !found; s++) {
+                        const uint32_t *b = faces->indices + 3 * meso_prism_layer_face(layer, q, s);
+                        for (int r = 0; r < 3 && !found; r++) /* reversed, any rotation */
+                            found = same_point(faces->positions[a[0]],
+                                               faces->positions[b[(r + 2) % 3]]) &&
+                                    same_point(faces->positions[a[1]],
+                                               faces->positions[b[(r + 1) % 3]]) &&
+                                    same_point(faces->positions[a[2]], faces->positions[b[r]]);
+                    }
+                }
+                twins += found;
+            }
+        }
+        assert_true(fins > 0);
+        assert_int_equal(twins, fins);
+        meso_prism_layer_destroy(layer);
+        meso_mesh_destroy(mesh);
+    }
+    meso_context_destroy(ctx);
+}
+
+/* Faces are wound counter-clockwise seen from outside their prism: every face plane has the
+ * prism's centroid behind it. */
+static void test_faces_face_out_of_their_prism(void **state) {
+    meso_context *ctx = test_context(1);
+    meso_mesh *mesh = make_shape(ctx, MESO_SHAPE_TORUS, 10);
+    meso_prism_layer *layer = NULL;
+    assert_int_equal(meso_prism_layer_create(ctx, mesh, 0.08f, "torus", &layer), MESO_OK);
+    for (size_t p = 0; p < layer->num_prisms; p++) {
+        const meso_prism *prism = &layer->prisms[p];
+        assert_true(prism->valid);
+        meso_vec3 centre = {0};
+        for (int i = 0; i < 3; i++)
+            centre = meso_vec3_add(
+                centre,
+                meso_vec3_add(mesh->positions[prism->vertices[i]],
+                              meso_prism_shell_point(mesh, prism->vertices[i], 1.0f, 0.08f)));
+        centre = meso_vec3_scale(centre, 1.0f / 6.0f);
+        for (int slot = 0; slot < MESO_PRISM_NUM_FACES; slot++) {
+            const meso_prism_plane *pl = &layer->planes[p * MESO_PRISM_NUM_FACES + (size_t)slot];
+            assert_true(meso_vec3_dot(pl->normal, centre) - pl->offset < 0.0f);
+        }
+    }
+    meso_prism_layer_destroy(layer);
+    meso_mesh_destroy(mesh);
+    meso_context_destroy(ctx);
+}
+
+/* meso_prism_map puts the vertices' (u, v, w) on the extruded vertices and is linear between. */
+static void test_map_reaches_the_extruded_vertices(void **state) {
+    meso_context *ctx = test_context(1);
+    meso_mesh *mesh = make_shape(ctx, MESO_SHAPE_SPHERE, 8);
+    const float depth = 0.2f;
+    for (size_t t = 0; t < mesh->num_triangles; t++) {
+        meso_prism prism;
+        if (!meso_prism_init(&prism, mesh, t)) continue;
+        for (int i = 0; i < 3; i++) {
+            uint32_t v = prism.vertices[i];
+            for (int w = 0; w <= 1; w++) {
+                meso_vec3 uvw = {mesh->uvs[v].x, mesh->uvs[v].y, (float)w};
+                meso_vec3 p = meso_prism_map(&prism, mesh, depth, uvw, -1);
+                meso_vec3 q = meso_vec3_madd(mesh->positions[v], mesh->normals[v], -depth * w);
+                assert_float_equal(meso_vec3_length(meso_vec3_sub(p, q)), 0.0f, 1e-5f);
+            }
+        }
+        /* the centroid at half depth: the mean of the six corners */
+        meso_vec3 uvw = {0.0f, 0.0f, 0.5f}, expect = {0};
+        for (int i = 0; i < 3; i++) {
+            uint32_t v = prism.vertices[i];
+            uvw.x += mesh->uvs[v].x / 3.0f, uvw.y += mesh->uvs[v].y / 3.0f;
+            expect = meso_vec3_add(
+                expect,
+                meso_vec3_scale(meso_vec3_madd(mesh->positions[v], mesh->normals[v], -0.5f * depth),
+                                1.0f / 3.0f));
+        }
+        meso_vec3 p = meso_prism_map(&prism, mesh, depth, uvw, -1);
+        assert_float_equal(meso_vec3_length(meso_vec3_sub(p, expect)), 0.0f, 1e-5f);
+    }
+    meso_mesh_destroy(mesh);
+    meso_context_destroy(ctx);
+}
+
+/* On the plane (two prisms), a ray straight down from the top leaves through the bottom one
+ * depth below with w = 1 and the same uv; a slanted one through a fin, where the fin's (u, v, w)
+ * is the analytic crossing. */
+static void test_exit_on_a_plane_is_exact(void **state) {
+    meso_context *ctx = test_context(1);
+    meso_mesh *mesh = make_shape(ctx, MESO_SHAPE_PLANE, 1); /* size 2, y = 0, normal +y */
+    const float depth = 0.25f;
+    meso_prism_layer *layer = NULL;
+    assert_int_equal(meso_prism_layer_create(ctx, mesh, depth, "plane", &layer), MESO_OK);
+    for (size_t p = 0; p < layer->num_prisms; p++) {
+        const meso_prism *prism = &layer->prisms[p];
+        meso_vec2 uv = {0.0f, 0.0f};
+        for (int i = 0; i < 3; i++) uv.x += prism->uv[i].x / 3.0f, uv.y += prism->uv[i].y / 3.0f;
+        meso_vec3 origin = meso_prism_map(prism, mesh, depth, (meso_vec3){uv.x, uv.y, 0.0f}, -1);
+        float t;
+        int slot;
+        assert_true(meso_prism_layer_exit(layer, p, origin, (meso_vec3){0.0f, -1.0f, 0.0f},
+                                          MESO_PRISM_TOP, &t, &slot));
+        assert_int_equal(slot, MESO_PRISM_BOTTOM);
+        assert_float_equal(t, depth, 1e-6f);
+        meso_vec3 exit = meso_vec3_madd(origin, (meso_vec3){0.0f, -1.0f, 0.0f}, t);
+        meso_vec3 uvw =
+            meso_prism_layer_face_uvw(layer, meso_prism_layer_face(layer, p, slot), exit);
+        assert_float_equal(uvw.x, uv.x, 1e-6f);
+        assert_float_equal(uvw.y, uv.y, 1e-6f);
+        assert_float_equal(uvw.z, 1.0f, 1e-6f);
+    }
+    /* toward the plane's border x = +1 (u = 1), 45 degrees down, from x = 0.9: through the
+     * border fin at x = 1, 0.1 below the top: w = 0.4, u = 1 */
+    meso_vec3 origin = {0.9f, 0.0f, 0.3f}, dir = meso_vec3_normalize((meso_vec3){1, -1, 0});
+    size_t prism = SIZE_MAX;
+    for (size_t p = 0; p < layer->num_prisms; p++) {
+        float b[3];
+        meso_prism_weights(&layer->prisms[p], (meso_vec2){0.95f, 0.35f}, b);
+        if (b[0] >= 0.0f && b[1] >= 0.0f && b[2] >= 0.0f) prism = p;
+    }
+    assert_true(prism != SIZE_MAX);
+    float t;
+    int slot;
+    assert_true(meso_prism_layer_exit(layer, prism, origin, dir, MESO_PRISM_TOP, &t, &slot));
+    assert_true(slot >= MESO_PRISM_FIN);
+    assert_float_equal(t, 0.1f * sqrtf(2.0f), 1e-5f);
+    meso_vec3 uvw = meso_prism_layer_face_uvw(layer, meso_prism_layer_face(layer, prism, slot),
+                                              meso_vec3_madd(origin, dir, t));
+    assert_float_equal(uvw.x, 1.0f, 1e-5f);
+    assert_float_equal(uvw.y, 0.35f, 1e-5f);
+    assert_float_equal(uvw.z, 0.4f, 1e-5f);
+    meso_prism_layer_destroy(layer);
+    meso_mesh_destroy(mesh);
+    meso_context_destroy(ctx);
+}
+
+/* Rays entering a prism of a curved mesh (convex and concave fins: the torus' inside) leave it
+ * where its own (u, v, w) volume ends: the exit's uv lies in the prism's UV triangle and w in
+ * [0, 1], even for rays that run along a fin a hair inside it -- they never leak into the
+ * neighbour's volume. */
+static void test_rays_along_fins_stay_in_their_prism(void **state) {
+    meso_context *ctx = test_context(1);
+    meso_mesh *mesh = make_shape(ctx, MESO_SHAPE_TORUS, 12);
+    const float depth = 0.1f;
+    meso_prism_layer *layer = NULL;
+    assert_int_equal(meso_prism_layer_create(ctx, mesh, depth, "torus", &layer), MESO_OK);
+    size_t convex = 0, concave = 0;
+    for (size_t i = 0; i < 3 * layer->num_prisms; i++) layer->fin_convex[i] ? convex++ : concave++;
+    assert_true(convex > 0 && concave > 0);
+    unsigned seed = 7;
+    float worst = 0.0f;
+    for (size_t p = 0; p < layer->num_prisms; p += 3) {
+        const meso_prism *prism = &layer->prisms[p];
+        for (int e = 0; e < 3; e++) {
+            /* start a hair inside edge e on the top, heading down along the fin's plane */
+            meso_vec2 a = prism->uv[e], b = prism->uv[(e + 1) % 3], c = prism->uv[(e + 2) % 3];
+            for (int k = 0; k < 8; k++) {
+                seed = seed * 1103515245u + 12345u;
+                float s = 0.1f + 0.8f * (float)(seed >> 8) / 16777216.0f;
+                meso_vec2 on = {a.x + (b.x - a.x) * s, a.y + (b.y - a.y) * s};
+                meso_vec2 in = {on.x + 1e-4f * (c.x - on.x), on.y + 1e-4f * (c.y - on.y)};
+                meso_vec3 top = meso_prism_map(prism, mesh, depth, (meso_vec3){in.x, in.y, 0}, -1);
+                meso_vec3 bottom =
+                    meso_prism_map(prism, mesh, depth, (meso_vec3){on.x, on.y, 1.0f}, -1);
+                /* toward a point on the fin's bottom edge (through the fin) or along it */
+                meso_vec3 dir = meso_vec3_normalize(meso_vec3_sub(bottom, top));
+                float t;
+                int slot;
+                assert_true(meso_prism_layer_exit(layer, p, top, dir, MESO_PRISM_TOP, &t, &slot));
+                assert_true(t >= 0.0f && t < 2.0f * depth + 1.0f);
+                meso_vec3 uvw = meso_prism_layer_face_uvw(
+                    layer, meso_prism_layer_face(layer, p, slot), meso_vec3_madd(top, dir, t));
+                float w[3];
+                meso_prism_weights(prism, (meso_vec2){uvw.x, uvw.y}, w);
+                float least = fminf(w[0], fminf(w[1], w[2]));
+                worst = fminf(worst, least);
+                assert_true(least > -2e-3f);
+                assert_true(uvw.z > -1e-3f && uvw.z < 1.0f + 1e-3f);
+            }
+        }
+    }
+    print_message("least barycentric weight of an exit: %g\n", (double)worst);
+    meso_prism_layer_destroy(layer);
+    meso_mesh_destroy(mesh);
+    meso_context_destroy(ctx);
+}
+
+static void test_layer_refuses_bad_input_naming_it(void **state) {
+    meso_context *ctx = test_context(1);
+    meso_mesh *mesh = make_shape(ctx, MESO_SHAPE_PLANE, 1);
+    meso_prism_layer *layer = (meso_prism_layer *)1;
+    assert_int_equal(meso_prism_layer_create(ctx, mesh, 0.0f, "floor", &layer),
+                     MESO_ERROR_INVALID_ARGUMENT);
+    assert_null(layer);
+    assert_non_null(strstr(meso_context_last_error(ctx), "floor: mesostructure.depth"));
+    meso_vec2 *uvs = mesh->uvs;
+    mesh->uvs = NULL;
+    layer = (meso_prism_layer *)1;
+    assert_int_equal(meso_prism_layer_create(ctx, mesh, 0.1f, "floor", &layer),
+                     MESO_ERROR_INVALID_ARGUMENT);
+    assert_null(layer);
+    assert_non_null(strstr(meso_context_last_error(ctx), "texture coordinates"));
+    mesh->uvs = uvs;
+    meso_prism_layer_destroy(NULL);
+    meso_mesh_destroy(mesh);
+    meso_context_destroy(ctx);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_closed_mesh_fins_have_bit_identical_twins),
+        cmocka_unit_test(test_faces_face_out_of_their_prism),
+        cmocka_unit_test(test_map_reaches_the_extruded_vertices),
+        cmocka_unit_test(test_exit_on_a_plane_is_exact),
+        cmocka_unit_test(test_rays_along_fins_stay_in_their_prism),
+        cmocka_unit_test(test_layer_refuses_bad_input_naming_it),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
