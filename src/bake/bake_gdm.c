@@ -292,13 +292,14 @@ static meso_isosurface_desc surface_cells_of(const meso_gdm_desc *d) {
         .resolution_w = at_least(SURFACE_REFINE * (d->layers - 1), SURFACE_MIN_CELLS_W)};
 }
 
-/* Embree's BVH, built on one thread: the same tree, hence the same hits, for any number of
- * the context's threads (rays are traced from the context's own pool). */
 /* Bytes of the traced surface per triangle: Embree's BVH and the vertex and index buffers,
  * measured (peak resident size: 130 bytes a triangle for the weave's 172 k). */
 #define SURFACE_BYTES_PER_TRIANGLE 130u
 
-/* `needed`: the bake's other memory, for the budget check once the triangles are counted. */
+/* The source's surface and Embree's BVH over it, built on one thread: the same tree, hence the
+ * same hits, for any number of the context's threads (rays are traced from the context's own
+ * pool). `needed`: the bake's other memory, for the budget check once the triangles are
+ * counted. */
 static meso_result surface_build(meso_context *ctx, const meso_gdm_desc *d, uint64_t needed,
                                  gdm_surface *s) {
     *s = (gdm_surface){0};
