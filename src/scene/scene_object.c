@@ -41,7 +41,7 @@ static meso_result parse_procedural_heightfield(const scene_parser *p, const cJS
     if (!meso_heightfield_kind_from_name(name, &desc.kind)) {
         scene_key k = scene_key_child(key, "procedural");
         return scene_error(p, MESO_ERROR_FORMAT, &k,
-                           "unknown procedural height field \"%s\" (bricks, bumps, weave, tiles)",
+                           "unknown procedural height field \"%s\" (bricks, bumps, weave, tiles, bark)",
                            name);
     }
     long resolution = 0, rows = 0, columns = 0, seed = 0;

@@ -1,0 +1,282 @@
+/* The path-traced reference (issue 17 item 5): the truth under an environment and with
+ * interreflection, over the same micro-geometry the direct-light reference traces.
+ *
+ * A pixel is the direct-light reference's colour (the shared shading model with hard shadows:
+ * ambient, the scene's lights, specular) plus the light the surface reflects from the
+ * environment and from other surfaces, which the model treats as Lambertian with its diffuse
+ * albedo (albedo x colour map):
+ *     L(x) = shade(x) + albedo(x) / pi * E(x),   E(x) = integral L_in(w) max(0, n.w) dw,
+ * where L_in is the environment's radiance where the ray w escapes and, where it hits a surface
+ * y, y's radiance albedo(y) (ambient + sum of lights n.l visible + E(y) / pi), up to `bounces`
+ * surfaces deep (0: no interreflection, the environment's direct light only). Specular is
+ * reflected from the scene's lights only, as in the direct model.
+ *
+ * E is estimated with one sample of each of two strategies combined by the balance heuristic
+ * (Veach & Guibas 1995, multiple importance sampling): a direction drawn from the environment's
+ * luminance (its importance sampling, meso_environment_sample) with a shadow ray, and a
+ * cosine-weighted direction about the normal, which continues the path where it hits a
+ * surface. The camera ray goes through the pixel centre as in every other renderer, so
+ * coverage and depth are the direct reference's exactly; only the lighting is sampled.
+ *
+ * Determinism: sample s of pixel p draws its numbers from a generator seeded by (p, s) alone,
+ * and a pixel's samples are summed in order, so the image is the same for any thread count.
+ * Progress: samples are taken in passes of PASS_SAMPLES over every 16 x 16 tile; the progress
+ * counts tiles x passes and a cancel stops at the next tile.
+ */
+#include <math.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "reference_internal.h"
+
+enum { TILE = 16, PASS_SAMPLES = 4 };
+
+/* ---- Random numbers ----------------------------------------------------------------------- */
+
+/* SplitMix64 (Steele, Lea & Flood 2014): a counter through a strong mixer, so nearby seeds
+ * give independent streams. */
+typedef struct path_random {
+    uint64_t state;
+} path_random;
+
+static uint64_t random_next64(path_random *r) {
+    uint64_t z = (r->state += UINT64_C(0x9E3779B97F4A7C15));
+    z = (z ^ (z >> 30)) * UINT64_C(0xBF58476D1CE4E5B9);
+    z = (z ^ (z >> 27)) * UINT64_C(0x94D049BB133111EB);
+    return z ^ (z >> 31);
+}
+
+/* Uniform in [0, 1): the top 24 bits, exactly representable. */
+static float random_next(path_random *r) { return (float)(random_next64(r) >> 40) * 0x1p-24f; }
+
+static path_random random_for(size_t pixel, int sample) {
+    path_random r = {((uint64_t)pixel << 24) ^ (uint64_t)sample};
+    random_next64(&r); /* one step, so that seeds differing in few bits start far apart */
+    return r;
+}
+
+/* ---- Directions --------------------------------------------------------------------------- */
+
+/* A cosine-weighted direction about the unit n (Malley's method: a uniform point of the disc
+ * lifted to the hemisphere); its density is max(0, n.w) / pi. */
+static meso_vec3 cosine_direction(meso_vec3 n, float u1, float u2) {
+    /* an orthonormal basis around n without a branch on n's size (Duff et al. 2017) */
+    float sign = copysignf(1.0f, n.z);
+    float a = -1.0f / (sign + n.z), b = n.x * n.y * a;
+    meso_vec3 t = {1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x};
+    meso_vec3 s = {b, sign + n.y * n.y * a, -n.y};
+    float r = sqrtf(u1), phi = 6.28318530718f * u2;
+    float x = r * cosf(phi), y = r * sinf(phi), z = sqrtf(fmaxf(0.0f, 1.0f - u1));
+    return meso_vec3_normalize(
+        meso_vec3_add(meso_vec3_add(meso_vec3_scale(t, x), meso_vec3_scale(s, y)),
+                      meso_vec3_scale(n, z)));
+}
+
+/* ---- Light transport ---------------------------------------------------------------------- */
+
+typedef struct path_job {
+    const meso_reference *reference;
+    const meso_frame *frame;
+    meso_frame albedo_frame; /* the frame with no lights and ambient 1: shading gives albedo */
+    meso_scene albedo_scene;
+    const meso_environment *environment; /* NULL: none */
+    int samples, bounces;
+    int pass;        /* the pass running: samples [pass * PASS_SAMPLES, ...) */
+    int tiles_x;
+    float *color, *coverage, *depth;
+    double *reflected; /* per pixel, RGB: the sum over samples of albedo E / pi */
+    meso_progress *progress;
+    atomic_bool cancelled;
+} path_job;
+
+/* The shading model's diffuse albedo at a hit (albedo x colour map, exactly as it shades). */
+static meso_vec3 albedo_at(const path_job *pj, const reference_hit *hit) {
+    return meso_shade_point(&pj->albedo_frame, hit->ref->object, hit->position, hit->normal,
+                            hit->uv, NULL);
+}
+
+/* The shading normal on the ray's side: interpolated normals may face away from the
+ * triangle the ray hit; light then arrives on the side the ray came from. */
+static meso_vec3 facing_normal(const reference_hit *hit) {
+    return meso_vec3_dot(hit->normal, hit->geometric_normal) < 0.0f ? meso_vec3_negate(hit->normal)
+                                                                    : hit->normal;
+}
+
+static bool unoccluded(const meso_reference *reference, meso_vec3 origin, meso_vec3 dir) {
+    struct RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    struct RTCRay ray;
+    memset(&ray, 0, sizeof ray);
+    ray.org_x = origin.x, ray.org_y = origin.y, ray.org_z = origin.z;
+    ray.dir_x = dir.x, ray.dir_y = dir.y, ray.dir_z = dir.z;
+    ray.tnear = 0.0f;
+    ray.tfar = INFINITY;
+    ray.mask = UINT32_MAX;
+    rtcOccluded1(reference->scene, &context, &ray);
+    return ray.tfar != -INFINITY;
+}
+
+static meso_vec3 surface_radiance(const path_job *pj, const reference_hit *hit, int bounces_left,
+                                  path_random *random);
+
+/* One estimate of the irradiance E at a hit (see the top of the file). */
+static meso_vec3 irradiance(const path_job *pj, const reference_hit *hit, int bounces_left,
+                            path_random *random) {
+    const meso_environment *env = pj->environment;
+    meso_vec3 n = facing_normal(hit), ng = hit->geometric_normal;
+    meso_vec3 e = {0, 0, 0};
+    /* the environment's importance: directions toward its bright texels */
+    float u1 = random_next(random), u2 = random_next(random);
+    if (env) {
+        float pdf_light = 0.0f;
+        meso_vec3 w = meso_environment_sample(env, u1, u2, &pdf_light);
+        float cosine = meso_vec3_dot(n, w);
+        if (cosine > 0.0f && meso_vec3_dot(ng, w) > 0.0f &&
+            unoccluded(pj->reference, hit->origin, w)) {
+            float pdf_cosine = cosine * (float)M_1_PI;
+            float weight = pdf_light / (pdf_light + pdf_cosine);
+            e = meso_vec3_madd(e, meso_environment_radiance(env, w), cosine / pdf_light * weight);
+        }
+    }
+    /* cosine-weighted: the environment where the ray escapes, the surface where it hits */
+    float u3 = random_next(random), u4 = random_next(random);
+    meso_vec3 w = cosine_direction(n, u3, u4);
+    float cosine = meso_vec3_dot(n, w);
+    if (!(cosine > 0.0f && meso_vec3_dot(ng, w) > 0.0f)) return e;
+    struct RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    reference_hit next;
+    if (!reference_trace(pj->reference, &context, hit->origin, w, 0.0f, &next)) {
+        if (env) {
+            float pdf_cosine = cosine * (float)M_1_PI;
+            float weight = pdf_cosine / (pdf_cosine + meso_environment_pdf(env, w));
+            /* L cos / pdf_cosine = L pi */
+            e = meso_vec3_madd(e, meso_environment_radiance(env, w), (float)M_PI * weight);
+        }
+    } else if (bounces_left > 0) {
+        e = meso_vec3_madd(e, surface_radiance(pj, &next, bounces_left - 1, random), (float)M_PI);
+    }
+    return e;
+}
+
+/* The radiance a surface point seen by a bounce ray reflects (diffusely) toward it. */
+static meso_vec3 surface_radiance(const path_job *pj, const reference_hit *hit, int bounces_left,
+                                  path_random *random) {
+    const meso_scene *scene = pj->frame->scene;
+    meso_vec3 n = facing_normal(hit);
+    float visibility[MESO_SCENE_MAX_LIGHTS];
+    reference_light_visibility(pj->reference, hit->origin, hit->position, visibility);
+    meso_vec3 direct = scene->ambient;
+    for (int l = 0; l < scene->num_lights; l++) {
+        float cosine = meso_vec3_dot(n, meso_light_direction(&scene->lights[l], hit->position));
+        if (cosine > 0.0f && visibility[l] > 0.0f)
+            direct = meso_vec3_madd(direct, scene->lights[l].color, cosine * visibility[l]);
+    }
+    meso_vec3 e = irradiance(pj, hit, bounces_left, random);
+    return meso_vec3_mul(albedo_at(pj, hit), meso_vec3_madd(direct, e, (float)M_1_PI));
+}
+
+static void path_tile(void *user, size_t job, int thread_index) {
+    (void)thread_index;
+    path_job *pj = user;
+    if (atomic_load_explicit(&pj->cancelled, memory_order_relaxed)) return;
+    const meso_reference *reference = pj->reference;
+    const meso_frame *frame = pj->frame;
+    const meso_scene *scene = frame->scene;
+    int x0 = (int)(job % (size_t)pj->tiles_x) * TILE, y0 = (int)(job / (size_t)pj->tiles_x) * TILE;
+    int x1 = x0 + TILE < frame->width ? x0 + TILE : frame->width;
+    int y1 = y0 + TILE < frame->height ? y0 + TILE : frame->height;
+    int first = pj->pass * PASS_SAMPLES;
+    int last = first + PASS_SAMPLES < pj->samples ? first + PASS_SAMPLES : pj->samples;
+    struct RTCIntersectContext primary;
+    rtcInitIntersectContext(&primary);
+    primary.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    float visibility[MESO_SCENE_MAX_LIGHTS];
+    for (int j = y0; j < y1; j++)
+        for (int i = x0; i < x1; i++) {
+            size_t pixel = (size_t)j * (size_t)frame->width + (size_t)i;
+            meso_vec3 dir = meso_frame_ray_direction(frame, (float)i + 0.5f, (float)j + 0.5f);
+            reference_hit hit;
+            bool found = reference_trace(reference, &primary, frame->eye, dir, frame->z_near, &hit);
+            if (pj->pass == 0) {
+                /* the direct-light reference's pixel, the same calls in the same order */
+                float *c = pj->color + 3 * pixel;
+                if (!found) {
+                    c[0] = scene->background.x, c[1] = scene->background.y;
+                    c[2] = scene->background.z;
+                    pj->coverage[pixel] = 0.0f;
+                    pj->depth[pixel] = INFINITY;
+                } else {
+                    reference_light_visibility(reference, hit.origin, hit.position, visibility);
+                    meso_vec3 shaded = meso_shade_point(frame, hit.ref->object, hit.position,
+                                                        hit.normal, hit.uv, visibility);
+                    c[0] = shaded.x, c[1] = shaded.y, c[2] = shaded.z;
+                    pj->coverage[pixel] = 1.0f;
+                    pj->depth[pixel] = hit.t;
+                }
+            }
+            if (!found) continue;
+            meso_vec3 albedo = albedo_at(pj, &hit);
+            double *sum = pj->reflected + 3 * pixel;
+            for (int s = first; s < last; s++) {
+                path_random random = random_for(pixel, s);
+                meso_vec3 e = irradiance(pj, &hit, pj->bounces, &random);
+                meso_vec3 reflected = meso_vec3_scale(meso_vec3_mul(albedo, e), (float)M_1_PI);
+                sum[0] += reflected.x, sum[1] += reflected.y, sum[2] += reflected.z;
+            }
+        }
+    if (last == pj->samples)
+        meso_progress_advance(frame->progress, (uint64_t)(x1 - x0) * (uint64_t)(y1 - y0));
+    if (meso_progress_advance(pj->progress, 1)) atomic_store(&pj->cancelled, true);
+}
+
+meso_result reference_path_render(meso_context *ctx, const meso_reference *reference,
+                                  const meso_frame *frame, float *color, float *coverage,
+                                  float *depth) {
+    size_t pixels = (size_t)frame->width * (size_t)frame->height;
+    meso_result r = meso_memory_check(ctx, "reference: path tracing",
+                                      (uint64_t)pixels * 3 * sizeof(double));
+    if (r != MESO_OK) return r;
+    path_job *pj = calloc(1, sizeof *pj);
+    double *reflected = calloc(pixels * 3, sizeof(double));
+    if (!pj || !reflected) {
+        free(pj);
+        free(reflected);
+        return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "reference: path tracing: %zu pixels",
+                              pixels);
+    }
+    pj->reference = reference;
+    pj->frame = frame;
+    pj->albedo_scene = *frame->scene;
+    pj->albedo_scene.num_lights = 0;
+    pj->albedo_scene.ambient = (meso_vec3){1.0f, 1.0f, 1.0f};
+    pj->albedo_frame = *frame;
+    pj->albedo_frame.scene = &pj->albedo_scene;
+    pj->environment = frame->scene->environment;
+    pj->samples = reference->path_samples;
+    pj->bounces = reference->path_bounces;
+    pj->tiles_x = (frame->width + TILE - 1) / TILE;
+    pj->color = color, pj->coverage = coverage, pj->depth = depth;
+    pj->reflected = reflected;
+    atomic_init(&pj->cancelled, false);
+    size_t tiles = (size_t)pj->tiles_x * (size_t)((frame->height + TILE - 1) / TILE);
+    int passes = (pj->samples + PASS_SAMPLES - 1) / PASS_SAMPLES;
+    double start = meso_time_seconds();
+    pj->progress = meso_progress_begin(ctx, "reference: path trace", tiles * (size_t)passes);
+    for (pj->pass = 0; pj->pass < passes && !atomic_load(&pj->cancelled); pj->pass++)
+        meso_parallel_for(ctx, tiles, path_tile, pj);
+    meso_progress_end(pj->progress);
+    bool cancelled = atomic_load(&pj->cancelled);
+    if (!cancelled) {
+        double scale = 1.0 / pj->samples;
+        for (size_t p = 0; p < 3 * pixels; p++) color[p] += (float)(reflected[p] * scale);
+        meso_log_info(ctx, "reference: path traced %d samples a pixel, %d bounces, in %.2f s",
+                      pj->samples, pj->bounces, meso_time_seconds() - start);
+    }
+    free(reflected);
+    free(pj);
+    if (cancelled)
+        return meso_log_error(ctx, MESO_ERROR_CANCELLED, "reference: render: cancelled");
+    return MESO_OK;
+}
