@@ -2,7 +2,8 @@
  * interreflection, over the same micro-geometry the direct-light reference traces.
  *
  * A pixel is the direct-light reference's colour (the shared shading model with hard shadows:
- * ambient, the scene's lights, specular) plus the light the surface reflects from the
+ * ambient, the scene's lights, specular; without the environment's unshadowed SH term, which
+ * the sampled environment light replaces) plus the light the surface reflects from the
  * environment and from other surfaces, which the model treats as Lambertian with its diffuse
  * albedo (albedo x colour map):
  *     L(x) = shade(x) + albedo(x) / pi * E(x),   E(x) = integral L_in(w) max(0, n.w) dw,
@@ -80,6 +81,10 @@ typedef struct path_job {
     const meso_frame *frame;
     meso_frame albedo_frame; /* the frame with no lights and ambient 1: shading gives albedo */
     meso_scene albedo_scene;
+    /* the frame without the environment's unshadowed SH term (render_environment.h), which
+     * the sampled light replaces: the direct part of a pixel */
+    meso_frame direct_frame;
+    meso_scene direct_scene;
     const meso_environment *environment; /* NULL: none */
     int samples, bounces;
     int pass;        /* the pass running: samples [pass * PASS_SAMPLES, ...) */
@@ -209,8 +214,9 @@ static void path_tile(void *user, size_t job, int thread_index) {
                     pj->depth[pixel] = INFINITY;
                 } else {
                     reference_light_visibility(reference, hit.origin, hit.position, visibility);
-                    meso_vec3 shaded = meso_shade_point(frame, hit.ref->object, hit.position,
-                                                        hit.normal, hit.uv, visibility);
+                    meso_vec3 shaded = meso_shade_point(&pj->direct_frame, hit.ref->object,
+                                                        hit.position, hit.normal, hit.uv,
+                                                        visibility);
                     c[0] = shaded.x, c[1] = shaded.y, c[2] = shaded.z;
                     pj->coverage[pixel] = 1.0f;
                     pj->depth[pixel] = hit.t;
@@ -251,6 +257,11 @@ meso_result reference_path_render(meso_context *ctx, const meso_reference *refer
     pj->albedo_scene = *frame->scene;
     pj->albedo_scene.num_lights = 0;
     pj->albedo_scene.ambient = (meso_vec3){1.0f, 1.0f, 1.0f};
+    pj->albedo_scene.environment = NULL;
+    pj->direct_scene = *frame->scene;
+    pj->direct_scene.environment = NULL;
+    pj->direct_frame = *frame;
+    pj->direct_frame.scene = &pj->direct_scene;
     pj->albedo_frame = *frame;
     pj->albedo_frame.scene = &pj->albedo_scene;
     pj->environment = frame->scene->environment;

@@ -162,12 +162,40 @@ static void test_path_output_is_identical_for_any_thread_count(void **state) {
     meso_context_destroy(one);
 }
 
+/* The rasterized techniques see the environment through its SH irradiance (unshadowed, in the
+ * ambient term: render_environment.h). On an open plane nothing shadows or interreflects, so
+ * they must agree with the path-traced truth up to the SH truncation of the sky. */
+static void test_path_and_sh_ambient_agree_on_an_open_plane(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    const char *skies[2] = {uniform_sky,
+                            "\"ambient\": [0, 0, 0], \"environment\": {\"sky\": {\"width\": 64}}"};
+    const double tolerance[2] = {0.003, 0.03};
+    for (int k = 0; k < 2; k++) {
+        meso_scene *scene = plane_scene(ctx, 24, skies[k], NULL, 0.5f);
+        meso_framebuffer *truth = render(ctx, scene, 64, 1);
+        meso_render_desc desc = {.technique = "flat"};
+        meso_framebuffer *flat = NULL;
+        assert_int_equal(meso_render_scene(ctx, scene, &desc, &flat), MESO_OK);
+        double a = mean_covered(flat, NULL), b = mean_covered(truth, NULL);
+        print_message("sky %d: flat with SH ambient %.4f, path traced %.4f\n", k, a, b);
+        assert_float_equal(a, b, tolerance[k] * b + 0.002);
+        /* and it is not the ambient term alone (0 here) */
+        assert_true(a > 0.2);
+        meso_framebuffer_destroy(flat);
+        meso_framebuffer_destroy(truth);
+        meso_scene_destroy(scene);
+    }
+    meso_context_destroy(ctx);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_path_flat_surface_under_uniform_sky_is_albedo_times_radiance),
         cmocka_unit_test(test_path_without_environment_or_interreflection_is_the_direct_reference),
         cmocka_unit_test(test_path_error_falls_as_one_over_sqrt_samples),
         cmocka_unit_test(test_path_output_is_identical_for_any_thread_count),
+        cmocka_unit_test(test_path_and_sh_ambient_agree_on_an_open_plane),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
