@@ -21,7 +21,6 @@
 #include "reference_internal.h"
 
 
-enum { TILE = 16 };
 #define REFERENCE_LOW_QUALITY_TRIANGLES 2000000
 
 /* ---- Small geometry helpers shared by the reference files --------------------------------- */
@@ -459,23 +458,13 @@ void reference_light_visibility(const meso_reference *reference, meso_vec3 origi
     rtcInitIntersectContext(&shadow);
     for (int l = 0; l < scene->num_lights; l++) {
         const meso_light *light = &scene->lights[l];
-        meso_vec3 to_light = meso_light_direction(light, position);
-        struct RTCRay ray;
-        memset(&ray, 0, sizeof ray);
-        ray.org_x = origin.x;
-        ray.org_y = origin.y;
-        ray.org_z = origin.z;
-        ray.dir_x = to_light.x;
-        ray.dir_y = to_light.y;
-        ray.dir_z = to_light.z;
-        ray.tnear = 0.0f;
-        ray.tfar = light->type == MESO_LIGHT_DIRECTIONAL
-                       ? INFINITY
-                       : meso_vec3_length(meso_vec3_sub(light->position, origin)) *
-                             (1.0f - 1e-5f);
-        ray.mask = UINT32_MAX;
-        rtcOccluded1(reference->scene, &shadow, &ray);
-        visibility[l] = ray.tfar == -INFINITY ? 0.0f : 1.0f;
+        float tfar = light->type == MESO_LIGHT_DIRECTIONAL
+                         ? INFINITY
+                         : meso_vec3_length(meso_vec3_sub(light->position, origin)) * (1.0f - 1e-5f);
+        visibility[l] = reference_unoccluded(reference->scene, &shadow, origin,
+                                             meso_light_direction(light, position), tfar)
+                            ? 1.0f
+                            : 0.0f;
     }
 }
 
@@ -488,43 +477,49 @@ typedef struct render_job {
     atomic_bool cancelled;
 } render_job;
 
+bool reference_direct_sample(const meso_reference *reference, const meso_frame *frame,
+                             struct RTCIntersectContext *primary, int i, int j, float *color,
+                             float *coverage, float *depth, reference_hit *out_hit) {
+    const meso_scene *scene = reference->scene_data;
+    size_t pixel = (size_t)j * (size_t)frame->width + (size_t)i;
+    meso_vec3 dir = meso_frame_ray_direction(frame, (float)i + 0.5f, (float)j + 0.5f);
+    /* dot(dir, forward) = 1: t is the view depth, near-clipped like the rasterizer */
+    float *c = color + 3 * pixel;
+    if (!reference_trace(reference, primary, frame->eye, dir, frame->z_near, out_hit)) {
+        c[0] = scene->background.x;
+        c[1] = scene->background.y;
+        c[2] = scene->background.z;
+        coverage[pixel] = 0.0f;
+        depth[pixel] = INFINITY;
+        return false;
+    }
+    float visibility[MESO_SCENE_MAX_LIGHTS];
+    reference_light_visibility(reference, out_hit->origin, out_hit->position, visibility);
+    meso_vec3 shaded = meso_shade_point(frame, out_hit->ref->object, out_hit->position,
+                                        out_hit->normal, out_hit->uv, visibility);
+    c[0] = shaded.x;
+    c[1] = shaded.y;
+    c[2] = shaded.z;
+    coverage[pixel] = 1.0f;
+    depth[pixel] = out_hit->t;
+    return true;
+}
+
 static void render_tile(void *user, size_t job, int thread_index) {
     render_job *rj = user;
     if (atomic_load_explicit(&rj->cancelled, memory_order_relaxed)) return;
-    const meso_reference *reference = rj->reference;
     const meso_frame *frame = rj->frame;
-    const meso_scene *scene = reference->scene_data;
-    int x0 = (int)(job % (size_t)rj->tiles_x) * TILE, y0 = (int)(job / (size_t)rj->tiles_x) * TILE;
-    int x1 = x0 + TILE < frame->width ? x0 + TILE : frame->width;
-    int y1 = y0 + TILE < frame->height ? y0 + TILE : frame->height;
+    int x0, y0, x1, y1;
+    reference_tile_bounds(job, rj->tiles_x, frame->width, frame->height, &x0, &y0, &x1, &y1);
     meso_progress_advance(frame->progress, (uint64_t)(x1 - x0) * (uint64_t)(y1 - y0));
     struct RTCIntersectContext primary;
     rtcInitIntersectContext(&primary);
     primary.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-    float visibility[MESO_SCENE_MAX_LIGHTS];
     for (int j = y0; j < y1; j++)
         for (int i = x0; i < x1; i++) {
-            size_t pixel = (size_t)j * (size_t)frame->width + (size_t)i;
-            meso_vec3 dir = meso_frame_ray_direction(frame, (float)i + 0.5f, (float)j + 0.5f);
-            /* dot(dir, forward) = 1: t is the view depth, near-clipped like the rasterizer */
             reference_hit hit;
-            float *c = rj->color + 3 * pixel;
-            if (!reference_trace(reference, &primary, frame->eye, dir, frame->z_near, &hit)) {
-                c[0] = scene->background.x;
-                c[1] = scene->background.y;
-                c[2] = scene->background.z;
-                rj->coverage[pixel] = 0.0f;
-                rj->depth[pixel] = INFINITY;
-                continue;
-            }
-            reference_light_visibility(reference, hit.origin, hit.position, visibility);
-            meso_vec3 shaded =
-                meso_shade_point(frame, hit.ref->object, hit.position, hit.normal, hit.uv, visibility);
-            c[0] = shaded.x;
-            c[1] = shaded.y;
-            c[2] = shaded.z;
-            rj->coverage[pixel] = 1.0f;
-            rj->depth[pixel] = hit.t;
+            reference_direct_sample(rj->reference, frame, &primary, i, j, rj->color, rj->coverage,
+                                    rj->depth, &hit);
         }
     if (meso_progress_advance(rj->progress, 1)) atomic_store(&rj->cancelled, true);
 }
@@ -539,8 +534,8 @@ meso_result meso_reference_render(meso_context *ctx, const meso_reference *refer
         return reference_path_render(ctx, reference, frame, color, coverage, depth);
     render_job rj = {.reference = reference, .frame = frame, .color = color,
                      .coverage = coverage, .depth = depth,
-                     .tiles_x = (frame->width + TILE - 1) / TILE};
-    size_t tiles = (size_t)rj.tiles_x * (size_t)((frame->height + TILE - 1) / TILE);
+                     .tiles_x = (frame->width + REFERENCE_TILE - 1) / REFERENCE_TILE};
+    size_t tiles = (size_t)rj.tiles_x * (size_t)((frame->height + REFERENCE_TILE - 1) / REFERENCE_TILE);
     atomic_init(&rj.cancelled, false);
     rj.progress = meso_progress_begin(ctx, "reference: trace", tiles);
     meso_parallel_for(ctx, tiles, render_tile, &rj);

@@ -43,7 +43,9 @@ meso_result meso_reference_create_with(meso_context *ctx, const meso_scene *scen
 /* ---- Private to reference*.c ------------------------------------------------------------- */
 
 #include <embree3/rtcore.h>
+#include <math.h>
 #include <stdatomic.h>
+#include <string.h>
 
 typedef enum reference_kind {
     REFERENCE_PLAIN = 0,   /* the mesh itself */
@@ -159,6 +161,38 @@ typedef struct reference_hit {
     meso_vec3 origin;           /* position moved off the surface toward the ray's side: where
                                    shadow and bounce rays start */
 } reference_hit;
+
+/* True when the ray origin + t dir, t in [0, tfar), hits nothing in `scene`. Thread-safe. */
+static inline bool reference_unoccluded(RTCScene scene, struct RTCIntersectContext *context,
+                                        meso_vec3 origin, meso_vec3 dir, float tfar) {
+    struct RTCRay ray;
+    memset(&ray, 0, sizeof ray);
+    ray.org_x = origin.x, ray.org_y = origin.y, ray.org_z = origin.z;
+    ray.dir_x = dir.x, ray.dir_y = dir.y, ray.dir_z = dir.z;
+    ray.tnear = 0.0f;
+    ray.tfar = tfar;
+    ray.mask = UINT32_MAX;
+    rtcOccluded1(scene, context, &ray);
+    return ray.tfar != -INFINITY;
+}
+
+/* The samples of 16 x 16 tile `job` of a width x height target, tiles_x tiles a row:
+ * [x0, x1) x [y0, y1). */
+enum { REFERENCE_TILE = 16 };
+static inline void reference_tile_bounds(size_t job, int tiles_x, int width, int height, int *x0,
+                                         int *y0, int *x1, int *y1) {
+    *x0 = (int)(job % (size_t)tiles_x) * REFERENCE_TILE;
+    *y0 = (int)(job / (size_t)tiles_x) * REFERENCE_TILE;
+    *x1 = *x0 + REFERENCE_TILE < width ? *x0 + REFERENCE_TILE : width;
+    *y1 = *y0 + REFERENCE_TILE < height ? *y0 + REFERENCE_TILE : height;
+}
+
+/* The direct reference's sample (i, j) of the frame: the camera ray through its centre, the
+ * hit shaded by meso_shade_point with hard shadows (colour, coverage 1, depth t), or the
+ * background (coverage 0, depth +inf). Returns whether it hit; *out_hit is the hit. */
+bool reference_direct_sample(const meso_reference *reference, const meso_frame *frame,
+                             struct RTCIntersectContext *primary, int i, int j, float *color,
+                             float *coverage, float *depth, reference_hit *out_hit);
 
 /* Trace the ray origin + t dir, t in [tnear, inf), against the whole scene; false when it
  * hits nothing. Thread-safe. */

@@ -31,7 +31,7 @@
 
 #include "reference_internal.h"
 
-enum { TILE = 16, PASS_SAMPLES = 4 };
+enum { PASS_SAMPLES = 4 };
 
 /* ---- Random numbers ----------------------------------------------------------------------- */
 
@@ -108,20 +108,6 @@ static meso_vec3 facing_normal(const reference_hit *hit) {
                                                                     : hit->normal;
 }
 
-static bool unoccluded(const meso_reference *reference, meso_vec3 origin, meso_vec3 dir) {
-    struct RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    struct RTCRay ray;
-    memset(&ray, 0, sizeof ray);
-    ray.org_x = origin.x, ray.org_y = origin.y, ray.org_z = origin.z;
-    ray.dir_x = dir.x, ray.dir_y = dir.y, ray.dir_z = dir.z;
-    ray.tnear = 0.0f;
-    ray.tfar = INFINITY;
-    ray.mask = UINT32_MAX;
-    rtcOccluded1(reference->scene, &context, &ray);
-    return ray.tfar != -INFINITY;
-}
-
 static meso_vec3 surface_radiance(const path_job *pj, const reference_hit *hit, int bounces_left,
                                   path_random *random);
 
@@ -137,8 +123,10 @@ static meso_vec3 irradiance(const path_job *pj, const reference_hit *hit, int bo
         float pdf_light = 0.0f;
         meso_vec3 w = meso_environment_sample(env, u1, u2, &pdf_light);
         float cosine = meso_vec3_dot(n, w);
+        struct RTCIntersectContext context;
+        rtcInitIntersectContext(&context);
         if (cosine > 0.0f && meso_vec3_dot(ng, w) > 0.0f &&
-            unoccluded(pj->reference, hit->origin, w)) {
+            reference_unoccluded(pj->reference->scene, &context, hit->origin, w, INFINITY)) {
             float pdf_cosine = cosine * (float)M_1_PI;
             float weight = pdf_light / (pdf_light + pdf_cosine);
             e = meso_vec3_madd(e, meso_environment_radiance(env, w), cosine / pdf_light * weight);
@@ -188,39 +176,25 @@ static void path_tile(void *user, size_t job, int thread_index) {
     if (atomic_load_explicit(&pj->cancelled, memory_order_relaxed)) return;
     const meso_reference *reference = pj->reference;
     const meso_frame *frame = pj->frame;
-    const meso_scene *scene = frame->scene;
-    int x0 = (int)(job % (size_t)pj->tiles_x) * TILE, y0 = (int)(job / (size_t)pj->tiles_x) * TILE;
-    int x1 = x0 + TILE < frame->width ? x0 + TILE : frame->width;
-    int y1 = y0 + TILE < frame->height ? y0 + TILE : frame->height;
+    int x0, y0, x1, y1;
+    reference_tile_bounds(job, pj->tiles_x, frame->width, frame->height, &x0, &y0, &x1, &y1);
     int first = pj->pass * PASS_SAMPLES;
     int last = first + PASS_SAMPLES < pj->samples ? first + PASS_SAMPLES : pj->samples;
     struct RTCIntersectContext primary;
     rtcInitIntersectContext(&primary);
     primary.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-    float visibility[MESO_SCENE_MAX_LIGHTS];
     for (int j = y0; j < y1; j++)
         for (int i = x0; i < x1; i++) {
             size_t pixel = (size_t)j * (size_t)frame->width + (size_t)i;
-            meso_vec3 dir = meso_frame_ray_direction(frame, (float)i + 0.5f, (float)j + 0.5f);
             reference_hit hit;
-            bool found = reference_trace(reference, &primary, frame->eye, dir, frame->z_near, &hit);
+            bool found;
             if (pj->pass == 0) {
-                /* the direct-light reference's pixel, the same calls in the same order */
-                float *c = pj->color + 3 * pixel;
-                if (!found) {
-                    c[0] = scene->background.x, c[1] = scene->background.y;
-                    c[2] = scene->background.z;
-                    pj->coverage[pixel] = 0.0f;
-                    pj->depth[pixel] = INFINITY;
-                } else {
-                    reference_light_visibility(reference, hit.origin, hit.position, visibility);
-                    meso_vec3 shaded = meso_shade_point(&pj->direct_frame, hit.ref->object,
-                                                        hit.position, hit.normal, hit.uv,
-                                                        visibility);
-                    c[0] = shaded.x, c[1] = shaded.y, c[2] = shaded.z;
-                    pj->coverage[pixel] = 1.0f;
-                    pj->depth[pixel] = hit.t;
-                }
+                /* the direct reference's sample, without the environment's SH term */
+                found = reference_direct_sample(reference, &pj->direct_frame, &primary, i, j,
+                                                pj->color, pj->coverage, pj->depth, &hit);
+            } else {
+                meso_vec3 dir = meso_frame_ray_direction(frame, (float)i + 0.5f, (float)j + 0.5f);
+                found = reference_trace(reference, &primary, frame->eye, dir, frame->z_near, &hit);
             }
             if (!found) continue;
             meso_vec3 albedo = albedo_at(pj, &hit);
@@ -267,11 +241,11 @@ meso_result reference_path_render(meso_context *ctx, const meso_reference *refer
     pj->environment = frame->scene->environment;
     pj->samples = reference->path_samples;
     pj->bounces = reference->path_bounces;
-    pj->tiles_x = (frame->width + TILE - 1) / TILE;
+    pj->tiles_x = (frame->width + REFERENCE_TILE - 1) / REFERENCE_TILE;
     pj->color = color, pj->coverage = coverage, pj->depth = depth;
     pj->reflected = reflected;
     atomic_init(&pj->cancelled, false);
-    size_t tiles = (size_t)pj->tiles_x * (size_t)((frame->height + TILE - 1) / TILE);
+    size_t tiles = (size_t)pj->tiles_x * (size_t)((frame->height + REFERENCE_TILE - 1) / REFERENCE_TILE);
     int passes = (pj->samples + PASS_SAMPLES - 1) / PASS_SAMPLES;
     double start = meso_time_seconds();
     pj->progress = meso_progress_begin(ctx, "reference: path trace", tiles * (size_t)passes);

@@ -5,10 +5,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include <embree3/rtcore.h>
-
+#include "reference_internal.h"
 #include "render_gi.h"
-#include "render_internal.h"
 
 enum { VERTICES_PER_JOB = 64, CHANNELS = 3 };
 
@@ -65,15 +63,7 @@ static void transfer_vertices(void *user, size_t job, int thread_index) {
         for (int d = 0; d < tj->directions; d++) {
             meso_vec3 w = tj->direction[d];
             if (meso_vec3_dot(w, n) <= 0.0f) continue; /* below the macro surface: opaque */
-            struct RTCRay ray;
-            memset(&ray, 0, sizeof ray);
-            ray.org_x = origin.x, ray.org_y = origin.y, ray.org_z = origin.z;
-            ray.dir_x = w.x, ray.dir_y = w.y, ray.dir_z = w.z;
-            ray.tnear = 0.0f;
-            ray.tfar = INFINITY;
-            ray.mask = UINT32_MAX;
-            rtcOccluded1(tj->scene, &context, &ray);
-            if (ray.tfar == -INFINITY) continue;
+            if (!reference_unoccluded(tj->scene, &context, origin, w, INFINITY)) continue;
             const float *add = tj->weighted + (size_t)d * CHANNELS * MESO_SH_COUNT;
             for (int k = 0; k < CHANNELS * MESO_SH_COUNT; k++) world[k] += add[k];
         }
