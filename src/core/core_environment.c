@@ -253,9 +253,11 @@ meso_result meso_environment_create_from_image(meso_context *ctx, const meso_ima
     return MESO_OK;
 }
 
-/* stb_image reads a truncated file as if zeros followed it; reading through callbacks shows
- * when it asked for bytes past the end (a read of 0 bytes: stb only refills when it needs one
- * more byte), which a complete file never does. */
+/* stb_image 2.27 (Debian's) reads past the end of a file as zeros, and its run-length decoder
+ * loops forever on a count of 0 (a later stb checks it). So the reader serves 0xff past the end
+ * instead: a run of 127 that always advances the decoder, which then ends or reports corrupt
+ * data; `past_end` records that the file was short, and the load is refused as truncated. stb
+ * asks for more only when it has used every byte it has, so a complete file never sets it. */
 typedef struct memory_reader {
     const unsigned char *data;
     size_t size, position;
@@ -264,9 +266,14 @@ typedef struct memory_reader {
 
 static int reader_read(void *user, char *out, int size) {
     memory_reader *m = user;
-    size_t left = m->size - m->position, n = size > 0 ? (size_t)size : 0;
-    if (n > left) n = left;
-    if (n == 0 && size > 0) m->past_end = true;
+    if (size <= 0) return 0;
+    size_t left = m->size - m->position, n = (size_t)size < left ? (size_t)size : left;
+    if (n == 0) {
+        /* stb refills only when it has used every byte and needs one more */
+        memset(out, 0xff, (size_t)size);
+        m->past_end = true;
+        return size;
+    }
     memcpy(out, m->data + m->position, n);
     m->position += n;
     return (int)n;

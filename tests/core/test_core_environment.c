@@ -3,6 +3,7 @@
  * and the importance sampling's density against the map. */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "test_util.h"
@@ -87,6 +88,28 @@ static void test_environment_bad_files_are_refused(void **state) {
     test_write_file(truncated, short_file, sizeof short_file - 1);
     assert_int_equal(meso_environment_load(ctx, truncated, 1.0f, &env), MESO_ERROR_FORMAT);
     assert_starts_with(meso_context_last_error(ctx), truncated);
+
+    /* a run-length encoded map cut short: stb 2.27 would loop forever on the zeros it reads
+     * past the end; refused as truncated */
+    size_t size = 0;
+    char *sky = test_read_file(MESO_SOURCE_DIR "/examples/sky.hdr", &size);
+    const char *cut = test_path(dir, "cut.hdr");
+    test_write_file(cut, sky, 600);
+    assert_int_equal(meso_environment_load(ctx, cut, 1.0f, &env), MESO_ERROR_FORMAT);
+    assert_starts_with(meso_context_last_error(ctx), cut);
+    /* and one whose run-length data holds counts of 0 (crafted): the bytes after the header of
+     * a 16-wide scanline, "2 2 0 16", then zeros up to the end */
+    char crafted[256];
+    int start = snprintf(crafted, sizeof crafted, "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 16\n");
+    memset(crafted + start, 0, sizeof crafted - (size_t)start);
+    crafted[start] = 2;
+    crafted[start + 1] = 2;
+    crafted[start + 2] = 0;
+    crafted[start + 3] = 16;
+    const char *zeros = test_path(dir, "zeros.hdr");
+    test_write_file(zeros, crafted, sizeof crafted);
+    assert_int_equal(meso_environment_load(ctx, zeros, 1.0f, &env), MESO_ERROR_FORMAT);
+    free(sky);
 
     assert_int_equal(meso_environment_load(ctx, test_path(dir, "missing.hdr"), 1.0f, &env),
                      MESO_ERROR_IO);
