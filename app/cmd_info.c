@@ -160,6 +160,14 @@ static meso_result info_scene(meso_context *ctx, const char *path) {
     print_vec3(", up ", c->up);
     printf(", fov_y %g deg\n", c->fov_y_deg);
     print_vec3("ambient: ", scene->ambient);
+    if (scene->environment) {
+        const meso_environment *e = scene->environment;
+        meso_vec3 up = {0, 1, 0};
+        printf("\nenvironment: %s, %dx%d texels, intensity %g, irradiance facing up (%g, %g, %g)",
+               e->source, e->map->width, e->map->height, (double)e->intensity,
+               (double)meso_sh_irradiance(e->sh[0], up), (double)meso_sh_irradiance(e->sh[1], up),
+               (double)meso_sh_irradiance(e->sh[2], up));
+    }
     printf("\nlights: %d\n", scene->num_lights);
     for (int i = 0; i < scene->num_lights; i++) {
         const meso_light *l = &scene->lights[i];
