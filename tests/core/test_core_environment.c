@@ -59,6 +59,11 @@ static void test_environment_example_map_loads(void **state) {
     meso_vec3 up = meso_environment_radiance(env, (meso_vec3){0, 1, 0});
     meso_vec3 down = meso_environment_radiance(env, (meso_vec3){0, -1, 0});
     assert_true(up.z > down.z && up.z > up.x);
+    /* the sun lies where its direction says (the map's orientation), nowhere opposite */
+    meso_vec3 sun = meso_vec3_normalize((meso_vec3){0.5f, 0.6f, 0.3f});
+    meso_vec3 toward = meso_environment_radiance(env, sun);
+    meso_vec3 mirrored = meso_environment_radiance(env, (meso_vec3){-sun.x, sun.y, sun.z});
+    assert_true(toward.x > 50.0f && mirrored.x < 2.0f);
     meso_environment_destroy(env);
     meso_context_destroy(ctx);
 }
