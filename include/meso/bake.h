@@ -13,6 +13,7 @@
  *   bake_sat.h         summed-area tables of height fields (Crow 1984)
  *   bake_isosurface.h  isosurfaces of solid mesostructure, extracted in texture space
  *   bake_layers.h      multilayer relief maps of solids and height fields (Policarpo & Oliveira §3)
+ *   bake_rtv.h         the radiance transfer volume, uncompressed (GDM §3.2; first step)
  */
 #ifndef MESO_BAKE_H
 #define MESO_BAKE_H
@@ -24,5 +25,6 @@
 #include "meso/bake_minmax.h"
 #include "meso/bake_sat.h"
 #include "meso/bake_layers.h"
+#include "meso/bake_rtv.h"
 
 #endif
