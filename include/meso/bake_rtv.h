@@ -1,5 +1,5 @@
-/* The radiance transfer volume (GDM paper §3.2, after Sloan et al. 2003's bi-scale radiance
- * transfer; issue 17 item 3), uncompressed and view-independent: a first step.
+/* The radiance transfer volume (GDM paper §3.2 and §4.1, after Sloan et al. 2003's bi-scale
+ * radiance transfer; issue 17 item 3).
  *
  * Overview
  *   For every voxel (x, y, z) of the mesostructure volume, 16 SH coefficients T_i of the
@@ -12,11 +12,25 @@
  *   q the mesostructure point the ray from p meets. The incident radiance vector is the one
  *   meso_gi_vertex_radiance computes per vertex (render module), interpolated to the hit.
  *
- * What is not here yet (docs/techniques/gdm-gi.md): the view dimension (θ, φ) and its SVD
- * compression (§4.1), the bake file kind "rtv" with its cache, and the rendering hook at the
- * GDM hit. meso's shading model is Lambertian for everything but the scene lights' specular,
- * so the response at a surface point does not depend on the view: the view columns of §4.1
- * would repeat this table.
+ * The view dimension (§3.2: f_i(x, y, z, theta, phi)): meso's shading model is Lambertian
+ * for everything but the scene lights' specular, so the response at a surface point does not
+ * depend on the view; what does is which surface point a voxel stands for. Entry (voxel c,
+ * view w_v) is T at the surface point the view ray through c shows: the ray, travelling along
+ * -w_v, is followed back out of the solid when c is inside it, and on until it meets the solid
+ * when c is outside (GDM's own semantics: the voxels around a thin feature answer for the side
+ * that is seen). Views: theta_t = (t + 0.5) (pi/2) / num_theta from the normal, phi_p =
+ * p 2 pi / num_phi, w_v = (sin theta cos phi, sin theta sin phi, cos theta) toward the viewer.
+ *
+ * Compression (§4.1): per coefficient i, the matrix with rows (z, y, x) and columns
+ * (theta, phi) is decomposed by SVD (meso_bake_svd_streamed) and `eigen` eigenfunctions kept:
+ * f_i(c, view) = sum_k W_ik(c) E_ik(view). rmse[k - 1] is the RMSE of the table over every
+ * entry with k eigenfunctions, from the singular values.
+ *
+ * Files: bake file kind "rtv" (meso_rtv_save / meso_rtv_load): arrays "weights" f32
+ * [16][voxels][k], "eigen" f32 [16][k][views], "shape" i32 {width, height, layers, num_theta,
+ * num_phi}, "rmse" f32 [16]; every size is checked against the others and the limits, every
+ * value is finite, before use. The rendering hook at the GDM hit (docs/techniques/gdm-gi.md)
+ * is pending.
  *
  * Conventions (those of bake_gdm.h): x = u, y = v in tiles (period 1), z = w in shell depths
  * (0 at the mesh, 1 at the shell's bottom); voxel (i, j, l) at u = (i + 0.5) / width,
@@ -52,12 +66,22 @@ typedef struct meso_rtv_desc {
     int directions;       /* incident directions over the sphere, spherical Fibonacci (256) */
     float albedo;         /* of the interreflection bounce (0.7); negative: none */
     float max_tiles;      /* a ray inside the shell this far (tiles) escapes (2) */
+    int num_theta, num_phi; /* views (4 x 8) */
+    int eigen;            /* eigenfunctions kept per coefficient (4), <= views */
 } meso_rtv_desc;
 
+#define MESO_RTV_KIND "rtv"
+#define MESO_RTV_RMSE_COUNT 16
+
 typedef struct meso_rtv {
-    int width, height, layers;
-    float *coefficients; /* [layers][height][width][16]; owned */
-    double bake_seconds;
+    int width, height, layers, num_theta, num_phi, num_eigen;
+    float *coefficients; /* [layers][height][width][16] at the nearest surface point; owned;
+                            NULL for a loaded RTV */
+    float *weights;      /* [16][layers][height][width][num_eigen]; owned */
+    float *eigen;        /* [16][num_eigen][num_theta][num_phi]; owned */
+    float rmse[MESO_RTV_RMSE_COUNT]; /* with k = 1..16 eigenfunctions (0 past the views) */
+    uint64_t raw_bytes, compressed_bytes;
+    double bake_seconds; /* 0 when loaded */
 } meso_rtv;
 
 /* Bake. Errors: MESO_ERROR_INVALID_ARGUMENT naming the field ("rtv: aspect: 0 is not in
@@ -66,11 +90,18 @@ typedef struct meso_rtv {
 meso_result meso_bake_rtv(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv **out_rtv);
 void meso_rtv_destroy(meso_rtv *rtv);
 
-/* The response at (u, v, w) (trilinear between voxels, periodic in u and v, clamped in w) to
- * incident radiance `radiance` (per channel, 16 coefficients in the tangent frame): the
- * reflected radiance per unit albedo, out_rgb. Multiply by the albedo (x colour map). */
-void meso_rtv_evaluate(const meso_rtv *rtv, meso_vec3 uvw, const float radiance[3][MESO_SH_COUNT],
-                       float out_rgb[3]);
+/* Save as a bake file (atomically); load one, validated (MESO_ERROR_FORMAT naming the file and
+ * the array for anything inconsistent, MESO_ERROR_IO, MESO_ERROR_LIMIT). */
+meso_result meso_rtv_save(meso_context *ctx, const meso_rtv *rtv, const char *path);
+meso_result meso_rtv_load(meso_context *ctx, const char *path, meso_rtv **out_rtv);
+
+/* The compressed response at (u, v, w) (trilinear between voxels, periodic in u and v, clamped
+ * in w) seen from `view` (unit, tangent frame, toward the viewer; bilinear between the baked
+ * views, clamped at the horizon) to incident radiance `radiance` (per channel, 16 coefficients
+ * in the tangent frame): the reflected radiance per unit albedo, out_rgb, >= 0. Multiply by
+ * the albedo (x colour map). The GDM technique calls it at its hit. Pure, thread-safe. */
+void meso_rtv_evaluate(const meso_rtv *rtv, meso_vec3 uvw, meso_vec3 view,
+                       const float radiance[3][MESO_SH_COUNT], float out_rgb[3]);
 
 #ifdef __cplusplus
 }

@@ -1,9 +1,12 @@
-/* The radiance transfer volume, uncompressed and view-independent (include/meso/bake_rtv.h;
- * GDM paper §3.2). Two passes over the voxels: direct transfer with the mesostructure's
- * shadowing, then one bounce gathered from the first pass where rays meet the mesostructure. */
+/* The radiance transfer volume (include/meso/bake_rtv.h; GDM paper §3.2, §4.1). Passes over
+ * the voxels: direct transfer with the mesostructure's shadowing at each voxel's nearest
+ * surface point; one bounce gathered from it where rays meet the mesostructure; the table per
+ * view (the surface point each view shows); the SVD of each coefficient's table. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include <stdio.h>
 
 #include "bake_internal.h"
 #include "meso/bake_rtv.h"
@@ -136,6 +139,121 @@ static void bake_row(void *user, size_t job, int thread_index) {
     }
 }
 
+/* The unit view direction (tangent frame, toward the viewer) of view (t, p). */
+static meso_vec3 view_direction(const meso_rtv *rtv, int t, int p) {
+    float theta = ((float)t + 0.5f) * 0.5f * (float)M_PI / (float)rtv->num_theta;
+    float phi = (float)p * 2.0f * (float)M_PI / (float)rtv->num_phi;
+    return (meso_vec3){sinf(theta) * cosf(phi), sinf(theta) * sinf(phi), cosf(theta)};
+}
+
+typedef struct view_job {
+    const rtv_job *rj;
+    const meso_rtv *rtv; /* sizes and the nearest-surface table */
+    float *raw;          /* [voxel][view][16] */
+} view_job;
+
+/* The surface point the view ray through c shows (see bake_rtv.h): followed back out of the
+ * solid, or on into it; c itself when neither happens within max_tiles. */
+static meso_vec3 seen_point(const rtv_job *rj, meso_vec3 c, meso_vec3 view) {
+    const meso_rtv_desc *d = &rj->desc;
+    bool inside = occupied(d, c);
+    /* inside: toward the viewer (+view); outside: along the ray (-view) */
+    float sign = inside ? 1.0f : -1.0f;
+    meso_vec3 move = {sign * view.x, sign * view.y, -sign * view.z / d->aspect};
+    float step = rj->step;
+    if (fabsf(move.z) * step > 0.125f / (float)d->layers)
+        step = 0.125f / (float)d->layers / fabsf(move.z);
+    float horizontal = sqrtf(view.x * view.x + view.y * view.y);
+    int steps = horizontal > 0.0f ? (int)ceilf(d->max_tiles / (horizontal * step)) : 1 << 20;
+    if (steps > 1 << 20) steps = 1 << 20;
+    for (int s = 1; s <= steps; s++) {
+        meso_vec3 q = meso_vec3_madd(c, move, step * (float)s);
+        if (q.z < 0.0f || q.z > 1.0f) break;
+        if (occupied(d, q) != inside) return q;
+    }
+    return c;
+}
+
+static void view_row(void *user, size_t job, int thread_index) {
+    (void)thread_index;
+    const view_job *vj = user;
+    const meso_rtv *rtv = vj->rtv;
+    int l = (int)(job / (size_t)rtv->height), j = (int)(job % (size_t)rtv->height);
+    int views = rtv->num_theta * rtv->num_phi;
+    for (int i = 0; i < rtv->width; i++) {
+        meso_vec3 c = {((float)i + 0.5f) / (float)rtv->width,
+                       1.0f - ((float)j + 0.5f) / (float)rtv->height,
+                       (float)l / (float)(rtv->layers - 1)};
+        size_t voxel = ((size_t)l * (size_t)rtv->height + (size_t)j) * (size_t)rtv->width + (size_t)i;
+        for (int t = 0; t < rtv->num_theta; t++)
+            for (int p = 0; p < rtv->num_phi; p++) {
+                meso_vec3 q = seen_point(vj->rj, c, view_direction(rtv, t, p));
+                lookup(rtv, rtv->coefficients, q,
+                       vj->raw + (voxel * (size_t)views + (size_t)(t * rtv->num_phi + p)) *
+                                     MESO_SH_COUNT);
+            }
+    }
+}
+
+typedef struct svd_source {
+    const float *raw;
+    int views, coefficient;
+} svd_source;
+
+/* Rows of coefficient i's table: raw[voxel][view][i]. */
+static void fill_rows(void *user, size_t first, size_t count, float *out) {
+    const svd_source *src = user;
+    for (size_t r = 0; r < count; r++)
+        for (int v = 0; v < src->views; v++)
+            out[r * (size_t)src->views + (size_t)v] =
+                src->raw[((first + r) * (size_t)src->views + (size_t)v) * MESO_SH_COUNT +
+                         (size_t)src->coefficient];
+}
+
+/* The per-view table and its SVD, coefficient by coefficient (§4.1); fills weights, eigen,
+ * rmse and the sizes. */
+static meso_result compress(meso_context *ctx, const rtv_job *rj, meso_rtv *rtv) {
+    int views = rtv->num_theta * rtv->num_phi, k = rtv->num_eigen;
+    size_t voxels = (size_t)rtv->width * (size_t)rtv->height * (size_t)rtv->layers;
+    float *raw = malloc(voxels * (size_t)views * MESO_SH_COUNT * sizeof(float));
+    float *singular = malloc((size_t)views * sizeof(float));
+    float *vectors = malloc((size_t)views * (size_t)views * sizeof(float));
+    rtv->weights = malloc((size_t)MESO_SH_COUNT * voxels * (size_t)k * sizeof(float));
+    rtv->eigen = malloc((size_t)MESO_SH_COUNT * (size_t)k * (size_t)views * sizeof(float));
+    meso_result r = MESO_OK;
+    if (!raw || !singular || !vectors || !rtv->weights || !rtv->eigen) {
+        r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "rtv: %zu voxels x %d views", voxels,
+                           views);
+        goto done;
+    }
+    view_job vj = {rj, rtv, raw};
+    meso_parallel_for(ctx, (size_t)rtv->layers * (size_t)rtv->height, view_row, &vj);
+    double tail[MESO_RTV_RMSE_COUNT] = {0}; /* sum over coefficients of s_j^2, j >= k */
+    for (int i = 0; i < MESO_SH_COUNT && r == MESO_OK; i++) {
+        svd_source src = {raw, views, i};
+        meso_bake_rows rows = {.rows = voxels, .columns = views, .fill = fill_rows, .user = &src};
+        r = meso_bake_svd_streamed(ctx, "rtv", &rows, k, singular, vectors,
+                                   rtv->weights + (size_t)i * voxels * (size_t)k, NULL);
+        if (r != MESO_OK) break;
+        for (int e = 0; e < k; e++)
+            for (int v = 0; v < views; v++)
+                rtv->eigen[((size_t)i * (size_t)k + (size_t)e) * (size_t)views + (size_t)v] =
+                    vectors[(size_t)v * (size_t)views + (size_t)e];
+        for (int kept = 1; kept <= MESO_RTV_RMSE_COUNT; kept++)
+            for (int j = kept; j < views; j++) tail[kept - 1] += (double)singular[j] * singular[j];
+    }
+    double entries = (double)MESO_SH_COUNT * (double)voxels * (double)views;
+    for (int e = 0; e < MESO_RTV_RMSE_COUNT; e++) rtv->rmse[e] = (float)sqrt(tail[e] / entries);
+    rtv->raw_bytes = (uint64_t)entries * sizeof(float);
+    rtv->compressed_bytes =
+        (uint64_t)MESO_SH_COUNT * ((uint64_t)voxels + (uint64_t)views) * (uint64_t)k * sizeof(float);
+done:
+    free(vectors);
+    free(singular);
+    free(raw);
+    return r;
+}
+
 meso_result meso_bake_rtv(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv **out_rtv) {
     *out_rtv = NULL;
     meso_rtv_desc d = desc ? *desc : (meso_rtv_desc){0};
@@ -145,6 +263,9 @@ meso_result meso_bake_rtv(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv
     if (!d.directions) d.directions = 256;
     if (d.albedo == 0.0f) d.albedo = 0.7f;
     if (d.max_tiles == 0.0f) d.max_tiles = 2.0f;
+    if (!d.num_theta) d.num_theta = 4;
+    if (!d.num_phi) d.num_phi = 8;
+    if (!d.eigen) d.eigen = 4;
     if (!d.heightfield == !d.solid)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "rtv: needs exactly one of a height field and a solid");
@@ -159,6 +280,11 @@ meso_result meso_bake_rtv(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv
     if (d.directions < 16 || d.directions > 65536)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "rtv: directions: %d is not in [16, 65536]", d.directions);
+    if (d.num_theta < 1 || d.num_phi < 1 || d.num_theta * d.num_phi > 4096 || d.eigen < 1 ||
+        d.eigen > d.num_theta * d.num_phi)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "rtv: %d x %d views (at most 4096) with %d eigenfunctions (1 .. views)",
+                              d.num_theta, d.num_phi, d.eigen);
     if (!(d.albedo <= 1.0f) || !(d.max_tiles > 0.0f && d.max_tiles <= 64.0f))
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "rtv: albedo must be at most 1 and max_tiles in (0, 64]");
@@ -167,8 +293,9 @@ meso_result meso_bake_rtv(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv
         return meso_log_error(ctx, MESO_ERROR_LIMIT, "rtv: %llu voxels exceed the limit of %llu",
                               (unsigned long long)voxels, (unsigned long long)MESO_RTV_MAX_VOXELS);
     bool bounce = d.albedo > 0.0f;
-    meso_result r = meso_memory_check(ctx, "rtv", voxels * MESO_SH_COUNT * sizeof(float) *
-                                                      (bounce ? 2u : 1u));
+    uint64_t views = (uint64_t)d.num_theta * (uint64_t)d.num_phi;
+    meso_result r = meso_memory_check(
+        ctx, "rtv", voxels * MESO_SH_COUNT * sizeof(float) * ((bounce ? 2u : 1u) + views + d.eigen));
     if (r != MESO_OK) return r;
     double start = meso_time_seconds();
     meso_rtv *rtv = calloc(1, sizeof *rtv);
@@ -184,6 +311,7 @@ meso_result meso_bake_rtv(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv
                               (unsigned long long)voxels);
     }
     rtv->width = d.width, rtv->height = d.height, rtv->layers = d.layers;
+    rtv->num_theta = d.num_theta, rtv->num_phi = d.num_phi, rtv->num_eigen = d.eigen;
     for (int k = 0; k < d.directions; k++) {
         double z = 1.0 - (2.0 * k + 1.0) / d.directions, s = sqrt(fmax(0.0, 1.0 - z * z));
         double phi = 2.399963229728653 * k;
@@ -204,7 +332,12 @@ meso_result meso_bake_rtv(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv
         meso_parallel_for(ctx, rows, bake_row, &pj);
     }
     free(first);
+    r = compress(ctx, &rj, rtv);
     free(direction);
+    if (r != MESO_OK) {
+        meso_rtv_destroy(rtv);
+        return r;
+    }
     rtv->bake_seconds = meso_time_seconds() - start;
     *out_rtv = rtv;
     return MESO_OK;
@@ -213,16 +346,155 @@ meso_result meso_bake_rtv(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv
 void meso_rtv_destroy(meso_rtv *rtv) {
     if (!rtv) return;
     free(rtv->coefficients);
+    free(rtv->weights);
+    free(rtv->eigen);
     free(rtv);
 }
 
-void meso_rtv_evaluate(const meso_rtv *rtv, meso_vec3 uvw, const float radiance[3][MESO_SH_COUNT],
-                       float out_rgb[3]) {
-    float t[MESO_SH_COUNT];
-    lookup(rtv, rtv->coefficients, uvw, t);
-    for (int c = 0; c < 3; c++) {
-        float sum = 0.0f;
-        for (int k = 0; k < MESO_SH_COUNT; k++) sum += t[k] * radiance[c][k];
-        out_rgb[c] = sum > 0.0f ? sum : 0.0f;
+/* ---- Evaluation --------------------------------------------------------------------------- */
+
+void meso_rtv_evaluate(const meso_rtv *rtv, meso_vec3 uvw, meso_vec3 view,
+                       const float radiance[3][MESO_SH_COUNT], float out_rgb[3]) {
+    int k = rtv->num_eigen, views = rtv->num_theta * rtv->num_phi;
+    size_t voxels = (size_t)rtv->width * (size_t)rtv->height * (size_t)rtv->layers;
+    /* the voxel corners and weights (as lookup), the view cell and weights */
+    float x = (uvw.x - floorf(uvw.x)) * (float)rtv->width - 0.5f;
+    float y = (1.0f - (uvw.y - floorf(uvw.y))) * (float)rtv->height - 0.5f;
+    float z = meso_clampf(uvw.z, 0.0f, 1.0f) * (float)(rtv->layers - 1);
+    float fx = floorf(x), fy = floorf(y), fz = floorf(z);
+    int i0 = ((int)fx % rtv->width + rtv->width) % rtv->width, i1 = (i0 + 1) % rtv->width;
+    int j0 = ((int)fy % rtv->height + rtv->height) % rtv->height, j1 = (j0 + 1) % rtv->height;
+    int l0 = (int)fz < rtv->layers - 1 ? (int)fz : rtv->layers - 1;
+    int l1 = l0 + 1 < rtv->layers ? l0 + 1 : l0;
+    size_t corner[8];
+    float corner_weight[8];
+    for (int c = 0; c < 8; c++) {
+        int ii = c & 1 ? i1 : i0, jj = c & 2 ? j1 : j0, ll = c & 4 ? l1 : l0;
+        corner[c] = ((size_t)ll * (size_t)rtv->height + (size_t)jj) * (size_t)rtv->width + (size_t)ii;
+        corner_weight[c] = (c & 1 ? x - fx : 1.0f - (x - fx)) * (c & 2 ? y - fy : 1.0f - (y - fy)) *
+                           (c & 4 ? z - fz : 1.0f - (z - fz));
     }
+    float theta = acosf(meso_clampf(view.z, 0.0f, 1.0f));
+    float t = meso_clampf(theta / (0.5f * (float)M_PI) * (float)rtv->num_theta - 0.5f, 0.0f,
+                          (float)(rtv->num_theta - 1));
+    float phi = atan2f(view.y, view.x);
+    float p = (phi < 0.0f ? phi + 2.0f * (float)M_PI : phi) / (2.0f * (float)M_PI) * (float)rtv->num_phi;
+    int t0 = (int)t, t1 = t0 + 1 < rtv->num_theta ? t0 + 1 : t0;
+    int p0 = (int)p % rtv->num_phi, p1 = (p0 + 1) % rtv->num_phi;
+    float tt = t - (float)t0, tp = p - floorf(p);
+    int view_index[4] = {t0 * rtv->num_phi + p0, t0 * rtv->num_phi + p1, t1 * rtv->num_phi + p0,
+                         t1 * rtv->num_phi + p1};
+    float view_weight[4] = {(1 - tt) * (1 - tp), (1 - tt) * tp, tt * (1 - tp), tt * tp};
+    out_rgb[0] = out_rgb[1] = out_rgb[2] = 0.0f;
+    for (int i = 0; i < MESO_SH_COUNT; i++) {
+        float f = 0.0f;
+        for (int e = 0; e < k; e++) {
+            const float *w = rtv->weights + (size_t)i * voxels * (size_t)k;
+            float weight = 0.0f;
+            for (int c = 0; c < 8; c++) weight += corner_weight[c] * w[corner[c] * (size_t)k + (size_t)e];
+            const float *eig = rtv->eigen + ((size_t)i * (size_t)k + (size_t)e) * (size_t)views;
+            float value = 0.0f;
+            for (int v = 0; v < 4; v++) value += view_weight[v] * eig[view_index[v]];
+            f += weight * value;
+        }
+        for (int c = 0; c < 3; c++) out_rgb[c] += f * radiance[c][i];
+    }
+    for (int c = 0; c < 3; c++) out_rgb[c] = out_rgb[c] > 0.0f ? out_rgb[c] : 0.0f;
+}
+
+/* ---- Files -------------------------------------------------------------------------------- */
+
+meso_result meso_rtv_save(meso_context *ctx, const meso_rtv *rtv, const char *path) {
+    uint64_t voxels = (uint64_t)rtv->width * (uint64_t)rtv->height * (uint64_t)rtv->layers;
+    uint64_t views = (uint64_t)rtv->num_theta * (uint64_t)rtv->num_phi;
+    int32_t shape[5] = {rtv->width, rtv->height, rtv->layers, rtv->num_theta, rtv->num_phi};
+    meso_bake_file bake = {.kind = MESO_RTV_KIND, .kind_version = 1, .params_json = "{}",
+                           .num_arrays = 4};
+    bake.arrays[0] = (meso_bake_array){.name = "shape", .type = MESO_BAKE_I32, .num_dims = 1,
+                                       .dims = {5}, .data = shape};
+    bake.arrays[1] = (meso_bake_array){.name = "weights", .type = MESO_BAKE_F32, .num_dims = 3,
+                                       .dims = {MESO_SH_COUNT, voxels, (uint64_t)rtv->num_eigen},
+                                       .data = rtv->weights};
+    bake.arrays[2] = (meso_bake_array){.name = "eigen", .type = MESO_BAKE_F32, .num_dims = 3,
+                                       .dims = {MESO_SH_COUNT, (uint64_t)rtv->num_eigen, views},
+                                       .data = rtv->eigen};
+    bake.arrays[3] = (meso_bake_array){.name = "rmse", .type = MESO_BAKE_F32, .num_dims = 1,
+                                       .dims = {MESO_RTV_RMSE_COUNT}, .data = (void *)rtv->rmse};
+    return meso_bake_file_save(ctx, &bake, path);
+}
+
+/* The array `name` with `type` and `num_dims`, or NULL after logging what is wrong. */
+static const meso_bake_array *expect_array(meso_context *ctx, const meso_bake_file *bake,
+                                           const char *path, const char *name,
+                                           meso_bake_type type, int num_dims) {
+    const meso_bake_array *a = meso_bake_file_find(bake, name);
+    if (!a || a->type != type || a->num_dims != num_dims) {
+        meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: rtv: array \"%s\" is missing or not %d-D of "
+                       "the right type", path, name, num_dims);
+        return NULL;
+    }
+    return a;
+}
+
+meso_result meso_rtv_load(meso_context *ctx, const char *path, meso_rtv **out_rtv) {
+    *out_rtv = NULL;
+    meso_bake_file *bake = NULL;
+    meso_result r = meso_bake_file_load(ctx, path, &bake);
+    if (r != MESO_OK) return r;
+    meso_rtv *rtv = NULL;
+    if (strcmp(bake->kind, MESO_RTV_KIND) != 0 || bake->kind_version != 1) {
+        r = meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: not an rtv bake (kind \"%s\" version %u)",
+                           path, bake->kind, (unsigned)bake->kind_version);
+        goto done;
+    }
+    const meso_bake_array *shape = expect_array(ctx, bake, path, "shape", MESO_BAKE_I32, 1);
+    const meso_bake_array *weights = expect_array(ctx, bake, path, "weights", MESO_BAKE_F32, 3);
+    const meso_bake_array *eigen = expect_array(ctx, bake, path, "eigen", MESO_BAKE_F32, 3);
+    const meso_bake_array *rmse = expect_array(ctx, bake, path, "rmse", MESO_BAKE_F32, 1);
+    if (!shape || !weights || !eigen || !rmse) {
+        r = MESO_ERROR_FORMAT;
+        goto done;
+    }
+    const int32_t *s = shape->data;
+    uint64_t voxels = 0, views = 0;
+    bool sizes = shape->dims[0] == 5 && rmse->dims[0] == MESO_RTV_RMSE_COUNT;
+    for (int k = 0; sizes && k < 5; k++) sizes = s[k] >= 1 && s[k] <= 4096;
+    if (sizes) {
+        voxels = (uint64_t)s[0] * (uint64_t)s[1] * (uint64_t)s[2];
+        views = (uint64_t)s[3] * (uint64_t)s[4];
+        sizes = s[2] >= 2 && voxels <= MESO_RTV_MAX_VOXELS && views <= 4096 &&
+                weights->dims[0] == MESO_SH_COUNT && weights->dims[1] == voxels &&
+                weights->dims[2] >= 1 && weights->dims[2] <= views &&
+                eigen->dims[0] == MESO_SH_COUNT && eigen->dims[1] == weights->dims[2] &&
+                eigen->dims[2] == views;
+    }
+    if (!sizes) {
+        r = meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: rtv: the arrays' sizes do not agree", path);
+        goto done;
+    }
+    if ((r = meso_bake_array_check_values(ctx, path, weights, -1e6, 1e6)) ||
+        (r = meso_bake_array_check_values(ctx, path, eigen, -1e6, 1e6)) ||
+        (r = meso_bake_array_check_values(ctx, path, rmse, 0.0, 1e6)))
+        goto done;
+    rtv = calloc(1, sizeof *rtv);
+    size_t weight_bytes = (size_t)meso_bake_array_count(weights) * sizeof(float);
+    size_t eigen_bytes = (size_t)meso_bake_array_count(eigen) * sizeof(float);
+    if (rtv) rtv->weights = malloc(weight_bytes), rtv->eigen = malloc(eigen_bytes);
+    if (!rtv || !rtv->weights || !rtv->eigen) {
+        r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", path);
+        goto done;
+    }
+    memcpy(rtv->weights, weights->data, weight_bytes);
+    memcpy(rtv->eigen, eigen->data, eigen_bytes);
+    memcpy(rtv->rmse, rmse->data, sizeof rtv->rmse);
+    rtv->width = s[0], rtv->height = s[1], rtv->layers = s[2];
+    rtv->num_theta = s[3], rtv->num_phi = s[4], rtv->num_eigen = (int)weights->dims[2];
+    rtv->raw_bytes = (uint64_t)MESO_SH_COUNT * voxels * views * sizeof(float);
+    rtv->compressed_bytes = (uint64_t)(weight_bytes + eigen_bytes);
+    *out_rtv = rtv;
+    rtv = NULL;
+done:
+    meso_rtv_destroy(rtv);
+    meso_bake_file_destroy(bake);
+    return r;
 }

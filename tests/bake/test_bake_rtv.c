@@ -1,7 +1,9 @@
 /* The radiance transfer volume (bake_rtv.c): a flat surface against the closed form, a groove
- * shadowed and filled by interreflection, thread-count independence, bad descs. */
+ * shadowed and filled by interreflection, the SVD's error, the file round trip, corrupted files
+ * refused, thread-count independence, bad descs. */
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "test_util.h"
 
@@ -44,8 +46,13 @@ static void test_rtv_flat_surface_is_the_cosine_lobe(void **state) {
     /* under radiance 1 everywhere it reflects 1 per unit albedo (E = pi) */
     float radiance[3][MESO_SH_COUNT], rgb[3];
     uniform_radiance(radiance);
-    meso_rtv_evaluate(rtv, (meso_vec3){0.3f, 0.7f, 0.4f}, radiance, rgb);
+    const meso_vec3 up = {0, 0, 1}, slanted = {0.5f, 0.3f, 0.81f};
+    meso_rtv_evaluate(rtv, (meso_vec3){0.3f, 0.7f, 0.4f}, up, radiance, rgb);
     assert_float_equal(rgb[1], 1.0, 0.01);
+    /* every view shows the same surface: one eigenfunction holds the table */
+    meso_rtv_evaluate(rtv, (meso_vec3){0.8f, 0.1f, 0.9f}, slanted, radiance, rgb);
+    assert_float_equal(rgb[1], 1.0, 0.01);
+    assert_true(rtv->rmse[0] < 1e-4f);
     meso_rtv_destroy(rtv);
     meso_heightfield_destroy(hf);
     meso_context_destroy(ctx);
@@ -68,9 +75,10 @@ static void test_rtv_groove_is_shadowed_and_filled_by_interreflection(void **sta
      * opposite wall's top: the 2D form factor of that window, (sin 90 + sin(-3.4)) / 2 = 0.47,
      * plus a little of the end of the far wall's top; with a bounce the walls light each other
      * (albedo 0.7); near the top of a wall more sky shows */
-    meso_rtv_evaluate(direct, (meso_vec3){0.5f, 0.5f, 1.0f}, radiance, no_bounce);
-    meso_rtv_evaluate(bounced, (meso_vec3){0.5f, 0.5f, 1.0f}, radiance, bounce);
-    meso_rtv_evaluate(direct, (meso_vec3){0.03f, 0.5f, 0.0f}, radiance, top);
+    const meso_vec3 up = {0, 0, 1};
+    meso_rtv_evaluate(direct, (meso_vec3){0.5f, 0.5f, 1.0f}, up, radiance, no_bounce);
+    meso_rtv_evaluate(bounced, (meso_vec3){0.5f, 0.5f, 1.0f}, up, radiance, bounce);
+    meso_rtv_evaluate(direct, (meso_vec3){0.03f, 0.5f, 0.0f}, up, radiance, top);
     print_message("groove bottom: direct %.3f, with a bounce %.3f; near the top %.3f\n",
                   no_bounce[0], bounce[0], top[0]);
     assert_float_equal(no_bounce[0], 0.5, 0.06);
@@ -83,10 +91,82 @@ static void test_rtv_groove_is_shadowed_and_filled_by_interreflection(void **sta
     assert_int_equal(meso_bake_rtv(one, &desc, &again), MESO_OK);
     assert_memory_equal(again->coefficients, bounced->coefficients,
                         16 * 2 * 3 * MESO_SH_COUNT * sizeof(float));
+    assert_memory_equal(again->weights, bounced->weights,
+                        (size_t)MESO_SH_COUNT * 16 * 2 * 3 * 4 * sizeof(float));
+    /* the groove's views differ (a wall seen from across the groove or along it): the error
+     * falls as eigenfunctions are added */
+    print_message("groove rtv RMSE with 1, 2, 4, 8 eigenfunctions: %.4f %.4f %.4f %.4f; "
+                  "%llu bytes raw, %llu compressed\n",
+                  bounced->rmse[0], bounced->rmse[1], bounced->rmse[3], bounced->rmse[7],
+                  (unsigned long long)bounced->raw_bytes,
+                  (unsigned long long)bounced->compressed_bytes);
+    assert_true(bounced->rmse[0] > bounced->rmse[3] && bounced->rmse[3] >= bounced->rmse[7]);
     meso_rtv_destroy(again);
     meso_context_destroy(one);
     meso_rtv_destroy(bounced);
     meso_rtv_destroy(direct);
+    meso_heightfield_destroy(hf);
+    meso_context_destroy(ctx);
+}
+
+static void test_rtv_file_round_trip_and_corruption(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    meso_heightfield *hf = field(ctx, 32, groove);
+    meso_rtv *rtv = NULL, *loaded = NULL;
+    meso_rtv_desc desc = {.heightfield = hf, .aspect = 0.5f, .width = 8, .height = 2, .layers = 3,
+                          .directions = 128};
+    assert_int_equal(meso_bake_rtv(ctx, &desc, &rtv), MESO_OK);
+    const char *path = test_path(test_temp_dir(), "groove.mesobake");
+    assert_int_equal(meso_rtv_save(ctx, rtv, path), MESO_OK);
+    assert_int_equal(meso_rtv_load(ctx, path, &loaded), MESO_OK);
+    float radiance[3][MESO_SH_COUNT], a[3], b[3];
+    uniform_radiance(radiance);
+    radiance[0][2] = 1.0f; /* some light from above in red */
+    meso_vec3 uvw = {0.37f, 0.2f, 0.6f}, view = meso_vec3_normalize((meso_vec3){0.3f, -0.2f, 0.9f});
+    meso_rtv_evaluate(rtv, uvw, view, radiance, a);
+    meso_rtv_evaluate(loaded, uvw, view, radiance, b);
+    assert_memory_equal(a, b, sizeof a);
+    assert_int_equal(loaded->compressed_bytes, rtv->compressed_bytes);
+    /* corrupted: a flipped payload byte fails the checksum; a bake of another kind, or with
+     * arrays whose sizes disagree, is refused naming the file */
+    size_t size = 0;
+    char *bytes = test_read_file(path, &size);
+    bytes[size / 2] ^= 0x40;
+    const char *bad = test_path(test_temp_dir(), "bad.mesobake");
+    test_write_file(bad, bytes, size);
+    meso_rtv *none = (meso_rtv *)1;
+    assert_int_equal(meso_rtv_load(ctx, bad, &none), MESO_ERROR_FORMAT);
+    assert_null(none);
+    free(bytes);
+    int32_t shape[5] = {9, 2, 3, 4, 8}; /* one voxel column more than the weights hold */
+    meso_bake_file wrong = {.kind = MESO_RTV_KIND, .kind_version = 1, .params_json = "{}",
+                            .num_arrays = 4};
+    wrong.arrays[0] = (meso_bake_array){.name = "shape", .type = MESO_BAKE_I32, .num_dims = 1,
+                                        .dims = {5}, .data = shape};
+    wrong.arrays[1] = (meso_bake_array){.name = "weights", .type = MESO_BAKE_F32, .num_dims = 3,
+                                        .dims = {MESO_SH_COUNT, 8 * 2 * 3, 4}, .data = rtv->weights};
+    wrong.arrays[2] = (meso_bake_array){.name = "eigen", .type = MESO_BAKE_F32, .num_dims = 3,
+                                        .dims = {MESO_SH_COUNT, 4, 32}, .data = rtv->eigen};
+    wrong.arrays[3] = (meso_bake_array){.name = "rmse", .type = MESO_BAKE_F32, .num_dims = 1,
+                                        .dims = {MESO_RTV_RMSE_COUNT}, .data = rtv->rmse};
+    assert_int_equal(meso_bake_file_save(ctx, &wrong, bad), MESO_OK);
+    assert_int_equal(meso_rtv_load(ctx, bad, &none), MESO_ERROR_FORMAT);
+    if (!strstr(meso_context_last_error(ctx), "sizes do not agree"))
+        fail_msg("%s", meso_context_last_error(ctx));
+    strcpy(wrong.kind, "vdm");
+    shape[0] = 8;
+    assert_int_equal(meso_bake_file_save(ctx, &wrong, bad), MESO_OK);
+    assert_int_equal(meso_rtv_load(ctx, bad, &none), MESO_ERROR_FORMAT);
+    /* a non-finite value behind a valid checksum */
+    strcpy(wrong.kind, MESO_RTV_KIND);
+    float saved = rtv->eigen[5];
+    rtv->eigen[5] = INFINITY;
+    assert_int_equal(meso_bake_file_save(ctx, &wrong, bad), MESO_OK);
+    assert_int_equal(meso_rtv_load(ctx, bad, &none), MESO_ERROR_FORMAT);
+    rtv->eigen[5] = saved;
+    meso_rtv_destroy(loaded);
+    meso_rtv_destroy(rtv);
     meso_heightfield_destroy(hf);
     meso_context_destroy(ctx);
 }
@@ -115,6 +195,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_rtv_flat_surface_is_the_cosine_lobe),
         cmocka_unit_test(test_rtv_groove_is_shadowed_and_filled_by_interreflection),
+        cmocka_unit_test(test_rtv_file_round_trip_and_corruption),
         cmocka_unit_test(test_rtv_bad_descs_are_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
