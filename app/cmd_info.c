@@ -230,6 +230,11 @@ static meso_result info_bake(meso_context *ctx, const char *path) {
     meso_bake_file *bake = NULL;
     meso_result result = meso_bake_file_load(ctx, path, &bake);
     if (result != MESO_OK) return result;
+    if (!strcmp(bake->kind, MESO_RTV_KIND)) {
+        /* GDM §4.1: sizes and the reconstruction error for each eigenfunction count */
+        char report[1024];
+        if (meso_rtv_describe(bake, report, sizeof(report))) fputs(report, stdout);
+    }
     if (!strcmp(bake->kind, MESO_LAYERS_KIND)) {
         /* Multilayer relief maps (Policarpo & Oliveira 2006 §3): checked as a renderer reads
          * them before anything is printed, so a bad file is one error line. */
@@ -271,6 +276,11 @@ static meso_result info_bake(meso_context *ctx, const char *path) {
             fputs(report, stdout);
             free(report);
         }
+    }
+    if (!strcmp(bake->kind, MESO_RTV_KIND)) {
+        /* GDM §4.1: sizes and the reconstruction error for each eigenfunction count */
+        char report[1024];
+        if (meso_rtv_describe(bake, report, sizeof(report))) fputs(report, stdout);
     }
     if (!strcmp(bake->kind, MESO_LAYERS_KIND)) {
         /* sizes beside the paper's three 256x256 RGBA8 maps, and what the layer limit clips */

@@ -47,6 +47,7 @@
 #ifndef MESO_BAKE_RTV_H
 #define MESO_BAKE_RTV_H
 
+#include "meso/bake_file.h"
 #include "meso/mesostructure.h"
 #include "meso/sh.h"
 
@@ -94,6 +95,11 @@ void meso_rtv_destroy(meso_rtv *rtv);
  * the array for anything inconsistent, MESO_ERROR_IO, MESO_ERROR_LIMIT). */
 meso_result meso_rtv_save(meso_context *ctx, const meso_rtv *rtv, const char *path);
 meso_result meso_rtv_load(meso_context *ctx, const char *path, meso_rtv **out_rtv);
+/* A text report of a bake file of kind "rtv" for `meso info`: voxels, views, eigenfunctions,
+ * raw and compressed size, RMSE for k = 1..16. Writes at most size bytes (NUL-terminated)
+ * like snprintf and returns the length it needed; 0 when the file is not an rtv bake whose
+ * arrays have the expected shapes. Thread-safe. */
+size_t meso_rtv_describe(const meso_bake_file *bake, char *buffer, size_t size);
 
 /* The compressed response at (u, v, w) (trilinear between voxels, periodic in u and v, clamped
  * in w) seen from `view` (unit, tangent frame, toward the viewer; bilinear between the baked

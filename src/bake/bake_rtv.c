@@ -498,3 +498,37 @@ done:
     meso_bake_file_destroy(bake);
     return r;
 }
+
+size_t meso_rtv_describe(const meso_bake_file *bake, char *buffer, size_t size) {
+    if (!bake || strcmp(bake->kind, MESO_RTV_KIND) != 0) return 0;
+    const meso_bake_array *shape = meso_bake_file_find(bake, "shape");
+    const meso_bake_array *weights = meso_bake_file_find(bake, "weights");
+    const meso_bake_array *rmse = meso_bake_file_find(bake, "rmse");
+    const meso_bake_array *eigen = meso_bake_file_find(bake, "eigen");
+    if (!shape || shape->type != MESO_BAKE_I32 || shape->num_dims != 1 || shape->dims[0] != 5 ||
+        !rmse || rmse->type != MESO_BAKE_F32 || rmse->num_dims != 1 ||
+        rmse->dims[0] != MESO_RTV_RMSE_COUNT || !weights || weights->num_dims != 3 || !eigen ||
+        eigen->num_dims != 3)
+        return 0;
+    const int32_t *s = shape->data;
+    const float *e = rmse->data;
+    uint64_t voxels = weights->dims[1], views = eigen->dims[2];
+    double raw = (double)MESO_SH_COUNT * (double)voxels * (double)views * 4.0;
+    double compressed = 4.0 * (double)(meso_bake_array_count(weights) + meso_bake_array_count(eigen));
+    int n = snprintf(buffer, size,
+                     "rtv: %dx%dx%d voxels, %dx%d views, %llu eigenfunctions a coefficient; raw "
+                     "%.2f MB, compressed %.2f MB\nRMSE with k eigenfunctions, k = 1..16:",
+                     s[0], s[1], s[2], s[3], s[4], (unsigned long long)weights->dims[2], raw / 1e6,
+                     compressed / 1e6);
+    for (int k = 0; k < MESO_RTV_RMSE_COUNT && n >= 0; k++) {
+        int m = snprintf(buffer && (size_t)n < size ? buffer + n : NULL,
+                         buffer && (size_t)n < size ? size - (size_t)n : 0, " %.4g", (double)e[k]);
+        n = m < 0 ? m : n + m;
+    }
+    if (n >= 0) {
+        int m = snprintf(buffer && (size_t)n < size ? buffer + n : NULL,
+                         buffer && (size_t)n < size ? size - (size_t)n : 0, "\n");
+        n = m < 0 ? m : n + m;
+    }
+    return n > 0 ? (size_t)n : 0;
+}

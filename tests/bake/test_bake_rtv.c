@@ -128,6 +128,19 @@ static void test_rtv_file_round_trip_and_corruption(void **state) {
     meso_rtv_evaluate(loaded, uvw, view, radiance, b);
     assert_memory_equal(a, b, sizeof a);
     assert_int_equal(loaded->compressed_bytes, rtv->compressed_bytes);
+    /* meso info's report */
+    const char *out = NULL;
+    char arguments[1024];
+    snprintf(arguments, sizeof arguments, "info %s", path);
+    assert_int_equal(test_run_meso(arguments, &out), 0);
+    meso_bake_file *file = NULL;
+    assert_int_equal(meso_bake_file_load(ctx, path, &file), MESO_OK);
+    char report[1024];
+    assert_true(meso_rtv_describe(file, report, sizeof report) > 0);
+    if (!strstr(report, "rtv: 8x2x3 voxels, 4x8 views, 4 eigenfunctions") ||
+        !strstr(report, "RMSE with k eigenfunctions"))
+        fail_msg("%s", report);
+    meso_bake_file_destroy(file);
     /* corrupted: a flipped payload byte fails the checksum; a bake of another kind, or with
      * arrays whose sizes disagree, is refused naming the file */
     size_t size = 0;
