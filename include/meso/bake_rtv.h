@@ -91,6 +91,10 @@ typedef struct meso_rtv {
 meso_result meso_bake_rtv(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv **out_rtv);
 void meso_rtv_destroy(meso_rtv *rtv);
 
+/* meso_bake_rtv through the bake cache (bake_file.h): keyed by the source's hash and every
+ * desc field; a cached RTV has no `coefficients` and bake_seconds 0. */
+meso_result meso_rtv_bake_cached(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv **out_rtv);
+
 /* Save as a bake file (atomically); load one, validated (MESO_ERROR_FORMAT naming the file and
  * the array for anything inconsistent, MESO_ERROR_IO, MESO_ERROR_LIMIT). */
 meso_result meso_rtv_save(meso_context *ctx, const meso_rtv *rtv, const char *path);

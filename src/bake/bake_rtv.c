@@ -404,10 +404,12 @@ void meso_rtv_evaluate(const meso_rtv *rtv, meso_vec3 uvw, meso_vec3 view,
 
 /* ---- Files -------------------------------------------------------------------------------- */
 
-meso_result meso_rtv_save(meso_context *ctx, const meso_rtv *rtv, const char *path) {
+/* The bake file of an RTV; it borrows the RTV's arrays and `shape` (5 values). */
+static meso_bake_file to_bake_file(const meso_rtv *rtv, int32_t shape[5]) {
     uint64_t voxels = (uint64_t)rtv->width * (uint64_t)rtv->height * (uint64_t)rtv->layers;
     uint64_t views = (uint64_t)rtv->num_theta * (uint64_t)rtv->num_phi;
-    int32_t shape[5] = {rtv->width, rtv->height, rtv->layers, rtv->num_theta, rtv->num_phi};
+    shape[0] = rtv->width, shape[1] = rtv->height, shape[2] = rtv->layers;
+    shape[3] = rtv->num_theta, shape[4] = rtv->num_phi;
     meso_bake_file bake = {.kind = MESO_RTV_KIND, .kind_version = 1, .params_json = "{}",
                            .num_arrays = 4};
     bake.arrays[0] = (meso_bake_array){.name = "shape", .type = MESO_BAKE_I32, .num_dims = 1,
@@ -420,6 +422,12 @@ meso_result meso_rtv_save(meso_context *ctx, const meso_rtv *rtv, const char *pa
                                        .data = rtv->eigen};
     bake.arrays[3] = (meso_bake_array){.name = "rmse", .type = MESO_BAKE_F32, .num_dims = 1,
                                        .dims = {MESO_RTV_RMSE_COUNT}, .data = (void *)rtv->rmse};
+    return bake;
+}
+
+meso_result meso_rtv_save(meso_context *ctx, const meso_rtv *rtv, const char *path) {
+    int32_t shape[5];
+    meso_bake_file bake = to_bake_file(rtv, shape);
     return meso_bake_file_save(ctx, &bake, path);
 }
 
@@ -436,11 +444,11 @@ static const meso_bake_array *expect_array(meso_context *ctx, const meso_bake_fi
     return a;
 }
 
-meso_result meso_rtv_load(meso_context *ctx, const char *path, meso_rtv **out_rtv) {
+/* An RTV from a loaded bake file, validated; `path` names it in messages. */
+static meso_result from_bake_file(meso_context *ctx, const meso_bake_file *bake, const char *path,
+                                  meso_rtv **out_rtv) {
     *out_rtv = NULL;
-    meso_bake_file *bake = NULL;
-    meso_result r = meso_bake_file_load(ctx, path, &bake);
-    if (r != MESO_OK) return r;
+    meso_result r = MESO_OK;
     meso_rtv *rtv = NULL;
     if (strcmp(bake->kind, MESO_RTV_KIND) != 0 || bake->kind_version != 1) {
         r = meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: not an rtv bake (kind \"%s\" version %u)",
@@ -495,8 +503,52 @@ meso_result meso_rtv_load(meso_context *ctx, const char *path, meso_rtv **out_rt
     rtv = NULL;
 done:
     meso_rtv_destroy(rtv);
+    return r;
+}
+
+meso_result meso_rtv_load(meso_context *ctx, const char *path, meso_rtv **out_rtv) {
+    *out_rtv = NULL;
+    meso_bake_file *bake = NULL;
+    meso_result r = meso_bake_file_load(ctx, path, &bake);
+    if (r != MESO_OK) return r;
+    r = from_bake_file(ctx, bake, path, out_rtv);
     meso_bake_file_destroy(bake);
     return r;
+}
+
+/* The cache key: the source's hash and every field that changes the table. */
+static uint64_t cache_key(const meso_rtv_desc *d, uint64_t source_hash) {
+    float fields[6] = {d->aspect, (float)d->width, (float)d->height, (float)d->layers,
+                       (float)d->directions, d->albedo};
+    float more[4] = {d->max_tiles, (float)d->num_theta, (float)d->num_phi, (float)d->eigen};
+    uint64_t key = meso_hash64(&source_hash, sizeof source_hash, MESO_HASH_SEED);
+    key = meso_hash64(fields, sizeof fields, key);
+    return meso_hash64(more, sizeof more, key);
+}
+
+meso_result meso_rtv_bake_cached(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv **out_rtv) {
+    *out_rtv = NULL;
+    meso_rtv_desc d = desc ? *desc : (meso_rtv_desc){0};
+    uint64_t source = d.heightfield ? d.heightfield->hash : d.solid ? meso_solid_hash(d.solid) : 0;
+    uint64_t key = cache_key(&d, source);
+    meso_bake_file *cached = NULL;
+    meso_result r = meso_bake_cache_load(ctx, MESO_RTV_KIND, 1, key, source, &cached);
+    if (r != MESO_OK) return r;
+    if (cached) {
+        r = from_bake_file(ctx, cached, "rtv cache entry", out_rtv);
+        meso_bake_file_destroy(cached);
+        if (r == MESO_OK) return MESO_OK;
+        meso_log_warning(ctx, "rtv: cache entry unusable, baking again: %s",
+                         meso_context_last_error(ctx));
+    }
+    if ((r = meso_bake_rtv(ctx, &d, out_rtv)) != MESO_OK) return r;
+    int32_t shape[5];
+    meso_bake_file bake = to_bake_file(*out_rtv, shape);
+    bake.source_hash = source;
+    if (meso_bake_cache_save(ctx, &bake, key) != MESO_OK)
+        meso_log_warning(ctx, "rtv: could not store the bake in the cache: %s",
+                         meso_context_last_error(ctx));
+    return MESO_OK;
 }
 
 size_t meso_rtv_describe(const meso_bake_file *bake, char *buffer, size_t size) {

@@ -184,6 +184,31 @@ static void test_rtv_file_round_trip_and_corruption(void **state) {
     meso_context_destroy(ctx);
 }
 
+static void test_rtv_cache_returns_the_same_table(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    /* an empty cache of its own, so the first call bakes */
+    setenv("MESO_CACHE_DIR", test_temp_dir(), 1);
+    meso_heightfield *hf = field(ctx, 16, groove);
+    meso_rtv_desc desc = {.heightfield = hf, .aspect = 0.3141f, .width = 4, .height = 2,
+                          .layers = 2, .directions = 64};
+    meso_rtv *baked = NULL, *cached = NULL;
+    assert_int_equal(meso_rtv_bake_cached(ctx, &desc, &baked), MESO_OK);
+    assert_int_equal(meso_rtv_bake_cached(ctx, &desc, &cached), MESO_OK);
+    assert_null(cached->coefficients); /* it came from the cache */
+    assert_memory_equal(cached->weights, baked->weights,
+                        (size_t)MESO_SH_COUNT * 4 * 2 * 2 * 4 * sizeof(float));
+    meso_rtv_destroy(cached);
+    /* another aspect is another entry */
+    desc.aspect = 0.2718f;
+    assert_int_equal(meso_rtv_bake_cached(ctx, &desc, &cached), MESO_OK);
+    assert_non_null(cached->coefficients);
+    meso_rtv_destroy(cached);
+    meso_rtv_destroy(baked);
+    meso_heightfield_destroy(hf);
+    meso_context_destroy(ctx);
+}
+
 static void test_rtv_bad_descs_are_refused(void **state) {
     (void)state;
     meso_context *ctx = test_context(1);
@@ -209,6 +234,7 @@ int main(void) {
         cmocka_unit_test(test_rtv_flat_surface_is_the_cosine_lobe),
         cmocka_unit_test(test_rtv_groove_is_shadowed_and_filled_by_interreflection),
         cmocka_unit_test(test_rtv_file_round_trip_and_corruption),
+        cmocka_unit_test(test_rtv_cache_returns_the_same_table),
         cmocka_unit_test(test_rtv_bad_descs_are_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
