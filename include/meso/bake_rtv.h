@@ -99,6 +99,10 @@ meso_result meso_rtv_bake_cached(meso_context *ctx, const meso_rtv_desc *desc, m
  * the array for anything inconsistent, MESO_ERROR_IO, MESO_ERROR_LIMIT). */
 meso_result meso_rtv_save(meso_context *ctx, const meso_rtv *rtv, const char *path);
 meso_result meso_rtv_load(meso_context *ctx, const char *path, meso_rtv **out_rtv);
+/* An RTV from a loaded bake file, validated as meso_rtv_load does; `name` names it in
+ * messages. The bake file may be destroyed afterwards. */
+meso_result meso_rtv_from_bake_file(meso_context *ctx, const meso_bake_file *bake,
+                                    const char *name, meso_rtv **out_rtv);
 /* A text report of a bake file of kind "rtv" for `meso info`: voxels, views, eigenfunctions,
  * raw and compressed size, RMSE for k = 1..16. Writes at most size bytes (NUL-terminated)
  * like snprintf and returns the length it needed; 0 when the file is not an rtv bake whose

@@ -444,9 +444,8 @@ static const meso_bake_array *expect_array(meso_context *ctx, const meso_bake_fi
     return a;
 }
 
-/* An RTV from a loaded bake file, validated; `path` names it in messages. */
-static meso_result from_bake_file(meso_context *ctx, const meso_bake_file *bake, const char *path,
-                                  meso_rtv **out_rtv) {
+meso_result meso_rtv_from_bake_file(meso_context *ctx, const meso_bake_file *bake,
+                                    const char *path, meso_rtv **out_rtv) {
     *out_rtv = NULL;
     meso_result r = MESO_OK;
     meso_rtv *rtv = NULL;
@@ -511,7 +510,7 @@ meso_result meso_rtv_load(meso_context *ctx, const char *path, meso_rtv **out_rt
     meso_bake_file *bake = NULL;
     meso_result r = meso_bake_file_load(ctx, path, &bake);
     if (r != MESO_OK) return r;
-    r = from_bake_file(ctx, bake, path, out_rtv);
+    r = meso_rtv_from_bake_file(ctx, bake, path, out_rtv);
     meso_bake_file_destroy(bake);
     return r;
 }
@@ -535,7 +534,7 @@ meso_result meso_rtv_bake_cached(meso_context *ctx, const meso_rtv_desc *desc, m
     meso_result r = meso_bake_cache_load(ctx, MESO_RTV_KIND, 1, key, source, &cached);
     if (r != MESO_OK) return r;
     if (cached) {
-        r = from_bake_file(ctx, cached, "rtv cache entry", out_rtv);
+        r = meso_rtv_from_bake_file(ctx, cached, "rtv cache entry", out_rtv);
         meso_bake_file_destroy(cached);
         if (r == MESO_OK) return MESO_OK;
         meso_log_warning(ctx, "rtv: cache entry unusable, baking again: %s",

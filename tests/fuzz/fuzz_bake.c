@@ -1,6 +1,7 @@
 /* Fuzz target: the bake container (meso_bake_file_load) and every kind's loader that reads
- * one: VDM (meso_vdm_from_bake_file, meso_vdm_describe) and relief layers
- * (meso_layers_from_bake_file, meso_layers_describe). */
+ * one: VDM (meso_vdm_from_bake_file, meso_vdm_describe), relief layers
+ * (meso_layers_from_bake_file, meso_layers_describe) and the RTV (meso_rtv_from_bake_file,
+ * meso_rtv_describe). */
 #include "fuzz_target.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
@@ -13,9 +14,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     meso_layers *layers = NULL;
     if (meso_layers_from_bake_file(ctx, bake, "fuzz", &layers) == MESO_OK)
         meso_layers_destroy(layers);
+    meso_rtv *rtv = NULL;
+    if (meso_rtv_from_bake_file(ctx, bake, "fuzz", &rtv) == MESO_OK) meso_rtv_destroy(rtv);
     char text[256];
     meso_vdm_describe(bake, text, sizeof text);
     meso_layers_describe(bake, text, sizeof text);
+    meso_rtv_describe(bake, text, sizeof text);
     meso_bake_file_destroy(bake);
     return 0;
 }
