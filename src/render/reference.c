@@ -74,6 +74,10 @@ const meso_technique_option meso_reference_options[MESO_REFERENCE_NUM_OPTIONS] =
     MESO_OPTION_ROW(MESO_OPTION_INT, bounces, 0, 16, 3,
                     "path tracing: interreflections inside and between objects (0: none)",
                     reference_options, bounces),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, rtv, 0, 1, 0,
+                    "light the environment through the radiance transfer volume at the true hit "
+                    "(GDM-GI's shading, docs/techniques/gdm-gi.md) instead of path tracing it",
+                    reference_options, rtv),
 };
 
 meso_result reference_read_options(meso_context *ctx, const meso_scene *scene,
@@ -233,6 +237,7 @@ meso_result meso_reference_create_with(meso_context *ctx, const meso_scene *scen
             /* frame-wide settings: the most any object asks for */
             if (options.samples > reference->path_samples) reference->path_samples = options.samples;
             if (options.bounces > reference->path_bounces) reference->path_bounces = options.bounces;
+            if (options.rtv) reference->path_rtv = true;
         }
         if (result != MESO_OK) {
         } else if (kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD) {
@@ -328,11 +333,12 @@ uint64_t meso_reference_triangle_count(const meso_reference *reference) {
 /* ---- Shading at a hit --------------------------------------------------------------------- */
 
 void reference_surface_at(const reference_object *ref, unsigned primitive, float hu, float hv,
-                          meso_vec3 *out_normal, meso_vec2 *out_uv) {
+                          meso_vec3 *out_normal, meso_vec2 *out_uv, reference_base *out_base) {
     const meso_mesh *mesh = ref->object->mesh;
     if (ref->kind == REFERENCE_PLAIN) {
         const uint32_t *tri = ref->indices + 3 * (size_t)primitive;
         float w0 = 1.0f - hu - hv;
+        if (out_base) *out_base = (reference_base){primitive, {w0, hu, hv}, 0.0f};
         *out_normal = meso_vec3_normalize(meso_vec3_barycentric(
             mesh->normals[tri[0]], mesh->normals[tri[1]], mesh->normals[tri[2]], w0, hu, hv));
         *out_uv = mesh->uvs ? meso_vec2_barycentric(mesh->uvs[tri[0]], mesh->uvs[tri[1]],
@@ -371,6 +377,12 @@ void reference_surface_at(const reference_object *ref, unsigned primitive, float
     meso_vec3 n = meso_vec3_normalize(meso_vec3_barycentric(
         mesh->normals[bt[0]], mesh->normals[bt[1]], mesh->normals[bt[2]], b[0], b[1], b[2]));
     *out_uv = uv;
+    if (out_base) {
+        /* a height field's hit lies on its surface: w = 1 - h (DESIGN.md) */
+        if (ref->kind == REFERENCE_HEIGHT_FIELD)
+            w = 1.0f - meso_heightfield_sample(ref->object->mesostructure.height_field, uv.x, uv.y);
+        *out_base = (reference_base){base, {b[0], b[1], b[2]}, w};
+    }
     if (ref->kind == REFERENCE_HEIGHT_FIELD) {
         meso_vec3 t, bt_vec;
         if (mesh->tangents && mesh->bitangents) {
@@ -442,7 +454,8 @@ bool reference_trace(const meso_reference *reference, struct RTCIntersectContext
     hit->ref = &reference->objects[rh.hit.geomID];
     hit->t = rh.ray.tfar;
     hit->position = meso_vec3_madd(origin, dir, rh.ray.tfar);
-    reference_surface_at(hit->ref, rh.hit.primID, rh.hit.u, rh.hit.v, &hit->normal, &hit->uv);
+    reference_surface_at(hit->ref, rh.hit.primID, rh.hit.u, rh.hit.v, &hit->normal, &hit->uv,
+                         &hit->base);
     /* rays leaving the hit start on the side the ray came from */
     meso_vec3 ng = meso_vec3_normalize((meso_vec3){rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z});
     if (meso_vec3_dot(ng, dir) > 0.0f) ng = meso_vec3_negate(ng);
@@ -530,7 +543,7 @@ meso_result meso_reference_render(meso_context *ctx, const meso_reference *refer
     if (!reference || !frame || !color || !coverage || !depth || frame->width <= 0 ||
         frame->height <= 0)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "reference: render: no target");
-    if (reference->path_samples > 0)
+    if (reference->path_samples > 0 || reference->path_rtv)
         return reference_path_render(ctx, reference, frame, color, coverage, depth);
     render_job rj = {.reference = reference, .frame = frame, .color = color,
                      .coverage = coverage, .depth = depth,

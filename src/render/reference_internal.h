@@ -34,7 +34,7 @@ typedef struct meso_reference_desc {
 
 /* The reference's option table, for the registry's entry. */
 extern const meso_technique_option meso_reference_options[];
-#define MESO_REFERENCE_NUM_OPTIONS 5
+#define MESO_REFERENCE_NUM_OPTIONS 6
 
 meso_result meso_reference_create_with(meso_context *ctx, const meso_scene *scene,
                                        const meso_reference_desc *desc,
@@ -101,6 +101,7 @@ typedef struct reference_options {
     int resolution;      /* solids: extraction grid cells a tile side (u and v; w a quarter) */
     int samples;         /* path-traced samples a pixel; 0: the direct-light reference */
     int bounces;         /* path tracing: interreflections (0: the environment's direct light) */
+    bool rtv;            /* the environment through the RTV at the true hit (GDM-GI's shading) */
 } reference_options;
 
 /* The tracer (reference.c); its fields are shared with reference_path.c. */
@@ -121,6 +122,7 @@ struct meso_reference {
      * options ask for; samples 0 draws the direct-light reference. */
     int path_samples;
     int path_bounces;
+    bool path_rtv; /* any object's option `rtv`: reference_path.c shades with the RTV */
 };
 
 /* The object's options: the table's defaults replaced by desc's, then the object's own. */
@@ -146,9 +148,19 @@ size_t reference_base_triangle(const reference_object *ref, uint64_t triangle);
 void reference_triangle_gradients(const meso_vec3 p[3], const meso_vec2 uv[3], meso_vec3 *out_t,
                                   meso_vec3 *out_b);
 
-/* The mesostructure's shading normal and the shading uv at a hit of `ref`. */
+/* Where a hit lies on the base mesh: its triangle, the barycentric weights (of the triangle's
+ * own vertex order) and the depth w in the shell (0 at the mesh, 1 at -depth; 0 for plain
+ * objects). */
+typedef struct reference_base {
+    size_t triangle;
+    float weights[3];
+    float w;
+} reference_base;
+
+/* The mesostructure's shading normal and the shading uv at a hit of `ref`, and (out_base not
+ * NULL) where it lies on the base mesh. */
 void reference_surface_at(const reference_object *ref, unsigned primitive, float hu, float hv,
-                          meso_vec3 *out_normal, meso_vec2 *out_uv);
+                          meso_vec3 *out_normal, meso_vec2 *out_uv, reference_base *out_base);
 
 /* What a ray hit. */
 typedef struct reference_hit {
@@ -160,6 +172,7 @@ typedef struct reference_hit {
     meso_vec3 geometric_normal; /* of the hit triangle, facing the ray's origin */
     meso_vec3 origin;           /* position moved off the surface toward the ray's side: where
                                    shadow and bounce rays start */
+    reference_base base;        /* where it lies on the base mesh */
 } reference_hit;
 
 /* True when the ray origin + t dir, t in [0, tfar), hits nothing in `scene`. Thread-safe. */

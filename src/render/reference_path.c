@@ -29,7 +29,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "meso/bake_rtv.h"
 #include "reference_internal.h"
+#include "render_gi.h"
 
 enum { PASS_SAMPLES = 4 };
 
@@ -91,6 +93,10 @@ typedef struct path_job {
     int tiles_x;
     float *color, *coverage, *depth;
     double *reflected; /* per pixel, RGB: the sum over samples of albedo E / pi */
+    /* RTV mode (option `rtv`): per object, its RTV and per-vertex incident radiance (NULL for
+     * objects without mesostructure, which keep the SH ambient of the shading model) */
+    meso_rtv **rtvs;
+    float **vertex_radiance;
     meso_progress *progress;
     atomic_bool cancelled;
 } path_job;
@@ -170,6 +176,97 @@ static meso_vec3 surface_radiance(const path_job *pj, const reference_hit *hit, 
     return meso_vec3_mul(albedo_at(pj, hit), meso_vec3_madd(direct, e, (float)M_1_PI));
 }
 
+/* ---- The RTV mode: GDM-GI's shading at the true hit (docs/techniques/gdm-gi.md) ------------ */
+
+/* What the environment adds at a hit through the RTV: albedo x RTV(uvw, view) . L, L the
+ * object's per-vertex incident radiance interpolated over the base triangle; objects without
+ * mesostructure get the shading model's SH ambient (the frame's own shading). */
+static meso_vec3 rtv_reflected(const path_job *pj, const meso_frame *frame,
+                               const reference_hit *hit) {
+    int o = (int)(hit->ref - pj->reference->objects);
+    const meso_mesh *mesh = hit->ref->object->mesh;
+    meso_vec3 albedo = albedo_at(pj, hit);
+    if (!pj->rtvs[o]) {
+        meso_vec3 full = meso_shade_point(frame, hit->ref->object, hit->position, hit->normal,
+                                          hit->uv, NULL);
+        meso_vec3 none = meso_shade_point(&pj->direct_frame, hit->ref->object, hit->position,
+                                          hit->normal, hit->uv, NULL);
+        return meso_vec3_sub(full, none);
+    }
+    const uint32_t *tri = mesh->indices + 3 * hit->base.triangle;
+    const float *b = hit->base.weights;
+    float radiance[3][MESO_SH_COUNT];
+    meso_gi_radiance_interpolate(pj->vertex_radiance[o], tri[0], tri[1], tri[2], b[0], b[1], b[2],
+                                 radiance);
+    /* the tangent frame as the vertices' (render_gi_transfer.c): T made orthogonal to N */
+    meso_vec3 n = meso_vec3_normalize(meso_vec3_barycentric(
+        mesh->normals[tri[0]], mesh->normals[tri[1]], mesh->normals[tri[2]], b[0], b[1], b[2]));
+    meso_vec3 t = mesh->tangents ? meso_vec3_barycentric(mesh->tangents[tri[0]],
+                                                         mesh->tangents[tri[1]],
+                                                         mesh->tangents[tri[2]], b[0], b[1], b[2])
+                                 : (meso_vec3){1, 0, 0};
+    t = meso_vec3_normalize(meso_vec3_sub(t, meso_vec3_scale(n, meso_vec3_dot(n, t))));
+    meso_vec3 bt = meso_vec3_cross(n, t);
+    meso_vec3 v = meso_vec3_normalize(meso_vec3_sub(frame->eye, hit->position));
+    meso_vec3 view = {meso_vec3_dot(v, t), meso_vec3_dot(v, bt), meso_vec3_dot(v, n)};
+    float rgb[3];
+    meso_rtv_evaluate(pj->rtvs[o], (meso_vec3){hit->uv.x, hit->uv.y, hit->base.w}, view, radiance,
+                      rgb);
+    return meso_vec3_mul(albedo, (meso_vec3){rgb[0], rgb[1], rgb[2]});
+}
+
+/* The shell's world aspect (depth / tile side) of an object: the tile side is the mean of
+ * |dP/du| and |dP/dv| over its vertices. */
+static float shell_aspect(const meso_object *object) {
+    const meso_mesh *mesh = object->mesh;
+    double side = 0.0;
+    size_t counted = 0;
+    for (size_t v = 0; mesh->tangents && mesh->bitangents && v < mesh->num_vertices; v++) {
+        float s = 0.5f * (meso_vec3_length(mesh->tangents[v]) + meso_vec3_length(mesh->bitangents[v]));
+        if (s > 0.0f && isfinite(s)) side += s, counted++;
+    }
+    float mean = counted ? (float)(side / (double)counted) : 1.0f;
+    float aspect = object->mesostructure.depth / mean;
+    return meso_clampf(aspect, 1e-4f, 100.0f);
+}
+
+/* Bake (through the cache) every object's RTV and per-vertex radiance. */
+static meso_result prepare_rtv(meso_context *ctx, path_job *pj) {
+    const meso_reference *reference = pj->reference;
+    const meso_scene *scene = pj->frame->scene;
+    if (!scene->environment)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "%s: reference: rtv needs the scene's environment", scene->path);
+    int n = reference->num_objects;
+    pj->rtvs = calloc((size_t)n, sizeof *pj->rtvs);
+    pj->vertex_radiance = calloc((size_t)n, sizeof *pj->vertex_radiance);
+    if (!pj->rtvs || !pj->vertex_radiance)
+        return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "reference: rtv");
+    for (int o = 0; o < n; o++) {
+        const meso_object *object = reference->objects[o].object;
+        if (!object || object->mesostructure.kind == MESO_MESOSTRUCTURE_NONE) continue;
+        const meso_mesostructure *ms = &object->mesostructure;
+        meso_rtv_desc desc = {.heightfield = ms->kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD
+                                                 ? ms->height_field
+                                                 : NULL,
+                              .solid = ms->kind == MESO_MESOSTRUCTURE_SOLID ? ms->solid : NULL,
+                              .aspect = shell_aspect(object)};
+        meso_result r = meso_rtv_bake_cached(ctx, &desc, &pj->rtvs[o]);
+        if (r == MESO_OK)
+            r = meso_gi_vertex_radiance(ctx, object->mesh, scene->environment, NULL,
+                                        &pj->vertex_radiance[o]);
+        if (r != MESO_OK) return r;
+    }
+    return MESO_OK;
+}
+
+static void release_rtv(path_job *pj, int n) {
+    for (int o = 0; pj->rtvs && o < n; o++) meso_rtv_destroy(pj->rtvs[o]);
+    for (int o = 0; pj->vertex_radiance && o < n; o++) free(pj->vertex_radiance[o]);
+    free(pj->rtvs);
+    free(pj->vertex_radiance);
+}
+
 static void path_tile(void *user, size_t job, int thread_index) {
     (void)thread_index;
     path_job *pj = user;
@@ -199,6 +296,11 @@ static void path_tile(void *user, size_t job, int thread_index) {
             if (!found) continue;
             meso_vec3 albedo = albedo_at(pj, &hit);
             double *sum = pj->reflected + 3 * pixel;
+            if (pj->rtvs) {
+                meso_vec3 reflected = rtv_reflected(pj, frame, &hit);
+                sum[0] += reflected.x, sum[1] += reflected.y, sum[2] += reflected.z;
+                continue;
+            }
             for (int s = first; s < last; s++) {
                 path_random random = random_for(pixel, s);
                 meso_vec3 e = irradiance(pj, &hit, pj->bounces, &random);
@@ -239,8 +341,14 @@ meso_result reference_path_render(meso_context *ctx, const meso_reference *refer
     pj->albedo_frame = *frame;
     pj->albedo_frame.scene = &pj->albedo_scene;
     pj->environment = frame->scene->environment;
-    pj->samples = reference->path_samples;
+    pj->samples = reference->path_rtv ? 1 : reference->path_samples;
     pj->bounces = reference->path_bounces;
+    if (reference->path_rtv && (r = prepare_rtv(ctx, pj)) != MESO_OK) {
+        release_rtv(pj, reference->num_objects);
+        free(reflected);
+        free(pj);
+        return r;
+    }
     pj->tiles_x = (frame->width + REFERENCE_TILE - 1) / REFERENCE_TILE;
     pj->color = color, pj->coverage = coverage, pj->depth = depth;
     pj->reflected = reflected;
@@ -256,9 +364,10 @@ meso_result reference_path_render(meso_context *ctx, const meso_reference *refer
     if (!cancelled) {
         double scale = 1.0 / pj->samples;
         for (size_t p = 0; p < 3 * pixels; p++) color[p] += (float)(reflected[p] * scale);
-        meso_log_info(ctx, "reference: path traced %d samples a pixel, %d bounces, in %.2f s",
-                      pj->samples, pj->bounces, meso_time_seconds() - start);
+        meso_log_info(ctx, "reference: %s in %.2f s", pj->rtvs ? "RTV shading" : "path traced",
+                      meso_time_seconds() - start);
     }
+    release_rtv(pj, reference->num_objects);
     free(reflected);
     free(pj);
     if (cancelled)
