@@ -48,17 +48,28 @@ static void surface_at(const meso_rtv_desc *d, meso_vec3 c, meso_vec3 *out_p, me
     *out_n = meso_vec3_length(n) > 0.0f ? meso_vec3_normalize(n) : (meso_vec3){0, 0, 1};
 }
 
+/* The step (world length) and step count of a march along the world direction w, which moves
+ * (u, v, w) by `move` per unit length: no step crosses more than an eighth of a layer of the
+ * shell, and the march ends after max_tiles tiles sideways. */
+static int march_steps(const rtv_job *rj, meso_vec3 w, meso_vec3 move, float *out_step) {
+    const meso_rtv_desc *d = &rj->desc;
+    float step = rj->step;
+    if (fabsf(move.z) * step > 0.125f / (float)d->layers)
+        step = 0.125f / (float)d->layers / fabsf(move.z);
+    float horizontal = sqrtf(w.x * w.x + w.y * w.y);
+    /* in float first: a nearly vertical ray would overflow an int */
+    float steps = horizontal > 0.0f ? ceilf(d->max_tiles / (horizontal * step)) : (float)(1 << 20);
+    *out_step = step;
+    return steps < (float)(1 << 20) ? (int)steps : 1 << 20;
+}
+
 /* March from p along the world direction w; true when it escapes (leaves through the top or
  * travels max_tiles), else *out_hit is the first occupied point. */
 static bool escapes(const rtv_job *rj, meso_vec3 p, meso_vec3 w, meso_vec3 *out_hit) {
     const meso_rtv_desc *d = &rj->desc;
     meso_vec3 move = {w.x, w.y, -w.z / d->aspect};
-    /* no step crosses more than an eighth of a layer of the shell */
-    float step = rj->step;
-    if (fabsf(move.z) * step > 0.125f / (float)d->layers) step = 0.125f / (float)d->layers / fabsf(move.z);
-    float horizontal = sqrtf(w.x * w.x + w.y * w.y);
-    int steps = horizontal > 0.0f ? (int)ceilf(d->max_tiles / (horizontal * step)) : 1 << 20;
-    if (steps > 1 << 20) steps = 1 << 20;
+    float step;
+    int steps = march_steps(rj, w, move, &step);
     for (int s = 1; s <= steps; s++) {
         meso_vec3 q = meso_vec3_madd(p, move, step * (float)s);
         if (q.z < 0.0f) return true;
@@ -160,12 +171,8 @@ static meso_vec3 seen_point(const rtv_job *rj, meso_vec3 c, meso_vec3 view) {
     /* inside: toward the viewer (+view); outside: along the ray (-view) */
     float sign = inside ? 1.0f : -1.0f;
     meso_vec3 move = {sign * view.x, sign * view.y, -sign * view.z / d->aspect};
-    float step = rj->step;
-    if (fabsf(move.z) * step > 0.125f / (float)d->layers)
-        step = 0.125f / (float)d->layers / fabsf(move.z);
-    float horizontal = sqrtf(view.x * view.x + view.y * view.y);
-    int steps = horizontal > 0.0f ? (int)ceilf(d->max_tiles / (horizontal * step)) : 1 << 20;
-    if (steps > 1 << 20) steps = 1 << 20;
+    float step;
+    int steps = march_steps(rj, view, move, &step);
     for (int s = 1; s <= steps; s++) {
         meso_vec3 q = meso_vec3_madd(c, move, step * (float)s);
         if (q.z < 0.0f || q.z > 1.0f) break;
