@@ -170,6 +170,14 @@ static meso_result info_scene(meso_context *ctx, const char *path) {
     print_vec3(", up ", c->up);
     printf(", fov_y %g deg\n", c->fov_y_deg);
     print_vec3("ambient: ", scene->ambient);
+    if (scene->environment) {
+        const meso_environment *e = scene->environment;
+        meso_vec3 up = {0, 1, 0};
+        printf("\nenvironment: %s, %dx%d texels, intensity %g, irradiance facing up (%g, %g, %g)",
+               e->source, e->map->width, e->map->height, (double)e->intensity,
+               (double)meso_sh_irradiance(e->sh[0], up), (double)meso_sh_irradiance(e->sh[1], up),
+               (double)meso_sh_irradiance(e->sh[2], up));
+    }
     printf("\nlights: %d\n", scene->num_lights);
     for (int i = 0; i < scene->num_lights; i++) {
         const meso_light *l = &scene->lights[i];
@@ -234,6 +242,11 @@ static meso_result info_bake(meso_context *ctx, const char *path) {
     meso_bake_file *bake = NULL;
     meso_result result = meso_bake_file_load(ctx, path, &bake);
     if (result != MESO_OK) return result;
+    if (!strcmp(bake->kind, MESO_RTV_KIND)) {
+        /* GDM §4.1: sizes and the reconstruction error for each eigenfunction count */
+        char report[1024];
+        if (meso_rtv_describe(bake, report, sizeof(report))) fputs(report, stdout);
+    }
     if (!strcmp(bake->kind, MESO_LAYERS_KIND)) {
         /* Multilayer relief maps (Policarpo & Oliveira 2006 §3): checked as a renderer reads
          * them before anything is printed, so a bad file is one error line. */
@@ -290,6 +303,11 @@ static meso_result info_bake(meso_context *ctx, const char *path) {
         /* GDM §4.1: sizes and the reconstruction error for k = 1..16 eigen-maps */
         char report[4096];
         if (meso_gdm_describe(bake, report, sizeof(report))) fputs(report, stdout);
+    }
+    if (!strcmp(bake->kind, MESO_RTV_KIND)) {
+        /* GDM §4.1: sizes and the reconstruction error for each eigenfunction count */
+        char report[1024];
+        if (meso_rtv_describe(bake, report, sizeof(report))) fputs(report, stdout);
     }
     if (!strcmp(bake->kind, MESO_LAYERS_KIND)) {
         /* sizes beside the paper's three 256x256 RGBA8 maps, and what the layer limit clips */

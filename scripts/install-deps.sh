@@ -6,6 +6,7 @@ set -euo pipefail
 packages=(
     build-essential cmake pkg-config
     libpng-dev            # images
+    libstb-dev            # Radiance .hdr environment maps (stb_image)
     libcjson-dev          # scene files
     libassimp-dev         # mesh import
     libembree-dev         # reference ray tracer (Embree 3)

@@ -15,6 +15,7 @@
  *   bake_layers.h      multilayer relief maps of solids and height fields (Policarpo & Oliveira §3)
  *   bake_gdm.h         generalized displacement maps of solids and height fields, SVD-compressed
  *                      (GDM §3.1, §4.1)
+ *   bake_rtv.h         the radiance transfer volume, uncompressed (GDM §3.2; first step)
  */
 #ifndef MESO_BAKE_H
 #define MESO_BAKE_H
@@ -27,5 +28,6 @@
 #include "meso/bake_sat.h"
 #include "meso/bake_layers.h"
 #include "meso/bake_gdm.h"
+#include "meso/bake_rtv.h"
 
 #endif

@@ -4,6 +4,8 @@
  *   core.h           results, context, logging, parallel loops, progress, hashing, files
  *   math.h           vectors and matrices
  *   image.h          float images, PNG, textures
+ *   sh.h             spherical harmonics of order 4 (basis, irradiance, rotation)
+ *   environment.h    environment light: Radiance .hdr maps, procedural sky, sampling
  *   geom.h           meshes, shapes, import, tangents, curvature, quadrics
  *   mesostructure.h  height fields and solids
  *   bake.h           the bake file container and every baked representation
@@ -19,6 +21,8 @@
 #include "meso/core.h"
 #include "meso/math.h"
 #include "meso/image.h"
+#include "meso/sh.h"
+#include "meso/environment.h"
 #include "meso/geom.h"
 #include "meso/prism.h"
 #include "meso/mesostructure.h"

@@ -42,6 +42,8 @@ typedef enum meso_heightfield_kind {
     MESO_HEIGHTFIELD_BUMPS,       /* a grid of smooth round bumps */
     MESO_HEIGHTFIELD_WEAVE,       /* over-under woven strips */
     MESO_HEIGHTFIELD_TILES,       /* square tiles with grout, slightly uneven tops */
+    MESO_HEIGHTFIELD_BARK,        /* tree bark: plates along v between wandering furrows,
+                                     cracked across, fibrous tops */
 } meso_heightfield_kind;
 
 /* The largest procedural resolution: its square is the image limit MESO_IMAGE_MAX_PIXELS. */
@@ -51,8 +53,10 @@ typedef enum meso_heightfield_kind {
 typedef struct meso_heightfield_desc {
     meso_heightfield_kind kind;
     int resolution;     /* texels a side (512) */
-    int rows, columns;  /* repeats per tile: bricks 4 x 2, bumps 4 x 4, weave 4 x 4, tiles 4 x 4 */
-    float gap;          /* mortar / groove / grout width as a fraction of a cell (0.08) */
+    int rows, columns;  /* repeats per tile: bricks 4 x 2, bumps 4 x 4, weave 4 x 4, tiles 4 x 4,
+                           bark 3 x 6 (rows: cracks along v; columns: plates around u) */
+    float gap;          /* mortar / groove / grout width as a fraction of a cell (0.08; bark's
+                           furrows 0.3) */
     float bevel;        /* rounded edge width, fraction of a cell (0.04) */
     float roughness;    /* amplitude of deterministic noise on tops, in height units (0.0) */
     uint32_t seed;      /* noise seed (1) */

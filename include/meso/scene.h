@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "meso/core.h"
+#include "meso/environment.h"
 #include "meso/geom.h"
 #include "meso/image.h"
 #include "meso/math.h"
@@ -102,6 +103,9 @@ typedef struct meso_scene {
     meso_encoding encoding;
     meso_camera camera;
     meso_vec3 ambient;
+    /* Distant light from every direction ("environment": an .hdr map or a procedural sky;
+     * docs/scene-format.md); NULL when the scene has none. Owned by the scene. */
+    meso_environment *environment;
     meso_light lights[MESO_SCENE_MAX_LIGHTS];
     int num_lights;
     meso_object *objects;

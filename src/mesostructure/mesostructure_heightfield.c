@@ -125,10 +125,11 @@ static const char *const heightfield_kind_names[] = {
     [MESO_HEIGHTFIELD_BUMPS] = "bumps",
     [MESO_HEIGHTFIELD_WEAVE] = "weave",
     [MESO_HEIGHTFIELD_TILES] = "tiles",
+    [MESO_HEIGHTFIELD_BARK] = "bark",
 };
 
 bool meso_heightfield_kind_from_name(const char *name, meso_heightfield_kind *out_kind) {
-    for (int k = MESO_HEIGHTFIELD_BRICKS; k <= MESO_HEIGHTFIELD_TILES; k++)
+    for (int k = MESO_HEIGHTFIELD_BRICKS; k <= MESO_HEIGHTFIELD_BARK; k++)
         if (name && strcmp(name, heightfield_kind_names[k]) == 0) {
             *out_kind = (meso_heightfield_kind)k;
             return true;
@@ -138,7 +139,7 @@ bool meso_heightfield_kind_from_name(const char *name, meso_heightfield_kind *ou
 
 const char *meso_heightfield_kind_name(meso_heightfield_kind kind) {
     if (kind == MESO_HEIGHTFIELD_DEFAULT) kind = MESO_HEIGHTFIELD_BRICKS;
-    if (kind < MESO_HEIGHTFIELD_BRICKS || kind > MESO_HEIGHTFIELD_TILES) return "unknown";
+    if (kind < MESO_HEIGHTFIELD_BRICKS || kind > MESO_HEIGHTFIELD_BARK) return "unknown";
     return heightfield_kind_names[kind];
 }
 
@@ -146,9 +147,10 @@ meso_heightfield_desc meso_heightfield_desc_defaults(const meso_heightfield_desc
     meso_heightfield_desc d = desc ? *desc : (meso_heightfield_desc){0};
     if (d.kind == MESO_HEIGHTFIELD_DEFAULT) d.kind = MESO_HEIGHTFIELD_BRICKS;
     if (d.resolution == 0) d.resolution = 512;
-    if (d.rows == 0) d.rows = 4;
-    if (d.columns == 0) d.columns = d.kind == MESO_HEIGHTFIELD_BRICKS ? 2 : 4;
-    if (d.gap == 0.0f) d.gap = 0.08f;
+    bool bark = d.kind == MESO_HEIGHTFIELD_BARK;
+    if (d.rows == 0) d.rows = bark ? 3 : 4;
+    if (d.columns == 0) d.columns = d.kind == MESO_HEIGHTFIELD_BRICKS ? 2 : bark ? 6 : 4;
+    if (d.gap == 0.0f) d.gap = bark ? 0.3f : 0.08f;
     if (d.bevel == 0.0f) d.bevel = 0.04f;
     if (d.seed == 0) d.seed = 1;
     if (d.wrap == MESO_WRAP_DEFAULT) d.wrap = MESO_WRAP_REPEAT;

@@ -1,4 +1,4 @@
-/* Procedural height fields: bricks, bumps, weave, tiles (docs/mesostructure.md).
+/* Procedural height fields: bricks, bumps, weave, tiles, bark (docs/mesostructure.md).
  *
  * Each generator is a pure function of (u, v) in the unit tile, built from cell indices taken
  * modulo the repeat counts and from periodic hash noise, so the pattern is exactly periodic in
@@ -173,6 +173,43 @@ static void eval_tiles(const pattern *p, float u, float v, texel_value *out) {
     }
 }
 
+/* Tree bark (GDM paper Fig. 10 shows bark under global illumination): ridged plates along v,
+ * one per column, separated by V furrows whose course wanders sideways with v; each plate is
+ * split across by `rows` thin cracks a tile at its own heights; the tops carry fibrous noise
+ * stretched along v. The furrows' walls rise over `gap` of a column on each side, so the
+ * plates are rounded ridges with a flat top only where the furrows are far apart. */
+static void eval_bark(const pattern *p, float u, float v, texel_value *out) {
+    const meso_heightfield_desc *d = &p->desc;
+    /* the furrows' sideways wander: periodic in u and v, so the tile repeats */
+    float wander = 0.45f * periodic_fbm(u, v, 3, d->seed + 29u);
+    float x = u * (float)d->columns + wander;
+    float fc = floorf(x);
+    int column = wrap_index((int)fc, d->columns);
+    float fx = x - fc;
+    uint32_t h = hash_cell(column, 0, d->seed);
+    /* across the plate: 0 in the furrow's bottom, 1 on the ridge */
+    float edge = fminf(fx, 1.0f - fx);
+    float across = rounded_edge((edge - 0.02f) / d->gap);
+    /* thin cracks across the plate at rows shifted by the plate's own hash */
+    float y = v * (float)d->rows + hash_unit(mix32(h + 1u));
+    float fy = y - floorf(y);
+    float crack_width = 2.0f * d->bevel * (float)d->rows; /* `bevel` of a tile, both sides */
+    float crack = rounded_edge(fminf(fy, 1.0f - fy) / crack_width);
+    float crack_depth = 0.35f + 0.25f * hash_unit(mix32(h + 2u));
+    /* fibres: noise stretched along v (a tile-periodic lattice 8x finer in u than in v) */
+    float fibre = periodic_value_noise(u * (float)(32 * d->columns), v * (float)(4 * d->rows),
+                                       32 * d->columns, 4 * d->rows, d->seed + 31u);
+    float top = 0.8f + 0.12f * periodic_fbm(u, v, 4 * d->columns, d->seed + 37u) +
+                0.06f * (fibre - 0.5f);
+    top -= d->roughness * 0.5f * (1.0f + periodic_fbm(u, v, 16 * d->columns, d->seed + 41u));
+    float plate = top * (1.0f - crack_depth * (1.0f - crack));
+    out->height = 0.04f + (plate - 0.04f) * across;
+    if (!p->color) return;
+    float grain = 0.85f + 0.3f * fibre;
+    float inner = 0.45f + 0.55f * fminf(across, crack); /* furrows and cracks: darker */
+    set_rgb(out, 0.36f * grain * inner, 0.29f * grain * inner, 0.22f * grain * inner);
+}
+
 typedef void (*eval_fn)(const pattern *p, float u, float v, texel_value *out);
 
 typedef struct raster_job {
@@ -204,7 +241,7 @@ static void raster_row(void *user, size_t job, int thread_index) {
 
 static meso_result validate_desc(meso_context *ctx, const meso_heightfield_desc *d) {
     const char *name = meso_heightfield_kind_name(d->kind);
-    if (d->kind < MESO_HEIGHTFIELD_BRICKS || d->kind > MESO_HEIGHTFIELD_TILES)
+    if (d->kind < MESO_HEIGHTFIELD_BRICKS || d->kind > MESO_HEIGHTFIELD_BARK)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "procedural height field: kind: unknown kind %d", (int)d->kind);
     if (d->resolution < 1 || d->resolution > MESO_HEIGHTFIELD_MAX_RESOLUTION)
@@ -253,6 +290,7 @@ meso_result meso_heightfield_create_procedural(meso_context *ctx, const meso_hei
         [MESO_HEIGHTFIELD_BUMPS] = eval_bumps,
         [MESO_HEIGHTFIELD_WEAVE] = eval_weave,
         [MESO_HEIGHTFIELD_TILES] = eval_tiles,
+        [MESO_HEIGHTFIELD_BARK] = eval_bark,
     };
     meso_heightfield *hf = NULL;
     meso_image *color = NULL;

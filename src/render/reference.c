@@ -20,22 +20,7 @@
 
 #include "reference_internal.h"
 
-struct meso_reference {
-    RTCDevice device;
-    RTCScene scene;
-    const meso_scene *scene_data;
-    reference_object *objects;
-    int num_objects;
-    uint64_t num_triangles;
-    float epsilon;         /* shadow-ray offset, world units */
-    _Atomic long long embree_bytes; /* Embree's own allocations (memory monitor) */
-    long long embree_peak;
-    long long memory_limit;   /* the context's budget: Embree allocations beyond it fail */
-    _Atomic bool over_budget; /* an allocation was refused for the budget */
-    size_t side_bytes;
-};
 
-enum { TILE = 16 };
 #define REFERENCE_LOW_QUALITY_TRIANGLES 2000000
 
 /* ---- Small geometry helpers shared by the reference files --------------------------------- */
@@ -82,6 +67,17 @@ const meso_technique_option meso_reference_options[MESO_REFERENCE_NUM_OPTIONS] =
     MESO_OPTION_ROW(MESO_OPTION_INT, resolution, 2, MESO_ISOSURFACE_MAX_RESOLUTION, 128,
                     "solids: extraction grid cells a tile side in u and v (w: a quarter)",
                     reference_options, resolution),
+    MESO_OPTION_ROW(MESO_OPTION_INT, samples, 0, 65536, 0,
+                    "path-traced samples a pixel (environment and interreflection); 0: the "
+                    "direct-light reference",
+                    reference_options, samples),
+    MESO_OPTION_ROW(MESO_OPTION_INT, bounces, 0, 16, 3,
+                    "path tracing: interreflections inside and between objects (0: none)",
+                    reference_options, bounces),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, rtv, 0, 1, 0,
+                    "light the environment through the radiance transfer volume at the true hit "
+                    "(GDM-GI's shading, docs/techniques/gdm-gi.md) instead of path tracing it",
+                    reference_options, rtv),
 };
 
 meso_result reference_read_options(meso_context *ctx, const meso_scene *scene,
@@ -236,16 +232,20 @@ meso_result meso_reference_create_with(meso_context *ctx, const meso_scene *scen
                                                   ? RTC_GEOMETRY_TYPE_QUAD
                                                   : RTC_GEOMETRY_TYPE_TRIANGLE);
         reference_options options;
-        if (kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD) {
+        result = reference_read_options(ctx, scene, object, &desc, &options);
+        if (result == MESO_OK) {
+            /* frame-wide settings: the most any object asks for */
+            if (options.samples > reference->path_samples) reference->path_samples = options.samples;
+            if (options.bounces > reference->path_bounces) reference->path_bounces = options.bounces;
+            if (options.rtv) reference->path_rtv = true;
+        }
+        if (result != MESO_OK) {
+        } else if (kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD) {
             ref->kind = REFERENCE_HEIGHT_FIELD;
-            result = reference_read_options(ctx, scene, object, &desc, &options);
-            if (result == MESO_OK)
-                result = reference_build_heightfield(ctx, scene, &options, geometry, ref, &total);
+            result = reference_build_heightfield(ctx, scene, &options, geometry, ref, &total);
         } else if (kind == MESO_MESOSTRUCTURE_SOLID) {
             ref->kind = REFERENCE_SOLID;
-            result = reference_read_options(ctx, scene, object, &desc, &options);
-            if (result == MESO_OK)
-                result = reference_build_solid(ctx, &desc, &options, geometry, ref, &total);
+            result = reference_build_solid(ctx, &desc, &options, geometry, ref, &total);
         } else {
             ref->kind = REFERENCE_PLAIN;
             result = build_plain(ctx, geometry, ref, &total);
@@ -332,13 +332,13 @@ uint64_t meso_reference_triangle_count(const meso_reference *reference) {
 
 /* ---- Shading at a hit --------------------------------------------------------------------- */
 
-/* The mesostructure's normal and the shading uv at a hit. */
-static void surface_at(const reference_object *ref, unsigned primitive, float hu, float hv,
-                       meso_vec3 *out_normal, meso_vec2 *out_uv) {
+void reference_surface_at(const reference_object *ref, unsigned primitive, float hu, float hv,
+                          meso_vec3 *out_normal, meso_vec2 *out_uv, reference_base *out_base) {
     const meso_mesh *mesh = ref->object->mesh;
     if (ref->kind == REFERENCE_PLAIN) {
         const uint32_t *tri = ref->indices + 3 * (size_t)primitive;
         float w0 = 1.0f - hu - hv;
+        if (out_base) *out_base = (reference_base){primitive, {w0, hu, hv}, 0.0f};
         *out_normal = meso_vec3_normalize(meso_vec3_barycentric(
             mesh->normals[tri[0]], mesh->normals[tri[1]], mesh->normals[tri[2]], w0, hu, hv));
         *out_uv = mesh->uvs ? meso_vec2_barycentric(mesh->uvs[tri[0]], mesh->uvs[tri[1]],
@@ -377,6 +377,12 @@ static void surface_at(const reference_object *ref, unsigned primitive, float hu
     meso_vec3 n = meso_vec3_normalize(meso_vec3_barycentric(
         mesh->normals[bt[0]], mesh->normals[bt[1]], mesh->normals[bt[2]], b[0], b[1], b[2]));
     *out_uv = uv;
+    if (out_base) {
+        /* a height field's hit lies on its surface: w = 1 - h (DESIGN.md) */
+        if (ref->kind == REFERENCE_HEIGHT_FIELD)
+            w = 1.0f - meso_heightfield_sample(ref->object->mesostructure.height_field, uv.x, uv.y);
+        *out_base = (reference_base){base, {b[0], b[1], b[2]}, w};
+    }
     if (ref->kind == REFERENCE_HEIGHT_FIELD) {
         meso_vec3 t, bt_vec;
         if (mesh->tangents && mesh->bitangents) {
@@ -427,6 +433,54 @@ static void surface_at(const reference_object *ref, unsigned primitive, float hu
 
 /* ---- Rendering ---------------------------------------------------------------------------- */
 
+bool reference_trace(const meso_reference *reference, struct RTCIntersectContext *context,
+                     meso_vec3 origin, meso_vec3 dir, float tnear, reference_hit *out_hit) {
+    struct RTCRayHit rh;
+    memset(&rh, 0, sizeof rh);
+    rh.ray.org_x = origin.x;
+    rh.ray.org_y = origin.y;
+    rh.ray.org_z = origin.z;
+    rh.ray.dir_x = dir.x;
+    rh.ray.dir_y = dir.y;
+    rh.ray.dir_z = dir.z;
+    rh.ray.tnear = tnear;
+    rh.ray.tfar = INFINITY; /* the rasterizer does not clip at the far plane */
+    rh.ray.mask = UINT32_MAX;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(reference->scene, context, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+    reference_hit *hit = out_hit;
+    hit->ref = &reference->objects[rh.hit.geomID];
+    hit->t = rh.ray.tfar;
+    hit->position = meso_vec3_madd(origin, dir, rh.ray.tfar);
+    reference_surface_at(hit->ref, rh.hit.primID, rh.hit.u, rh.hit.v, &hit->normal, &hit->uv,
+                         &hit->base);
+    /* rays leaving the hit start on the side the ray came from */
+    meso_vec3 ng = meso_vec3_normalize((meso_vec3){rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z});
+    if (meso_vec3_dot(ng, dir) > 0.0f) ng = meso_vec3_negate(ng);
+    hit->geometric_normal = ng;
+    hit->origin = meso_vec3_madd(hit->position, ng, reference->epsilon);
+    return true;
+}
+
+void reference_light_visibility(const meso_reference *reference, meso_vec3 origin,
+                                meso_vec3 position, float *visibility) {
+    const meso_scene *scene = reference->scene_data;
+    struct RTCIntersectContext shadow;
+    rtcInitIntersectContext(&shadow);
+    for (int l = 0; l < scene->num_lights; l++) {
+        const meso_light *light = &scene->lights[l];
+        float tfar = light->type == MESO_LIGHT_DIRECTIONAL
+                         ? INFINITY
+                         : meso_vec3_length(meso_vec3_sub(light->position, origin)) * (1.0f - 1e-5f);
+        visibility[l] = reference_unoccluded(reference->scene, &shadow, origin,
+                                             meso_light_direction(light, position), tfar)
+                            ? 1.0f
+                            : 0.0f;
+    }
+}
+
 typedef struct render_job {
     const meso_reference *reference;
     const meso_frame *frame;
@@ -436,84 +490,49 @@ typedef struct render_job {
     atomic_bool cancelled;
 } render_job;
 
+bool reference_direct_sample(const meso_reference *reference, const meso_frame *frame,
+                             struct RTCIntersectContext *primary, int i, int j, float *color,
+                             float *coverage, float *depth, reference_hit *out_hit) {
+    const meso_scene *scene = reference->scene_data;
+    size_t pixel = (size_t)j * (size_t)frame->width + (size_t)i;
+    meso_vec3 dir = meso_frame_ray_direction(frame, (float)i + 0.5f, (float)j + 0.5f);
+    /* dot(dir, forward) = 1: t is the view depth, near-clipped like the rasterizer */
+    float *c = color + 3 * pixel;
+    if (!reference_trace(reference, primary, frame->eye, dir, frame->z_near, out_hit)) {
+        c[0] = scene->background.x;
+        c[1] = scene->background.y;
+        c[2] = scene->background.z;
+        coverage[pixel] = 0.0f;
+        depth[pixel] = INFINITY;
+        return false;
+    }
+    float visibility[MESO_SCENE_MAX_LIGHTS];
+    reference_light_visibility(reference, out_hit->origin, out_hit->position, visibility);
+    meso_vec3 shaded = meso_shade_point(frame, out_hit->ref->object, out_hit->position,
+                                        out_hit->normal, out_hit->uv, visibility);
+    c[0] = shaded.x;
+    c[1] = shaded.y;
+    c[2] = shaded.z;
+    coverage[pixel] = 1.0f;
+    depth[pixel] = out_hit->t;
+    return true;
+}
+
 static void render_tile(void *user, size_t job, int thread_index) {
     render_job *rj = user;
     if (atomic_load_explicit(&rj->cancelled, memory_order_relaxed)) return;
-    const meso_reference *reference = rj->reference;
     const meso_frame *frame = rj->frame;
-    const meso_scene *scene = reference->scene_data;
-    int x0 = (int)(job % (size_t)rj->tiles_x) * TILE, y0 = (int)(job / (size_t)rj->tiles_x) * TILE;
-    int x1 = x0 + TILE < frame->width ? x0 + TILE : frame->width;
-    int y1 = y0 + TILE < frame->height ? y0 + TILE : frame->height;
+    int x0, y0, x1, y1;
+    reference_tile_bounds(job, rj->tiles_x, frame->width, frame->height, &x0, &y0, &x1, &y1);
     meso_progress_advance(frame->progress, (uint64_t)(x1 - x0) * (uint64_t)(y1 - y0));
-    struct RTCIntersectContext primary, shadow;
+    struct RTCIntersectContext primary;
     rtcInitIntersectContext(&primary);
     primary.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-    rtcInitIntersectContext(&shadow);
-    float visibility[MESO_SCENE_MAX_LIGHTS];
     for (int j = y0; j < y1; j++)
         for (int i = x0; i < x1; i++) {
-            size_t pixel = (size_t)j * (size_t)frame->width + (size_t)i;
-            meso_vec3 dir = meso_frame_ray_direction(frame, (float)i + 0.5f, (float)j + 0.5f);
-            struct RTCRayHit rh;
-            memset(&rh, 0, sizeof rh);
-            rh.ray.org_x = frame->eye.x;
-            rh.ray.org_y = frame->eye.y;
-            rh.ray.org_z = frame->eye.z;
-            rh.ray.dir_x = dir.x;
-            rh.ray.dir_y = dir.y;
-            rh.ray.dir_z = dir.z;
-            /* dot(dir, forward) = 1: t is the view depth, near-clipped like the rasterizer */
-            rh.ray.tnear = frame->z_near;
-            rh.ray.tfar = INFINITY; /* the rasterizer does not clip at the far plane */
-            rh.ray.mask = UINT32_MAX;
-            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-            rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-            rtcIntersect1(reference->scene, &primary, &rh);
-            float *c = rj->color + 3 * pixel;
-            if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
-                c[0] = scene->background.x;
-                c[1] = scene->background.y;
-                c[2] = scene->background.z;
-                rj->coverage[pixel] = 0.0f;
-                rj->depth[pixel] = INFINITY;
-                continue;
-            }
-            const reference_object *ref = &reference->objects[rh.hit.geomID];
-            meso_vec3 position = meso_vec3_madd(frame->eye, dir, rh.ray.tfar);
-            meso_vec3 normal;
-            meso_vec2 uv;
-            surface_at(ref, rh.hit.primID, rh.hit.u, rh.hit.v, &normal, &uv);
-            /* shadow rays leave from the side the camera ray came from */
-            meso_vec3 ng = meso_vec3_normalize((meso_vec3){rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z});
-            if (meso_vec3_dot(ng, dir) > 0.0f) ng = meso_vec3_negate(ng);
-            meso_vec3 origin = meso_vec3_madd(position, ng, reference->epsilon);
-            for (int l = 0; l < scene->num_lights; l++) {
-                const meso_light *light = &scene->lights[l];
-                meso_vec3 to_light = meso_light_direction(light, position);
-                struct RTCRay ray;
-                memset(&ray, 0, sizeof ray);
-                ray.org_x = origin.x;
-                ray.org_y = origin.y;
-                ray.org_z = origin.z;
-                ray.dir_x = to_light.x;
-                ray.dir_y = to_light.y;
-                ray.dir_z = to_light.z;
-                ray.tnear = 0.0f;
-                ray.tfar = light->type == MESO_LIGHT_DIRECTIONAL
-                               ? INFINITY
-                               : meso_vec3_length(meso_vec3_sub(light->position, origin)) *
-                                     (1.0f - 1e-5f);
-                ray.mask = UINT32_MAX;
-                rtcOccluded1(reference->scene, &shadow, &ray);
-                visibility[l] = ray.tfar == -INFINITY ? 0.0f : 1.0f;
-            }
-            meso_vec3 shaded = meso_shade_point(frame, ref->object, position, normal, uv, visibility);
-            c[0] = shaded.x;
-            c[1] = shaded.y;
-            c[2] = shaded.z;
-            rj->coverage[pixel] = 1.0f;
-            rj->depth[pixel] = rh.ray.tfar;
+            reference_hit hit;
+            reference_direct_sample(rj->reference, frame, &primary, i, j, rj->color, rj->coverage,
+                                    rj->depth, &hit);
         }
     if (meso_progress_advance(rj->progress, 1)) atomic_store(&rj->cancelled, true);
 }
@@ -524,10 +543,12 @@ meso_result meso_reference_render(meso_context *ctx, const meso_reference *refer
     if (!reference || !frame || !color || !coverage || !depth || frame->width <= 0 ||
         frame->height <= 0)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "reference: render: no target");
+    if (reference->path_samples > 0 || reference->path_rtv)
+        return reference_path_render(ctx, reference, frame, color, coverage, depth);
     render_job rj = {.reference = reference, .frame = frame, .color = color,
                      .coverage = coverage, .depth = depth,
-                     .tiles_x = (frame->width + TILE - 1) / TILE};
-    size_t tiles = (size_t)rj.tiles_x * (size_t)((frame->height + TILE - 1) / TILE);
+                     .tiles_x = (frame->width + REFERENCE_TILE - 1) / REFERENCE_TILE};
+    size_t tiles = (size_t)rj.tiles_x * (size_t)((frame->height + REFERENCE_TILE - 1) / REFERENCE_TILE);
     atomic_init(&rj.cancelled, false);
     rj.progress = meso_progress_begin(ctx, "reference: trace", tiles);
     meso_parallel_for(ctx, tiles, render_tile, &rj);

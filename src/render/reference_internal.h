@@ -34,7 +34,7 @@ typedef struct meso_reference_desc {
 
 /* The reference's option table, for the registry's entry. */
 extern const meso_technique_option meso_reference_options[];
-#define MESO_REFERENCE_NUM_OPTIONS 3
+#define MESO_REFERENCE_NUM_OPTIONS 6
 
 meso_result meso_reference_create_with(meso_context *ctx, const meso_scene *scene,
                                        const meso_reference_desc *desc,
@@ -43,6 +43,9 @@ meso_result meso_reference_create_with(meso_context *ctx, const meso_scene *scen
 /* ---- Private to reference*.c ------------------------------------------------------------- */
 
 #include <embree3/rtcore.h>
+#include <math.h>
+#include <stdatomic.h>
+#include <string.h>
 
 typedef enum reference_kind {
     REFERENCE_PLAIN = 0,   /* the mesh itself */
@@ -96,7 +99,31 @@ typedef struct reference_options {
     float subdivision;   /* height fields: micro-edges per texel */
     float view_adaptive; /* height fields: micro-edges per pixel at most; <= 0: no cap */
     int resolution;      /* solids: extraction grid cells a tile side (u and v; w a quarter) */
+    int samples;         /* path-traced samples a pixel; 0: the direct-light reference */
+    int bounces;         /* path tracing: interreflections (0: the environment's direct light) */
+    bool rtv;            /* the environment through the RTV at the true hit (GDM-GI's shading) */
 } reference_options;
+
+/* The tracer (reference.c); its fields are shared with reference_path.c. */
+struct meso_reference {
+    RTCDevice device;
+    RTCScene scene;
+    const meso_scene *scene_data;
+    reference_object *objects;
+    int num_objects;
+    uint64_t num_triangles;
+    float epsilon;         /* shadow-ray offset, world units */
+    _Atomic long long embree_bytes; /* Embree's own allocations (memory monitor) */
+    long long embree_peak;
+    long long memory_limit;   /* the context's budget: Embree allocations beyond it fail */
+    _Atomic bool over_budget; /* an allocation was refused for the budget */
+    size_t side_bytes;
+    /* Path tracing (reference_path.c): the largest `samples` and `bounces` any object's
+     * options ask for; samples 0 draws the direct-light reference. */
+    int path_samples;
+    int path_bounces;
+    bool path_rtv; /* any object's option `rtv`: reference_path.c shades with the RTV */
+};
 
 /* The object's options: the table's defaults replaced by desc's, then the object's own. */
 meso_result reference_read_options(meso_context *ctx, const meso_scene *scene,
@@ -120,6 +147,81 @@ size_t reference_base_triangle(const reference_object *ref, uint64_t triangle);
 /* dP/du and dP/dv of a triangle from its positions and UVs (zero when the UVs are degenerate). */
 void reference_triangle_gradients(const meso_vec3 p[3], const meso_vec2 uv[3], meso_vec3 *out_t,
                                   meso_vec3 *out_b);
+
+/* Where a hit lies on the base mesh: its triangle, the barycentric weights (of the triangle's
+ * own vertex order) and the depth w in the shell (0 at the mesh, 1 at -depth; 0 for plain
+ * objects). */
+typedef struct reference_base {
+    size_t triangle;
+    float weights[3];
+    float w;
+} reference_base;
+
+/* The mesostructure's shading normal and the shading uv at a hit of `ref`, and (out_base not
+ * NULL) where it lies on the base mesh. */
+void reference_surface_at(const reference_object *ref, unsigned primitive, float hu, float hv,
+                          meso_vec3 *out_normal, meso_vec2 *out_uv, reference_base *out_base);
+
+/* What a ray hit. */
+typedef struct reference_hit {
+    const reference_object *ref;
+    float t;                    /* the ray's parameter at the hit */
+    meso_vec3 position;
+    meso_vec3 normal;           /* the mesostructure's shading normal */
+    meso_vec2 uv;               /* shading uv */
+    meso_vec3 geometric_normal; /* of the hit triangle, facing the ray's origin */
+    meso_vec3 origin;           /* position moved off the surface toward the ray's side: where
+                                   shadow and bounce rays start */
+    reference_base base;        /* where it lies on the base mesh */
+} reference_hit;
+
+/* True when the ray origin + t dir, t in [0, tfar), hits nothing in `scene`. Thread-safe. */
+static inline bool reference_unoccluded(RTCScene scene, struct RTCIntersectContext *context,
+                                        meso_vec3 origin, meso_vec3 dir, float tfar) {
+    struct RTCRay ray;
+    memset(&ray, 0, sizeof ray);
+    ray.org_x = origin.x, ray.org_y = origin.y, ray.org_z = origin.z;
+    ray.dir_x = dir.x, ray.dir_y = dir.y, ray.dir_z = dir.z;
+    ray.tnear = 0.0f;
+    ray.tfar = tfar;
+    ray.mask = UINT32_MAX;
+    rtcOccluded1(scene, context, &ray);
+    return ray.tfar != -INFINITY;
+}
+
+/* The samples of 16 x 16 tile `job` of a width x height target, tiles_x tiles a row:
+ * [x0, x1) x [y0, y1). */
+enum { REFERENCE_TILE = 16 };
+static inline void reference_tile_bounds(size_t job, int tiles_x, int width, int height, int *x0,
+                                         int *y0, int *x1, int *y1) {
+    *x0 = (int)(job % (size_t)tiles_x) * REFERENCE_TILE;
+    *y0 = (int)(job / (size_t)tiles_x) * REFERENCE_TILE;
+    *x1 = *x0 + REFERENCE_TILE < width ? *x0 + REFERENCE_TILE : width;
+    *y1 = *y0 + REFERENCE_TILE < height ? *y0 + REFERENCE_TILE : height;
+}
+
+/* The direct reference's sample (i, j) of the frame: the camera ray through its centre, the
+ * hit shaded by meso_shade_point with hard shadows (colour, coverage 1, depth t), or the
+ * background (coverage 0, depth +inf). Returns whether it hit; *out_hit is the hit. */
+bool reference_direct_sample(const meso_reference *reference, const meso_frame *frame,
+                             struct RTCIntersectContext *primary, int i, int j, float *color,
+                             float *coverage, float *depth, reference_hit *out_hit);
+
+/* Trace the ray origin + t dir, t in [tnear, inf), against the whole scene; false when it
+ * hits nothing. Thread-safe. */
+bool reference_trace(const meso_reference *reference, struct RTCIntersectContext *context,
+                     meso_vec3 origin, meso_vec3 dir, float tnear, reference_hit *out_hit);
+
+/* visibility[l] = 1 when light l of the scene is seen from `origin` (a point just off the
+ * surface at `position`), else 0: one occlusion ray a light against the whole scene. */
+void reference_light_visibility(const meso_reference *reference, meso_vec3 origin,
+                                meso_vec3 position, float *visibility);
+
+/* The path-traced frame (reference_path.c): as meso_reference_render, with reference->path_*
+ * (docs/reference.md "Path tracing"). */
+meso_result reference_path_render(meso_context *ctx, const meso_reference *reference,
+                                  const meso_frame *frame, float *color, float *coverage,
+                                  float *depth);
 
 /* Barycentric weights of `uv` in the UV triangle; false when it is degenerate (weights 1/3). */
 bool reference_uv_barycentrics(const meso_vec2 uv[3], meso_vec2 point, float out_weights[3]);

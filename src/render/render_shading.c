@@ -1,6 +1,7 @@
 /* The shading model every technique and the reference share (DESIGN.md, "Shading"). */
 #include <math.h>
 
+#include "render_environment.h"
 #include "render_shading.h"
 
 static inline v8i sel_i(v8i mask, v8i a, v8i b) { return (a & mask) | (b & ~mask); }
@@ -74,7 +75,7 @@ static inline v8f rsqrt_safe(v8f len2, v8i *nonzero) {
 }
 
 /* colour = albedo map(uv) (ambient + sum_i c_i max(0, N.L_i) v_i) + sum_i spec c_i (N.H_i)^s v_i
- * (DESIGN.md), specular only where N.L_i > 0 and N.H_i > 0. */
+ * (DESIGN.md); with an environment, ambient + E(N) / pi (render_environment.h), specular only where N.L_i > 0 and N.H_i > 0. */
 void meso_shade_batch8(const meso_frame *frame, const meso_object *object,
                        const meso_shade_batch *in, int lanes, v8f *out_r, v8f *out_g,
                        v8f *out_b) {
@@ -99,6 +100,8 @@ void meso_shade_batch8(const meso_frame *frame, const meso_object *object,
         vz = select_v(nonzero, vz * inv, vz);
     }
     v8f dr = splat(scene->ambient.x), dg = splat(scene->ambient.y), db = splat(scene->ambient.z);
+    if (scene->environment) meso_environment_ambient8(scene->environment, in->nx, in->ny, in->nz,
+                                                      &dr, &dg, &db);
     v8f sr = splat(0.0f), sg = splat(0.0f), sb = splat(0.0f);
     bool integer_power =
         m->shininess >= 0.0f && m->shininess <= 4096.0f && m->shininess == floorf(m->shininess);

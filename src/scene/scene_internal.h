@@ -67,6 +67,17 @@ meso_result scene_get_string(const scene_parser *p, const cJSON *obj, const scen
 meso_result scene_resolve_path(const scene_parser *p, const scene_key *key, const char *path,
                                char out[SCENE_PATH_MAX]);
 
+/* A missing or unreadable referenced file, reported with the scene, the key and the path. */
+meso_result scene_check_readable(const scene_parser *p, const scene_key *key, const char *path);
+/* A loader's error (naming only its own file) said again at the scene's key. */
+meso_result scene_relog_at_key(const scene_parser *p, const scene_key *key, meso_result r);
+/* A library's MESO_ERROR_INVALID_ARGUMENT for parameters the parser let through, said as a bad
+ * value (MESO_ERROR_FORMAT) at the key with the library's reason; other results pass. */
+meso_result scene_relog_as_format(const scene_parser *p, const scene_key *key, meso_result r);
+
+/* "environment" of the top level (scene_environment.c); item may be NULL (none). */
+meso_result scene_parse_environment(const scene_parser *p, const cJSON *item, meso_scene *scene);
+
 /* Parse objects[index] into *object (zeroed by the caller; released by scene_object_deinit
  * whatever the result). */
 /* The memory the objects' built-in shapes and procedural height fields will need, read from

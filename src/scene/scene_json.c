@@ -290,3 +290,37 @@ meso_result scene_check_numbers(const scene_parser *p, const char *json) {
     }
     return MESO_OK;
 }
+
+/* ---- Referenced files --------------------------------------------------------------------- */
+
+/* A missing referenced file is reported with the scene, the key and the resolved path, which
+ * the loaders' own messages (naming only the file) would not say. */
+meso_result scene_check_readable(const scene_parser *p, const scene_key *key, const char *path) {
+    FILE *file = NULL;
+    if (meso_file_open_read(p->ctx, path, &file) != MESO_OK) {
+        /* the loader's reason ("path: is a FIFO, ..."), said at the scene's key */
+        char reason[1024];
+        snprintf(reason, sizeof(reason), "%s", meso_context_last_error(p->ctx));
+        return scene_error(p, MESO_ERROR_IO, key, "%s", reason);
+    }
+    fclose(file);
+    return MESO_OK;
+}
+
+/* A loader's error (naming only its own file) said again at the scene's key, so that the
+ * one line names the scene, the key and the loaded file's reason. */
+meso_result scene_relog_at_key(const scene_parser *p, const scene_key *key, meso_result r) {
+    if (r == MESO_ERROR_OUT_OF_MEMORY) return r;
+    char reason[1024];
+    snprintf(reason, sizeof(reason), "%s", meso_context_last_error(p->ctx));
+    return scene_error(p, r, key, "%s", reason);
+}
+
+/* A library call refused parameters the parser let through (e.g. an odd weave count): report
+ * it as a bad value of the scene, at the key, with the library's reason. */
+meso_result scene_relog_as_format(const scene_parser *p, const scene_key *key, meso_result r) {
+    if (r != MESO_ERROR_INVALID_ARGUMENT) return r;
+    char reason[1024];
+    snprintf(reason, sizeof(reason), "%s", meso_context_last_error(p->ctx));
+    return scene_error(p, MESO_ERROR_FORMAT, key, "%s", reason);
+}

@@ -1,6 +1,6 @@
 /* Scene files: JSON text -> meso_scene (DESIGN.md "Scene file contract", docs/scene-format.md).
- * The top level (image, camera, ambient, lights, objects) lives here; objects are parsed by
- * scene_object.c. Every error names the file and the key path; nothing leaks on any path. */
+ * The top level (image, camera, ambient, lights, objects) lives here; the environment is parsed
+ * by scene_environment.c, objects by scene_object.c. Every error names the file and the key path; nothing leaks on any path. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -164,8 +164,8 @@ static int line_of(const char *text, const char *position) {
 }
 
 static meso_result parse_document(const scene_parser *p, const char *json, meso_scene *scene) {
-    static const char *const keys[] = {"description", "image",   "camera", "ambient",
-                                       "lights",      "objects", NULL};
+    static const char *const keys[] = {"description", "image",   "camera",      "ambient",
+                                       "lights",      "objects", "environment", NULL};
     /* The error position comes back through return_parse_end (the same pointer as
      * cJSON_GetErrorPtr()); cJSON also stores it in a global, which is never read here. */
     const char *end = NULL;
@@ -192,6 +192,8 @@ static meso_result parse_document(const scene_parser *p, const char *json, meso_
         (r = parse_camera(p, cJSON_GetObjectItemCaseSensitive(root, "camera"), &scene->camera)) ||
         (r = scene_get_vec3(p, root, &top, "ambient", true, false, &scene->ambient)) ||
         (r = parse_lights(p, cJSON_GetObjectItemCaseSensitive(root, "lights"), scene)) ||
+        (r = scene_parse_environment(p, cJSON_GetObjectItemCaseSensitive(root, "environment"),
+                                     scene)) ||
         (r = parse_objects(p, cJSON_GetObjectItemCaseSensitive(root, "objects"), scene)))
         goto done;
 done:
@@ -257,6 +259,7 @@ void meso_scene_destroy(meso_scene *scene) {
     if (!scene) return;
     for (int i = 0; i < scene->num_objects; i++) scene_object_deinit(&scene->objects[i]);
     free(scene->objects);
+    meso_environment_destroy(scene->environment);
     free(scene);
 }
 

@@ -19,38 +19,6 @@ static meso_result copy_name(const scene_parser *p, const scene_key *key, const 
     return MESO_OK;
 }
 
-/* A missing referenced file is reported with the scene, the key and the resolved path, which
- * the loaders' own messages (naming only the file) would not say. */
-static meso_result check_readable(const scene_parser *p, const scene_key *key, const char *path) {
-    FILE *file = NULL;
-    if (meso_file_open_read(p->ctx, path, &file) != MESO_OK) {
-        /* the loader's reason ("path: is a FIFO, ..."), said at the scene's key */
-        char reason[1024];
-        snprintf(reason, sizeof(reason), "%s", meso_context_last_error(p->ctx));
-        return scene_error(p, MESO_ERROR_IO, key, "%s", reason);
-    }
-    fclose(file);
-    return MESO_OK;
-}
-
-/* A loader's error (naming only its own file) said again at the scene's key, so that the
- * one line names the scene, the key and the loaded file's reason. */
-static meso_result relog_at_key(const scene_parser *p, const scene_key *key, meso_result r) {
-    if (r == MESO_ERROR_OUT_OF_MEMORY) return r;
-    char reason[1024];
-    snprintf(reason, sizeof(reason), "%s", meso_context_last_error(p->ctx));
-    return scene_error(p, r, key, "%s", reason);
-}
-
-/* A library call refused parameters the parser let through (e.g. an odd weave count): report
- * it as a bad value of the scene, at the key, with the library's reason. */
-static meso_result relog_as_format(const scene_parser *p, const scene_key *key, meso_result r) {
-    if (r != MESO_ERROR_INVALID_ARGUMENT) return r;
-    char reason[1024];
-    snprintf(reason, sizeof(reason), "%s", meso_context_last_error(p->ctx));
-    return scene_error(p, MESO_ERROR_FORMAT, key, "%s", reason);
-}
-
 static const char *base_name(const char *path) {
     const char *slash = strrchr(path, '/');
     return slash ? slash + 1 : path;
@@ -73,7 +41,7 @@ static meso_result parse_procedural_heightfield(const scene_parser *p, const cJS
     if (!meso_heightfield_kind_from_name(name, &desc.kind)) {
         scene_key k = scene_key_child(key, "procedural");
         return scene_error(p, MESO_ERROR_FORMAT, &k,
-                           "unknown procedural height field \"%s\" (bricks, bumps, weave, tiles)",
+                           "unknown procedural height field \"%s\" (bricks, bumps, weave, tiles, bark)",
                            name);
     }
     long resolution = 0, rows = 0, columns = 0, seed = 0;
@@ -114,7 +82,7 @@ static meso_result parse_procedural_heightfield(const scene_parser *p, const cJS
     meso_mesostructure *m = &object->mesostructure;
     r = meso_heightfield_create_procedural(p->ctx, &desc, &m->height_field,
                                            want_color ? out_color : NULL);
-    if (r != MESO_OK) return relog_as_format(p, key, r);
+    if (r != MESO_OK) return scene_relog_as_format(p, key, r);
     snprintf(m->source, sizeof(m->source), "%s", meso_heightfield_kind_name(desc.kind));
     return MESO_OK;
 }
@@ -143,7 +111,7 @@ static meso_result parse_procedural_solid(const scene_parser *p, const cJSON *it
     desc.thickness = thickness;
     meso_mesostructure *m = &object->mesostructure;
     r = meso_solid_create_procedural(p->ctx, &desc, &m->solid);
-    if (r != MESO_OK) return relog_as_format(p, key, r);
+    if (r != MESO_OK) return scene_relog_as_format(p, key, r);
     snprintf(m->source, sizeof(m->source), "%s", meso_solid_kind_name(desc.kind));
     return MESO_OK;
 }
@@ -230,10 +198,10 @@ static meso_result parse_impostor_solid(const scene_parser *p, const cJSON *item
     if (meso_shape_kind_from_name(model, &shape.kind)) {
         r = meso_mesh_create_shape(p->ctx, &shape, &mesh);
     } else {
-        if ((r = scene_resolve_path(p, &k, model, path)) || (r = check_readable(p, &k, path)))
+        if ((r = scene_resolve_path(p, &k, model, path)) || (r = scene_check_readable(p, &k, path)))
             return r;
         r = meso_mesh_load(p->ctx, path, &mesh);
-        if (r != MESO_OK) return relog_at_key(p, &k, r);
+        if (r != MESO_OK) return scene_relog_at_key(p, &k, r);
     }
     if (r != MESO_OK) return r;
     meso_vec3 lo = mesh->positions[0], hi = lo;
@@ -315,10 +283,10 @@ static meso_result parse_height_map_or_solid(const scene_parser *p, const cJSON 
                                "must be a PNG path or {\"procedural\": NAME, ...}");
         char path[SCENE_PATH_MAX];
         if ((r = scene_resolve_path(p, &k, height_map->valuestring, path)) ||
-            (r = check_readable(p, &k, path)))
+            (r = scene_check_readable(p, &k, path)))
             return r;
         r = meso_heightfield_load_png(p->ctx, path, m->wrap, &m->height_field);
-        if (r != MESO_OK) return relog_at_key(p, &k, r);
+        if (r != MESO_OK) return scene_relog_at_key(p, &k, r);
         uint64_t texels = (uint64_t)m->height_field->width * (uint64_t)m->height_field->height;
         if ((r = scene_account_memory(p, &k, 4 * texels)) != MESO_OK) return r;
         snprintf(m->source, sizeof(m->source), "%s", base_name(height_map->valuestring));
@@ -333,10 +301,10 @@ static meso_result parse_height_map_or_solid(const scene_parser *p, const cJSON 
     if (cJSON_IsString(solid)) { /* a tile mesh (DESIGN.md: x, y -> u, v; z -> 1 - w) */
         char path[SCENE_PATH_MAX];
         if ((r = scene_resolve_path(p, &k, solid->valuestring, path)) ||
-            (r = check_readable(p, &k, path)))
+            (r = scene_check_readable(p, &k, path)))
             return r;
         meso_mesh *tile = NULL;
-        if ((r = meso_mesh_load(p->ctx, path, &tile)) != MESO_OK) return relog_at_key(p, &k, r);
+        if ((r = meso_mesh_load(p->ctx, path, &tile)) != MESO_OK) return scene_relog_at_key(p, &k, r);
         r = meso_solid_create_from_triangles(p->ctx, tile->positions, tile->num_vertices,
                                              tile->indices, tile->num_triangles, path, 0,
                                              &m->solid);
@@ -355,11 +323,11 @@ static meso_result parse_height_map_or_solid(const scene_parser *p, const cJSON 
 static meso_result load_color_map_file(const scene_parser *p, const scene_key *key,
                                        const char *path, meso_wrap wrap,
                                        meso_texture **out_texture) {
-    meso_result r = check_readable(p, key, path);
+    meso_result r = scene_check_readable(p, key, path);
     if (r != MESO_OK) return r;
     meso_image *image = NULL;
     r = meso_image_load_png(p->ctx, path, &image);
-    if (r != MESO_OK) return relog_at_key(p, key, r);
+    if (r != MESO_OK) return scene_relog_at_key(p, key, r);
     /* the image and the texture made from it with its mip levels (a third more) */
     uint64_t image_bytes = (uint64_t)image->width * (uint64_t)image->height *
                            (uint64_t)image->channels * sizeof(float);
@@ -520,10 +488,10 @@ static meso_result create_mesh(const scene_parser *p, const cJSON *obj, const sc
             return r;
         scene_key file_key = scene_key_child(&shape_key, "file");
         if ((r = scene_resolve_path(p, &file_key, file, out_path)) ||
-            (r = check_readable(p, &file_key, out_path)))
+            (r = scene_check_readable(p, &file_key, out_path)))
             return r;
         r = meso_mesh_load_with_material(p->ctx, out_path, out_mesh, out_material);
-        if (r != MESO_OK) return relog_at_key(p, &file_key, r);
+        if (r != MESO_OK) return scene_relog_at_key(p, &file_key, r);
         return scene_account_memory(
             p, key,
             meso_mesh_memory_estimate((*out_mesh)->num_vertices, (*out_mesh)->num_triangles));
@@ -547,7 +515,7 @@ static meso_result create_mesh(const scene_parser *p, const cJSON *obj, const sc
     /* accounted before it is built: a mesh over the budget is never allocated */
     if ((r = scene_account_memory(p, key, meso_shape_memory_estimate(&desc))) != MESO_OK) return r;
     r = meso_mesh_create_shape(p->ctx, &desc, out_mesh);
-    return r == MESO_OK ? r : relog_as_format(p, key, r);
+    return r == MESO_OK ? r : scene_relog_as_format(p, key, r);
 }
 
 /* Scaled texture coordinates are limited so that u times the largest texture side (16384 =

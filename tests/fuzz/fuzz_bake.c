@@ -1,7 +1,7 @@
 /* Fuzz target: the bake container (meso_bake_file_load) and every kind's loader that reads
  * one: VDM (meso_vdm_from_bake_file, meso_vdm_describe), relief layers
- * (meso_layers_from_bake_file, meso_layers_describe) and GDM (meso_gdm_from_bake_file,
- * meso_gdm_describe). */
+ * (meso_layers_from_bake_file, meso_layers_describe), GDM (meso_gdm_from_bake_file,
+ * meso_gdm_describe) and the RTV (meso_rtv_from_bake_file, meso_rtv_describe). */
 #include "fuzz_target.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
@@ -16,10 +16,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         meso_layers_destroy(layers);
     meso_gdm *gdm = NULL;
     if (meso_gdm_from_bake_file(ctx, bake, "fuzz", &gdm) == MESO_OK) meso_gdm_destroy(gdm);
+    meso_rtv *rtv = NULL;
+    if (meso_rtv_from_bake_file(ctx, bake, "fuzz", &rtv) == MESO_OK) meso_rtv_destroy(rtv);
     char text[256];
     meso_vdm_describe(bake, text, sizeof text);
     meso_layers_describe(bake, text, sizeof text);
     meso_gdm_describe(bake, text, sizeof text);
+    meso_rtv_describe(bake, text, sizeof text);
     meso_bake_file_destroy(bake);
     return 0;
 }

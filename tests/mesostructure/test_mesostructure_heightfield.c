@@ -7,7 +7,8 @@
 #include "test_util.h"
 
 static const meso_heightfield_kind all_kinds[] = {MESO_HEIGHTFIELD_BRICKS, MESO_HEIGHTFIELD_BUMPS,
-                                                  MESO_HEIGHTFIELD_WEAVE, MESO_HEIGHTFIELD_TILES};
+                                                  MESO_HEIGHTFIELD_WEAVE, MESO_HEIGHTFIELD_TILES,
+                                                  MESO_HEIGHTFIELD_BARK};
 #define NUM_KINDS (sizeof(all_kinds) / sizeof(all_kinds[0]))
 
 static meso_heightfield *make(meso_context *ctx, meso_heightfield_kind kind, int resolution,

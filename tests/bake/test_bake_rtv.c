@@ -1,0 +1,241 @@
+/* The radiance transfer volume (bake_rtv.c): a flat surface against the closed form, a groove
+ * shadowed and filled by interreflection, the SVD's error, the file round trip, corrupted files
+ * refused, thread-count independence, bad descs. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "test_util.h"
+
+/* Uniform radiance 1 in every direction: only c_0 = sqrt(4 pi). */
+static void uniform_radiance(float out[3][MESO_SH_COUNT]) {
+    for (int c = 0; c < 3; c++)
+        for (int k = 0; k < MESO_SH_COUNT; k++) out[c][k] = k == 0 ? sqrtf(4.0f * (float)M_PI) : 0.0f;
+}
+
+static meso_heightfield *field(meso_context *ctx, int size, float (*h)(float u, float v)) {
+    meso_heightfield *hf = NULL;
+    assert_int_equal(meso_heightfield_create_constant(ctx, size, size, 0.0f, &hf), MESO_OK);
+    for (int j = 0; j < size; j++)
+        for (int i = 0; i < size; i++)
+            hf->heights[(size_t)j * size + i] =
+                h(((float)i + 0.5f) / (float)size, 1.0f - ((float)j + 0.5f) / (float)size);
+    meso_heightfield_update_hash(hf);
+    return hf;
+}
+
+static float flat(float u, float v) { return 0.6f; }
+/* a V groove across u, bottom at u = 0.5, walls at 45 degrees for aspect 0.5 */
+static float groove(float u, float v) { return fabsf(2.0f * u - 1.0f); }
+
+static void test_rtv_flat_surface_is_the_cosine_lobe(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    meso_heightfield *hf = field(ctx, 16, flat);
+    meso_rtv *rtv = NULL;
+    meso_rtv_desc desc = {.heightfield = hf, .aspect = 0.2f, .width = 4, .height = 4, .layers = 3,
+                          .directions = 1024};
+    assert_int_equal(meso_bake_rtv(ctx, &desc, &rtv), MESO_OK);
+    /* nothing shadows: T_i = 1/pi integral over the upper hemisphere of cos Y_i:
+     * T_0 = Y_0 = 0.2821, T_2 = 0.4886 * 2/3 = 0.3257, T_6 = 0.3154 / 2 = 0.1577, others 0;
+     * the 1024 directions' quadrature is good to ~0.5 % */
+    const float expected[MESO_SH_COUNT] = {0.2821f, 0, 0.3257f, 0, 0, 0, 0.1577f};
+    for (size_t v = 0; v < 4 * 4 * 3; v++)
+        for (int k = 0; k < MESO_SH_COUNT; k++)
+            assert_float_equal(rtv->coefficients[v * MESO_SH_COUNT + k], expected[k], 0.004);
+    /* under radiance 1 everywhere it reflects 1 per unit albedo (E = pi) */
+    float radiance[3][MESO_SH_COUNT], rgb[3];
+    uniform_radiance(radiance);
+    const meso_vec3 up = {0, 0, 1}, slanted = {0.5f, 0.3f, 0.81f};
+    meso_rtv_evaluate(rtv, (meso_vec3){0.3f, 0.7f, 0.4f}, up, radiance, rgb);
+    assert_float_equal(rgb[1], 1.0, 0.01);
+    /* every view shows the same surface: one eigenfunction holds the table */
+    meso_rtv_evaluate(rtv, (meso_vec3){0.8f, 0.1f, 0.9f}, slanted, radiance, rgb);
+    assert_float_equal(rgb[1], 1.0, 0.01);
+    assert_true(rtv->rmse[0] < 1e-4f);
+    meso_rtv_destroy(rtv);
+    meso_heightfield_destroy(hf);
+    meso_context_destroy(ctx);
+}
+
+static void test_rtv_groove_is_shadowed_and_filled_by_interreflection(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    meso_heightfield *hf = field(ctx, 64, groove);
+    float radiance[3][MESO_SH_COUNT], no_bounce[3], bounce[3], top[3];
+    uniform_radiance(radiance);
+    meso_rtv_desc desc = {.heightfield = hf, .aspect = 0.5f, .width = 16, .height = 2,
+                          .layers = 3, .directions = 512, .albedo = -1.0f};
+    meso_rtv *direct = NULL, *bounced = NULL;
+    assert_int_equal(meso_bake_rtv(ctx, &desc, &direct), MESO_OK);
+    desc.albedo = 0.7f;
+    assert_int_equal(meso_bake_rtv(ctx, &desc, &bounced), MESO_OK);
+    /* the voxels at the groove's bottom (u = 0.5 +- 1/32, w = 1) hold points on its walls,
+     * normals 45 degrees from up, which see the sky between their own wall's plane and the
+     * opposite wall's top: the 2D form factor of that window, (sin 90 + sin(-3.4)) / 2 = 0.47,
+     * plus a little of the end of the far wall's top; with a bounce the walls light each other
+     * (albedo 0.7); near the top of a wall more sky shows */
+    const meso_vec3 up = {0, 0, 1};
+    meso_rtv_evaluate(direct, (meso_vec3){0.5f, 0.5f, 1.0f}, up, radiance, no_bounce);
+    meso_rtv_evaluate(bounced, (meso_vec3){0.5f, 0.5f, 1.0f}, up, radiance, bounce);
+    meso_rtv_evaluate(direct, (meso_vec3){0.03f, 0.5f, 0.0f}, up, radiance, top);
+    print_message("groove bottom: direct %.3f, with a bounce %.3f; near the top %.3f\n",
+                  no_bounce[0], bounce[0], top[0]);
+    assert_float_equal(no_bounce[0], 0.5, 0.06);
+    assert_true(bounce[0] > no_bounce[0] + 0.05f);
+    assert_true(bounce[0] < 1.0f);
+    assert_true(top[0] > no_bounce[0] + 0.2f);
+    /* the same bytes with one thread */
+    meso_context *one = test_context(1);
+    meso_rtv *again = NULL;
+    assert_int_equal(meso_bake_rtv(one, &desc, &again), MESO_OK);
+    assert_memory_equal(again->coefficients, bounced->coefficients,
+                        16 * 2 * 3 * MESO_SH_COUNT * sizeof(float));
+    assert_memory_equal(again->weights, bounced->weights,
+                        (size_t)MESO_SH_COUNT * 16 * 2 * 3 * 4 * sizeof(float));
+    /* the groove's views differ (a wall seen from across the groove or along it): the error
+     * falls as eigenfunctions are added */
+    print_message("groove rtv RMSE with 1, 2, 4, 8 eigenfunctions: %.4f %.4f %.4f %.4f; "
+                  "%llu bytes raw, %llu compressed\n",
+                  bounced->rmse[0], bounced->rmse[1], bounced->rmse[3], bounced->rmse[7],
+                  (unsigned long long)bounced->raw_bytes,
+                  (unsigned long long)bounced->compressed_bytes);
+    assert_true(bounced->rmse[0] > bounced->rmse[3] && bounced->rmse[3] >= bounced->rmse[7]);
+    meso_rtv_destroy(again);
+    meso_context_destroy(one);
+    meso_rtv_destroy(bounced);
+    meso_rtv_destroy(direct);
+    meso_heightfield_destroy(hf);
+    meso_context_destroy(ctx);
+}
+
+static void test_rtv_file_round_trip_and_corruption(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    meso_heightfield *hf = field(ctx, 32, groove);
+    meso_rtv *rtv = NULL, *loaded = NULL;
+    meso_rtv_desc desc = {.heightfield = hf, .aspect = 0.5f, .width = 8, .height = 2, .layers = 3,
+                          .directions = 128};
+    assert_int_equal(meso_bake_rtv(ctx, &desc, &rtv), MESO_OK);
+    const char *path = test_path(test_temp_dir(), "groove.mesobake");
+    assert_int_equal(meso_rtv_save(ctx, rtv, path), MESO_OK);
+    assert_int_equal(meso_rtv_load(ctx, path, &loaded), MESO_OK);
+    float radiance[3][MESO_SH_COUNT], a[3], b[3];
+    uniform_radiance(radiance);
+    radiance[0][2] = 1.0f; /* some light from above in red */
+    meso_vec3 uvw = {0.37f, 0.2f, 0.6f}, view = meso_vec3_normalize((meso_vec3){0.3f, -0.2f, 0.9f});
+    meso_rtv_evaluate(rtv, uvw, view, radiance, a);
+    meso_rtv_evaluate(loaded, uvw, view, radiance, b);
+    assert_memory_equal(a, b, sizeof a);
+    assert_int_equal(loaded->compressed_bytes, rtv->compressed_bytes);
+    /* meso info's report */
+    const char *out = NULL;
+    char arguments[1024];
+    snprintf(arguments, sizeof arguments, "info %s", path);
+    assert_int_equal(test_run_meso(arguments, &out), 0);
+    meso_bake_file *file = NULL;
+    assert_int_equal(meso_bake_file_load(ctx, path, &file), MESO_OK);
+    char report[1024];
+    assert_true(meso_rtv_describe(file, report, sizeof report) > 0);
+    if (!strstr(report, "rtv: 8x2x3 voxels, 4x8 views, 4 eigenfunctions") ||
+        !strstr(report, "RMSE with k eigenfunctions"))
+        fail_msg("%s", report);
+    meso_bake_file_destroy(file);
+    /* corrupted: a flipped payload byte fails the checksum; a bake of another kind, or with
+     * arrays whose sizes disagree, is refused naming the file */
+    size_t size = 0;
+    char *bytes = test_read_file(path, &size);
+    bytes[size / 2] ^= 0x40;
+    const char *bad = test_path(test_temp_dir(), "bad.mesobake");
+    test_write_file(bad, bytes, size);
+    meso_rtv *none = (meso_rtv *)1;
+    assert_int_equal(meso_rtv_load(ctx, bad, &none), MESO_ERROR_FORMAT);
+    assert_null(none);
+    free(bytes);
+    int32_t shape[5] = {9, 2, 3, 4, 8}; /* one voxel column more than the weights hold */
+    meso_bake_file wrong = {.kind = MESO_RTV_KIND, .kind_version = 1, .params_json = "{}",
+                            .num_arrays = 4};
+    wrong.arrays[0] = (meso_bake_array){.name = "shape", .type = MESO_BAKE_I32, .num_dims = 1,
+                                        .dims = {5}, .data = shape};
+    wrong.arrays[1] = (meso_bake_array){.name = "weights", .type = MESO_BAKE_F32, .num_dims = 3,
+                                        .dims = {MESO_SH_COUNT, 8 * 2 * 3, 4}, .data = rtv->weights};
+    wrong.arrays[2] = (meso_bake_array){.name = "eigen", .type = MESO_BAKE_F32, .num_dims = 3,
+                                        .dims = {MESO_SH_COUNT, 4, 32}, .data = rtv->eigen};
+    wrong.arrays[3] = (meso_bake_array){.name = "rmse", .type = MESO_BAKE_F32, .num_dims = 1,
+                                        .dims = {MESO_RTV_RMSE_COUNT}, .data = rtv->rmse};
+    assert_int_equal(meso_bake_file_save(ctx, &wrong, bad), MESO_OK);
+    assert_int_equal(meso_rtv_load(ctx, bad, &none), MESO_ERROR_FORMAT);
+    if (!strstr(meso_context_last_error(ctx), "sizes do not agree"))
+        fail_msg("%s", meso_context_last_error(ctx));
+    strcpy(wrong.kind, "vdm");
+    shape[0] = 8;
+    assert_int_equal(meso_bake_file_save(ctx, &wrong, bad), MESO_OK);
+    assert_int_equal(meso_rtv_load(ctx, bad, &none), MESO_ERROR_FORMAT);
+    /* a non-finite value behind a valid checksum */
+    strcpy(wrong.kind, MESO_RTV_KIND);
+    float saved = rtv->eigen[5];
+    rtv->eigen[5] = INFINITY;
+    assert_int_equal(meso_bake_file_save(ctx, &wrong, bad), MESO_OK);
+    assert_int_equal(meso_rtv_load(ctx, bad, &none), MESO_ERROR_FORMAT);
+    rtv->eigen[5] = saved;
+    meso_rtv_destroy(loaded);
+    meso_rtv_destroy(rtv);
+    meso_heightfield_destroy(hf);
+    meso_context_destroy(ctx);
+}
+
+static void test_rtv_cache_returns_the_same_table(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    /* an empty cache of its own, so the first call bakes */
+    setenv("MESO_CACHE_DIR", test_temp_dir(), 1);
+    meso_heightfield *hf = field(ctx, 16, groove);
+    meso_rtv_desc desc = {.heightfield = hf, .aspect = 0.3141f, .width = 4, .height = 2,
+                          .layers = 2, .directions = 64};
+    meso_rtv *baked = NULL, *cached = NULL;
+    assert_int_equal(meso_rtv_bake_cached(ctx, &desc, &baked), MESO_OK);
+    assert_int_equal(meso_rtv_bake_cached(ctx, &desc, &cached), MESO_OK);
+    assert_null(cached->coefficients); /* it came from the cache */
+    assert_memory_equal(cached->weights, baked->weights,
+                        (size_t)MESO_SH_COUNT * 4 * 2 * 2 * 4 * sizeof(float));
+    meso_rtv_destroy(cached);
+    /* another aspect is another entry */
+    desc.aspect = 0.2718f;
+    assert_int_equal(meso_rtv_bake_cached(ctx, &desc, &cached), MESO_OK);
+    assert_non_null(cached->coefficients);
+    meso_rtv_destroy(cached);
+    meso_rtv_destroy(baked);
+    meso_heightfield_destroy(hf);
+    meso_context_destroy(ctx);
+}
+
+static void test_rtv_bad_descs_are_refused(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(1);
+    meso_heightfield *hf = field(ctx, 4, flat);
+    meso_rtv *rtv = (meso_rtv *)1;
+    assert_int_equal(meso_bake_rtv(ctx, &(meso_rtv_desc){.heightfield = hf}, &rtv),
+                     MESO_ERROR_INVALID_ARGUMENT);
+    assert_string_equal(meso_context_last_error(ctx), "rtv: aspect: 0 is not in (0, 100]");
+    assert_null(rtv);
+    assert_int_equal(meso_bake_rtv(ctx, &(meso_rtv_desc){.aspect = 1}, &rtv),
+                     MESO_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(meso_bake_rtv(ctx,
+                                   &(meso_rtv_desc){.heightfield = hf, .aspect = 1, .width = 4096,
+                                                    .height = 4096, .layers = 4},
+                                   &rtv),
+                     MESO_ERROR_LIMIT);
+    meso_heightfield_destroy(hf);
+    meso_context_destroy(ctx);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_rtv_flat_surface_is_the_cosine_lobe),
+        cmocka_unit_test(test_rtv_groove_is_shadowed_and_filled_by_interreflection),
+        cmocka_unit_test(test_rtv_file_round_trip_and_corruption),
+        cmocka_unit_test(test_rtv_cache_returns_the_same_table),
+        cmocka_unit_test(test_rtv_bad_descs_are_refused),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
