@@ -103,9 +103,13 @@ typedef struct raster_object {
     const void *state;
 } raster_object;
 
+typedef struct covered_samples covered_samples;
+
 typedef struct raster_thread_scratch {
-    meso_fragment *fragments;        /* RASTER_TILE_SIZE^2 */
-    uint32_t *pixels;                /* tile-buffer index of each fragment */
+    meso_fragment *fragments;        /* RASTER_TILE_SIZE^2: a batch never repeats a sample */
+    uint32_t *pixels;                /* tile-buffer index of each fragment (2 x tile + 1) */
+    uint8_t *pending;                /* RASTER_TILE_SIZE^2: samples held by the batch (zeroed) */
+    covered_samples *covered;        /* one triangle's samples before their attributes */
     uint8_t *wire;                   /* RASTER_TILE_SIZE^2 wireframe mask */
     float *color, *coverage, *depth; /* the tile being drawn, RASTER_TILE_SIZE a row */
 } raster_thread_scratch;

@@ -110,14 +110,20 @@ static void fill_fragments(const raster_triangle *tri, const meso_frame *frame,
     }
 }
 
-/* Covered samples of `tri` inside [x0, x1] x [y0, y1] that pass the depth test become
- * fragments; returns how many. Coverage and the depth test compact their survivors without
- * branches (small triangles make those branches unpredictable), then the attributes are filled
- * in one straight loop. */
-static size_t gather_fragments(const raster_triangle *tri, int x0, int y0, int x1, int y1, int tx0,
-                               int ty0, const meso_frame *frame, const float *depth,
-                               const vertex_attributes *va, meso_fragment *frags,
-                               uint32_t *pixels) {
+/* The samples of one triangle that pass coverage and the early depth test, before their
+ * attributes are filled: sample position, view depth, tile-buffer index. Padded by one group of
+ * 8 for the vector fill. */
+typedef struct covered_samples {
+    int32_t x[TILE_SAMPLES + LANES], y[TILE_SAMPLES + LANES];
+    float depth[TILE_SAMPLES + LANES];
+} covered_samples;
+
+/* Covered samples of `tri` inside [x0, x1] x [y0, y1] that pass the depth test go to `out` and
+ * their tile-buffer indices to `pixels`; returns how many. Coverage and the depth test compact
+ * their survivors without branches (small triangles make those branches unpredictable). */
+static size_t cover_triangle(const raster_triangle *tri, int x0, int y0, int x1, int y1, int tx0,
+                             int ty0, const float *depth, covered_samples *out,
+                             uint32_t *pixels) {
     const int64_t half = RASTER_SUBPIXEL_ONE / 2;
     int64_t px = ((int64_t)x0 << RASTER_SUBPIXEL_BITS) + half;
     int64_t py = ((int64_t)y0 << RASTER_SUBPIXEL_BITS) + half;
@@ -135,10 +141,6 @@ static size_t gather_fragments(const raster_triangle *tri, int x0, int y0, int x
      * candidates read valid depths */
     int candidates[RASTER_TILE_SIZE + LANES];
     for (int i = 0; i < RASTER_TILE_SIZE + LANES; i++) candidates[i] = x0;
-    /* padded by one group of 8 for the vector fill */
-    float frag_depth[RASTER_TILE_SIZE * RASTER_TILE_SIZE + LANES];
-    int32_t frag_x[RASTER_TILE_SIZE * RASTER_TILE_SIZE + LANES];
-    int32_t frag_y[RASTER_TILE_SIZE * RASTER_TILE_SIZE + LANES];
     size_t n = 0;
     for (int y = y0; y <= y1; y++) {
         int64_t e0 = row[0], e1 = row[1], e2 = row[2];
@@ -177,18 +179,17 @@ static size_t gather_fragments(const raster_triangle *tri, int x0, int y0, int x
             int lanes = m - first < LANES ? m - first : LANES;
             for (int k = 0; k < lanes; k++) { /* compacted without branches */
                 pixels[n] = base + (uint32_t)column[k];
-                frag_depth[n] = d[k];
-                frag_x[n] = x[k];
-                frag_y[n] = y;
+                out->depth[n] = d[k];
+                out->x[n] = x[k];
+                out->y[n] = y;
                 n += (size_t)(keep >> k & 1);
             }
         }
     }
     if (!n) return 0;
     for (size_t i = n; i % LANES; i++) { /* unused lanes repeat the last fragment */
-        frag_x[i] = frag_x[n - 1], frag_y[i] = frag_y[n - 1], frag_depth[i] = frag_depth[n - 1];
+        out->x[i] = out->x[n - 1], out->y[i] = out->y[n - 1], out->depth[i] = out->depth[n - 1];
     }
-    fill_fragments(tri, frame, va, n, frag_x, frag_y, frag_depth, frags);
     return n;
 }
 
@@ -256,6 +257,40 @@ static inline void stream_fence(void) {
 #endif
 }
 
+/* Fragments of one object in one tile waiting to be shaded; no two share a sample. */
+typedef struct tile_batch {
+    const raster_object *object;
+    const meso_frame *frame;
+    meso_fragment *fragments;
+    uint32_t *pixels;  /* tile-buffer index of each fragment */
+    uint8_t *pending;  /* per tile sample: 1 while a fragment of the batch covers it */
+    float *color, *coverage, *depth; /* the tile's buffers */
+    size_t count;
+    uint64_t shaded; /* fragments shaded in the tile so far */
+} tile_batch;
+
+/* Shade the batch and write the fragments that stay in front; empty the batch. */
+static void flush_batch(tile_batch *b) {
+    if (!b->count) return;
+    const raster_object *obj = b->object;
+    obj->technique->shade(obj->state, b->frame, obj->object, b->fragments, b->count);
+    float *depth = b->depth, *coverage = b->coverage, *color = b->color;
+    for (size_t i = 0; i < b->count; i++) {
+        const meso_fragment *f = &b->fragments[i];
+        uint32_t p = b->pixels[i];
+        b->pending[p] = 0;
+        /* discarded, behind, or NaN: nothing drawn */
+        if (f->discard || !(f->out_depth < depth[p])) continue;
+        depth[p] = f->out_depth;
+        coverage[p] = 1.0f;
+        color[3 * p + 0] = f->color.x;
+        color[3 * p + 1] = f->color.y;
+        color[3 * p + 2] = f->color.z;
+    }
+    b->shaded += b->count;
+    b->count = 0;
+}
+
 static void draw_tile(void *user, size_t job, int thread_index) {
     const draw_job *dj = user;
     raster_pass *pass = dj->pass;
@@ -294,39 +329,60 @@ static void draw_tile(void *user, size_t job, int thread_index) {
     memcpy(color, pass->clear_color, 3 * TILE_SAMPLES * sizeof(float));
     memcpy(coverage, pass->clear_coverage, TILE_SAMPLES * sizeof(float));
     memcpy(depth, pass->clear_depth, TILE_SAMPLES * sizeof(float));
-    uint64_t fragments = 0;
+    /* One batch per (object, tile): the fragments of consecutive triangles of one object
+     * gather until the object changes or a triangle covers a sample already in the batch.
+     * Flushing on such a repeat before its depth test keeps every early depth test exactly
+     * as it was with a batch per triangle: a sample not in the batch holds its final depth,
+     * and write-back only lowers depths, so a sample rejected against the batch's older
+     * depth would be rejected against the newer one too. The same fragments are shaded and
+     * written, hence the same bytes. */
+    tile_batch batch = {.fragments = scratch->fragments,
+                        .pixels = scratch->pixels,
+                        .pending = scratch->pending,
+                        .color = color,
+                        .coverage = coverage,
+                        .depth = depth,
+                        .frame = frame};
+    covered_samples *covered = scratch->covered;
     for (size_t c = 0; c < bins->num_chunks; c++) {
         const raster_chunk *chunk = &bins->chunks[c];
         size_t count;
         const uint32_t *list = raster_chunk_tile(chunk, tile, &count);
         if (!count) continue;
         const raster_object *obj = &dj->objects[chunk->mesh];
+        if (obj != batch.object) flush_batch(&batch);
+        batch.object = obj;
         const meso_mesh *mesh = bins->meshes[chunk->mesh].mesh;
         for (size_t e = 0; e < count; e++) {
             const raster_triangle *tri = &chunk->triangles[list[e]];
             int x0 = tri->min_x > tx0 ? tri->min_x : tx0, x1 = tri->max_x < tx1 ? tri->max_x : tx1;
             int y0 = tri->min_y > ty0 ? tri->min_y : ty0, y1 = tri->max_y < ty1 ? tri->max_y : ty1;
             if (x0 > x1 || y0 > y1) continue;
+            uint32_t *pixels = batch.pixels + batch.count;
+            size_t n = cover_triangle(tri, x0, y0, x1, y1, tx0, ty0, depth, covered, pixels);
+            if (!n) continue;
+            uint8_t repeats = 0;
+            for (size_t i = 0; i < n; i++) { /* a triangle covers a sample once */
+                repeats |= batch.pending[pixels[i]];
+                batch.pending[pixels[i]] = 1;
+            }
+            if (repeats) { /* test again against the depths the batch writes */
+                for (size_t i = 0; i < n; i++) batch.pending[pixels[i]] = 0;
+                flush_batch(&batch);
+                pixels = batch.pixels;
+                n = cover_triangle(tri, x0, y0, x1, y1, tx0, ty0, depth, covered, pixels);
+                for (size_t i = 0; i < n; i++) batch.pending[pixels[i]] = 1;
+                if (!n) continue;
+            }
             vertex_attributes va;
             load_attributes(mesh, tri->triangle, &va);
-            size_t n = gather_fragments(tri, x0, y0, x1, y1, tx0, ty0, frame, depth, &va,
-                                        scratch->fragments, scratch->pixels);
-            if (!n) continue;
-            obj->technique->shade(obj->state, frame, obj->object, scratch->fragments, n);
-            fragments += n;
-            for (size_t i = 0; i < n; i++) {
-                const meso_fragment *f = &scratch->fragments[i];
-                uint32_t p = scratch->pixels[i];
-                /* discarded, behind, or NaN: nothing drawn */
-                if (f->discard || !(f->out_depth < depth[p])) continue;
-                depth[p] = f->out_depth;
-                coverage[p] = 1.0f;
-                color[3 * p + 0] = f->color.x;
-                color[3 * p + 1] = f->color.y;
-                color[3 * p + 2] = f->color.z;
-            }
+            fill_fragments(tri, frame, &va, n, covered->x, covered->y, covered->depth,
+                           batch.fragments + batch.count);
+            batch.count += n;
         }
     }
+    flush_batch(&batch);
+    uint64_t fragments = batch.shaded;
     pass->tile_fragments[tile] = fragments;
 
     if (dj->wireframe) {
@@ -368,13 +424,19 @@ static meso_result reserve_threads(meso_context *ctx, raster_pass *pass) {
     pass->threads = t;
     for (int i = pass->num_threads; i < threads; i++) {
         t[i].fragments = malloc(TILE_SAMPLES * sizeof(meso_fragment));
-        t[i].pixels = malloc(TILE_SAMPLES * sizeof(uint32_t));
+        /* a triangle's samples are tested before the check for repeats: up to a tile's
+         * worth past a full batch, plus the branch-free compaction's one extra write */
+        t[i].pixels = malloc((2 * TILE_SAMPLES + 1) * sizeof(uint32_t));
         t[i].wire = malloc(TILE_SAMPLES);
+        t[i].pending = calloc(TILE_SAMPLES, 1);
+        t[i].covered = malloc(sizeof(covered_samples));
         t[i].color = malloc(3 * TILE_SAMPLES * sizeof(float));
         t[i].coverage = malloc(TILE_SAMPLES * sizeof(float));
         t[i].depth = malloc(TILE_SAMPLES * sizeof(float));
         if (!t[i].fragments || !t[i].pixels || !t[i].wire || !t[i].color || !t[i].coverage ||
-            !t[i].depth) {
+            !t[i].depth || !t[i].pending || !t[i].covered) {
+            free(t[i].pending);
+            free(t[i].covered);
             free(t[i].fragments);
             free(t[i].pixels);
             free(t[i].wire);
@@ -445,6 +507,8 @@ void raster_pass_release(raster_pass *pass) {
         free(pass->threads[i].fragments);
         free(pass->threads[i].pixels);
         free(pass->threads[i].wire);
+        free(pass->threads[i].pending);
+        free(pass->threads[i].covered);
         free(pass->threads[i].color);
         free(pass->threads[i].coverage);
         free(pass->threads[i].depth);

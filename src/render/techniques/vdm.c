@@ -733,7 +733,7 @@ static void vdm_shade(const void *state, const meso_frame *frame, const meso_obj
             float theta = acosf(fminf(vb.z, 1.0f)), phi = atan2f(vb.y, vb.x);
             float c = 0.0f, c_world = 0.0f;
             if (has_curvature) {
-                /* per vertex, then interpolated (§3.2); a batch is usually one triangle */
+                /* per vertex, then interpolated (§3.2); a triangle's fragments are consecutive */
                 if (f->triangle != cached_triangle) {
                     const uint32_t *tri = mesh->indices + 3 * (size_t)f->triangle;
                     for (int k = 0; k < 3; k++)
