@@ -29,7 +29,7 @@ test-asan: deps
 	cmake --build $(BUILD_ASAN) -j $(JOBS)
 	cd $(BUILD_ASAN) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 		LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 \
-		MESO_TEST_SANITIZED=1 ctest --output-on-failure -j $(JOBS)
+		ctest --output-on-failure -j $(JOBS)
 
 bench: build
 	$(BUILD)/meso bench

@@ -13,6 +13,7 @@
 #include "raster_internal.h"
 
 #define MAX_POLYGON 9 /* 3 vertices + one per clip plane (5) + 1 */
+#define RESERVE_FIRST_ITEMS 64 /* first capacity of a chunk's growing arrays */
 
 typedef struct clip_vertex {
     double x, y, z, w;
@@ -185,7 +186,7 @@ static bool setup_triangle(const raster_setup_desc *desc, bool cull_back, const 
 
 static bool reserve(void **data, size_t *capacity, size_t needed, size_t item) {
     if (needed <= *capacity) return true;
-    size_t cap = *capacity ? *capacity : 64;
+    size_t cap = *capacity ? *capacity : RESERVE_FIRST_ITEMS;
     while (cap < needed) cap *= 2;
     void *p = realloc(*data, cap * item);
     if (!p) return false;
@@ -340,7 +341,8 @@ meso_result raster_bins_build(meso_context *ctx, raster_bins *bins, const meso_m
      * larger chunks so that the per-chunk tile tables (4 bytes a tile) stay within about
      * 32 bytes a triangle. */
     size_t num_tiles = (size_t)bins->tiles_x * (size_t)bins->tiles_y;
-    size_t chunk_size = RASTER_CHUNK_TRIANGLES * (num_tiles > 2048 ? num_tiles / 2048 : 1);
+    size_t chunk_size = RASTER_CHUNK_TRIANGLES *
+                        (num_tiles > RASTER_CHUNK_TILES ? num_tiles / RASTER_CHUNK_TILES : 1);
     size_t chunks = 0;
     for (int m = 0; m < num_meshes; m++) {
         bins->meshes[m].mesh = meshes[m];

@@ -14,6 +14,13 @@
 #include "render_simd.h"
 
 #define TILE_SAMPLES (RASTER_TILE_SIZE * RASTER_TILE_SIZE)
+/* Wireframe: an edge sample is drawn when its depth is within this slack of the buffer's (the
+ * edge lies on the surface the buffer holds, up to rounding of two different evaluations). */
+#define WIRE_DEPTH_RELATIVE_SLACK 1.001f
+#define WIRE_DEPTH_ABSOLUTE_SLACK 1e-4f
+/* Wire colour: black, or white where the image's luma (Rec. 709 weights) is below this, low
+ * enough that the switch hides in the darkest regions. */
+#define WIRE_DARK_LUMA 0.03f
 
 typedef struct draw_job {
     raster_pass *pass;
@@ -229,8 +236,7 @@ static void mark_edges(const raster_triangle *tri, int tx0, int ty0, int tx1, in
             if (!(inv_depth > 0.0f)) continue;
             float d = 1.0f / inv_depth;
             float z = depth[(py - ty0) * RASTER_TILE_SIZE + (px - tx0)];
-            /* a little slack: the edge lies on the surface the depth buffer holds */
-            if (d <= z * 1.001f + 1e-4f || !isfinite(z))
+            if (d <= z * WIRE_DEPTH_RELATIVE_SLACK + WIRE_DEPTH_ABSOLUTE_SLACK || !isfinite(z))
                 wire[(py - ty0) * RASTER_TILE_SIZE + (px - tx0)] = 1;
         }
     }
@@ -395,13 +401,12 @@ static void draw_tile(void *user, size_t job, int thread_index) {
             for (size_t e = 0; e < count; e++)
                 mark_edges(&chunk->triangles[list[e]], tx0, ty0, tx1, ty1, depth, wire);
         }
-        /* A contrasting colour: black lines, white ones where the image is nearly black (a
-         * fixed threshold low enough that the switch hides in the darkest regions). */
+        /* A contrasting colour: black lines, white ones where the image is nearly black. */
         for (int i = 0; i < TILE_SAMPLES; i++) {
             if (!wire[i]) continue;
             float *rgb = color + 3 * i;
             float luma = 0.2126f * rgb[0] + 0.7152f * rgb[1] + 0.0722f * rgb[2];
-            float v = luma > 0.03f ? 0.0f : 1.0f;
+            float v = luma > WIRE_DARK_LUMA ? 0.0f : 1.0f;
             rgb[0] = rgb[1] = rgb[2] = v;
         }
     }

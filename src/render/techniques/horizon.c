@@ -76,8 +76,8 @@ static inline float fast_atan2(float y, float x) {
         (0.99997726f +
          z2 * (-0.33262347f +
                z2 * (0.19354346f + z2 * (-0.11643287f + z2 * (0.05265332f - z2 * 0.01172120f)))));
-    if (ay > ax) r = 1.57079633f - r;
-    if (x < 0.0f) r = 3.14159265f - r;
+    if (ay > ax) r = 0.5f * MESO_PI - r;
+    if (x < 0.0f) r = MESO_PI - r;
     return y < 0.0f ? -r : r;
 }
 
@@ -85,7 +85,7 @@ static inline float fast_atan2(float y, float x) {
  * nearest texels, each interpolated between the two nearest azimuths (Max 1988 §2). */
 static float horizon_slope(const meso_horizon_map *map, bool clamp, float x, float y, float phi) {
     int n = map->num_azimuths;
-    float a = phi * (float)n * (1.0f / (2.0f * 3.14159265f));
+    float a = phi * (float)n * (1.0f / (2.0f * MESO_PI));
     a -= (float)n * floorf(a / (float)n);
     int k0 = (int)a;
     k0 = k0 >= n ? n - 1 : k0;

@@ -77,26 +77,8 @@ static inline size_t relief_heights_memory(const relief_heights *h) {
     return (size_t)(h->width + 1) * (size_t)(h->height + 1) * sizeof(float);
 }
 
-/* h at texel-centre coordinates (x, y): the bilinear surface of meso_heightfield_sample. */
-static inline float relief_sample(const relief_heights *m, float x, float y) {
-    float fw = (float)m->width, fh = (float)m->height;
-    if (m->clamp) {
-        x = meso_clampf(x, 0.0f, fw - 1.0f);
-        y = meso_clampf(y, 0.0f, fh - 1.0f);
-    } else {
-        x -= fw * floorf(x * (1.0f / fw));
-        y -= fh * floorf(y * (1.0f / fh));
-    }
-    int i = (int)x, j = (int)y;
-    i = i > m->width - 1 ? m->width - 1 : i;
-    j = j > m->height - 1 ? m->height - 1 : j;
-    float tx = x - (float)i, ty = y - (float)j;
-    const float *r0 = m->padded + (size_t)j * (size_t)m->stride + (size_t)i, *r1 = r0 + m->stride;
-    float top = r0[0] + (r0[1] - r0[0]) * tx, bottom = r1[0] + (r1[1] - r1[0]) * tx;
-    return top + (bottom - top) * ty;
-}
-
-/* Eight lookups at once; the hot loop of every search (4 gathers of 8 texels). */
+/* h at texel-centre coordinates (x, y), the bilinear surface of meso_heightfield_sample, eight
+ * lookups at once; the hot loop of every search (4 gathers of 8 texels). */
 static inline v8f relief_sample8(const relief_heights *m, v8f x, v8f y) {
     float fw = (float)m->width, fh = (float)m->height;
     if (m->clamp) {
@@ -263,7 +245,6 @@ static inline v8vec3 v8_madd(v8vec3 a, v8vec3 b, v8f s) {
 static inline v8vec3 v8_splat3(meso_vec3 a) {
     return (v8vec3){v8_splat(a.x), v8_splat(a.y), v8_splat(a.z)};
 }
-static inline meso_vec3 v8_lane3(v8vec3 a, int k) { return (meso_vec3){a.x[k], a.y[k], a.z[k]}; }
 
 /* Up to eight fragments in structure-of-arrays form with their texture-space frame: the dual
  * basis (B x N, N x T, T x B) / det writes a world direction D as (du, dv, dn) with
