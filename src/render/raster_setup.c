@@ -314,6 +314,17 @@ static void setup_chunk(void *user, size_t job, int thread_index) {
     bins->chunks[job] = local;
 }
 
+/* Triangles a chunk of a mesh of num_triangles: `base`, or more for meshes of more than
+ * RASTER_CHUNKS_PER_MESH chunks. Every chunk costs a pass over the tile table when it is binned
+ * and every tile a look at every chunk when it is drawn; for the million triangles of a
+ * displaced mesh those passes cost more than the triangles' own setup. Depends on the mesh
+ * only, never the thread count, and a tile meets its triangles in the same order whatever
+ * the chunking, so the images are the same. */
+static size_t mesh_chunk_size(size_t num_triangles, size_t base) {
+    size_t spread = (num_triangles + RASTER_CHUNKS_PER_MESH - 1) / RASTER_CHUNKS_PER_MESH;
+    return spread > base ? spread : base;
+}
+
 meso_result raster_bins_build(meso_context *ctx, raster_bins *bins, const meso_mesh *const *meshes,
                               const bool *both_faces, int num_meshes,
                               const raster_setup_desc *desc) {
@@ -348,7 +359,8 @@ meso_result raster_bins_build(meso_context *ctx, raster_bins *bins, const meso_m
         bins->meshes[m].mesh = meshes[m];
         bins->meshes[m].both_faces = both_faces && both_faces[m];
         size_t nt = meshes[m] ? meshes[m]->num_triangles : 0;
-        chunks += (nt + chunk_size - 1) / chunk_size;
+        size_t size = mesh_chunk_size(nt, chunk_size);
+        chunks += (nt + size - 1) / size;
     }
 
     /* Chunks of source triangles, in object order. */
@@ -363,11 +375,12 @@ meso_result raster_bins_build(meso_context *ctx, raster_bins *bins, const meso_m
     size_t next = 0;
     for (int m = 0; m < num_meshes; m++) {
         size_t nt = meshes[m] ? meshes[m]->num_triangles : 0;
-        for (size_t first = 0; first < nt; first += chunk_size) {
+        size_t size = mesh_chunk_size(nt, chunk_size);
+        for (size_t first = 0; first < nt; first += size) {
             raster_chunk *c = &bins->chunks[next++];
             c->mesh = m;
             c->first = (uint32_t)first;
-            c->count = (uint32_t)(nt - first < chunk_size ? nt - first : chunk_size);
+            c->count = (uint32_t)(nt - first < size ? nt - first : size);
         }
     }
     meso_parallel_for(ctx, chunks, setup_chunk, bins);
