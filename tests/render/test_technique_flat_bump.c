@@ -148,6 +148,14 @@ static void test_shade_point_follows_the_shading_model(void **state) {
     assert_true(fabsf(c.x - 0.05f) < 1e-6f);
 }
 
+/* A frame whose shading returns the colour map's value: no lights, white ambient. */
+static void color_map_frame(test_scene *ts, meso_frame *frame) {
+    test_scene_init(ts, 8, 8);
+    ts->scene.num_lights = 0;
+    ts->scene.ambient = (meso_vec3){1.0f, 1.0f, 1.0f};
+    meso_frame_init(frame, &ts->scene, 8, 8);
+}
+
 /* The compact colour map (meso_texture_add_srgb8): a map whose values are 8-bit sRGB codes
  * (as a PNG gives) shades to the same bits as the float map, any other map within half an
  * 8-bit sRGB step (the largest, at 1.0, is 0.0089 in linear), and a value outside [0, 1]
@@ -158,11 +166,8 @@ static void test_shading_compact_color_map_matches_float_map(void **state) {
     const float *codes = meso_srgb8_table();
     assert_true(codes[0] == 0.0f && codes[255] == 1.0f);
     test_scene ts;
-    test_scene_init(&ts, 8, 8);
-    ts.scene.num_lights = 0;
-    ts.scene.ambient = (meso_vec3){1.0f, 1.0f, 1.0f};
     meso_frame frame;
-    meso_frame_init(&frame, &ts.scene, 8, 8);
+    color_map_frame(&ts, &frame);
     for (int exact = 0; exact < 2; exact++) {
         meso_image *image = NULL;
         assert_int_equal(meso_image_create(ctx, 7, 5, 3, &image), MESO_OK);
@@ -226,11 +231,8 @@ static void test_shading_samples_the_color_map_like_meso_texture_sample(void **s
     assert_int_equal(meso_image_create(ctx, 5, 3, 3, &image), MESO_OK);
     for (int i = 0; i < 5 * 3 * 3; i++) image->pixels[i] = (float)((i * 37) % 11) / 10.0f;
     test_scene ts;
-    test_scene_init(&ts, 8, 8);
-    ts.scene.num_lights = 0;
-    ts.scene.ambient = (meso_vec3){1.0f, 1.0f, 1.0f};
     meso_frame frame;
-    meso_frame_init(&frame, &ts.scene, 8, 8);
+    color_map_frame(&ts, &frame);
     const meso_vec2 uvs[] = {{0.1f, 0.2f}, {0.95f, 0.03f}, {-0.3f, 1.7f}, {1.0f, 1.0f},
                              {0.0f, 0.0f}, {-1e-9f, 0.5f}, {3.2f, -7.9f}, {0.5f, NAN},
                              {INFINITY, 0.5f}, {0.4999f, 0.5001f}, {123.456f, 0.25f}};

@@ -40,20 +40,12 @@ static void bump_shade(const void *state, const meso_frame *frame, const meso_ob
     for (size_t start = 0; start < count; start += RELIEF_LANES) {
         int n = count - start < RELIEF_LANES ? (int)(count - start) : RELIEF_LANES;
         meso_fragment *f = fragments + start;
-        relief_lanes l;
-        relief_lanes_load(&l, frame, f, n);
-        v8f x, y, gu, gv;
-        relief_lanes_texel(m, &l, &x, &y);
         /* Blinn 1978: the perturbed normal from dh/du, dh/dv */
-        relief_gradient8(m, x, y, &gu, &gv);
-        v8vec3 normal = relief_normal8(&l, depth, gu, gv);
-        meso_shade_batch in = {.px = l.position.x, .py = l.position.y, .pz = l.position.z,
-                               .nx = normal.x, .ny = normal.y, .nz = normal.z,
-                               .u = l.u, .v = l.v};
-        meso_shade_batch_all_visible(&in, frame);
-        v8f r, g, b;
-        meso_shade_batch8(frame, object, &in, n, &r, &g, &b);
-        for (int k = 0; k < n; ++k) f[k].color = (meso_vec3){r[k], g[k], b[k]};
+        relief_lanes l;
+        v8f x, y;
+        meso_shade_batch in;
+        relief_bump_lanes(m, frame, f, n, depth, &l, &x, &y, &in);
+        relief_shade_store(frame, object, &in, f, n);
     }
 }
 

@@ -325,6 +325,31 @@ static inline v8vec3 relief_normal8(const relief_lanes *l, float depth, v8f gu, 
                     v8_select(keep, l->normal.z, n.z * inv)};
 }
 
+/* Up to eight fragments with the bump-mapped normal at their own uv (Blinn 1978; no shift):
+ * lanes loaded, texel-centre coordinates in *x, *y, and the shading inputs in *in with every
+ * light visible. bump draws this as is; horizon adds its visibility. */
+static inline void relief_bump_lanes(const relief_heights *m, const meso_frame *frame,
+                                     const meso_fragment *f, int count, float depth,
+                                     relief_lanes *l, v8f *x, v8f *y, meso_shade_batch *in) {
+    relief_lanes_load(l, frame, f, count);
+    v8f gu, gv;
+    relief_lanes_texel(m, l, x, y);
+    relief_gradient8(m, *x, *y, &gu, &gv);
+    v8vec3 normal = relief_normal8(l, depth, gu, gv);
+    *in = (meso_shade_batch){.px = l->position.x, .py = l->position.y, .pz = l->position.z,
+                             .nx = normal.x, .ny = normal.y, .nz = normal.z,
+                             .u = l->u, .v = l->v};
+    meso_shade_batch_all_visible(in, frame);
+}
+
+/* Shade the lanes of `in` and write the colours of the first `count` fragments. */
+static inline void relief_shade_store(const meso_frame *frame, const meso_object *object,
+                                      const meso_shade_batch *in, meso_fragment *f, int count) {
+    v8f r, g, b;
+    meso_shade_batch8(frame, object, in, count, &r, &g, &b);
+    for (int k = 0; k < count; ++k) f[k].color = (meso_vec3){r[k], g[k], b[k]};
+}
+
 /* The displaced normal n, found in the frame of the fragment where the ray entered, carried
  * to the hit t V away on the curved mesh: the quadric surface -(qa x^2 + qb y^2) has the
  * normal N + 2 qa x T^ + 2 qb y B^ (unnormalised) at (x, y), so every normal there is turned
