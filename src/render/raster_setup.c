@@ -208,10 +208,12 @@ static void setup_source_triangle(const raster_bins *bins, const raster_mesh *rm
         meso_vec3 p = rm->mesh->positions[idx[k]];
         c[k] = meso_mat4_mul_vec4(desc->view_projection, (meso_vec4){p.x, p.y, p.z, 1.0f});
     }
-    for (int k = 0; k < 3; k++) {
-        if (!isfinite(c[k].x) || !isfinite(c[k].y) || !isfinite(c[k].z) || !isfinite(c[k].w))
-            return;
-    }
+    /* x * 0 is NaN exactly when x is infinite or NaN, and a NaN survives the sum: one
+     * branch for the twelve coordinates (a million-triangle mesh runs this twice a frame) */
+    float poison = 0.0f;
+    for (int k = 0; k < 3; k++)
+        poison += (c[k].x * 0.0f + c[k].y * 0.0f) + (c[k].z * 0.0f + c[k].w * 0.0f);
+    if (poison != poison) return;
     /* Trivial reject: all three outside one plane of the view frustum (no sample centre lies
      * on or beyond x = +-w or y = +-w). */
     if (c[0].x > c[0].w && c[1].x > c[1].w && c[2].x > c[2].w) return;
@@ -231,9 +233,9 @@ static void setup_source_triangle(const raster_bins *bins, const raster_mesh *rm
     int n = 3, cur = 0;
     float g = bins->guard;
     bool inside = true;
-    for (int k = 0; k < 3 && inside; k++) {
-        inside = nd[k] >= 0.0f && c[k].w > 0.0f && fabsf(c[k].x) <= g * c[k].w &&
-                 fabsf(c[k].y) <= g * c[k].w;
+    for (int k = 0; k < 3; k++) { /* without branches: almost every triangle is inside */
+        inside &= (nd[k] >= 0.0f) & (c[k].w > 0.0f) & (fabsf(c[k].x) <= g * c[k].w) &
+                  (fabsf(c[k].y) <= g * c[k].w);
     }
     if (!inside) {
         for (int plane = 0; plane < 5 && n >= 3; plane++) {
