@@ -3,8 +3,8 @@
  *
  * Every tile is one job. It clears its own part of the target, then walks the chunks in order
  * and, in each, the triangles binned to it in order; fragments are shaded one batch per
- * (triangle, tile). No job reads what another writes, so the bytes never depend on the number
- * of threads or the schedule.
+ * (object, tile), split where a triangle repeats a sample of the batch. No job reads what
+ * another writes, so the bytes never depend on the number of threads or the schedule.
  */
 #include <math.h>
 #include <stdlib.h>
