@@ -30,7 +30,7 @@ test-asan: deps
 	cmake --build $(BUILD_ASAN) -j $(JOBS)
 	cd $(BUILD_ASAN) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 		LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 \
-		MESO_TEST_SANITIZED=1 ctest --output-on-failure -j $(JOBS)
+		ctest --output-on-failure -j $(JOBS)
 
 # The whole suite built by clang with UndefinedBehaviorSanitizer and float-cast-overflow (CI
 # runs it; docs/robustness.md): out-of-range float-to-int conversions GCC cannot report. It

@@ -6,6 +6,12 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#if defined(__x86_64__) || defined(__i386__)
+#include <x86intrin.h>
+#define BENCH_HAS_TSC 1
+#else
+#define BENCH_HAS_TSC 0
+#endif
 
 #include "examples_embedded.h"
 
@@ -29,7 +35,12 @@ static const app_command_help bench_help = {
         "the examples built into the program are used. Prints the machine and an aligned\n"
         "table; --json writes the same numbers. --backend gl (or cpu,gl: both, side by side)\n"
         "times the GLSL shaders on OpenGL (docs/gpu.md), drawing and reading back the frame;\n"
-        "the GL uses its own threads, so it has no one-thread column.",
+        "the GL uses its own threads, so it has no one-thread column.\n\n"
+        "With --profile each row also gives the cost model of docs/performance.md, from the\n"
+        "one-thread run: covered pixels of the frame, fragments shaded a covered pixel,\n"
+        "nanoseconds and time-stamp-counter cycles a covered pixel, and for techniques whose\n"
+        "searches take a fixed number of steps (linear_steps, binary_steps, shadow_steps) the\n"
+        "nominal steps a pixel and nanoseconds a step.",
     .examples = "  meso bench\n"
                 "  meso bench examples/bricks-plane.json --techniques relief,parallax --frames 10\n"
                 "  meso bench --size 256x256 --seconds 1 --json bench.json\n"
@@ -42,6 +53,7 @@ typedef struct bench_options {
     double seconds; /* 0: not given */
     app_size size;
     const char *json;
+    bool profile;
     app_settings settings; /* --set */
     const char *backends;  /* --backend: "cpu", "gl" or "cpu,gl" */
     const char *shader_dir;
@@ -55,6 +67,11 @@ typedef struct bench_row {
     double ms;        /* median at the full thread count */
     double ms_single; /* median at one thread, NAN when not measured */
     int frames;
+    /* --profile, from the one-thread run (NAN when not measured) */
+    double covered;       /* coverage summed over the last frame's pixels */
+    double fragments;     /* shaded in the last frame */
+    double cycles_single; /* median time-stamp-counter cycles a frame */
+    double steps;         /* nominal search steps a covered pixel; NAN: no fixed count */
 } bench_row;
 
 typedef struct bench_scene {
@@ -63,8 +80,9 @@ typedef struct bench_scene {
 } bench_scene;
 
 /* Time frames of a prepared renderer: the median in ms, frames counted in *out_frames. */
-static meso_result time_frames(app_renderer *renderer, meso_framebuffer *fb, const bench_options *o,
-                               double *times, double *out_ms, int *out_frames) {
+static meso_result time_frames(app_renderer *renderer, meso_framebuffer *fb,
+                               const bench_options *o, double *times, double *cycles,
+                               double *out_ms, double *out_cycles, int *out_frames) {
     double warmup_start = meso_time_seconds();
     for (int i = 0; i < WARMUP_FRAMES && meso_time_seconds() - warmup_start < WARMUP_SECONDS; i++) {
         meso_result result = app_renderer_render(renderer, fb);
@@ -77,21 +95,62 @@ static meso_result time_frames(app_renderer *renderer, meso_framebuffer *fb, con
     while (count < limit &&
            (count == 0 || seconds <= 0.0 || meso_time_seconds() - start < seconds)) {
         double t = meso_time_seconds();
+#if BENCH_HAS_TSC
+        unsigned long long c = __rdtsc();
+#endif
         meso_result result = app_renderer_render(renderer, fb);
         if (result != MESO_OK) return result;
+#if BENCH_HAS_TSC
+        cycles[count] = (double)(__rdtsc() - c);
+#else
+        cycles[count] = NAN;
+#endif
         times[count++] = 1000.0 * (meso_time_seconds() - t);
     }
     *out_ms = app_median(times, (size_t)count);
+    *out_cycles = app_median(cycles, (size_t)count);
     *out_frames = count;
     return MESO_OK;
 }
 
 /* One scene x technique. The renderer is made at the full thread count, so per-thread scratch
  * it sizes then stays valid when the count is lowered to one. */
+/* The value of option `name` of `technique` for this run: the last --set of it, else its
+ * default; NAN when the technique has no such option. */
+static double option_value(const meso_technique_info *technique, const bench_options *o,
+                           const char *name) {
+    const meso_technique_option *row = meso_technique_find_option(technique, name);
+    if (!row) return NAN;
+    double value = row->default_value;
+    for (int i = 0; i < o->settings.count; i++) {
+        const meso_option *set = &o->settings.items[i];
+        if (strcmp(set->technique, technique->name) == 0 && strcmp(set->name, name) == 0)
+            value = set->value;
+    }
+    return value;
+}
+
+/* Search steps a pixel when the technique's searches have fixed counts: linear + binary along
+ * the view, plus the shadow search toward each light when shadows are on. NAN for adaptive
+ * searches (a linear_steps of 0 means "chosen per pixel", and techniques without these
+ * options walk a data structure). An upper bound where a search may stop early. */
+static double nominal_steps(const meso_technique_info *technique, const bench_options *o,
+                            const meso_scene *scene) {
+    double linear = option_value(technique, o, "linear_steps");
+    if (!(linear >= 1.0)) return NAN;
+    double binary = option_value(technique, o, "binary_steps");
+    double shadow = option_value(technique, o, "shadow_steps");
+    double shadows = option_value(technique, o, "shadows");
+    double steps = linear + (isnan(binary) ? 0.0 : binary);
+    if (!isnan(shadow) && !(shadows == 0.0)) steps += shadow * (double)scene->num_lights;
+    return steps;
+}
+
 static meso_result bench_one(meso_context *ctx, const bench_scene *s, const char *technique,
                              const app_backend *backend, const bench_options *o, double *times,
-                             bench_row *row) {
-    *row = (bench_row){.ms_single = NAN};
+                             double *cycles, bench_row *row) {
+    *row = (bench_row){
+        .ms_single = NAN, .covered = NAN, .fragments = NAN, .cycles_single = NAN, .steps = NAN};
     snprintf(row->scene, sizeof(row->scene), "%.*s", MESO_NAME_MAX - 1, s->name);
     snprintf(row->technique, sizeof(row->technique), "%s", technique);
     snprintf(row->backend, sizeof(row->backend), "%s", app_backend_is_gl(backend) ? "gl" : "cpu");
@@ -105,14 +164,26 @@ static meso_result bench_one(meso_context *ctx, const bench_scene *s, const char
         result = meso_framebuffer_create(ctx, o->size.width, o->size.height, &fb);
     if (result == MESO_OK) {
         row->prepare_ms = 1000.0 * app_renderer_get_stats(&renderer).prepare_seconds;
-        result = time_frames(&renderer, fb, o, times, &row->ms, &row->frames);
+        double frame_cycles;
+        result = time_frames(&renderer, fb, o, times, cycles, &row->ms, &frame_cycles, &row->frames);
+        if (threads == 1 && !renderer.gl) row->ms_single = row->ms, row->cycles_single = frame_cycles;
     }
     /* the GL draws with its own threads (llvmpipe: LP_NUM_THREADS): no one-thread column */
     if (result == MESO_OK && threads > 1 && !renderer.gl) {
         int frames = 0;
         meso_context_set_num_threads(ctx, 1);
-        result = time_frames(&renderer, fb, o, times, &row->ms_single, &frames);
+        result = time_frames(&renderer, fb, o, times, cycles, &row->ms_single, &row->cycles_single,
+                             &frames);
         meso_context_set_num_threads(ctx, threads);
+    }
+    if (result == MESO_OK && o->profile) {
+        double covered = 0.0;
+        size_t pixels = (size_t)fb->width * (size_t)fb->height;
+        for (size_t i = 0; i < pixels; i++) covered += fb->coverage[i];
+        row->covered = covered;
+        row->fragments = (double)app_renderer_get_stats(&renderer).fragments;
+        const meso_technique_info *info = meso_technique_find(technique);
+        if (info) row->steps = nominal_steps(info, o, s->scene);
     }
     meso_framebuffer_destroy(fb);
     app_renderer_destroy(&renderer);
@@ -133,6 +204,27 @@ static void print_table(const bench_row *rows, size_t count, int threads) {
             printf(" %12s %8s\n", "-", "-");
         else
             printf(" %12.2f %7.2fx\n", r->ms_single, r->ms_single / r->ms);
+    }
+}
+
+/* The cost model (--profile): per covered pixel at one thread. */
+static void print_profile(const bench_row *rows, size_t count) {
+    printf("\nper covered pixel, one thread (cycles: time-stamp counter)\n");
+    printf("%-20s %-14s %10s %8s %9s %9s %7s %8s\n", "scene", "technique", "covered px",
+           "frag/px", "ns/px", "cyc/px", "steps", "ns/step");
+    for (size_t i = 0; i < count; i++) {
+        const bench_row *r = &rows[i];
+        if (!(r->covered > 0.0)) {
+            printf("%-20s %-14s %10s\n", r->scene, r->technique, "0");
+            continue;
+        }
+        double ns = r->ms_single * 1e6 / r->covered;
+        printf("%-20s %-14s %10.0f %8.2f %9.1f %9.0f", r->scene, r->technique, r->covered,
+               r->fragments / r->covered, ns, r->cycles_single / r->covered);
+        if (isnan(r->steps))
+            printf(" %7s %8s\n", "-", "-");
+        else
+            printf(" %7.0f %8.2f\n", r->steps, ns / r->steps);
     }
 }
 
@@ -168,6 +260,18 @@ static meso_result write_json(meso_context *ctx, const char *path, const bench_r
         app_text_json_number(&json, r->ms_single);
         app_text_printf(&json, ", \"scaling\": ");
         app_text_json_number(&json, r->ms_single / r->ms);
+        if (o->profile) {
+            app_text_printf(&json, ", \"covered_pixels\": ");
+            app_text_json_number(&json, r->covered);
+            app_text_printf(&json, ", \"fragments\": ");
+            app_text_json_number(&json, r->fragments);
+            app_text_printf(&json, ", \"ns_per_pixel_1_thread\": ");
+            app_text_json_number(&json, r->ms_single * 1e6 / r->covered);
+            app_text_printf(&json, ", \"tsc_cycles_per_pixel_1_thread\": ");
+            app_text_json_number(&json, r->cycles_single / r->covered);
+            app_text_printf(&json, ", \"nominal_steps_per_pixel\": ");
+            app_text_json_number(&json, r->steps);
+        }
         app_text_printf(&json, "}");
     }
     app_text_printf(&json, "\n  ]\n}\n");
@@ -213,6 +317,8 @@ int meso_cmd_bench(int argc, char **argv) {
         {"--size", NULL, APP_OPTION_SIZE, &o.size, "WxH", "frame size", "512x512", 0, 0},
         {"--json", NULL, APP_OPTION_STRING, &o.json, "OUT.json", "also write the numbers as JSON",
          NULL, 0, 0},
+        {"--profile", NULL, APP_OPTION_FLAG, &o.profile, NULL,
+         "also the cost per covered pixel and per search step (one thread)", NULL, 0, 0},
         APP_SET_OPTION(&o.settings),
         {"--backend", NULL, APP_OPTION_STRING, &o.backends, "cpu|gl|cpu,gl",
          "the back end(s) to time: meso's rasterizer, the GLSL shaders on OpenGL, or both", "cpu",
@@ -250,8 +356,9 @@ int meso_cmd_bench(int argc, char **argv) {
     size_t num_scenes = 0;
     bench_row *rows = calloc((size_t)MAX_SCENES * MAX_TECHNIQUES, sizeof(*rows));
     double *times = calloc(MAX_FRAMES, sizeof(*times));
+    double *cycles = calloc(MAX_FRAMES, sizeof(*cycles));
     size_t num_rows = 0;
-    meso_result result = rows && times ? load_scenes(ctx, paths, num_paths, scenes, &num_scenes)
+    meso_result result = rows && times && cycles ? load_scenes(ctx, paths, num_paths, scenes, &num_scenes)
                                        : MESO_ERROR_OUT_OF_MEMORY;
 
     char machine[320], date[32];
@@ -282,7 +389,8 @@ int meso_cmd_bench(int argc, char **argv) {
                     !meso_gl_technique_supported(names[t]))
                     continue;
                 meso_result r =
-                    bench_one(ctx, &scenes[s], names[t], &backends[b], &o, times, &rows[num_rows]);
+                    bench_one(ctx, &scenes[s], names[t], &backends[b], &o, times, cycles,
+                              &rows[num_rows]);
                 if (r == MESO_OK)
                     num_rows++;
                 else if (r == MESO_ERROR_OUT_OF_MEMORY)
@@ -298,11 +406,13 @@ int meso_cmd_bench(int argc, char **argv) {
         result = meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                                 "bench: no technique could draw the scenes");
     if (result == MESO_OK) print_table(rows, num_rows, threads);
+    if (result == MESO_OK && o.profile) print_profile(rows, num_rows);
     if (result == MESO_OK && o.json)
         result = write_json(ctx, o.json, rows, num_rows, machine, date, threads, load, &o);
     status = result == MESO_OK ? APP_EXIT_OK : app_fail(ctx, result);
     for (size_t s = 0; s < num_scenes; s++) meso_scene_destroy(scenes[s].scene);
     free(times);
+    free(cycles);
     free(rows);
     meso_context_destroy(ctx);
     return status;

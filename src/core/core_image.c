@@ -1,4 +1,6 @@
 /* Float images and textures with mip pyramids. */
+#include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -103,7 +105,56 @@ fail:
 void meso_texture_destroy(meso_texture *t) {
     if (!t) return;
     for (int i = 0; i < MESO_TEXTURE_MAX_LEVELS; i++) meso_image_destroy(t->levels[i]);
+    free(t->srgb8);
     free(t);
+}
+
+static float srgb8_values[256];
+static pthread_once_t srgb8_once = PTHREAD_ONCE_INIT;
+
+static void srgb8_fill(void) {
+    /* the PNG reader's 8-bit scale (core_png.c), so a decoded PNG code comes back exactly */
+    for (int k = 0; k < 256; k++) srgb8_values[k] = meso_srgb_to_linear((float)k * (1.0f / 255.0f));
+}
+
+const float *meso_srgb8_table(void) {
+    pthread_once(&srgb8_once, srgb8_fill);
+    return srgb8_values;
+}
+
+/* The code whose decoded value is nearest `linear` (in [0, 1]): the rounded encode and its two
+ * neighbours, the encode's float rounding being the only doubt. */
+static uint32_t srgb8_encode(const float *table, float linear) {
+    long k = lrintf(meso_linear_to_srgb(linear) * 255.0f);
+    k = k < 0 ? 0 : k > 255 ? 255 : k;
+    long best = k;
+    for (long c = k - 1; c <= k + 1; c++) {
+        if (c < 0 || c > 255) continue;
+        if (fabsf(table[c] - linear) < fabsf(table[best] - linear)) best = c;
+    }
+    return (uint32_t)best;
+}
+
+meso_result meso_texture_add_srgb8(meso_context *ctx, meso_texture *t) {
+    const meso_image *level = t->levels[0];
+    size_t n = (size_t)level->width * (size_t)level->height;
+    for (size_t i = 0; i < n; i++) {
+        for (int c = 0; c < 3; c++) {
+            float v = level->pixels[4 * i + (size_t)c];
+            if (!(v >= 0.0f && v <= 1.0f)) return MESO_OK; /* HDR or NaN: stays float */
+        }
+    }
+    uint32_t *codes = malloc(n * sizeof(*codes));
+    if (!codes) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "texture: out of memory");
+    const float *table = meso_srgb8_table();
+    for (size_t i = 0; i < n; i++) {
+        const float *p = level->pixels + 4 * i;
+        codes[i] = srgb8_encode(table, p[0]) | srgb8_encode(table, p[1]) << 8 |
+                   srgb8_encode(table, p[2]) << 16;
+    }
+    free(t->srgb8);
+    t->srgb8 = codes;
+    return MESO_OK;
 }
 
 static inline int wrap_index(int i, int n, meso_wrap wrap) {

@@ -16,9 +16,11 @@
 #include "render_internal.h"
 
 #define RASTER_TILE_SIZE 32 /* samples a side of a screen tile */
-#define RASTER_CHUNK_TRIANGLES                                                                     \
-    256                        /* source triangles per setup chunk (times                          \
-                                  num_tiles / 2048 above 2048 tiles) */
+#define RASTER_CHUNK_TRIANGLES 256 /* source triangles per setup chunk (times num_tiles /      \
+                                      RASTER_CHUNK_TILES above that many tiles) */
+#define RASTER_CHUNKS_PER_MESH 128 /* chunks grow beyond this many a mesh (raster_setup.c) */
+#define RASTER_CHUNK_TILES 2048 /* tiles above which chunks grow: a chunk's tile table (4 bytes a \
+                                   tile) stays within ~32 bytes a triangle */
 #define RASTER_SUBPIXEL_BITS 8 /* vertices snap to 1/256 sample */
 #define RASTER_SUBPIXEL_ONE (1 << RASTER_SUBPIXEL_BITS)
 #define RASTER_GUARD_SAMPLES 262144.0 /* |screen coordinate| bound after guard-band clipping */
@@ -104,9 +106,13 @@ typedef struct raster_object {
     const void *state;
 } raster_object;
 
+typedef struct covered_samples covered_samples;
+
 typedef struct raster_thread_scratch {
-    meso_fragment *fragments;        /* RASTER_TILE_SIZE^2 */
-    uint32_t *pixels;                /* tile-buffer index of each fragment */
+    meso_fragment *fragments;        /* RASTER_TILE_SIZE^2: a batch never repeats a sample */
+    uint32_t *pixels;                /* tile-buffer index of each fragment (2 x tile + 1) */
+    uint8_t *pending;                /* RASTER_TILE_SIZE^2: samples held by the batch (zeroed) */
+    covered_samples *covered;        /* one triangle's samples before their attributes */
     uint8_t *wire;                   /* RASTER_TILE_SIZE^2 wireframe mask */
     float *color, *coverage, *depth; /* the tile being drawn, RASTER_TILE_SIZE a row */
 } raster_thread_scratch;

@@ -13,6 +13,7 @@
 #include "raster_internal.h"
 
 #define MAX_POLYGON 9 /* 3 vertices + one per clip plane (5) + 1 */
+#define RESERVE_FIRST_ITEMS 64 /* first capacity of a chunk's growing arrays */
 
 typedef struct clip_vertex {
     double x, y, z, w;
@@ -185,7 +186,7 @@ static bool setup_triangle(const raster_setup_desc *desc, bool cull_back, const 
 
 static bool reserve(void **data, size_t *capacity, size_t needed, size_t item) {
     if (needed <= *capacity) return true;
-    size_t cap = *capacity ? *capacity : 64;
+    size_t cap = *capacity ? *capacity : RESERVE_FIRST_ITEMS;
     while (cap < needed) cap *= 2;
     void *p = realloc(*data, cap * item);
     if (!p) return false;
@@ -207,10 +208,12 @@ static void setup_source_triangle(const raster_bins *bins, const raster_mesh *rm
         meso_vec3 p = rm->mesh->positions[idx[k]];
         c[k] = meso_mat4_mul_vec4(desc->view_projection, (meso_vec4){p.x, p.y, p.z, 1.0f});
     }
-    for (int k = 0; k < 3; k++) {
-        if (!isfinite(c[k].x) || !isfinite(c[k].y) || !isfinite(c[k].z) || !isfinite(c[k].w))
-            return;
-    }
+    /* x * 0 is NaN exactly when x is infinite or NaN, and a NaN survives the sum: one
+     * branch for the twelve coordinates (a million-triangle mesh runs this twice a frame) */
+    float poison = 0.0f;
+    for (int k = 0; k < 3; k++)
+        poison += (c[k].x * 0.0f + c[k].y * 0.0f) + (c[k].z * 0.0f + c[k].w * 0.0f);
+    if (poison != poison) return;
     /* Trivial reject: all three outside one plane of the view frustum (no sample centre lies
      * on or beyond x = +-w or y = +-w). */
     if (c[0].x > c[0].w && c[1].x > c[1].w && c[2].x > c[2].w) return;
@@ -230,9 +233,9 @@ static void setup_source_triangle(const raster_bins *bins, const raster_mesh *rm
     int n = 3, cur = 0;
     float g = bins->guard;
     bool inside = true;
-    for (int k = 0; k < 3 && inside; k++) {
-        inside = nd[k] >= 0.0f && c[k].w > 0.0f && fabsf(c[k].x) <= g * c[k].w &&
-                 fabsf(c[k].y) <= g * c[k].w;
+    for (int k = 0; k < 3; k++) { /* without branches: almost every triangle is inside */
+        inside &= (nd[k] >= 0.0f) & (c[k].w > 0.0f) & (fabsf(c[k].x) <= g * c[k].w) &
+                  (fabsf(c[k].y) <= g * c[k].w);
     }
     if (!inside) {
         for (int plane = 0; plane < 5 && n >= 3; plane++) {
@@ -313,6 +316,17 @@ static void setup_chunk(void *user, size_t job, int thread_index) {
     bins->chunks[job] = local;
 }
 
+/* Triangles a chunk of a mesh of num_triangles: `base`, or more for meshes of more than
+ * RASTER_CHUNKS_PER_MESH chunks. Every chunk costs a pass over the tile table when it is binned
+ * and every tile a look at every chunk when it is drawn; for the million triangles of a
+ * displaced mesh those passes cost more than the triangles' own setup. Depends on the mesh
+ * only, never the thread count, and a tile meets its triangles in the same order whatever
+ * the chunking, so the images are the same. */
+static size_t mesh_chunk_size(size_t num_triangles, size_t base) {
+    size_t spread = (num_triangles + RASTER_CHUNKS_PER_MESH - 1) / RASTER_CHUNKS_PER_MESH;
+    return spread > base ? spread : base;
+}
+
 meso_result raster_bins_build(meso_context *ctx, raster_bins *bins, const meso_mesh *const *meshes,
                               const bool *both_faces, int num_meshes,
                               const raster_setup_desc *desc) {
@@ -340,13 +354,15 @@ meso_result raster_bins_build(meso_context *ctx, raster_bins *bins, const meso_m
      * larger chunks so that the per-chunk tile tables (4 bytes a tile) stay within about
      * 32 bytes a triangle. */
     size_t num_tiles = (size_t)bins->tiles_x * (size_t)bins->tiles_y;
-    size_t chunk_size = RASTER_CHUNK_TRIANGLES * (num_tiles > 2048 ? num_tiles / 2048 : 1);
+    size_t chunk_size = RASTER_CHUNK_TRIANGLES *
+                        (num_tiles > RASTER_CHUNK_TILES ? num_tiles / RASTER_CHUNK_TILES : 1);
     size_t chunks = 0;
     for (int m = 0; m < num_meshes; m++) {
         bins->meshes[m].mesh = meshes[m];
         bins->meshes[m].both_faces = both_faces && both_faces[m];
         size_t nt = meshes[m] ? meshes[m]->num_triangles : 0;
-        chunks += (nt + chunk_size - 1) / chunk_size;
+        size_t size = mesh_chunk_size(nt, chunk_size);
+        chunks += (nt + size - 1) / size;
     }
 
     /* Chunks of source triangles, in object order. */
@@ -361,11 +377,12 @@ meso_result raster_bins_build(meso_context *ctx, raster_bins *bins, const meso_m
     size_t next = 0;
     for (int m = 0; m < num_meshes; m++) {
         size_t nt = meshes[m] ? meshes[m]->num_triangles : 0;
-        for (size_t first = 0; first < nt; first += chunk_size) {
+        size_t size = mesh_chunk_size(nt, chunk_size);
+        for (size_t first = 0; first < nt; first += size) {
             raster_chunk *c = &bins->chunks[next++];
             c->mesh = m;
             c->first = (uint32_t)first;
-            c->count = (uint32_t)(nt - first < chunk_size ? nt - first : chunk_size);
+            c->count = (uint32_t)(nt - first < size ? nt - first : size);
         }
     }
     meso_parallel_for(ctx, chunks, setup_chunk, bins);

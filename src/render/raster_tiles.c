@@ -3,8 +3,8 @@
  *
  * Every tile is one job. It clears its own part of the target, then walks the chunks in order
  * and, in each, the triangles binned to it in order; fragments are shaded one batch per
- * (triangle, tile). No job reads what another writes, so the bytes never depend on the number
- * of threads or the schedule.
+ * (object, tile), split where a triangle repeats a sample of the batch. No job reads what
+ * another writes, so the bytes never depend on the number of threads or the schedule.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -14,6 +14,13 @@
 #include "render_simd.h"
 
 #define TILE_SAMPLES (RASTER_TILE_SIZE * RASTER_TILE_SIZE)
+/* Wireframe: an edge sample is drawn when its depth is within this slack of the buffer's (the
+ * edge lies on the surface the buffer holds, up to rounding of two different evaluations). */
+#define WIRE_DEPTH_RELATIVE_SLACK 1.001f
+#define WIRE_DEPTH_ABSOLUTE_SLACK 1e-4f
+/* Wire colour: black, or white where the image's luma (Rec. 709 weights) is below this, low
+ * enough that the switch hides in the darkest regions. */
+#define WIRE_DARK_LUMA 0.03f
 
 typedef struct draw_job {
     raster_pass *pass;
@@ -110,14 +117,20 @@ static void fill_fragments(const raster_triangle *tri, const meso_frame *frame,
     }
 }
 
-/* Covered samples of `tri` inside [x0, x1] x [y0, y1] that pass the depth test become
- * fragments; returns how many. Coverage and the depth test compact their survivors without
- * branches (small triangles make those branches unpredictable), then the attributes are filled
- * in one straight loop. */
-static size_t gather_fragments(const raster_triangle *tri, int x0, int y0, int x1, int y1, int tx0,
-                               int ty0, const meso_frame *frame, const float *depth,
-                               const vertex_attributes *va, meso_fragment *frags,
-                               uint32_t *pixels) {
+/* The samples of one triangle that pass coverage and the early depth test, before their
+ * attributes are filled: sample position, view depth, tile-buffer index. Padded by one group of
+ * 8 for the vector fill. */
+typedef struct covered_samples {
+    int32_t x[TILE_SAMPLES + LANES], y[TILE_SAMPLES + LANES];
+    float depth[TILE_SAMPLES + LANES];
+} covered_samples;
+
+/* Covered samples of `tri` inside [x0, x1] x [y0, y1] that pass the depth test go to `out` and
+ * their tile-buffer indices to `pixels`; returns how many. Coverage and the depth test compact
+ * their survivors without branches (small triangles make those branches unpredictable). */
+static size_t cover_triangle(const raster_triangle *tri, int x0, int y0, int x1, int y1, int tx0,
+                             int ty0, const float *depth, covered_samples *out,
+                             uint32_t *pixels) {
     const int64_t half = RASTER_SUBPIXEL_ONE / 2;
     int64_t px = ((int64_t)x0 << RASTER_SUBPIXEL_BITS) + half;
     int64_t py = ((int64_t)y0 << RASTER_SUBPIXEL_BITS) + half;
@@ -135,10 +148,6 @@ static size_t gather_fragments(const raster_triangle *tri, int x0, int y0, int x
      * candidates read valid depths */
     int candidates[RASTER_TILE_SIZE + LANES];
     for (int i = 0; i < RASTER_TILE_SIZE + LANES; i++) candidates[i] = x0;
-    /* padded by one group of 8 for the vector fill */
-    float frag_depth[RASTER_TILE_SIZE * RASTER_TILE_SIZE + LANES];
-    int32_t frag_x[RASTER_TILE_SIZE * RASTER_TILE_SIZE + LANES];
-    int32_t frag_y[RASTER_TILE_SIZE * RASTER_TILE_SIZE + LANES];
     size_t n = 0;
     for (int y = y0; y <= y1; y++) {
         int64_t e0 = row[0], e1 = row[1], e2 = row[2];
@@ -177,18 +186,17 @@ static size_t gather_fragments(const raster_triangle *tri, int x0, int y0, int x
             int lanes = m - first < LANES ? m - first : LANES;
             for (int k = 0; k < lanes; k++) { /* compacted without branches */
                 pixels[n] = base + (uint32_t)column[k];
-                frag_depth[n] = d[k];
-                frag_x[n] = x[k];
-                frag_y[n] = y;
+                out->depth[n] = d[k];
+                out->x[n] = x[k];
+                out->y[n] = y;
                 n += (size_t)(keep >> k & 1);
             }
         }
     }
     if (!n) return 0;
     for (size_t i = n; i % LANES; i++) { /* unused lanes repeat the last fragment */
-        frag_x[i] = frag_x[n - 1], frag_y[i] = frag_y[n - 1], frag_depth[i] = frag_depth[n - 1];
+        out->x[i] = out->x[n - 1], out->y[i] = out->y[n - 1], out->depth[i] = out->depth[n - 1];
     }
-    fill_fragments(tri, frame, va, n, frag_x, frag_y, frag_depth, frags);
     return n;
 }
 
@@ -228,8 +236,7 @@ static void mark_edges(const raster_triangle *tri, int tx0, int ty0, int tx1, in
             if (!(inv_depth > 0.0f)) continue;
             float d = 1.0f / inv_depth;
             float z = depth[(py - ty0) * RASTER_TILE_SIZE + (px - tx0)];
-            /* a little slack: the edge lies on the surface the depth buffer holds */
-            if (d <= z * 1.001f + 1e-4f || !isfinite(z))
+            if (d <= z * WIRE_DEPTH_RELATIVE_SLACK + WIRE_DEPTH_ABSOLUTE_SLACK || !isfinite(z))
                 wire[(py - ty0) * RASTER_TILE_SIZE + (px - tx0)] = 1;
         }
     }
@@ -254,6 +261,40 @@ static inline void stream_fence(void) {
 #if defined(__AVX__)
     _mm_sfence();
 #endif
+}
+
+/* Fragments of one object in one tile waiting to be shaded; no two share a sample. */
+typedef struct tile_batch {
+    const raster_object *object;
+    const meso_frame *frame;
+    meso_fragment *fragments;
+    uint32_t *pixels;  /* tile-buffer index of each fragment */
+    uint8_t *pending;  /* per tile sample: 1 while a fragment of the batch covers it */
+    float *color, *coverage, *depth; /* the tile's buffers */
+    size_t count;
+    uint64_t shaded; /* fragments shaded in the tile so far */
+} tile_batch;
+
+/* Shade the batch and write the fragments that stay in front; empty the batch. */
+static void flush_batch(tile_batch *b) {
+    if (!b->count) return;
+    const raster_object *obj = b->object;
+    obj->technique->shade(obj->state, b->frame, obj->object, b->fragments, b->count);
+    float *depth = b->depth, *coverage = b->coverage, *color = b->color;
+    for (size_t i = 0; i < b->count; i++) {
+        const meso_fragment *f = &b->fragments[i];
+        uint32_t p = b->pixels[i];
+        b->pending[p] = 0;
+        /* discarded, behind, or NaN: nothing drawn */
+        if (f->discard || !(f->out_depth < depth[p])) continue;
+        depth[p] = f->out_depth;
+        coverage[p] = 1.0f;
+        color[3 * p + 0] = f->color.x;
+        color[3 * p + 1] = f->color.y;
+        color[3 * p + 2] = f->color.z;
+    }
+    b->shaded += b->count;
+    b->count = 0;
 }
 
 static void draw_tile(void *user, size_t job, int thread_index) {
@@ -294,39 +335,60 @@ static void draw_tile(void *user, size_t job, int thread_index) {
     memcpy(color, pass->clear_color, 3 * TILE_SAMPLES * sizeof(float));
     memcpy(coverage, pass->clear_coverage, TILE_SAMPLES * sizeof(float));
     memcpy(depth, pass->clear_depth, TILE_SAMPLES * sizeof(float));
-    uint64_t fragments = 0;
+    /* One batch per (object, tile): the fragments of consecutive triangles of one object
+     * gather until the object changes or a triangle covers a sample already in the batch.
+     * Flushing on such a repeat before its depth test keeps every early depth test exactly
+     * as it was with a batch per triangle: a sample not in the batch holds its final depth,
+     * and write-back only lowers depths, so a sample rejected against the batch's older
+     * depth would be rejected against the newer one too. The same fragments are shaded and
+     * written, hence the same bytes. */
+    tile_batch batch = {.fragments = scratch->fragments,
+                        .pixels = scratch->pixels,
+                        .pending = scratch->pending,
+                        .color = color,
+                        .coverage = coverage,
+                        .depth = depth,
+                        .frame = frame};
+    covered_samples *covered = scratch->covered;
     for (size_t c = 0; c < bins->num_chunks; c++) {
         const raster_chunk *chunk = &bins->chunks[c];
         size_t count;
         const uint32_t *list = raster_chunk_tile(chunk, tile, &count);
         if (!count) continue;
         const raster_object *obj = &dj->objects[chunk->mesh];
+        if (obj != batch.object) flush_batch(&batch);
+        batch.object = obj;
         const meso_mesh *mesh = bins->meshes[chunk->mesh].mesh;
         for (size_t e = 0; e < count; e++) {
             const raster_triangle *tri = &chunk->triangles[list[e]];
             int x0 = tri->min_x > tx0 ? tri->min_x : tx0, x1 = tri->max_x < tx1 ? tri->max_x : tx1;
             int y0 = tri->min_y > ty0 ? tri->min_y : ty0, y1 = tri->max_y < ty1 ? tri->max_y : ty1;
             if (x0 > x1 || y0 > y1) continue;
+            uint32_t *pixels = batch.pixels + batch.count;
+            size_t n = cover_triangle(tri, x0, y0, x1, y1, tx0, ty0, depth, covered, pixels);
+            if (!n) continue;
+            uint8_t repeats = 0;
+            for (size_t i = 0; i < n; i++) { /* a triangle covers a sample once */
+                repeats |= batch.pending[pixels[i]];
+                batch.pending[pixels[i]] = 1;
+            }
+            if (repeats) { /* test again against the depths the batch writes */
+                for (size_t i = 0; i < n; i++) batch.pending[pixels[i]] = 0;
+                flush_batch(&batch);
+                pixels = batch.pixels;
+                n = cover_triangle(tri, x0, y0, x1, y1, tx0, ty0, depth, covered, pixels);
+                for (size_t i = 0; i < n; i++) batch.pending[pixels[i]] = 1;
+                if (!n) continue;
+            }
             vertex_attributes va;
             load_attributes(mesh, tri->triangle, &va);
-            size_t n = gather_fragments(tri, x0, y0, x1, y1, tx0, ty0, frame, depth, &va,
-                                        scratch->fragments, scratch->pixels);
-            if (!n) continue;
-            obj->technique->shade(obj->state, frame, obj->object, scratch->fragments, n);
-            fragments += n;
-            for (size_t i = 0; i < n; i++) {
-                const meso_fragment *f = &scratch->fragments[i];
-                uint32_t p = scratch->pixels[i];
-                /* discarded, behind, or NaN: nothing drawn */
-                if (f->discard || !(f->out_depth < depth[p])) continue;
-                depth[p] = f->out_depth;
-                coverage[p] = 1.0f;
-                color[3 * p + 0] = f->color.x;
-                color[3 * p + 1] = f->color.y;
-                color[3 * p + 2] = f->color.z;
-            }
+            fill_fragments(tri, frame, &va, n, covered->x, covered->y, covered->depth,
+                           batch.fragments + batch.count);
+            batch.count += n;
         }
     }
+    flush_batch(&batch);
+    uint64_t fragments = batch.shaded;
     pass->tile_fragments[tile] = fragments;
 
     if (dj->wireframe) {
@@ -339,13 +401,12 @@ static void draw_tile(void *user, size_t job, int thread_index) {
             for (size_t e = 0; e < count; e++)
                 mark_edges(&chunk->triangles[list[e]], tx0, ty0, tx1, ty1, depth, wire);
         }
-        /* A contrasting colour: black lines, white ones where the image is nearly black (a
-         * fixed threshold low enough that the switch hides in the darkest regions). */
+        /* A contrasting colour: black lines, white ones where the image is nearly black. */
         for (int i = 0; i < TILE_SAMPLES; i++) {
             if (!wire[i]) continue;
             float *rgb = color + 3 * i;
             float luma = 0.2126f * rgb[0] + 0.7152f * rgb[1] + 0.0722f * rgb[2];
-            float v = luma > 0.03f ? 0.0f : 1.0f;
+            float v = luma > WIRE_DARK_LUMA ? 0.0f : 1.0f;
             rgb[0] = rgb[1] = rgb[2] = v;
         }
     }
@@ -368,13 +429,19 @@ static meso_result reserve_threads(meso_context *ctx, raster_pass *pass) {
     pass->threads = t;
     for (int i = pass->num_threads; i < threads; i++) {
         t[i].fragments = malloc(TILE_SAMPLES * sizeof(meso_fragment));
-        t[i].pixels = malloc(TILE_SAMPLES * sizeof(uint32_t));
+        /* a triangle's samples are tested before the check for repeats: up to a tile's
+         * worth past a full batch, plus the branch-free compaction's one extra write */
+        t[i].pixels = malloc((2 * TILE_SAMPLES + 1) * sizeof(uint32_t));
         t[i].wire = malloc(TILE_SAMPLES);
+        t[i].pending = calloc(TILE_SAMPLES, 1);
+        t[i].covered = malloc(sizeof(covered_samples));
         t[i].color = malloc(3 * TILE_SAMPLES * sizeof(float));
         t[i].coverage = malloc(TILE_SAMPLES * sizeof(float));
         t[i].depth = malloc(TILE_SAMPLES * sizeof(float));
         if (!t[i].fragments || !t[i].pixels || !t[i].wire || !t[i].color || !t[i].coverage ||
-            !t[i].depth) {
+            !t[i].depth || !t[i].pending || !t[i].covered) {
+            free(t[i].pending);
+            free(t[i].covered);
             free(t[i].fragments);
             free(t[i].pixels);
             free(t[i].wire);
@@ -445,6 +512,8 @@ void raster_pass_release(raster_pass *pass) {
         free(pass->threads[i].fragments);
         free(pass->threads[i].pixels);
         free(pass->threads[i].wire);
+        free(pass->threads[i].pending);
+        free(pass->threads[i].covered);
         free(pass->threads[i].color);
         free(pass->threads[i].coverage);
         free(pass->threads[i].depth);

@@ -76,8 +76,12 @@ typedef struct meso_technique {
      * before rasterization. Per-pixel techniques draw object->mesh. */
     meso_result (*geometry)(meso_context *ctx, void *state, const meso_frame *frame,
                             const meso_mesh **out_mesh);
-    /* Shade `count` fragments of one triangle of one object. Called from many threads at once
-     * with different fragments; reads the state only. */
+    /* Shade `count` fragments of one object in one screen tile. A batch may span triangles:
+     * each fragment names its own `triangle`, and a triangle's fragments are consecutive (the
+     * rasterizer gathers one object's triangles of a tile in order, raster_tiles.c); no two
+     * fragments of a batch share a sample. The result of a fragment must not depend on the
+     * others of its batch (images stay byte-identical whatever the batching). Called from many
+     * threads at once with different fragments; reads the state only. */
     void (*shade)(const void *state, const meso_frame *frame, const meso_object *object,
                   meso_fragment *fragments, size_t count);
     /* Bytes of baked data held by the state (NULL: 0). */

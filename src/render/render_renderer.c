@@ -214,6 +214,7 @@ meso_result meso_renderer_create(meso_context *ctx, const meso_scene *scene,
         if ((r = resolve_technique(ctx, &scene->objects[i], d.technique, d.fallback, &t)) !=
             MESO_OK)
             goto fail;
+        rd->techniques[i] = t; /* resolved once: prepared below unless the reference draws */
         if (t->info.kind == MESO_TECHNIQUE_REFERENCE) {
             if (first_reference < 0) first_reference = i;
         } else if (first_other < 0) {
@@ -239,9 +240,7 @@ meso_result meso_renderer_create(meso_context *ctx, const meso_scene *scene,
     } else {
         for (int i = 0; i < count; i++) {
             const meso_object *object = &scene->objects[i];
-            const meso_technique *t = NULL;
-            resolve_technique(ctx, object, d.technique, d.fallback, &t);
-            rd->techniques[i] = t;
+            const meso_technique *t = rd->techniques[i];
             if (t->prepare && (r = t->prepare(ctx, scene, object, &rd->states[i])) != MESO_OK)
                 goto fail;
             if (t->memory) rd->stats.memory_bytes += t->memory(rd->states[i]);

@@ -73,6 +73,17 @@ static inline v8f v8_gather(const float *base, v8i index) {
 #endif
 }
 
+/* base[index[k]] per lane, 32-bit integers. */
+static inline v8i v8i_gather(const int32_t *base, v8i index) {
+#if defined(__AVX2__)
+    return (v8i)_mm256_i32gather_epi32((const int *)base, (__m256i)index, 4);
+#else
+    v8i r;
+    for (int k = 0; k < V8_LANES; ++k) r[k] = base[index[k]];
+    return r;
+#endif
+}
+
 static inline int v8_any(v8i mask) {
     return ((mask[0] | mask[1]) | (mask[2] | mask[3])) |
            ((mask[4] | mask[5]) | (mask[6] | mask[7]));

@@ -328,10 +328,12 @@ static meso_result load_color_map_file(const scene_parser *p, const scene_key *k
     meso_image *image = NULL;
     r = meso_image_load_png(p->ctx, path, &image);
     if (r != MESO_OK) return scene_relog_at_key(p, key, r);
-    /* the image and the texture made from it with its mip levels (a third more) */
-    uint64_t image_bytes = (uint64_t)image->width * (uint64_t)image->height *
-                           (uint64_t)image->channels * sizeof(float);
-    if ((r = scene_account_memory(p, key, image_bytes + image_bytes / 3 * 4)) != MESO_OK) {
+    /* the image and the texture made from it with its mip levels (a third more), and its
+     * 8-bit sRGB copy (4 bytes a texel) */
+    uint64_t texels = (uint64_t)image->width * (uint64_t)image->height;
+    uint64_t image_bytes = texels * (uint64_t)image->channels * sizeof(float);
+    if ((r = scene_account_memory(p, key, image_bytes + image_bytes / 3 * 4 + texels * 4)) !=
+        MESO_OK) {
         meso_image_destroy(image);
         return r;
     }
@@ -345,6 +347,7 @@ static meso_result load_color_map_file(const scene_parser *p, const scene_key *k
         }
     r = meso_texture_create(p->ctx, image, wrap, true, out_texture);
     meso_image_destroy(image);
+    if (r == MESO_OK) r = meso_texture_add_srgb8(p->ctx, *out_texture);
     return r;
 }
 
@@ -434,7 +437,9 @@ static meso_result parse_material(const scene_parser *p, const cJSON *item, cons
         if (!generated_color)
             return scene_error(p, MESO_ERROR_FORMAT, &k,
                                "\"mesostructure\" needs a procedural height_map");
-        return meso_texture_create(p->ctx, generated_color, wrap, true, &mat->color_map);
+        if ((r = meso_texture_create(p->ctx, generated_color, wrap, true, &mat->color_map)))
+            return r;
+        return meso_texture_add_srgb8(p->ctx, mat->color_map);
     }
     return load_color_map(p, &k, color_map, wrap, &mat->color_map);
 }

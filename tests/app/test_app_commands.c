@@ -56,6 +56,51 @@ static void test_app_bench_prints_table_and_writes_json(void **state) {
     free(json);
 }
 
+/* --profile: a cost row per technique whose covered pixels lie within the frame, and the
+ * nominal search steps of a fixed-step search (relief: 16 linear + 6 binary + 16 shadow
+ * steps toward the scene's one light; 40 + 6 + 20 with --set). */
+static void test_app_bench_profile_reports_cost_per_pixel(void **state) {
+    (void)state;
+    static char out[65536];
+    char args[4096];
+    snprintf(args, sizeof(args),
+             "bench %s --techniques flat,relief --frames 1 --size 64x48 --threads 1 --profile",
+             BRICKS);
+    assert_int_equal(run_capture_stdout(args, out, sizeof(out)), 0);
+    const char *profile = strstr(out, "per covered pixel");
+    if (!profile) fail_msg("no profile table:\n%s", out);
+    static const char *const techniques[] = {"flat", "relief"};
+    for (int t = 0; t < 2; t++) {
+        char key[64];
+        snprintf(key, sizeof(key), "bricks-plane         %-14s", techniques[t]);
+        const char *row = strstr(profile, key);
+        if (!row) fail_msg("no profile row for %s:\n%s", techniques[t], out);
+        double covered = 0.0, per_fragment = 0.0, ns = 0.0, cycles = 0.0;
+        char steps[32] = "";
+        int fields = sscanf(row + strlen(key), "%lf %lf %lf %lf %31s", &covered, &per_fragment,
+                            &ns, &cycles, steps);
+        assert_int_equal(fields, 5);
+        if (!(covered > 0.0 && covered <= 64.0 * 48.0)) fail_msg("covered %g", covered);
+        if (!(per_fragment >= 1.0)) fail_msg("fragments a pixel %g", per_fragment);
+        if (!(ns > 0.0)) fail_msg("ns a pixel %g", ns);
+        assert_string_equal(steps, t == 0 ? "-" : "38");
+    }
+    snprintf(args, sizeof(args),
+             "bench %s --techniques relief --frames 1 --size 32x32 --threads 1 --profile "
+             "--set relief.linear_steps=40 --set relief.shadow_steps=20",
+             BRICKS);
+    assert_int_equal(run_capture_stdout(args, out, sizeof(out)), 0);
+    profile = strstr(out, "per covered pixel");
+    assert_non_null(profile);
+    const char *row = strstr(profile, "relief");
+    assert_non_null(row);
+    double covered, per_fragment, ns, cycles, steps;
+    assert_int_equal(sscanf(row + strlen("relief"), "%lf %lf %lf %lf %lf", &covered, &per_fragment,
+                            &ns, &cycles, &steps),
+                     5);
+    assert_true(steps == 66.0);
+}
+
 static void test_app_bench_unknown_technique_is_usage_error(void **state) {
     (void)state;
     const char *err = NULL;
@@ -118,6 +163,7 @@ static void test_app_info_on_folder_is_bad_input(void **state) {
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_app_bench_prints_table_and_writes_json),
+        cmocka_unit_test(test_app_bench_profile_reports_cost_per_pixel),
         cmocka_unit_test(test_app_bench_unknown_technique_is_usage_error),
         cmocka_unit_test(test_app_info_describes_scene_png_and_bake),
         cmocka_unit_test(test_app_info_on_folder_is_bad_input),

@@ -148,6 +148,80 @@ static void test_shade_point_follows_the_shading_model(void **state) {
     assert_true(fabsf(c.x - 0.05f) < 1e-6f);
 }
 
+/* A frame whose shading returns the colour map's value: no lights, white ambient. */
+static void color_map_frame(test_scene *ts, meso_frame *frame) {
+    test_scene_init(ts, 8, 8);
+    ts->scene.num_lights = 0;
+    ts->scene.ambient = (meso_vec3){1.0f, 1.0f, 1.0f};
+    meso_frame_init(frame, &ts->scene, 8, 8);
+}
+
+/* The compact colour map (meso_texture_add_srgb8): a map whose values are 8-bit sRGB codes
+ * (as a PNG gives) shades to the same bits as the float map, any other map within half an
+ * 8-bit sRGB step (the largest, at 1.0, is 0.0089 in linear), and a value outside [0, 1]
+ * keeps the float map. Single points and batches agree bit for bit in both paths. */
+static void test_shading_compact_color_map_matches_float_map(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(1);
+    const float *codes = meso_srgb8_table();
+    assert_true(codes[0] == 0.0f && codes[255] == 1.0f);
+    test_scene ts;
+    meso_frame frame;
+    color_map_frame(&ts, &frame);
+    for (int exact = 0; exact < 2; exact++) {
+        meso_image *image = NULL;
+        assert_int_equal(meso_image_create(ctx, 7, 5, 3, &image), MESO_OK);
+        for (int i = 0; i < 7 * 5 * 3; i++)
+            image->pixels[i] = exact ? codes[(i * 97) % 256] : (float)((i * 37) % 101) / 100.0f;
+        meso_texture *plain = NULL, *compact = NULL;
+        assert_int_equal(meso_texture_create(ctx, image, MESO_WRAP_REPEAT, false, &plain), MESO_OK);
+        assert_int_equal(meso_texture_create(ctx, image, MESO_WRAP_REPEAT, false, &compact),
+                         MESO_OK);
+        assert_int_equal(meso_texture_add_srgb8(ctx, compact), MESO_OK);
+        assert_non_null(compact->srgb8);
+        meso_object a, b;
+        memset(&a, 0, sizeof(a));
+        a.material.albedo = (meso_vec3){1.0f, 1.0f, 1.0f};
+        b = a;
+        a.material.color_map = plain;
+        b.material.color_map = compact;
+        meso_fragment frags[64];
+        memset(frags, 0, sizeof(frags));
+        float worst = 0.0f;
+        for (int i = 0; i < 64; i++) {
+            meso_vec2 uv = {(float)i * 0.173f - 2.0f, (float)(i * i % 17) * 0.0711f};
+            meso_vec3 want = meso_shade_point(&frame, &a, (meso_vec3){0, 0, 0},
+                                              (meso_vec3){0, 1, 0}, uv, NULL);
+            meso_vec3 got = meso_shade_point(&frame, &b, (meso_vec3){0, 0, 0},
+                                             (meso_vec3){0, 1, 0}, uv, NULL);
+            if (exact) assert_memory_equal(&want, &got, sizeof(got));
+            worst = fmaxf(worst, fmaxf(fabsf(got.x - want.x),
+                                       fmaxf(fabsf(got.y - want.y), fabsf(got.z - want.z))));
+            frags[i].normal = (meso_vec3){0, 1, 0};
+            frags[i].uv = uv;
+        }
+        if (!(worst <= 0.0045f)) fail_msg("compact map off by %g", worst);
+        if (!exact && !(worst > 0.0f)) fail_msg("quantisation left no trace: not the 8-bit path");
+        meso_shade_fragments(&frame, &b, frags, 64, NULL);
+        for (int i = 0; i < 64; i++) {
+            meso_vec3 one = meso_shade_point(&frame, &b, frags[i].position, frags[i].normal,
+                                             frags[i].uv, NULL);
+            assert_memory_equal(&one, &frags[i].color, sizeof(one));
+        }
+        meso_texture_destroy(plain);
+        meso_texture_destroy(compact);
+        /* HDR: not representable, the float map stays */
+        image->pixels[4] = 1.5f;
+        assert_int_equal(meso_texture_create(ctx, image, MESO_WRAP_REPEAT, false, &compact),
+                         MESO_OK);
+        assert_int_equal(meso_texture_add_srgb8(ctx, compact), MESO_OK);
+        assert_null(compact->srgb8);
+        meso_texture_destroy(compact);
+        meso_image_destroy(image);
+    }
+    meso_context_destroy(ctx);
+}
+
 /* The colour map in the shading equals meso_texture_sample's bilinear level-0 lookup, for
  * repeat and clamp, out-of-range and non-finite uvs, in single points and in batches. */
 static void test_shading_samples_the_color_map_like_meso_texture_sample(void **state) {
@@ -157,11 +231,8 @@ static void test_shading_samples_the_color_map_like_meso_texture_sample(void **s
     assert_int_equal(meso_image_create(ctx, 5, 3, 3, &image), MESO_OK);
     for (int i = 0; i < 5 * 3 * 3; i++) image->pixels[i] = (float)((i * 37) % 11) / 10.0f;
     test_scene ts;
-    test_scene_init(&ts, 8, 8);
-    ts.scene.num_lights = 0;
-    ts.scene.ambient = (meso_vec3){1.0f, 1.0f, 1.0f};
     meso_frame frame;
-    meso_frame_init(&frame, &ts.scene, 8, 8);
+    color_map_frame(&ts, &frame);
     const meso_vec2 uvs[] = {{0.1f, 0.2f}, {0.95f, 0.03f}, {-0.3f, 1.7f}, {1.0f, 1.0f},
                              {0.0f, 0.0f}, {-1e-9f, 0.5f}, {3.2f, -7.9f}, {0.5f, NAN},
                              {INFINITY, 0.5f}, {0.4999f, 0.5001f}, {123.456f, 0.25f}};
@@ -223,6 +294,7 @@ int main(void) {
         cmocka_unit_test(test_shade_point_follows_the_shading_model),
         cmocka_unit_test(test_displaced_normal_tilts_against_the_slope),
         cmocka_unit_test(test_shading_samples_the_color_map_like_meso_texture_sample),
+        cmocka_unit_test(test_shading_compact_color_map_matches_float_map),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -770,6 +770,9 @@ void displace_shade(const displace_surface *surface, const displace_shadows *sha
     enum { CHUNK = 64 };
     int num_lights = frame->scene->num_lights;
     float visibility[CHUNK * MESO_SCENE_MAX_LIGHTS];
+    uint32_t cached_triangle = UINT32_MAX;
+    meso_vec3 face_normal = {0.0f, 0.0f, 0.0f};
+    bool have_face = false;
     for (size_t first = 0; first < count; first += CHUNK) {
         size_t n = count - first < CHUNK ? count - first : CHUNK;
         for (size_t f = 0; f < n; f++) {
@@ -783,14 +786,23 @@ void displace_shade(const displace_surface *surface, const displace_shadows *sha
                                                      frag->bitangent, surface->depth, g);
                 if (meso_vec3_dot(n3, n3) > 0.0f && meso_vec3_is_finite(n3)) normal = n3;
             }
-            meso_vec3 face = frag->normal;
-            if (mesh && frag->triangle < mesh->num_triangles) {
-                const uint32_t *t = mesh->indices + (size_t)frag->triangle * 3;
-                meso_vec3 p0 = mesh->positions[t[0]];
-                meso_vec3 e = meso_vec3_cross(meso_vec3_sub(mesh->positions[t[1]], p0),
-                                              meso_vec3_sub(mesh->positions[t[2]], p0));
-                if (meso_vec3_dot(e, e) > 0.0f) face = meso_vec3_normalize(e);
+            /* a batch spans triangles, each one's fragments consecutive: the face normal
+             * once a triangle */
+            if (frag->triangle != cached_triangle) {
+                cached_triangle = frag->triangle;
+                have_face = false;
+                if (mesh && frag->triangle < mesh->num_triangles) {
+                    const uint32_t *t = mesh->indices + (size_t)frag->triangle * 3;
+                    meso_vec3 p0 = mesh->positions[t[0]];
+                    meso_vec3 e = meso_vec3_cross(meso_vec3_sub(mesh->positions[t[1]], p0),
+                                                  meso_vec3_sub(mesh->positions[t[2]], p0));
+                    if (meso_vec3_dot(e, e) > 0.0f) {
+                        face_normal = meso_vec3_normalize(e);
+                        have_face = true;
+                    }
+                }
             }
+            meso_vec3 face = have_face ? face_normal : frag->normal;
             displace_shadows_visibility(shadows, frame->scene, frag->position, normal, face,
                                         visibility + f * (size_t)num_lights);
             frag->normal = normal;

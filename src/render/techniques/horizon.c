@@ -76,8 +76,8 @@ static inline float fast_atan2(float y, float x) {
         (0.99997726f +
          z2 * (-0.33262347f +
                z2 * (0.19354346f + z2 * (-0.11643287f + z2 * (0.05265332f - z2 * 0.01172120f)))));
-    if (ay > ax) r = 1.57079633f - r;
-    if (x < 0.0f) r = 3.14159265f - r;
+    if (ay > ax) r = 0.5f * MESO_PI - r;
+    if (x < 0.0f) r = MESO_PI - r;
     return y < 0.0f ? -r : r;
 }
 
@@ -85,7 +85,7 @@ static inline float fast_atan2(float y, float x) {
  * nearest texels, each interpolated between the two nearest azimuths (Max 1988 §2). */
 static float horizon_slope(const meso_horizon_map *map, bool clamp, float x, float y, float phi) {
     int n = map->num_azimuths;
-    float a = phi * (float)n * (1.0f / (2.0f * 3.14159265f));
+    float a = phi * (float)n * (1.0f / (2.0f * MESO_PI));
     a -= (float)n * floorf(a / (float)n);
     int k0 = (int)a;
     k0 = k0 >= n ? n - 1 : k0;
@@ -125,15 +125,9 @@ static void shade(const void *state, const meso_frame *frame, const meso_object 
         int n = count - start < RELIEF_LANES ? (int)(count - start) : RELIEF_LANES;
         meso_fragment *f = fragments + start;
         relief_lanes l;
-        relief_lanes_load(&l, frame, f, n);
-        v8f x, y, gu, gv;
-        relief_lanes_texel(m, &l, &x, &y);
-        relief_gradient8(m, x, y, &gu, &gv);
-        v8vec3 normal = relief_normal8(&l, depth, gu, gv);
-        meso_shade_batch in = {.px = l.position.x, .py = l.position.y, .pz = l.position.z,
-                               .nx = normal.x, .ny = normal.y, .nz = normal.z,
-                               .u = l.u, .v = l.v};
-        meso_shade_batch_all_visible(&in, frame);
+        v8f x, y;
+        meso_shade_batch in;
+        relief_bump_lanes(m, frame, f, n, depth, &l, &x, &y, &in);
         for (int k = 0; k < n; ++k) {
             for (int li = 0; li < num_lights; ++li) {
                 meso_vec3 L = meso_light_direction(&scene->lights[li], f[k].position);
@@ -161,9 +155,7 @@ static void shade(const void *state, const meso_frame *frame, const meso_object 
                            : smooth_step(-SOFT_RADIANS, SOFT_RADIANS, sin_d);
             }
         }
-        v8f r, g, b;
-        meso_shade_batch8(frame, object, &in, n, &r, &g, &b);
-        for (int k = 0; k < n; ++k) f[k].color = (meso_vec3){r[k], g[k], b[k]};
+        relief_shade_store(frame, object, &in, f, n);
     }
 }
 

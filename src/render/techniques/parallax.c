@@ -76,9 +76,7 @@ static void shade(const void *state, const meso_frame *frame, const meso_object 
                                .nx = normal.x, .ny = normal.y, .nz = normal.z,
                                .u = l.u + uo, .v = l.v + vo};
         meso_shade_batch_all_visible(&in, frame);
-        v8f r, g, b;
-        meso_shade_batch8(frame, object, &in, n, &r, &g, &b);
-        for (int k = 0; k < n; ++k) f[k].color = (meso_vec3){r[k], g[k], b[k]};
+        relief_shade_store(frame, object, &in, f, n);
     }
 }
 

@@ -77,26 +77,8 @@ static inline size_t relief_heights_memory(const relief_heights *h) {
     return (size_t)(h->width + 1) * (size_t)(h->height + 1) * sizeof(float);
 }
 
-/* h at texel-centre coordinates (x, y): the bilinear surface of meso_heightfield_sample. */
-static inline float relief_sample(const relief_heights *m, float x, float y) {
-    float fw = (float)m->width, fh = (float)m->height;
-    if (m->clamp) {
-        x = meso_clampf(x, 0.0f, fw - 1.0f);
-        y = meso_clampf(y, 0.0f, fh - 1.0f);
-    } else {
-        x -= fw * floorf(x * (1.0f / fw));
-        y -= fh * floorf(y * (1.0f / fh));
-    }
-    int i = (int)x, j = (int)y;
-    i = i > m->width - 1 ? m->width - 1 : i;
-    j = j > m->height - 1 ? m->height - 1 : j;
-    float tx = x - (float)i, ty = y - (float)j;
-    const float *r0 = m->padded + (size_t)j * (size_t)m->stride + (size_t)i, *r1 = r0 + m->stride;
-    float top = r0[0] + (r0[1] - r0[0]) * tx, bottom = r1[0] + (r1[1] - r1[0]) * tx;
-    return top + (bottom - top) * ty;
-}
-
-/* Eight lookups at once; the hot loop of every search (4 gathers of 8 texels). */
+/* h at texel-centre coordinates (x, y), the bilinear surface of meso_heightfield_sample, eight
+ * lookups at once; the hot loop of every search (4 gathers of 8 texels). */
 static inline v8f relief_sample8(const relief_heights *m, v8f x, v8f y) {
     float fw = (float)m->width, fh = (float)m->height;
     if (m->clamp) {
@@ -263,7 +245,6 @@ static inline v8vec3 v8_madd(v8vec3 a, v8vec3 b, v8f s) {
 static inline v8vec3 v8_splat3(meso_vec3 a) {
     return (v8vec3){v8_splat(a.x), v8_splat(a.y), v8_splat(a.z)};
 }
-static inline meso_vec3 v8_lane3(v8vec3 a, int k) { return (meso_vec3){a.x[k], a.y[k], a.z[k]}; }
 
 /* Up to eight fragments in structure-of-arrays form with their texture-space frame: the dual
  * basis (B x N, N x T, T x B) / det writes a world direction D as (du, dv, dn) with
@@ -342,6 +323,31 @@ static inline v8vec3 relief_normal8(const relief_lanes *l, float depth, v8f gu, 
     return (v8vec3){v8_select(keep, l->normal.x, n.x * inv),
                     v8_select(keep, l->normal.y, n.y * inv),
                     v8_select(keep, l->normal.z, n.z * inv)};
+}
+
+/* Up to eight fragments with the bump-mapped normal at their own uv (Blinn 1978; no shift):
+ * lanes loaded, texel-centre coordinates in *x, *y, and the shading inputs in *in with every
+ * light visible. bump draws this as is; horizon adds its visibility. */
+static inline void relief_bump_lanes(const relief_heights *m, const meso_frame *frame,
+                                     const meso_fragment *f, int count, float depth,
+                                     relief_lanes *l, v8f *x, v8f *y, meso_shade_batch *in) {
+    relief_lanes_load(l, frame, f, count);
+    v8f gu, gv;
+    relief_lanes_texel(m, l, x, y);
+    relief_gradient8(m, *x, *y, &gu, &gv);
+    v8vec3 normal = relief_normal8(l, depth, gu, gv);
+    *in = (meso_shade_batch){.px = l->position.x, .py = l->position.y, .pz = l->position.z,
+                             .nx = normal.x, .ny = normal.y, .nz = normal.z,
+                             .u = l->u, .v = l->v};
+    meso_shade_batch_all_visible(in, frame);
+}
+
+/* Shade the lanes of `in` and write the colours of the first `count` fragments. */
+static inline void relief_shade_store(const meso_frame *frame, const meso_object *object,
+                                      const meso_shade_batch *in, meso_fragment *f, int count) {
+    v8f r, g, b;
+    meso_shade_batch8(frame, object, in, count, &r, &g, &b);
+    for (int k = 0; k < count; ++k) f[k].color = (meso_vec3){r[k], g[k], b[k]};
 }
 
 /* The displaced normal n, found in the frame of the fragment where the ray entered, carried

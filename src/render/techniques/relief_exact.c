@@ -183,16 +183,6 @@ typedef struct exact_rays8 {
     float bias;
 } exact_rays8;
 
-static inline v8i v8i_gather(const int32_t *base, v8i index) {
-#if defined(__AVX2__)
-    return (v8i)_mm256_i32gather_epi32((const int *)base, (__m256i)index, 4);
-#else
-    v8i r;
-    for (int k = 0; k < RELIEF_LANES; ++k) r[k] = base[index[k]];
-    return r;
-#endif
-}
-
 /* The offset of each lane's level in the pyramid's block: two in-register table lookups
  * (levels 0-7 and 8-15) instead of a gather, for pyramids of up to 16 levels. */
 static inline v8i level_offsets(const exact_state *s, v8i level) {

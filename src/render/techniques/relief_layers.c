@@ -498,8 +498,8 @@ static void normal(const void *user, const relief_lanes *l, const relief_batch *
                     v8_select(ok, n.z * inv, l->normal.z)};
 }
 
-/* Whether the batch's triangle faces away from the eye (geometric normal, counter-clockwise
- * from outside): every fragment of a batch is of one triangle. */
+/* Whether the fragment's triangle faces away from the eye (geometric normal, counter-clockwise
+ * from outside). */
 static bool back_facing(const meso_frame *frame, const meso_object *object,
                         const meso_fragment *f) {
     const meso_mesh *mesh = object->mesh;
@@ -525,27 +525,29 @@ static void move_along_ray(meso_fragment *f, const meso_frame *frame, float t) {
     f->out_depth = f->depth;
 }
 
-static void shade(const void *state, const meso_frame *frame, const meso_object *object,
-                  meso_fragment *fragments, size_t count) {
-    const layers_state *s = state;
-    if (count == 0) return;
-    if (!back_facing(frame, object, &fragments[0])) {
-        if (s->impostor) {
-            /* §4: the quad passes through the middle of the object (depth 0.5): the search
-             * starts where the ray crosses the shell's top, half the depth above the quad */
-            float half = 0.5f * object->mesostructure.depth;
-            for (size_t i = 0; i < count; ++i) {
-                meso_fragment *f = &fragments[i];
-                float vn = meso_vec3_dot(meso_vec3_sub(f->position, frame->eye), f->normal);
-                if (vn < 0.0f) move_along_ray(f, frame, half / vn);
-            }
+/* Fragments of front faces: the search from the mesh (or, for an impostor, from the shell's
+ * top) down. */
+static void shade_front(const layers_state *s, const meso_frame *frame, const meso_object *object,
+                        meso_fragment *fragments, size_t count) {
+    if (s->impostor) {
+        /* §4: the quad passes through the middle of the object (depth 0.5): the search
+         * starts where the ray crosses the shell's top, half the depth above the quad */
+        float half = 0.5f * object->mesostructure.depth;
+        for (size_t i = 0; i < count; ++i) {
+            meso_fragment *f = &fragments[i];
+            float vn = meso_vec3_dot(meso_vec3_sub(f->position, frame->eye), f->normal);
+            if (vn < 0.0f) move_along_ray(f, frame, half / vn);
         }
-        /* a height field: no normal callback, so relief_shade_fragments takes the field's
-         * gradient from s->size's heights (normal() says why not the baked normals) */
-        relief_tracer tracer = {s, search, shadow, s->heightfield ? NULL : normal};
-        relief_shade_fragments(&s->size, &tracer, s->params, frame, object, fragments, count);
-        return;
     }
+    /* a height field: no normal callback, so relief_shade_fragments takes the field's
+     * gradient from s->size's heights (normal() says why not the baked normals) */
+    relief_tracer tracer = {s, search, shadow, s->heightfield ? NULL : normal};
+    relief_shade_fragments(&s->size, &tracer, s->params, frame, object, fragments, count);
+}
+
+/* Fragments of back faces (both_faces): the mirrored search from the shell's bottom up. */
+static void shade_back(const layers_state *s, const meso_frame *frame, const meso_object *object,
+                       meso_fragment *fragments, size_t count) {
     if (!s->below) { /* a height field's floor is solid: nothing shows through it */
         for (size_t i = 0; i < count; ++i) fragments[i].discard = true;
         return;
@@ -580,7 +582,7 @@ static void shade(const void *state, const meso_frame *frame, const meso_object 
         move_along_ray(f, frame, -tau);
         f->normal = meso_vec3_negate(f->normal);
     }
-    /* the fragments still drawn, packed (batches are one triangle's, at most a tile) */
+    /* the fragments still drawn, in runs */
     size_t kept = 0;
     for (size_t i = 0; i < count; ++i)
         if (!fragments[i].discard) kept++;
@@ -600,6 +602,33 @@ static void shade(const void *state, const meso_frame *frame, const meso_object 
                                    fragments + start, end - start);
         }
         start = end;
+    }
+}
+
+/* A batch may span triangles (render_internal.h): runs of fragments whose triangles face the
+ * same way go to the front or the back search. A triangle's fragments are consecutive, so the
+ * facing is computed once a triangle. */
+static void shade(const void *state, const meso_frame *frame, const meso_object *object,
+                  meso_fragment *fragments, size_t count) {
+    const layers_state *s = state;
+    size_t start = 0;
+    bool back = false;
+    uint32_t triangle = UINT32_MAX;
+    for (size_t i = 0; i < count; i++) {
+        if (fragments[i].triangle == triangle && i > 0) continue;
+        triangle = fragments[i].triangle;
+        bool facing_back = back_facing(frame, object, &fragments[i]);
+        if (i > 0 && facing_back == back) continue;
+        if (i > start) {
+            if (back) shade_back(s, frame, object, fragments + start, i - start);
+            else shade_front(s, frame, object, fragments + start, i - start);
+        }
+        start = i;
+        back = facing_back;
+    }
+    if (count > start) {
+        if (back) shade_back(s, frame, object, fragments + start, count - start);
+        else shade_front(s, frame, object, fragments + start, count - start);
     }
 }
 

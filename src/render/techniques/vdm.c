@@ -13,9 +13,8 @@
 
 #include "meso/bake_vdm.h"
 #include "render_internal.h"
+#include "render_simd.h"
 
-#define HALF_PI_F 1.57079632679f
-#define TWO_PI_F 6.28318530718f
 #define MAX_LEVELS MESO_VDM_MAX_LEVELS
 
 typedef struct vdm_state {
@@ -47,7 +46,6 @@ typedef struct vdm_state {
     uint16_t *level_weights[MAX_LEVELS]; /* half floats: half the memory traffic */
 } vdm_state;
 
-typedef float v8f __attribute__((vector_size(32)));
 #define MAX_CHUNKS (MESO_VDM_MAX_EIGEN / 8)
 
 static inline v8f load8(const float *p) {
@@ -280,7 +278,7 @@ static inline texel_axes texel_axes_of(const vdm_state *s, meso_vec2 uv, float p
         a.x = axis_wrap(x, width);
         a.y = axis_wrap(y, height);
     }
-    a.phi = axis_wrap(phi * (float)v->num_phi / TWO_PI_F, v->num_phi);
+    a.phi = axis_wrap(phi * (float)v->num_phi / (2.0f * MESO_PI), v->num_phi);
     return a;
 }
 
@@ -299,7 +297,7 @@ typedef struct column_set {
 } column_set;
 
 static inline column_set columns_of(const meso_vdm_view *v, float theta, float c) {
-    axis t = axis_clamp(theta * (float)v->num_theta / HALF_PI_F - 0.5f, v->num_theta);
+    axis t = axis_clamp(theta * (float)v->num_theta / (0.5f * MESO_PI) - 0.5f, v->num_theta);
     float cn = v->num_curvatures > 1
                    ? (c - v->curvature_min) / (v->curvature_max - v->curvature_min) *
                          (float)(v->num_curvatures - 1)
@@ -617,7 +615,7 @@ static void vdm_shade(const void *state, const meso_frame *frame, const meso_obj
     const meso_mesh *mesh = object->mesh;
     const meso_heightfield *hf = object->mesostructure.height_field;
     float depth_world = object->mesostructure.depth, depth_tiles = s->depth_tiles;
-    float theta_step = HALF_PI_F / (float)s->view.num_theta;
+    float theta_step = (0.5f * MESO_PI) / (float)s->view.num_theta;
     bool has_curvature = s->curvature && mesh->curvature_max && mesh->curvature_min &&
                          mesh->curvature_dir_max && mesh->curvature_dir_min;
     /* shading runs 8-wide over a chunk once its fragments know P', N' and T' */
@@ -656,7 +654,7 @@ static void vdm_shade(const void *state, const meso_frame *frame, const meso_obj
             float theta = acosf(fminf(vb.z, 1.0f)), phi = atan2f(vb.y, vb.x);
             float c = 0.0f, c_world = 0.0f;
             if (has_curvature) {
-                /* per vertex, then interpolated (§3.2); a batch is usually one triangle */
+                /* per vertex, then interpolated (§3.2); a triangle's fragments are consecutive */
                 if (f->triangle != cached_triangle) {
                     const uint32_t *tri = mesh->indices + 3 * (size_t)f->triangle;
                     for (int k = 0; k < 3; k++)
@@ -673,7 +671,7 @@ static void vdm_shade(const void *state, const meso_frame *frame, const meso_obj
                                            : s->tile_world;
                 c *= world_per_unit * world_per_unit / s->tile_world;
             }
-            float max_theta = HALF_PI_F;
+            float max_theta = 0.5f * MESO_PI;
             int level = 0;
             if (s->num_levels > 1) {
                 /* texels under the pixel: its world size at this depth over the texel's */
@@ -730,7 +728,7 @@ static void vdm_shade(const void *state, const meso_frame *frame, const meso_obj
                 float reach = depth_below * depth_tiles / lz; /* P' to P'' along L, bake units */
                 meso_vec2 uv_light = {uv.x + reach * lb.x, uv.y + reach * lb.y};
                 float theta_l = acosf(fminf(lz, 1.0f)), phi_l = atan2f(lb.y, lb.x);
-                float max_theta_l = HALF_PI_F;
+                float max_theta_l = 0.5f * MESO_PI;
                 float light_corners[8];
                 float d_l = lookup(s, uv_light, theta_l, phi_l, 0.0f, level, &max_theta_l,
                                    s->refine_steps > 0 ? light_corners : NULL);
