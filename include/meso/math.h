@@ -22,6 +22,8 @@ static inline meso_vec2 meso_vec2_make(float x, float y) { return (meso_vec2){x,
 static inline meso_vec3 meso_vec3_make(float x, float y, float z) { return (meso_vec3){x, y, z}; }
 static inline meso_vec3 meso_vec3_add(meso_vec3 a, meso_vec3 b) { return (meso_vec3){a.x + b.x, a.y + b.y, a.z + b.z}; }
 static inline meso_vec3 meso_vec3_sub(meso_vec3 a, meso_vec3 b) { return (meso_vec3){a.x - b.x, a.y - b.y, a.z - b.z}; }
+/* Component-wise product (colours: albedo times radiance). */
+static inline meso_vec3 meso_vec3_mul(meso_vec3 a, meso_vec3 b) { return (meso_vec3){a.x * b.x, a.y * b.y, a.z * b.z}; }
 static inline meso_vec3 meso_vec3_scale(meso_vec3 a, float s) { return (meso_vec3){a.x * s, a.y * s, a.z * s}; }
 /* a + b * s */
 static inline meso_vec3 meso_vec3_madd(meso_vec3 a, meso_vec3 b, float s) { return (meso_vec3){a.x + b.x * s, a.y + b.y * s, a.z + b.z * s}; }
