@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "meso/bake_rtv.h"
+#include "render_environment.h"
 #include "render_gi.h"
 
 enum { GI_BATCH = 64, GI_CHANNELS = 3 };
@@ -13,6 +14,7 @@ enum { GI_BATCH = 64, GI_CHANNELS = 3 };
 struct gdm_gi {
     meso_rtv *rtv;
     const meso_mesh *mesh;
+    const meso_environment *environment;
     float *radiance;     /* per vertex: 3 x 16 incident radiance in the vertex's frame */
     meso_vec3 *tangents; /* per vertex: the frame's unit T (meso_gi_vertex_tangent) */
     /* this frame's scene and frame with the environment removed (the direct part: constant
@@ -29,6 +31,7 @@ meso_result gdm_gi_create(meso_context *ctx, const meso_scene *scene, const meso
     gdm_gi *gi = calloc(1, sizeof *gi);
     if (!gi) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: gdm gi", object->name);
     gi->mesh = mesh;
+    gi->environment = scene->environment;
     meso_result r;
     gi->tangents = malloc((mesh->num_vertices ? mesh->num_vertices : 1) * sizeof *gi->tangents);
     if (!gi->tangents) {
@@ -84,8 +87,14 @@ void gdm_gi_begin_frame(gdm_gi *gi, const meso_frame *frame) {
 
 /* RTV(uvw, view) . L per unit albedo at one hit: L interpolated from the prism's vertices at
  * the hit's (u, v), the view in the interpolated tangent frame (as the vertices' frames,
- * render_gi_transfer.c, and the reference's rtv mode). */
-static void reflected_at(const gdm_gi *gi, const meso_frame *frame, const meso_fragment *f,
+ * render_gi_transfer.c, and the reference's rtv mode).
+ *
+ * A hit seen from below its base surface (the far wall of a woven teapot seen from inside
+ * through the near wall's holes) is lit, in the model, only by the vertices' outer
+ * hemisphere: nothing, the macro surface being opaque below its tangent plane. The model has
+ * no incident light for the inside of a closed mesh; there the shading model's unshadowed SH
+ * ambient at the hit's normal stands in (gi off's term). Returns false for such a hit. */
+static bool reflected_at(const gdm_gi *gi, const meso_frame *frame, const meso_fragment *f,
                          const gdm_gi_hit *hit, float out_rgb[3]) {
     const meso_mesh *mesh = gi->mesh;
     const uint32_t *v = hit->prism->vertices;
@@ -102,7 +111,15 @@ static void reflected_at(const gdm_gi *gi, const meso_frame *frame, const meso_f
     meso_vec3 toward = meso_vec3_normalize(meso_vec3_sub(frame->eye, f->position));
     meso_vec3 view = {meso_vec3_dot(toward, t), meso_vec3_dot(toward, bt),
                       meso_vec3_dot(toward, n)};
+    if (view.z < 0.0f) {
+        v8f r = v8_splat(0.0f), g = r, bl = r;
+        meso_environment_ambient8(gi->environment, v8_splat(f->normal.x), v8_splat(f->normal.y),
+                                  v8_splat(f->normal.z), &r, &g, &bl);
+        out_rgb[0] = r[0], out_rgb[1] = g[0], out_rgb[2] = bl[0];
+        return false;
+    }
     meso_rtv_evaluate(gi->rtv, hit->uvw, view, (const float(*)[MESO_SH_COUNT])radiance, out_rgb);
+    return true;
 }
 
 void gdm_gi_shade(const gdm_gi *gi, const meso_frame *frame, const meso_object *object,
