@@ -9,7 +9,8 @@
 #include "render_environment.h"
 #include "render_gi.h"
 
-enum { GI_BATCH = 64, GI_CHANNELS = 3 };
+/* GI_MAX_EIGEN: gdm's option gi_eigen is at most the 32 views of the default RTV */
+enum { GI_BATCH = 64, GI_CHANNELS = 3, GI_MAX_EIGEN = 32 };
 
 struct gdm_gi {
     meso_rtv *rtv;
@@ -17,11 +18,81 @@ struct gdm_gi {
     const meso_environment *environment;
     float *radiance;     /* per vertex: 3 x 16 incident radiance in the vertex's frame */
     meso_vec3 *tangents; /* per vertex: the frame's unit T (meso_gi_vertex_tangent) */
+    /* the RTV's arrays voxel-major and view-major, [voxel][16][k] and [view][16][k]: a hit
+     * reads 8 + 4 runs of 16 k floats instead of 16 x (8 + 4) scattered ones (bake_rtv.h
+     * keeps them coefficient-major, as §4.1's SVD produces them) */
+    float *weights, *eigen;
+    int stride; /* 16 k */
     /* this frame's scene and frame with the environment removed (the direct part: constant
      * ambient, lights, specular), and with ambient 1 and nothing else (the albedo) */
     meso_scene direct_scene, albedo_scene;
     meso_frame direct_frame, albedo_frame;
 };
+
+static meso_result pack_rtv(meso_context *ctx, gdm_gi *gi, const char *name) {
+    const meso_rtv *rtv = gi->rtv;
+    size_t k = (size_t)rtv->num_eigen, stride = MESO_SH_COUNT * k;
+    size_t voxels = (size_t)rtv->width * (size_t)rtv->height * (size_t)rtv->layers;
+    size_t views = (size_t)rtv->num_theta * (size_t)rtv->num_phi;
+    if (k > GI_MAX_EIGEN)
+        return meso_log_error(ctx, MESO_ERROR_LIMIT, "%s: gdm gi: %zu eigenfunctions, at most %d",
+                              name, k, (int)GI_MAX_EIGEN);
+    gi->stride = (int)stride;
+    gi->weights = malloc(voxels * stride * sizeof(float));
+    gi->eigen = malloc(views * stride * sizeof(float));
+    if (!gi->weights || !gi->eigen)
+        return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: gdm gi: RTV", name);
+    for (size_t i = 0; i < MESO_SH_COUNT; i++)
+        for (size_t e = 0; e < k; e++) {
+            for (size_t c = 0; c < voxels; c++)
+                gi->weights[c * stride + i * k + e] = rtv->weights[(i * voxels + c) * k + e];
+            for (size_t v = 0; v < views; v++)
+                gi->eigen[v * stride + i * k + e] = rtv->eigen[(i * k + e) * views + v];
+        }
+    return MESO_OK;
+}
+
+/* meso_rtv_evaluate on the packed arrays: the same sums in another order, 8 wide (16 k is a
+ * multiple of 8). */
+static void evaluate(const gdm_gi *gi, meso_vec3 uvw, meso_vec3 view,
+                     const float radiance[GI_CHANNELS][MESO_SH_COUNT], float out_rgb[3]) {
+    enum { MAX_CHUNKS = MESO_SH_COUNT * GI_MAX_EIGEN / 8 };
+    meso_rtv_cell cell;
+    meso_rtv_cell_at(gi->rtv, uvw, view, &cell);
+    int chunks = gi->stride / 8, k = gi->rtv->num_eigen;
+    v8f w[MAX_CHUNKS], e[MAX_CHUNKS];
+    for (int j = 0; j < chunks; j++) w[j] = e[j] = v8_splat(0.0f);
+    for (int c = 0; c < 8; c++) {
+        const float *p = gi->weights + cell.corner[c] * (size_t)gi->stride;
+        v8f cw = v8_splat(cell.corner_weight[c]);
+        for (int j = 0; j < chunks; j++) {
+            v8f x;
+            memcpy(&x, p + 8 * j, sizeof x);
+            w[j] += cw * x;
+        }
+    }
+    for (int v = 0; v < 4; v++) {
+        const float *p = gi->eigen + (size_t)cell.view_index[v] * (size_t)gi->stride;
+        v8f vw = v8_splat(cell.view_weight[v]);
+        for (int j = 0; j < chunks; j++) {
+            v8f x;
+            memcpy(&x, p + 8 * j, sizeof x);
+            e[j] += vw * x;
+        }
+    }
+    float product[MESO_SH_COUNT * GI_MAX_EIGEN];
+    for (int j = 0; j < chunks; j++) {
+        v8f x = w[j] * e[j];
+        memcpy(product + 8 * j, &x, sizeof x);
+    }
+    float rgb[GI_CHANNELS] = {0};
+    for (int i = 0; i < MESO_SH_COUNT; i++) {
+        float f = 0.0f;
+        for (int q = 0; q < k; q++) f += product[i * k + q];
+        for (int c = 0; c < GI_CHANNELS; c++) rgb[c] += f * radiance[c][i];
+    }
+    for (int c = 0; c < GI_CHANNELS; c++) out_rgb[c] = rgb[c] > 0.0f ? rgb[c] : 0.0f;
+}
 
 meso_result gdm_gi_create(meso_context *ctx, const meso_scene *scene, const meso_object *object,
                           const gdm_gi_desc *desc, gdm_gi **out_gi) {
@@ -49,6 +120,7 @@ meso_result gdm_gi_create(meso_context *ctx, const meso_scene *scene, const meso
         .layers = desc->layers,
         .eigen = desc->eigen};
     if ((r = meso_rtv_bake_cached(ctx, &rtv_desc, &gi->rtv)) != MESO_OK) goto fail;
+    if ((r = pack_rtv(ctx, gi, object->name)) != MESO_OK) goto fail;
     if ((r = meso_gi_vertex_radiance(ctx, mesh, scene->environment, NULL, &gi->radiance)) !=
         MESO_OK)
         goto fail;
@@ -64,12 +136,14 @@ void gdm_gi_destroy(gdm_gi *gi) {
     meso_rtv_destroy(gi->rtv);
     free(gi->radiance);
     free(gi->tangents);
+    free(gi->weights);
+    free(gi->eigen);
     free(gi);
 }
 
 size_t gdm_gi_memory(const gdm_gi *gi) {
     if (!gi) return 0;
-    return (size_t)gi->rtv->compressed_bytes +
+    return 2 * (size_t)gi->rtv->compressed_bytes + /* the RTV and its packed copy */
            gi->mesh->num_vertices * (GI_CHANNELS * MESO_SH_COUNT * sizeof(float) + sizeof(meso_vec3));
 }
 
@@ -118,7 +192,7 @@ static bool reflected_at(const gdm_gi *gi, const meso_frame *frame, const meso_f
         out_rgb[0] = r[0], out_rgb[1] = g[0], out_rgb[2] = bl[0];
         return false;
     }
-    meso_rtv_evaluate(gi->rtv, hit->uvw, view, (const float(*)[MESO_SH_COUNT])radiance, out_rgb);
+    evaluate(gi, hit->uvw, view, (const float(*)[MESO_SH_COUNT])radiance, out_rgb);
     return true;
 }
 
