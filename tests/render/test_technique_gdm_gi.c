@@ -8,30 +8,14 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gi_test_scene.h"
 #include "test_util.h"
 
-/* A plane of size 2 seen from above at an angle, linear output, albedo `albedo`; `extra` adds
- * top-level keys (environment, lights, ambient). */
 static meso_scene *plane_scene(meso_context *ctx, int size, const char *extra,
                                const char *mesostructure, float albedo) {
-    char json[4096];
-    snprintf(json, sizeof json,
-             "{\"image\": {\"width\": %d, \"height\": %d, \"encoding\": \"linear\"},"
-             " \"camera\": {\"eye\": [0, 1.6, 1.2], \"target\": [0, 0, 0], \"fov_y_deg\": 40},"
-             " %s,"
-             " \"objects\": [{\"shape\": \"plane\", \"size\": 2, \"uv_scale\": [2, 2],"
-             " \"mesostructure\": %s,"
-             " \"material\": {\"albedo\": [%g, %g, %g]}, \"technique\": \"gdm\"}]}",
-             size, size, extra, mesostructure, (double)albedo, (double)albedo, (double)albedo);
-    meso_scene *scene = NULL;
-    if (meso_scene_parse(ctx, json, "gdm-gi.json", NULL, &scene) != MESO_OK)
-        fail_msg("scene: %s", meso_context_last_error(ctx));
-    return scene;
+    return gi_plane_scene(ctx, size, extra, mesostructure, albedo, "gdm");
 }
 
-static const char uniform_sky[] =
-    "\"ambient\": [0, 0, 0], \"environment\": {\"sky\": {\"zenith\": [1, 1, 1], \"horizon\": "
-    "[1, 1, 1], \"ground\": [1, 1, 1], \"sun\": false, \"width\": 32}}";
 static const char default_sky_and_sun[] =
     "\"ambient\": [0.02, 0.02, 0.02], \"environment\": {\"sky\": {\"width\": 64}},"
     " \"lights\": [{\"type\": \"directional\", \"direction\": [0.5, 0.7, 0.3], \"color\": [1, 1, 1]}]";
@@ -55,31 +39,19 @@ static meso_framebuffer *render_gdm(meso_context *ctx, const meso_scene *scene, 
     return fb;
 }
 
-static double mean_covered(const meso_framebuffer *fb, size_t *out_covered) {
-    double sum = 0.0;
-    size_t covered = 0;
-    for (size_t p = 0; p < (size_t)fb->width * (size_t)fb->height; p++)
-        if (fb->coverage[p] > 0.0f) {
-            sum += fb->color[3 * p + 1];
-            covered++;
-        }
-    if (out_covered) *out_covered = covered;
-    return covered ? sum / (double)covered : 0.0;
-}
-
 static bool same_bits(const float *a, const float *b, size_t count) {
     return memcmp(a, b, count * sizeof(float)) == 0;
 }
 
-static void test_flat_slab_under_a_uniform_sky_reflects_the_irradiance(void **state) {
+static void test_flat_slab_under_a_gi_uniform_sky_reflects_the_irradiance(void **state) {
     (void)state;
     meso_context *ctx = test_context(2);
-    meso_scene *scene = plane_scene(ctx, 24, uniform_sky, flat_field, 0.5f);
+    meso_scene *scene = plane_scene(ctx, 24, gi_uniform_sky, flat_field, 0.5f);
     meso_framebuffer *fb = render_gdm(ctx, scene, -1);
     /* E = pi under radiance 1: albedo E / pi = 0.5 (the RTV's order-4 cosine lobe and the
      * vertices' hemisphere-cut radiance: within 2 %, as the reference's rtv mode) */
     size_t covered = 0;
-    double mean = mean_covered(fb, &covered);
+    double mean = gi_mean_covered(fb, &covered);
     print_message("flat slab under a uniform sky: mean %.4f over %zu pixels (0.5 expected)\n",
                   mean, covered);
     assert_true(covered > 200);
@@ -100,8 +72,8 @@ static void test_bricks_agree_with_the_rtv_at_the_true_hits_and_shadow_the_sky(v
     meso_render_desc desc = {.technique = "reference", .options = options, .num_options = 1};
     meso_framebuffer *rtv = NULL;
     assert_int_equal(meso_render_scene(ctx, scene, &desc, &rtv), MESO_OK);
-    double a = mean_covered(gi, NULL), b = mean_covered(rtv, NULL);
-    double c = mean_covered(unshadowed, NULL);
+    double a = gi_mean_covered(gi, NULL), b = gi_mean_covered(rtv, NULL);
+    double c = gi_mean_covered(unshadowed, NULL);
     print_message("bricks: gdm gi %.4f, reference rtv %.4f, gdm gi off (SH ambient) %.4f\n", a, b,
                   c);
     /* the same model at gdm's hits and at the true ones: the hits and the shadows differ by
@@ -152,7 +124,7 @@ static void test_gi_off_or_without_a_sky_is_gdm_bit_for_bit(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_flat_slab_under_a_uniform_sky_reflects_the_irradiance),
+        cmocka_unit_test(test_flat_slab_under_a_gi_uniform_sky_reflects_the_irradiance),
         cmocka_unit_test(test_bricks_agree_with_the_rtv_at_the_true_hits_and_shadow_the_sky),
         cmocka_unit_test(test_gi_off_or_without_a_sky_is_gdm_bit_for_bit),
     };
