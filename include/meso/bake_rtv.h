@@ -29,8 +29,8 @@
  * Files: bake file kind "rtv" (meso_rtv_save / meso_rtv_load): arrays "weights" f32
  * [16][voxels][k], "eigen" f32 [16][k][views], "shape" i32 {width, height, layers, num_theta,
  * num_phi}, "rmse" f32 [16]; every size is checked against the others and the limits, every
- * value is finite, before use. The rendering hook at the GDM hit (docs/techniques/gdm-gi.md)
- * is pending.
+ * value is finite, before use. The rendering hook at the GDM hit is the gdm technique's option
+ * `gi` (docs/techniques/gdm-gi.md).
  *
  * Conventions (those of bake_gdm.h): x = u, y = v in tiles (period 1), z = w in shell depths
  * (0 at the mesh, 1 at the shell's bottom); voxel (i, j, l) at u = (i + 0.5) / width,
@@ -108,6 +108,17 @@ meso_result meso_rtv_from_bake_file(meso_context *ctx, const meso_bake_file *bak
  * like snprintf and returns the length it needed; 0 when the file is not an rtv bake whose
  * arrays have the expected shapes. Thread-safe. */
 size_t meso_rtv_describe(const meso_bake_file *bake, char *buffer, size_t size);
+
+/* Where meso_rtv_evaluate reads for (uvw, view): the 8 voxels (indices into the voxel arrays,
+ * [layers][height][width]) with their trilinear weights and the 4 views ([num_theta][num_phi])
+ * with their bilinear weights. For renderers that lay the arrays out their own way. Pure. */
+typedef struct meso_rtv_cell {
+    size_t corner[8];
+    float corner_weight[8];
+    int view_index[4];
+    float view_weight[4];
+} meso_rtv_cell;
+void meso_rtv_cell_at(const meso_rtv *rtv, meso_vec3 uvw, meso_vec3 view, meso_rtv_cell *out);
 
 /* The compressed response at (u, v, w) (trilinear between voxels, periodic in u and v, clamped
  * in w) seen from `view` (unit, tangent frame, toward the viewer; bilinear between the baked

@@ -360,10 +360,7 @@ void meso_rtv_destroy(meso_rtv *rtv) {
 
 /* ---- Evaluation --------------------------------------------------------------------------- */
 
-void meso_rtv_evaluate(const meso_rtv *rtv, meso_vec3 uvw, meso_vec3 view,
-                       const float radiance[3][MESO_SH_COUNT], float out_rgb[3]) {
-    int k = rtv->num_eigen, views = rtv->num_theta * rtv->num_phi;
-    size_t voxels = (size_t)rtv->width * (size_t)rtv->height * (size_t)rtv->layers;
+void meso_rtv_cell_at(const meso_rtv *rtv, meso_vec3 uvw, meso_vec3 view, meso_rtv_cell *out) {
     /* the voxel corners and weights (as lookup), the view cell and weights */
     float x = (uvw.x - floorf(uvw.x)) * (float)rtv->width - 0.5f;
     float y = (1.0f - (uvw.y - floorf(uvw.y))) * (float)rtv->height - 0.5f;
@@ -373,13 +370,11 @@ void meso_rtv_evaluate(const meso_rtv *rtv, meso_vec3 uvw, meso_vec3 view,
     int j0 = ((int)fy % rtv->height + rtv->height) % rtv->height, j1 = (j0 + 1) % rtv->height;
     int l0 = (int)fz < rtv->layers - 1 ? (int)fz : rtv->layers - 1;
     int l1 = l0 + 1 < rtv->layers ? l0 + 1 : l0;
-    size_t corner[8];
-    float corner_weight[8];
     for (int c = 0; c < 8; c++) {
         int ii = c & 1 ? i1 : i0, jj = c & 2 ? j1 : j0, ll = c & 4 ? l1 : l0;
-        corner[c] = ((size_t)ll * (size_t)rtv->height + (size_t)jj) * (size_t)rtv->width + (size_t)ii;
-        corner_weight[c] = (c & 1 ? x - fx : 1.0f - (x - fx)) * (c & 2 ? y - fy : 1.0f - (y - fy)) *
-                           (c & 4 ? z - fz : 1.0f - (z - fz));
+        out->corner[c] = ((size_t)ll * (size_t)rtv->height + (size_t)jj) * (size_t)rtv->width + (size_t)ii;
+        out->corner_weight[c] = (c & 1 ? x - fx : 1.0f - (x - fx)) * (c & 2 ? y - fy : 1.0f - (y - fy)) *
+                                (c & 4 ? z - fz : 1.0f - (z - fz));
     }
     float theta = acosf(meso_clampf(view.z, 0.0f, 1.0f));
     float t = meso_clampf(theta / (0.5f * (float)M_PI) * (float)rtv->num_theta - 0.5f, 0.0f,
@@ -389,9 +384,21 @@ void meso_rtv_evaluate(const meso_rtv *rtv, meso_vec3 uvw, meso_vec3 view,
     int t0 = (int)t, t1 = t0 + 1 < rtv->num_theta ? t0 + 1 : t0;
     int p0 = (int)p % rtv->num_phi, p1 = (p0 + 1) % rtv->num_phi;
     float tt = t - (float)t0, tp = p - floorf(p);
-    int view_index[4] = {t0 * rtv->num_phi + p0, t0 * rtv->num_phi + p1, t1 * rtv->num_phi + p0,
-                         t1 * rtv->num_phi + p1};
-    float view_weight[4] = {(1 - tt) * (1 - tp), (1 - tt) * tp, tt * (1 - tp), tt * tp};
+    out->view_index[0] = t0 * rtv->num_phi + p0, out->view_index[1] = t0 * rtv->num_phi + p1;
+    out->view_index[2] = t1 * rtv->num_phi + p0, out->view_index[3] = t1 * rtv->num_phi + p1;
+    out->view_weight[0] = (1 - tt) * (1 - tp), out->view_weight[1] = (1 - tt) * tp;
+    out->view_weight[2] = tt * (1 - tp), out->view_weight[3] = tt * tp;
+}
+
+void meso_rtv_evaluate(const meso_rtv *rtv, meso_vec3 uvw, meso_vec3 view,
+                       const float radiance[3][MESO_SH_COUNT], float out_rgb[3]) {
+    int k = rtv->num_eigen, views = rtv->num_theta * rtv->num_phi;
+    size_t voxels = (size_t)rtv->width * (size_t)rtv->height * (size_t)rtv->layers;
+    meso_rtv_cell cell;
+    meso_rtv_cell_at(rtv, uvw, view, &cell);
+    const size_t *corner = cell.corner;
+    const float *corner_weight = cell.corner_weight, *view_weight = cell.view_weight;
+    const int *view_index = cell.view_index;
     out_rgb[0] = out_rgb[1] = out_rgb[2] = 0.0f;
     for (int i = 0; i < MESO_SH_COUNT; i++) {
         float f = 0.0f;

@@ -215,21 +215,6 @@ static meso_vec3 rtv_reflected(const path_job *pj, const meso_frame *frame,
     return meso_vec3_mul(albedo, (meso_vec3){rgb[0], rgb[1], rgb[2]});
 }
 
-/* The shell's world aspect (depth / tile side) of an object: the tile side is the mean of
- * |dP/du| and |dP/dv| over its vertices. */
-static float shell_aspect(const meso_object *object) {
-    const meso_mesh *mesh = object->mesh;
-    double side = 0.0;
-    size_t counted = 0;
-    for (size_t v = 0; mesh->tangents && mesh->bitangents && v < mesh->num_vertices; v++) {
-        float s = 0.5f * (meso_vec3_length(mesh->tangents[v]) + meso_vec3_length(mesh->bitangents[v]));
-        if (s > 0.0f && isfinite(s)) side += s, counted++;
-    }
-    float mean = counted ? (float)(side / (double)counted) : 1.0f;
-    float aspect = object->mesostructure.depth / mean;
-    return meso_clampf(aspect, 1e-4f, 100.0f);
-}
-
 /* Bake (through the cache) every object's RTV and per-vertex radiance. */
 static meso_result prepare_rtv(meso_context *ctx, path_job *pj) {
     const meso_reference *reference = pj->reference;
@@ -250,7 +235,7 @@ static meso_result prepare_rtv(meso_context *ctx, path_job *pj) {
                                                  ? ms->height_field
                                                  : NULL,
                               .solid = ms->kind == MESO_MESOSTRUCTURE_SOLID ? ms->solid : NULL,
-                              .aspect = shell_aspect(object)};
+                              .aspect = meso_gi_shell_aspect(object)};
         meso_result r = meso_rtv_bake_cached(ctx, &desc, &pj->rtvs[o]);
         if (r == MESO_OK)
             r = meso_gi_vertex_radiance(ctx, object->mesh, scene->environment, NULL,

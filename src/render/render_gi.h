@@ -19,6 +19,7 @@
 
 #include "meso/environment.h"
 #include "meso/geom.h"
+#include "meso/scene.h"
 
 /* Zero fields take the defaults. */
 typedef struct meso_gi_vertex_desc {
@@ -33,6 +34,15 @@ typedef struct meso_gi_vertex_desc {
 meso_result meso_gi_vertex_radiance(meso_context *ctx, const meso_mesh *mesh,
                                     const meso_environment *environment,
                                     const meso_gi_vertex_desc *desc, float **out_radiance);
+
+/* The unit tangent T of vertex v's frame: dP/du made orthogonal to the normal (any direction
+ * across the normal where the mesh has no usable tangent). The frame is (T, N x T, N). */
+meso_vec3 meso_gi_vertex_tangent(const meso_mesh *mesh, size_t v);
+
+/* The shell's world aspect (depth / tile side) of an object with mesostructure, the RTV bake's
+ * `aspect` (bake_rtv.h): the tile side is the mean of |dP/du| and |dP/dv| over its vertices;
+ * clamped to [1e-4, 100]. Pure. */
+float meso_gi_shell_aspect(const meso_object *object);
 
 /* The incident radiance at a point of triangle (i0, i1, i2) with barycentric weights
  * (b0, b1, b2): the vertices' coefficients interpolated (the paper interpolates the vertex

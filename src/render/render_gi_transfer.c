@@ -27,8 +27,7 @@ static meso_vec3 fibonacci_direction(int k, int n) {
     return (meso_vec3){(float)(r * cos(phi)), (float)z, (float)(r * sin(phi))};
 }
 
-/* The vertex's tangent frame as the rows of the matrix M with g(d) = f(M d): columns T, B, N. */
-static void vertex_frame(const meso_mesh *mesh, size_t v, float out_frame[3][3]) {
+meso_vec3 meso_gi_vertex_tangent(const meso_mesh *mesh, size_t v) {
     meso_vec3 n = meso_vec3_normalize(mesh->normals[v]);
     meso_vec3 t = mesh->tangents ? mesh->tangents[v] : (meso_vec3){0, 0, 0};
     t = meso_vec3_sub(t, meso_vec3_scale(n, meso_vec3_dot(n, t)));
@@ -37,7 +36,26 @@ static void vertex_frame(const meso_mesh *mesh, size_t v, float out_frame[3][3])
         t = fabsf(n.x) < 0.9f ? (meso_vec3){1, 0, 0} : (meso_vec3){0, 1, 0};
         t = meso_vec3_sub(t, meso_vec3_scale(n, meso_vec3_dot(n, t)));
     }
-    t = meso_vec3_normalize(t);
+    return meso_vec3_normalize(t);
+}
+
+float meso_gi_shell_aspect(const meso_object *object) {
+    const meso_mesh *mesh = object->mesh;
+    double side = 0.0;
+    size_t counted = 0;
+    for (size_t v = 0; mesh->tangents && mesh->bitangents && v < mesh->num_vertices; v++) {
+        float s = 0.5f * (meso_vec3_length(mesh->tangents[v]) + meso_vec3_length(mesh->bitangents[v]));
+        if (s > 0.0f && isfinite(s)) side += s, counted++;
+    }
+    float mean = counted ? (float)(side / (double)counted) : 1.0f;
+    float aspect = object->mesostructure.depth / mean;
+    return meso_clampf(aspect, 1e-4f, 100.0f);
+}
+
+/* The vertex's tangent frame as the rows of the matrix M with g(d) = f(M d): columns T, B, N. */
+static void vertex_frame(const meso_mesh *mesh, size_t v, float out_frame[3][3]) {
+    meso_vec3 n = meso_vec3_normalize(mesh->normals[v]);
+    meso_vec3 t = meso_gi_vertex_tangent(mesh, v);
     meso_vec3 b = meso_vec3_cross(n, t);
     const meso_vec3 columns[3] = {t, b, n};
     for (int c = 0; c < 3; c++) {

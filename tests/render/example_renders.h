@@ -13,6 +13,7 @@ static const meso_option example_small_bakes[] = {
     {"vdm", "num_curvatures", 4},      {"relief_layers", "size", 64},
     {"gdm", "resolution", 16},         {"gdm", "layers", 8},
     {"gdm", "num_theta", 8},           {"gdm", "num_phi", 8},
+    {"gdm", "gi_resolution", 16},      {"gdm", "gi_layers", 4},
 };
 
 /* examples/<name>.json, its image made side x side. */

@@ -7,30 +7,14 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gi_test_scene.h"
 #include "test_util.h"
 
-/* A plane of size 2 seen from above at an angle, linear output, albedo `albedo`; `extra` adds
- * top-level keys (environment, lights, ambient) and `mesostructure` the object's. */
 static meso_scene *plane_scene(meso_context *ctx, int size, const char *extra,
                                const char *mesostructure, float albedo) {
-    char json[4096];
-    snprintf(json, sizeof json,
-             "{\"image\": {\"width\": %d, \"height\": %d, \"encoding\": \"linear\"},"
-             " \"camera\": {\"eye\": [0, 1.6, 1.2], \"target\": [0, 0, 0], \"fov_y_deg\": 40},"
-             " %s,"
-             " \"objects\": [{\"shape\": \"plane\", \"size\": 2, \"uv_scale\": [2, 2]%s%s,"
-             " \"material\": {\"albedo\": [%g, %g, %g]}, \"technique\": \"reference\"}]}",
-             size, size, extra, mesostructure ? ", \"mesostructure\": " : "",
-             mesostructure ? mesostructure : "", (double)albedo, (double)albedo, (double)albedo);
-    meso_scene *scene = NULL;
-    if (meso_scene_parse(ctx, json, "path.json", NULL, &scene) != MESO_OK)
-        fail_msg("scene: %s", meso_context_last_error(ctx));
-    return scene;
+    return gi_plane_scene(ctx, size, extra, mesostructure, albedo, "reference");
 }
 
-static const char uniform_sky[] =
-    "\"ambient\": [0, 0, 0], \"environment\": {\"sky\": {\"zenith\": [1, 1, 1], \"horizon\": "
-    "[1, 1, 1], \"ground\": [1, 1, 1], \"sun\": false, \"width\": 32}}";
 static const char bricks[] =
     "{\"height_map\": {\"procedural\": \"bricks\", \"resolution\": 128}, \"depth\": 0.1}";
 
@@ -45,28 +29,16 @@ static meso_framebuffer *render(meso_context *ctx, const meso_scene *scene, int 
     return fb;
 }
 
-static double mean_covered(const meso_framebuffer *fb, size_t *out_covered) {
-    double sum = 0.0;
-    size_t covered = 0;
-    for (size_t p = 0; p < (size_t)fb->width * (size_t)fb->height; p++)
-        if (fb->coverage[p] > 0.0f) {
-            sum += fb->color[3 * p + 1];
-            covered++;
-        }
-    if (out_covered) *out_covered = covered;
-    return covered ? sum / (double)covered : 0.0;
-}
-
-static void test_path_flat_surface_under_uniform_sky_is_albedo_times_radiance(void **state) {
+static void test_path_flat_surface_under_gi_uniform_sky_is_albedo_times_radiance(void **state) {
     (void)state;
     meso_context *ctx = test_context(2);
     /* L = 1 from every direction, albedo 0.5, no ambient, no lights: the plane receives
      * E = pi L from its hemisphere and reflects albedo E / pi = 0.5 everywhere */
-    meso_scene *scene = plane_scene(ctx, 24, uniform_sky, NULL, 0.5f);
+    meso_scene *scene = plane_scene(ctx, 24, gi_uniform_sky, NULL, 0.5f);
     meso_framebuffer *fb = render(ctx, scene, 16, 3);
     size_t covered = 0;
     /* the mean of ~500 pixels of 16 samples: its standard deviation is about 0.002 */
-    assert_float_equal(mean_covered(fb, &covered), 0.5, 0.006);
+    assert_float_equal(gi_mean_covered(fb, &covered), 0.5, 0.006);
     assert_true(covered > 24 * 24 / 2);
     /* single pixels scatter by about 0.04 (the two strategies' weights vary with the angle) */
     for (size_t p = 0; p < 24 * 24; p++)
@@ -99,7 +71,7 @@ static void test_path_without_environment_or_interreflection_is_the_direct_refer
         brighter += bounced->color[p] > direct->color[p] + 1e-3f;
     }
     assert_true(brighter > n / 10);
-    assert_true(mean_covered(bounced, NULL) > mean_covered(direct, NULL) + 0.005);
+    assert_true(gi_mean_covered(bounced, NULL) > gi_mean_covered(direct, NULL) + 0.005);
     meso_framebuffer_destroy(bounced);
     meso_framebuffer_destroy(path);
     meso_framebuffer_destroy(direct);
@@ -168,7 +140,7 @@ static void test_path_output_is_identical_for_any_thread_count(void **state) {
 static void test_path_and_sh_ambient_agree_on_an_open_plane(void **state) {
     (void)state;
     meso_context *ctx = test_context(2);
-    const char *skies[2] = {uniform_sky,
+    const char *skies[2] = {gi_uniform_sky,
                             "\"ambient\": [0, 0, 0], \"environment\": {\"sky\": {\"width\": 64}}"};
     const double tolerance[2] = {0.003, 0.03};
     for (int k = 0; k < 2; k++) {
@@ -177,7 +149,7 @@ static void test_path_and_sh_ambient_agree_on_an_open_plane(void **state) {
         meso_render_desc desc = {.technique = "flat"};
         meso_framebuffer *flat = NULL;
         assert_int_equal(meso_render_scene(ctx, scene, &desc, &flat), MESO_OK);
-        double a = mean_covered(flat, NULL), b = mean_covered(truth, NULL);
+        double a = gi_mean_covered(flat, NULL), b = gi_mean_covered(truth, NULL);
         print_message("sky %d: flat with SH ambient %.4f, path traced %.4f\n", k, a, b);
         assert_float_equal(a, b, tolerance[k] * b + 0.002);
         /* and it is not the ambient term alone (0 here) */
@@ -200,13 +172,13 @@ static void test_rtv_mode_against_the_closed_form_and_the_truth(void **state) {
     const char flat_field[] =
         "{\"height_map\": {\"procedural\": \"tiles\", \"resolution\": 16, \"gap\": 0.001, "
         "\"bevel\": 0.001}, \"depth\": 0.0001}";
-    meso_scene *scene = plane_scene(ctx, 24, uniform_sky, flat_field, 0.5f);
+    meso_scene *scene = plane_scene(ctx, 24, gi_uniform_sky, flat_field, 0.5f);
     meso_option options[1] = {{"reference", "rtv", 1}};
     meso_render_desc desc = {.options = options, .num_options = 1};
     meso_framebuffer *fb = NULL;
     assert_int_equal(meso_render_scene(ctx, scene, &desc, &fb), MESO_OK);
     /* the hemisphere-cut incident radiance truncated at order 4: within 2 % */
-    assert_float_equal(mean_covered(fb, NULL), 0.5, 0.01);
+    assert_float_equal(gi_mean_covered(fb, NULL), 0.5, 0.01);
     meso_framebuffer_destroy(fb);
     meso_scene_destroy(scene);
 
@@ -215,8 +187,8 @@ static void test_rtv_mode_against_the_closed_form_and_the_truth(void **state) {
     assert_int_equal(meso_render_scene(ctx, scene, &desc, &fb), MESO_OK);
     meso_framebuffer *truth = render(ctx, scene, 64, 1);
     meso_framebuffer *unshadowed = render(ctx, scene, 0, 0); /* the SH ambient, no shadowing */
-    double a = mean_covered(fb, NULL), b = mean_covered(truth, NULL);
-    double c = mean_covered(unshadowed, NULL);
+    double a = gi_mean_covered(fb, NULL), b = gi_mean_covered(truth, NULL);
+    double c = gi_mean_covered(unshadowed, NULL);
     print_message("bricks: RTV mode %.4f, path traced %.4f, unshadowed SH ambient %.4f; "
                   "RMSE against the truth: RTV %.4f, SH ambient %.4f\n",
                   a, b, c, rmse(fb, truth), rmse(unshadowed, truth));
@@ -240,7 +212,7 @@ static void test_rtv_mode_against_the_closed_form_and_the_truth(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_path_flat_surface_under_uniform_sky_is_albedo_times_radiance),
+        cmocka_unit_test(test_path_flat_surface_under_gi_uniform_sky_is_albedo_times_radiance),
         cmocka_unit_test(test_path_without_environment_or_interreflection_is_the_direct_reference),
         cmocka_unit_test(test_path_error_falls_as_one_over_sqrt_samples),
         cmocka_unit_test(test_path_output_is_identical_for_any_thread_count),

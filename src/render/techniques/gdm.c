@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gdm_gi.h"
 #include "gdm_lookup.h"
 #include "meso/bake_gdm.h"
 #include "meso/prism.h"
@@ -35,12 +36,15 @@ typedef struct gdm_state {
     meso_vec3 voxel;     /* a voxel's sides in texture units */
     float refine_window; /* texture units: 3 layers */
     float hit_margin;    /* d < dt - hit_margin is a hit */
+    gdm_gi *gi;          /* global illumination (gdm_gi.h); NULL: off */
 } gdm_state;
 
 typedef struct gdm_options {
     bool compressed, shadows;
     int normals, eigenmaps, resolution, layers, num_theta, num_phi, refine_steps, shadow_steps;
     float shadow_bias, hit_margin;
+    bool gi;
+    int gi_resolution, gi_layers, gi_eigen;
 } gdm_options;
 
 static const meso_technique_option gdm_option_table[] = {
@@ -79,12 +83,25 @@ static const meso_technique_option gdm_option_table[] = {
                     "beyond the paper: check the hit (and a shadow) on the mesostructure and "
                     "bisect this many times; 0: the paper's d < |T_out - T_in| and d_L",
                     gdm_options, refine_steps),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, gi, 0, 1, 1,
+                    "where the scene has an environment: its light through the radiance "
+                    "transfer volume (shadowed, interreflected; docs/techniques/gdm-gi.md); "
+                    "0: the shading model's unshadowed SH ambient",
+                    gdm_options, gi),
+    MESO_OPTION_ROW(MESO_OPTION_INT, gi_resolution, 4, 256, 32, "gi: RTV voxels a side in u and v",
+                    gdm_options, gi_resolution),
+    MESO_OPTION_ROW(MESO_OPTION_INT, gi_layers, 2, 64, 8, "gi: RTV voxels in depth (w)",
+                    gdm_options, gi_layers),
+    MESO_OPTION_ROW(MESO_OPTION_INT, gi_eigen, 1, 32, 4,
+                    "gi: RTV eigenfunctions kept per coefficient (§4.1; at most the 32 views)",
+                    gdm_options, gi_eigen),
 };
 
 static void gdm_release(void *state) {
     gdm_state *s = state;
     if (!s) return;
     meso_gdm_destroy(s->gdm);
+    gdm_gi_destroy(s->gi);
     gdm_lookup_table_deinit(&s->table);
     meso_prism_layer_destroy(s->layer);
     free(s->drawn_indices);
@@ -169,6 +186,13 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
             goto fail;
         }
     }
+    if (options.gi && scene->environment &&
+        (r = gdm_gi_create(ctx, scene, object,
+                           &(gdm_gi_desc){.resolution = options.gi_resolution,
+                                          .layers = options.gi_layers,
+                                          .eigen = options.gi_eigen},
+                           &s->gi)) != MESO_OK)
+        goto fail;
     *out_state = s;
     return MESO_OK;
 fail:
@@ -186,6 +210,7 @@ static meso_result gdm_geometry(meso_context *ctx, void *state, const meso_frame
                                 const meso_mesh **out_mesh) {
     (void)ctx;
     gdm_state *s = state;
+    if (s->gi) gdm_gi_begin_frame(s->gi, frame);
     const meso_mesh *faces = s->layer->faces;
     size_t n = s->layer->num_prisms, total = faces->num_triangles;
     float *keys = s->sort_keys;
@@ -400,7 +425,7 @@ static bool shadowed(const gdm_state *s, meso_vec3 t, meso_vec3 normal_t, meso_v
 /* One fragment: false when the ray leaves its prism without meeting the mesostructure. Fills
  * position, normal, uv, out_depth and the lights' visibility. */
 static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_object *object,
-                      meso_fragment *f, float *visibility) {
+                      meso_fragment *f, float *visibility, gdm_gi_hit *out_hit) {
     const meso_prism_layer *layer = s->layer;
     const meso_mesh *mesh = object->mesh;
     int slot;
@@ -460,6 +485,7 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
     f->position = position;
     f->normal = normal;
     f->uv = (meso_vec2){hit.x, hit.y};
+    *out_hit = (gdm_gi_hit){hit, prism};
     const meso_scene *scene = frame->scene;
     for (int li = 0; li < scene->num_lights; li++) {
         visibility[li] = 1.0f;
@@ -478,12 +504,14 @@ static void gdm_shade(const void *state, const meso_frame *frame, const meso_obj
     int num_lights = frame->scene->num_lights;
     enum { CHUNK = 64 };
     float visibility[CHUNK * MESO_SCENE_MAX_LIGHTS];
+    gdm_gi_hit hits[CHUNK];
     for (size_t start = 0; start < count; start += CHUNK) {
         size_t end = start + CHUNK < count ? start + CHUNK : count;
         for (size_t i = start; i < end; i++) {
             /* fragments of one batch may come from different faces and prisms */
             meso_fragment *f = &fragments[i];
-            if (!shade_one(s, frame, object, f, visibility + (i - start) * (size_t)num_lights))
+            if (!shade_one(s, frame, object, f, visibility + (i - start) * (size_t)num_lights,
+                           &hits[i - start]))
                 f->discard = true;
         }
         /* shade the runs of hits 8-wide; misses draw nothing */
@@ -494,8 +522,11 @@ static void gdm_shade(const void *state, const meso_frame *frame, const meso_obj
             }
             size_t run = i;
             while (run < end && !fragments[run].discard) run++;
-            meso_shade_fragments(frame, object, fragments + i, run - i,
-                                 visibility + (i - start) * (size_t)num_lights);
+            const float *v = visibility + (i - start) * (size_t)num_lights;
+            if (s->gi)
+                gdm_gi_shade(s->gi, frame, object, fragments + i, run - i, v, hits + (i - start));
+            else
+                meso_shade_fragments(frame, object, fragments + i, run - i, v);
             i = run;
         }
     }
@@ -509,7 +540,8 @@ static size_t gdm_memory(const void *state) {
     size_t normals = (size_t)v.width * (size_t)v.height * (size_t)v.layers * 3 * sizeof(float);
     return (size_t)c.compressed_bytes + (v.raw ? (size_t)c.raw_bytes : 0) + normals +
            gdm_lookup_table_bytes(&s->table) + meso_prism_layer_memory(s->layer) +
-           s->layer->faces->num_triangles * (4 * sizeof(uint32_t) + sizeof(float));
+           s->layer->faces->num_triangles * (4 * sizeof(uint32_t) + sizeof(float)) +
+           gdm_gi_memory(s->gi);
 }
 
 const meso_technique meso_technique_gdm = {

@@ -1,0 +1,224 @@
+/* gdm under global illumination: the RTV . incident radiance dot product at the GDM hit
+ * (gdm_gi.h; GDM paper §3.2, §4.2; docs/techniques/gdm-gi.md). */
+#include "gdm_gi.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "meso/bake_rtv.h"
+#include "render_environment.h"
+#include "render_gi.h"
+
+/* GI_MAX_EIGEN: gdm's option gi_eigen is at most the 32 views of the default RTV */
+enum { GI_BATCH = 64, GI_CHANNELS = 3, GI_MAX_EIGEN = 32 };
+
+struct gdm_gi {
+    meso_rtv *rtv;
+    const meso_mesh *mesh;
+    const meso_environment *environment;
+    float *radiance;     /* per vertex: 3 x 16 incident radiance in the vertex's frame */
+    meso_vec3 *tangents; /* per vertex: the frame's unit T (meso_gi_vertex_tangent) */
+    /* the RTV's arrays voxel-major and view-major, [voxel][16][k] and [view][16][k]: a hit
+     * reads 8 + 4 runs of 16 k floats instead of 16 x (8 + 4) scattered ones (bake_rtv.h
+     * keeps them coefficient-major, as §4.1's SVD produces them) */
+    float *weights, *eigen;
+    int stride; /* 16 k */
+    /* this frame's scene and frame with the environment removed (the direct part: constant
+     * ambient, lights, specular), and with ambient 1 and nothing else (the albedo) */
+    meso_scene direct_scene, albedo_scene;
+    meso_frame direct_frame, albedo_frame;
+};
+
+static meso_result pack_rtv(meso_context *ctx, gdm_gi *gi, const char *name) {
+    const meso_rtv *rtv = gi->rtv;
+    size_t k = (size_t)rtv->num_eigen, stride = MESO_SH_COUNT * k;
+    size_t voxels = (size_t)rtv->width * (size_t)rtv->height * (size_t)rtv->layers;
+    size_t views = (size_t)rtv->num_theta * (size_t)rtv->num_phi;
+    if (k > GI_MAX_EIGEN)
+        return meso_log_error(ctx, MESO_ERROR_LIMIT, "%s: gdm gi: %zu eigenfunctions, at most %d",
+                              name, k, (int)GI_MAX_EIGEN);
+    gi->stride = (int)stride;
+    gi->weights = malloc(voxels * stride * sizeof(float));
+    gi->eigen = malloc(views * stride * sizeof(float));
+    if (!gi->weights || !gi->eigen)
+        return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: gdm gi: RTV", name);
+    for (size_t i = 0; i < MESO_SH_COUNT; i++)
+        for (size_t e = 0; e < k; e++) {
+            for (size_t c = 0; c < voxels; c++)
+                gi->weights[c * stride + i * k + e] = rtv->weights[(i * voxels + c) * k + e];
+            for (size_t v = 0; v < views; v++)
+                gi->eigen[v * stride + i * k + e] = rtv->eigen[(i * k + e) * views + v];
+        }
+    return MESO_OK;
+}
+
+/* meso_rtv_evaluate on the packed arrays: the same sums in another order, 8 wide (16 k is a
+ * multiple of 8). */
+static void evaluate(const gdm_gi *gi, meso_vec3 uvw, meso_vec3 view,
+                     const float radiance[GI_CHANNELS][MESO_SH_COUNT], float out_rgb[3]) {
+    enum { MAX_CHUNKS = MESO_SH_COUNT * GI_MAX_EIGEN / 8 };
+    meso_rtv_cell cell;
+    meso_rtv_cell_at(gi->rtv, uvw, view, &cell);
+    int chunks = gi->stride / 8, k = gi->rtv->num_eigen;
+    v8f w[MAX_CHUNKS], e[MAX_CHUNKS];
+    for (int j = 0; j < chunks; j++) w[j] = e[j] = v8_splat(0.0f);
+    for (int c = 0; c < 8; c++) {
+        const float *p = gi->weights + cell.corner[c] * (size_t)gi->stride;
+        v8f cw = v8_splat(cell.corner_weight[c]);
+        for (int j = 0; j < chunks; j++) {
+            v8f x;
+            memcpy(&x, p + 8 * j, sizeof x);
+            w[j] += cw * x;
+        }
+    }
+    for (int v = 0; v < 4; v++) {
+        const float *p = gi->eigen + (size_t)cell.view_index[v] * (size_t)gi->stride;
+        v8f vw = v8_splat(cell.view_weight[v]);
+        for (int j = 0; j < chunks; j++) {
+            v8f x;
+            memcpy(&x, p + 8 * j, sizeof x);
+            e[j] += vw * x;
+        }
+    }
+    float product[MESO_SH_COUNT * GI_MAX_EIGEN];
+    for (int j = 0; j < chunks; j++) {
+        v8f x = w[j] * e[j];
+        memcpy(product + 8 * j, &x, sizeof x);
+    }
+    float rgb[GI_CHANNELS] = {0};
+    for (int i = 0; i < MESO_SH_COUNT; i++) {
+        float f = 0.0f;
+        for (int q = 0; q < k; q++) f += product[i * k + q];
+        for (int c = 0; c < GI_CHANNELS; c++) rgb[c] += f * radiance[c][i];
+    }
+    for (int c = 0; c < GI_CHANNELS; c++) out_rgb[c] = rgb[c] > 0.0f ? rgb[c] : 0.0f;
+}
+
+meso_result gdm_gi_create(meso_context *ctx, const meso_scene *scene, const meso_object *object,
+                          const gdm_gi_desc *desc, gdm_gi **out_gi) {
+    *out_gi = NULL;
+    const meso_mesostructure *ms = &object->mesostructure;
+    const meso_mesh *mesh = object->mesh;
+    gdm_gi *gi = calloc(1, sizeof *gi);
+    if (!gi) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: gdm gi", object->name);
+    gi->mesh = mesh;
+    gi->environment = scene->environment;
+    meso_result r;
+    gi->tangents = malloc((mesh->num_vertices ? mesh->num_vertices : 1) * sizeof *gi->tangents);
+    if (!gi->tangents) {
+        r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: gdm gi", object->name);
+        goto fail;
+    }
+    for (size_t v = 0; v < mesh->num_vertices; v++) gi->tangents[v] = meso_gi_vertex_tangent(mesh, v);
+    /* the shell's aspect as the reference's rtv mode takes it: the same cached bake */
+    meso_rtv_desc rtv_desc = {
+        .heightfield = ms->kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD ? ms->height_field : NULL,
+        .solid = ms->kind == MESO_MESOSTRUCTURE_SOLID ? ms->solid : NULL,
+        .aspect = meso_gi_shell_aspect(object),
+        .width = desc->resolution,
+        .height = desc->resolution,
+        .layers = desc->layers,
+        .eigen = desc->eigen};
+    if ((r = meso_rtv_bake_cached(ctx, &rtv_desc, &gi->rtv)) != MESO_OK) goto fail;
+    if ((r = pack_rtv(ctx, gi, object->name)) != MESO_OK) goto fail;
+    if ((r = meso_gi_vertex_radiance(ctx, mesh, scene->environment, NULL, &gi->radiance)) !=
+        MESO_OK)
+        goto fail;
+    *out_gi = gi;
+    return MESO_OK;
+fail:
+    gdm_gi_destroy(gi);
+    return r;
+}
+
+void gdm_gi_destroy(gdm_gi *gi) {
+    if (!gi) return;
+    meso_rtv_destroy(gi->rtv);
+    free(gi->radiance);
+    free(gi->tangents);
+    free(gi->weights);
+    free(gi->eigen);
+    free(gi);
+}
+
+size_t gdm_gi_memory(const gdm_gi *gi) {
+    if (!gi) return 0;
+    return 2 * (size_t)gi->rtv->compressed_bytes + /* the RTV and its packed copy */
+           gi->mesh->num_vertices * (GI_CHANNELS * MESO_SH_COUNT * sizeof(float) + sizeof(meso_vec3));
+}
+
+void gdm_gi_begin_frame(gdm_gi *gi, const meso_frame *frame) {
+    gi->direct_scene = *frame->scene;
+    gi->direct_scene.environment = NULL;
+    gi->direct_frame = *frame;
+    gi->direct_frame.scene = &gi->direct_scene;
+    gi->albedo_scene = gi->direct_scene;
+    gi->albedo_scene.num_lights = 0;
+    gi->albedo_scene.ambient = (meso_vec3){1.0f, 1.0f, 1.0f};
+    gi->albedo_frame = *frame;
+    gi->albedo_frame.scene = &gi->albedo_scene;
+}
+
+/* RTV(uvw, view) . L per unit albedo at one hit: L interpolated from the prism's vertices at
+ * the hit's (u, v), the view in the interpolated tangent frame (as the vertices' frames,
+ * render_gi_transfer.c, and the reference's rtv mode).
+ *
+ * A hit seen from below its base surface (the far wall of a woven teapot seen from inside
+ * through the near wall's holes) is lit, in the model, only by the vertices' outer
+ * hemisphere: nothing, the macro surface being opaque below its tangent plane. The model has
+ * no incident light for the inside of a closed mesh; there the shading model's unshadowed SH
+ * ambient at the hit's normal stands in (gi off's term). Returns false for such a hit. */
+static bool reflected_at(const gdm_gi *gi, const meso_frame *frame, const meso_fragment *f,
+                         const gdm_gi_hit *hit, float out_rgb[3]) {
+    const meso_mesh *mesh = gi->mesh;
+    const uint32_t *v = hit->prism->vertices;
+    float b[3];
+    meso_prism_weights(hit->prism, (meso_vec2){hit->uvw.x, hit->uvw.y}, b);
+    float radiance[GI_CHANNELS][MESO_SH_COUNT];
+    meso_gi_radiance_interpolate(gi->radiance, v[0], v[1], v[2], b[0], b[1], b[2], radiance);
+    meso_vec3 n = meso_vec3_normalize(meso_vec3_barycentric(
+        mesh->normals[v[0]], mesh->normals[v[1]], mesh->normals[v[2]], b[0], b[1], b[2]));
+    meso_vec3 t = meso_vec3_barycentric(gi->tangents[v[0]], gi->tangents[v[1]],
+                                        gi->tangents[v[2]], b[0], b[1], b[2]);
+    t = meso_vec3_normalize(meso_vec3_sub(t, meso_vec3_scale(n, meso_vec3_dot(n, t))));
+    meso_vec3 bt = meso_vec3_cross(n, t);
+    meso_vec3 toward = meso_vec3_normalize(meso_vec3_sub(frame->eye, f->position));
+    meso_vec3 view = {meso_vec3_dot(toward, t), meso_vec3_dot(toward, bt),
+                      meso_vec3_dot(toward, n)};
+    if (view.z < 0.0f) {
+        v8f r = v8_splat(0.0f), g = r, bl = r;
+        meso_environment_ambient8(gi->environment, v8_splat(f->normal.x), v8_splat(f->normal.y),
+                                  v8_splat(f->normal.z), &r, &g, &bl);
+        out_rgb[0] = r[0], out_rgb[1] = g[0], out_rgb[2] = bl[0];
+        return false;
+    }
+    evaluate(gi, hit->uvw, view, (const float(*)[MESO_SH_COUNT])radiance, out_rgb);
+    return true;
+}
+
+void gdm_gi_shade(const gdm_gi *gi, const meso_frame *frame, const meso_object *object,
+                  meso_fragment *fragments, size_t count, const float *visibility,
+                  const gdm_gi_hit *hits) {
+    int num_lights = gi->direct_scene.num_lights;
+    const meso_material *m = &object->material;
+    for (size_t start = 0; start < count; start += GI_BATCH) {
+        size_t n = count - start < GI_BATCH ? count - start : GI_BATCH;
+        meso_fragment *batch = fragments + start;
+        meso_vec3 reflected[GI_BATCH];
+        for (size_t i = 0; i < n; i++) {
+            float rgb[3];
+            reflected_at(gi, frame, &batch[i], &hits[start + i], rgb);
+            reflected[i] = (meso_vec3){rgb[0], rgb[1], rgb[2]};
+        }
+        /* the albedo: the shading model's own (albedo x colour map) with ambient 1 alone */
+        if (m->color_map) {
+            meso_shade_fragments(&gi->albedo_frame, object, batch, n, NULL);
+            for (size_t i = 0; i < n; i++) reflected[i] = meso_vec3_mul(reflected[i], batch[i].color);
+        } else {
+            for (size_t i = 0; i < n; i++) reflected[i] = meso_vec3_mul(reflected[i], m->albedo);
+        }
+        meso_shade_fragments(&gi->direct_frame, object, batch, n,
+                             visibility ? visibility + start * (size_t)num_lights : NULL);
+        for (size_t i = 0; i < n; i++) batch[i].color = meso_vec3_add(batch[i].color, reflected[i]);
+    }
+}
