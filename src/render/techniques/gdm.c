@@ -296,6 +296,34 @@ static inline bool inside_mesostructure(const gdm_state *s, meso_vec3 uvw) {
     return meso_solid_distance(s->solid, tile_point(uvw)) <= 0.0f;
 }
 
+/* Samples of the mesostructure along one texture-space ray t0 + x dir (dir unit), remembering
+ * what the last outside and the last inside sample prove about their neighbours: a solid's
+ * distance is a bound with Lipschitz constant 1 in (u, v, w) (mesostructure_solid.c), so every
+ * point nearer than |f| to a sample is on the same side of the surface. A probe there gets the
+ * same answer without evaluating the distance function (56 % of weave-torus's frame): the
+ * answers, and so the images, are those of evaluating every probe. A height field's sample
+ * proves nothing about its neighbours (radius -1). */
+typedef struct ray_probe {
+    meso_vec3 t0, dir;
+    float x[2], radius[2]; /* [0] the last outside sample, [1] the last inside: where, |f| */
+} ray_probe;
+
+static inline ray_probe ray_probe_start(meso_vec3 t0, meso_vec3 dir) {
+    return (ray_probe){.t0 = t0, .dir = dir, .radius = {-1.0f, -1.0f}};
+}
+
+static inline bool ray_probe_inside(const gdm_state *s, ray_probe *r, float x) {
+    for (int side = 0; side < 2; side++) /* 0.999, 1e-6: positions are rounded, bounds tight */
+        if (fabsf(x - r->x[side]) < 0.999f * r->radius[side] - 1e-6f) return side == 1;
+    meso_vec3 p = meso_vec3_madd(r->t0, r->dir, x);
+    if (s->heightfield) return inside_mesostructure(s, p);
+    float f = meso_solid_distance(s->solid, tile_point(p));
+    int side = f <= 0.0f;
+    r->x[side] = x;
+    r->radius[side] = fabsf(f);
+    return side == 1;
+}
+
 /* Beyond the paper (docs/techniques/gdm.md): d interpolated across an occluding edge lands
  * between the two surfaces (VDM's lesson, docs/design.md), and the compressed table errs by
  * a tenth of the shell on a weave. The table's answer is checked on the mesostructure: when
@@ -306,8 +334,8 @@ static inline bool inside_mesostructure(const gdm_state *s, meso_vec3 uvw) {
  * inside whatever its rounding. Returns the hit's distance along V_t, negative for none. */
 static float refine_hit(const gdm_state *s, meso_vec3 t_in, meso_vec3 vt, float d, float dt,
                         bool solid_floor) {
-#define INSIDE(x)                                                                                  \
-    ((solid_floor && (x) >= dt) || inside_mesostructure(s, meso_vec3_madd(t_in, vt, (x))))
+    ray_probe probe = ray_probe_start(t_in, vt);
+#define INSIDE(x) ((solid_floor && (x) >= dt) || ray_probe_inside(s, &probe, (x)))
     float window = s->refine_window;
     float guess = fminf(fmaxf(d, 0.0f), dt);
     float before = fmaxf(guess - window, 0.0f), after = fminf(guess + 0.5f * window, dt);
@@ -385,11 +413,11 @@ static bool shadowed(const gdm_state *s, meso_vec3 t, meso_vec3 normal_t, meso_v
          * table's error, 0.1 of the shell for a weave at k = 7, is larger than the gaps a
          * light ray threads through) */
         if (d >= boundary - margin) return false;
-        if (inside_mesostructure(s, meso_vec3_madd(t, lt, d + 0.5f * s->refine_window)))
-            return true;
+        ray_probe probe = ray_probe_start(t, lt);
+        if (ray_probe_inside(s, &probe, d + 0.5f * s->refine_window)) return true;
         for (int k = 0; k < s->shadow_steps; k++) {
             float x = boundary * ((float)k + 0.5f) / (float)s->shadow_steps;
-            if (inside_mesostructure(s, meso_vec3_madd(t, lt, x))) return true;
+            if (ray_probe_inside(s, &probe, x)) return true;
         }
         return false;
     }
