@@ -35,6 +35,7 @@ typedef struct gdm_state {
     meso_vec3 voxel;     /* a voxel's sides in texture units */
     float refine_window; /* texture units: 3 layers */
     float hit_margin;    /* d < dt - hit_margin is a hit */
+    float probe_scale;   /* a height field's (1 - h) - w times this bounds the distance */
 } gdm_state;
 
 typedef struct gdm_options {
@@ -94,6 +95,22 @@ static void gdm_release(void *state) {
     free(s);
 }
 
+/* 1 / the Lipschitz constant of (1 - h(u, v)) - w in (u, v, w): h is bilinear between texel
+ * centres, so its slope along u is at most the largest step between neighbouring texels
+ * (wrapped pairs included: at worst an overestimate) times the width, likewise along v. */
+static float heightfield_probe_scale(const meso_heightfield *hf) {
+    float step_u = 0.0f, step_v = 0.0f;
+    for (int j = 0; j < hf->height; j++)
+        for (int i = 0; i < hf->width; i++) {
+            float h = meso_heightfield_texel(hf, i, j);
+            step_u = fmaxf(step_u, fabsf(meso_heightfield_texel(hf, i + 1, j) - h));
+            step_v = fmaxf(step_v, fabsf(meso_heightfield_texel(hf, i, j + 1) - h));
+        }
+    float gu = step_u * (float)hf->width, gv = step_v * (float)hf->height;
+    float lipschitz = sqrtf(1.0f + gu * gu + gv * gv);
+    return isfinite(lipschitz) ? 1.0f / lipschitz : 0.0f;
+}
+
 static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
                                const meso_object *object, void **out_state) {
     *out_state = NULL;
@@ -146,6 +163,7 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
     s->refine_window = 3.0f / (float)(options.layers - 1);
     s->voxel = (meso_vec3){1.0f / (float)options.resolution, 1.0f / (float)options.resolution,
                            1.0f / (float)(options.layers - 1)};
+    s->probe_scale = desc.heightfield ? heightfield_probe_scale(desc.heightfield) : 1.0f;
     if ((r = meso_prism_layer_create(ctx, object->mesh, ms->depth, object->name, &s->layer)) !=
         MESO_OK)
         goto fail;
@@ -298,11 +316,11 @@ static inline bool inside_mesostructure(const gdm_state *s, meso_vec3 uvw) {
 
 /* Samples of the mesostructure along one texture-space ray t0 + x dir (dir unit), remembering
  * what the last outside and the last inside sample prove about their neighbours: a solid's
- * distance is a bound with Lipschitz constant 1 in (u, v, w) (mesostructure_solid.c), so every
- * point nearer than |f| to a sample is on the same side of the surface. A probe there gets the
- * same answer without evaluating the distance function (56 % of weave-torus's frame): the
- * answers, and so the images, are those of evaluating every probe. A height field's sample
- * proves nothing about its neighbours (radius -1). */
+ * distance is a bound with Lipschitz constant 1 in (u, v, w) (mesostructure_solid.c), and so
+ * is a height field's (1 - h) - w scaled by probe_scale; every point nearer than |f| to a
+ * sample is on the same side of the surface. A probe there gets the same answer without
+ * evaluating the mesostructure (the weave's distance function was 56 % of weave-torus's
+ * frame): the answers, and so the images, are those of evaluating every probe. */
 typedef struct ray_probe {
     meso_vec3 t0, dir;
     float x[2], radius[2]; /* [0] the last outside sample, [1] the last inside: where, |f| */
@@ -316,11 +334,12 @@ static inline bool ray_probe_inside(const gdm_state *s, ray_probe *r, float x) {
     for (int side = 0; side < 2; side++) /* 0.999, 1e-6: positions are rounded, bounds tight */
         if (fabsf(x - r->x[side]) < 0.999f * r->radius[side] - 1e-6f) return side == 1;
     meso_vec3 p = meso_vec3_madd(r->t0, r->dir, x);
-    if (s->heightfield) return inside_mesostructure(s, p);
-    float f = meso_solid_distance(s->solid, tile_point(p));
+    /* inside_mesostructure's test: w >= 1 - h is (1 - h) - w <= 0 in floats */
+    float f = s->heightfield ? (1.0f - meso_heightfield_sample(s->heightfield, p.x, p.y)) - p.z
+                             : meso_solid_distance(s->solid, tile_point(p));
     int side = f <= 0.0f;
     r->x[side] = x;
-    r->radius[side] = fabsf(f);
+    r->radius[side] = fabsf(f) * s->probe_scale;
     return side == 1;
 }
 
@@ -478,9 +497,9 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
     f->out_depth = depth > f->depth ? depth : f->depth;
     texture_frame tf = frame_at(mesh, prism, (meso_vec2){hit.x, hit.y}, s->depth);
     meso_vec3 normal, normal_t = texture_normal(s, hit);
-    if (s->heightfield && !s->baked_normals) /* as the reference and the other techniques */
+    if (s->heightfield && !s->baked_normals) /* as the reference and the other techniques; */
         normal = meso_displaced_normal(tf.normal, tf.tangent, tf.bitangent, s->depth,
-                                       meso_heightfield_gradient(s->heightfield, hit.x, hit.y));
+                                       (meso_vec2){-normal_t.x, -normal_t.y}); /* = gradient */
     else
         normal = world_normal(&tf, normal_t);
     float length_t = meso_vec3_length(normal_t);
