@@ -36,6 +36,9 @@ typedef struct gdm_state {
     float refine_window; /* texture units: 3 layers */
     float hit_margin;    /* d < dt - hit_margin is a hit */
     float probe_scale;   /* a height field's (1 - h) - w times this bounds the distance */
+    /* height fields: w below which nothing is solid, in each prism's column (prism_clear)
+     * and anywhere (clear_w); -1 for solids */
+    float *prism_clear, clear_w;
 } gdm_state;
 
 typedef struct gdm_options {
@@ -92,6 +95,7 @@ static void gdm_release(void *state) {
     free(s->drawn_face);
     free(s->sort_counts);
     free(s->sort_keys);
+    free(s->prism_clear);
     free(s);
 }
 
@@ -109,6 +113,64 @@ static float heightfield_probe_scale(const meso_heightfield *hf) {
     float gu = step_u * (float)hf->width, gv = step_v * (float)hf->height;
     float lipschitz = sqrtf(1.0f + gu * gu + gv * gv);
     return isfinite(lipschitz) ? 1.0f / lipschitz : 0.0f;
+}
+
+/* The highest texel a bilinear sample in [u0, u1] x [v0, v1] can read, with a texel's margin
+ * for rounding; the whole map's when the box covers it. */
+static float heightfield_box_max(const meso_heightfield *hf, float u0, float u1, float v0,
+                                 float v1, float map_max) {
+    float i0 = floorf(u0 * (float)hf->width - 0.5f) - 1.0f;
+    float i1 = floorf(u1 * (float)hf->width - 0.5f) + 2.0f;
+    float j0 = floorf((1.0f - v1) * (float)hf->height - 0.5f) - 1.0f;
+    float j1 = floorf((1.0f - v0) * (float)hf->height - 0.5f) + 2.0f;
+    if (!(i1 - i0 < (float)hf->width && j1 - j0 < (float)hf->height)) return map_max;
+    float h = 0.0f;
+    for (int j = (int)j0; j <= (int)j1; j++) {
+        /* meso_heightfield_texel's wrapping, once a row and at the box's first column */
+        int jj = j, ii = (int)i0;
+        if (hf->wrap == MESO_WRAP_CLAMP) {
+            jj = jj < 0 ? 0 : (jj >= hf->height ? hf->height - 1 : jj);
+        } else {
+            jj = (jj % hf->height + hf->height) % hf->height;
+            ii = (ii % hf->width + hf->width) % hf->width;
+        }
+        const float *row = hf->heights + (size_t)jj * (size_t)hf->width;
+        for (int i = (int)i0; i <= (int)i1; i++) {
+            if (hf->wrap == MESO_WRAP_CLAMP) {
+                h = fmaxf(h, row[i < 0 ? 0 : (i >= hf->width ? hf->width - 1 : i)]);
+            } else {
+                h = fmaxf(h, row[ii]);
+                ii = ii + 1 == hf->width ? 0 : ii + 1;
+            }
+        }
+    }
+    return h;
+}
+
+/* For each prism, the w above which its column of a height field holds no solid: a probe
+ * higher up is outside without sampling h (the ray's probes in refine_hit stay in the
+ * prism's column; a shadow ray leaves it and uses the whole map's). false: out of memory. */
+static bool heightfield_clearances(gdm_state *s) {
+    const meso_heightfield *hf = s->heightfield;
+    float map_max = 0.0f;
+    for (size_t t = 0; t < (size_t)hf->width * (size_t)hf->height; t++)
+        map_max = fmaxf(map_max, hf->heights[t]);
+    /* 1e-6: a bilinear blend may round a hair above its texels */
+    s->clear_w = 1.0f - map_max - 1e-6f;
+    size_t n = s->layer->num_prisms;
+    s->prism_clear = malloc((n ? n : 1) * sizeof(float));
+    if (!s->prism_clear) return false;
+    for (size_t i = 0; i < n; i++) {
+        const meso_vec2 *uv = s->layer->prisms[i].uv;
+        float u0 = fminf(fminf(uv[0].x, uv[1].x), uv[2].x);
+        float u1 = fmaxf(fmaxf(uv[0].x, uv[1].x), uv[2].x);
+        float v0 = fminf(fminf(uv[0].y, uv[1].y), uv[2].y);
+        float v1 = fmaxf(fmaxf(uv[0].y, uv[1].y), uv[2].y);
+        bool finite = isfinite(u0) && isfinite(u1) && isfinite(v0) && isfinite(v1);
+        float h = finite ? heightfield_box_max(hf, u0, u1, v0, v1, map_max) : map_max;
+        s->prism_clear[i] = 1.0f - h - 1e-6f;
+    }
+    return true;
 }
 
 static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
@@ -167,6 +229,11 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
     if ((r = meso_prism_layer_create(ctx, object->mesh, ms->depth, object->name, &s->layer)) !=
         MESO_OK)
         goto fail;
+    s->clear_w = -1.0f;
+    if (s->heightfield && !heightfield_clearances(s)) {
+        r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: gdm", object->name);
+        goto fail;
+    }
     size_t faces = s->layer->faces->num_triangles ? s->layer->faces->num_triangles : 1;
     s->drawn_indices = malloc(3 * faces * sizeof(uint32_t));
     s->drawn_face = malloc(faces * sizeof(uint32_t));
@@ -324,16 +391,18 @@ static inline bool inside_mesostructure(const gdm_state *s, meso_vec3 uvw) {
 typedef struct ray_probe {
     meso_vec3 t0, dir;
     float x[2], radius[2]; /* [0] the last outside sample, [1] the last inside: where, |f| */
+    float clear_w;         /* outside above this w (height fields; prism_clear, clear_w) */
 } ray_probe;
 
-static inline ray_probe ray_probe_start(meso_vec3 t0, meso_vec3 dir) {
-    return (ray_probe){.t0 = t0, .dir = dir, .radius = {-1.0f, -1.0f}};
+static inline ray_probe ray_probe_start(meso_vec3 t0, meso_vec3 dir, float clear_w) {
+    return (ray_probe){.t0 = t0, .dir = dir, .radius = {-1.0f, -1.0f}, .clear_w = clear_w};
 }
 
 static inline bool ray_probe_inside(const gdm_state *s, ray_probe *r, float x) {
     for (int side = 0; side < 2; side++) /* 0.999, 1e-6: positions are rounded, bounds tight */
         if (fabsf(x - r->x[side]) < 0.999f * r->radius[side] - 1e-6f) return side == 1;
     meso_vec3 p = meso_vec3_madd(r->t0, r->dir, x);
+    if (p.z < r->clear_w) return false;
     /* inside_mesostructure's test: w >= 1 - h is (1 - h) - w <= 0 in floats */
     float f = s->heightfield ? (1.0f - meso_heightfield_sample(s->heightfield, p.x, p.y)) - p.z
                              : meso_solid_distance(s->solid, tile_point(p));
@@ -351,9 +420,9 @@ static inline bool ray_probe_inside(const gdm_state *s, ray_probe *r, float x) {
  * bisection where the table is right. Otherwise (the table was wrong here) a few probes
  * from the entry find the first inside point. The segment's end on a solid floor counts as
  * inside whatever its rounding. Returns the hit's distance along V_t, negative for none. */
-static float refine_hit(const gdm_state *s, meso_vec3 t_in, meso_vec3 vt, float d, float dt,
-                        bool solid_floor) {
-    ray_probe probe = ray_probe_start(t_in, vt);
+static float refine_hit(const gdm_state *s, size_t prism, meso_vec3 t_in, meso_vec3 vt, float d,
+                        float dt, bool solid_floor) {
+    ray_probe probe = ray_probe_start(t_in, vt, s->prism_clear ? s->prism_clear[prism] : -1.0f);
 #define INSIDE(x) ((solid_floor && (x) >= dt) || ray_probe_inside(s, &probe, (x)))
     float window = s->refine_window;
     float guess = fminf(fmaxf(d, 0.0f), dt);
@@ -432,7 +501,7 @@ static bool shadowed(const gdm_state *s, meso_vec3 t, meso_vec3 normal_t, meso_v
          * table's error, 0.1 of the shell for a weave at k = 7, is larger than the gaps a
          * light ray threads through) */
         if (d >= boundary - margin) return false;
-        ray_probe probe = ray_probe_start(t, lt);
+        ray_probe probe = ray_probe_start(t, lt, s->clear_w);
         if (ray_probe_inside(s, &probe, d + 0.5f * s->refine_window)) return true;
         for (int k = 0; k < s->shadow_steps; k++) {
             float x = boundary * ((float)k + 0.5f) / (float)s->shadow_steps;
@@ -473,7 +542,7 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
     meso_vec3 vt = meso_vec3_scale(segment, 1.0f / dt);
     float d = lookup(s, t_in, vt);
     if (s->refine_steps > 0) {
-        d = refine_hit(s, t_in, vt, d, dt,
+        d = refine_hit(s, prism_index, t_in, vt, d, dt,
                        exit_slot == MESO_PRISM_BOTTOM && floor_is_solid(s, t_out));
         if (d < 0.0f) return false;
     } else if (!(d < dt - s->hit_margin)) {
