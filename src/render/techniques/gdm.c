@@ -27,7 +27,11 @@ typedef struct gdm_state {
     meso_prism_layer *layer;
     const meso_heightfield *heightfield; /* one of these two */
     const meso_solid *solid;
-    float depth; /* world units */
+    float depth;       /* world units */
+    float probe_scale; /* a height field's (1 - h) - w times this bounds the distance */
+    /* height fields: w below which nothing is solid, in each prism's column (prism_clear)
+     * and anywhere (clear_w); -1 for solids */
+    float *prism_clear, clear_w;
     int num_eigen;
     bool raw, shadows, baked_normals; /* baked_normals: the "normals" option resolved */
     int refine_steps, shadow_steps;
@@ -35,10 +39,6 @@ typedef struct gdm_state {
     meso_vec3 voxel;     /* a voxel's sides in texture units */
     float refine_window; /* texture units: 3 layers */
     float hit_margin;    /* d < dt - hit_margin is a hit */
-    float probe_scale;   /* a height field's (1 - h) - w times this bounds the distance */
-    /* height fields: w below which nothing is solid, in each prism's column (prism_clear)
-     * and anywhere (clear_w); -1 for solids */
-    float *prism_clear, clear_w;
 } gdm_state;
 
 typedef struct gdm_options {
@@ -117,8 +117,8 @@ static float heightfield_probe_scale(const meso_heightfield *hf) {
 
 /* The highest texel a bilinear sample in [u0, u1] x [v0, v1] can read, with a texel's margin
  * for rounding; the whole map's when the box covers it. */
-static float heightfield_box_max(const meso_heightfield *hf, float u0, float u1, float v0,
-                                 float v1, float map_max) {
+static float heightfield_box_max(const meso_heightfield *hf, float u0, float u1, float v0, float v1,
+                                 float map_max) {
     float i0 = floorf(u0 * (float)hf->width - 0.5f) - 1.0f;
     float i1 = floorf(u1 * (float)hf->width - 0.5f) + 2.0f;
     float j0 = floorf((1.0f - v1) * (float)hf->height - 0.5f) - 1.0f;
