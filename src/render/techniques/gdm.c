@@ -28,7 +28,11 @@ typedef struct gdm_state {
     meso_prism_layer *layer;
     const meso_heightfield *heightfield; /* one of these two */
     const meso_solid *solid;
-    float depth; /* world units */
+    float depth;       /* world units */
+    float probe_scale; /* a height field's (1 - h) - w times this bounds the distance */
+    /* height fields: w below which nothing is solid, in each prism's column (prism_clear)
+     * and anywhere (clear_w); -1 for solids */
+    float *prism_clear, clear_w;
     int num_eigen;
     bool raw, shadows, baked_normals; /* baked_normals: the "normals" option resolved */
     int refine_steps, shadow_steps;
@@ -108,7 +112,82 @@ static void gdm_release(void *state) {
     free(s->drawn_face);
     free(s->sort_counts);
     free(s->sort_keys);
+    free(s->prism_clear);
     free(s);
+}
+
+/* 1 / the Lipschitz constant of (1 - h(u, v)) - w in (u, v, w): h is bilinear between texel
+ * centres, so its slope along u is at most the largest step between neighbouring texels
+ * (wrapped pairs included: at worst an overestimate) times the width, likewise along v. */
+static float heightfield_probe_scale(const meso_heightfield *hf) {
+    float step_u = 0.0f, step_v = 0.0f;
+    for (int j = 0; j < hf->height; j++)
+        for (int i = 0; i < hf->width; i++) {
+            float h = meso_heightfield_texel(hf, i, j);
+            step_u = fmaxf(step_u, fabsf(meso_heightfield_texel(hf, i + 1, j) - h));
+            step_v = fmaxf(step_v, fabsf(meso_heightfield_texel(hf, i, j + 1) - h));
+        }
+    float gu = step_u * (float)hf->width, gv = step_v * (float)hf->height;
+    float lipschitz = sqrtf(1.0f + gu * gu + gv * gv);
+    return isfinite(lipschitz) ? 1.0f / lipschitz : 0.0f;
+}
+
+/* The highest texel a bilinear sample in [u0, u1] x [v0, v1] can read, with a texel's margin
+ * for rounding; the whole map's when the box covers it. */
+static float heightfield_box_max(const meso_heightfield *hf, float u0, float u1, float v0, float v1,
+                                 float map_max) {
+    float i0 = floorf(u0 * (float)hf->width - 0.5f) - 1.0f;
+    float i1 = floorf(u1 * (float)hf->width - 0.5f) + 2.0f;
+    float j0 = floorf((1.0f - v1) * (float)hf->height - 0.5f) - 1.0f;
+    float j1 = floorf((1.0f - v0) * (float)hf->height - 0.5f) + 2.0f;
+    if (!(i1 - i0 < (float)hf->width && j1 - j0 < (float)hf->height)) return map_max;
+    float h = 0.0f;
+    for (int j = (int)j0; j <= (int)j1; j++) {
+        /* meso_heightfield_texel's wrapping, once a row and at the box's first column */
+        int jj = j, ii = (int)i0;
+        if (hf->wrap == MESO_WRAP_CLAMP) {
+            jj = jj < 0 ? 0 : (jj >= hf->height ? hf->height - 1 : jj);
+        } else {
+            jj = (jj % hf->height + hf->height) % hf->height;
+            ii = (ii % hf->width + hf->width) % hf->width;
+        }
+        const float *row = hf->heights + (size_t)jj * (size_t)hf->width;
+        for (int i = (int)i0; i <= (int)i1; i++) {
+            if (hf->wrap == MESO_WRAP_CLAMP) {
+                h = fmaxf(h, row[i < 0 ? 0 : (i >= hf->width ? hf->width - 1 : i)]);
+            } else {
+                h = fmaxf(h, row[ii]);
+                ii = ii + 1 == hf->width ? 0 : ii + 1;
+            }
+        }
+    }
+    return h;
+}
+
+/* For each prism, the w above which its column of a height field holds no solid: a probe
+ * higher up is outside without sampling h (the ray's probes in refine_hit stay in the
+ * prism's column; a shadow ray leaves it and uses the whole map's). false: out of memory. */
+static bool heightfield_clearances(gdm_state *s) {
+    const meso_heightfield *hf = s->heightfield;
+    float map_max = 0.0f;
+    for (size_t t = 0; t < (size_t)hf->width * (size_t)hf->height; t++)
+        map_max = fmaxf(map_max, hf->heights[t]);
+    /* 1e-6: a bilinear blend may round a hair above its texels */
+    s->clear_w = 1.0f - map_max - 1e-6f;
+    size_t n = s->layer->num_prisms;
+    s->prism_clear = malloc((n ? n : 1) * sizeof(float));
+    if (!s->prism_clear) return false;
+    for (size_t i = 0; i < n; i++) {
+        const meso_vec2 *uv = s->layer->prisms[i].uv;
+        float u0 = fminf(fminf(uv[0].x, uv[1].x), uv[2].x);
+        float u1 = fmaxf(fmaxf(uv[0].x, uv[1].x), uv[2].x);
+        float v0 = fminf(fminf(uv[0].y, uv[1].y), uv[2].y);
+        float v1 = fmaxf(fmaxf(uv[0].y, uv[1].y), uv[2].y);
+        bool finite = isfinite(u0) && isfinite(u1) && isfinite(v0) && isfinite(v1);
+        float h = finite ? heightfield_box_max(hf, u0, u1, v0, v1, map_max) : map_max;
+        s->prism_clear[i] = 1.0f - h - 1e-6f;
+    }
+    return true;
 }
 
 static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
@@ -163,9 +242,15 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
     s->refine_window = 3.0f / (float)(options.layers - 1);
     s->voxel = (meso_vec3){1.0f / (float)options.resolution, 1.0f / (float)options.resolution,
                            1.0f / (float)(options.layers - 1)};
+    s->probe_scale = desc.heightfield ? heightfield_probe_scale(desc.heightfield) : 1.0f;
     if ((r = meso_prism_layer_create(ctx, object->mesh, ms->depth, object->name, &s->layer)) !=
         MESO_OK)
         goto fail;
+    s->clear_w = -1.0f;
+    if (s->heightfield && !heightfield_clearances(s)) {
+        r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: gdm", object->name);
+        goto fail;
+    }
     size_t faces = s->layer->faces->num_triangles ? s->layer->faces->num_triangles : 1;
     s->drawn_indices = malloc(3 * faces * sizeof(uint32_t));
     s->drawn_face = malloc(faces * sizeof(uint32_t));
@@ -321,6 +406,37 @@ static inline bool inside_mesostructure(const gdm_state *s, meso_vec3 uvw) {
     return meso_solid_distance(s->solid, tile_point(uvw)) <= 0.0f;
 }
 
+/* Samples of the mesostructure along one texture-space ray t0 + x dir (dir unit), remembering
+ * what the last outside and the last inside sample prove about their neighbours: a solid's
+ * distance is a bound with Lipschitz constant 1 in (u, v, w) (mesostructure_solid.c), and so
+ * is a height field's (1 - h) - w scaled by probe_scale; every point nearer than |f| to a
+ * sample is on the same side of the surface. A probe there gets the same answer without
+ * evaluating the mesostructure (the weave's distance function was 56 % of weave-torus's
+ * frame): the answers, and so the images, are those of evaluating every probe. */
+typedef struct ray_probe {
+    meso_vec3 t0, dir;
+    float x[2], radius[2]; /* [0] the last outside sample, [1] the last inside: where, |f| */
+    float clear_w;         /* outside above this w (height fields; prism_clear, clear_w) */
+} ray_probe;
+
+static inline ray_probe ray_probe_start(meso_vec3 t0, meso_vec3 dir, float clear_w) {
+    return (ray_probe){.t0 = t0, .dir = dir, .radius = {-1.0f, -1.0f}, .clear_w = clear_w};
+}
+
+static inline bool ray_probe_inside(const gdm_state *s, ray_probe *r, float x) {
+    for (int side = 0; side < 2; side++) /* 0.999, 1e-6: positions are rounded, bounds tight */
+        if (fabsf(x - r->x[side]) < 0.999f * r->radius[side] - 1e-6f) return side == 1;
+    meso_vec3 p = meso_vec3_madd(r->t0, r->dir, x);
+    if (p.z < r->clear_w) return false;
+    /* inside_mesostructure's test: w >= 1 - h is (1 - h) - w <= 0 in floats */
+    float f = s->heightfield ? (1.0f - meso_heightfield_sample(s->heightfield, p.x, p.y)) - p.z
+                             : meso_solid_distance(s->solid, tile_point(p));
+    int side = f <= 0.0f;
+    r->x[side] = x;
+    r->radius[side] = fabsf(f) * s->probe_scale;
+    return side == 1;
+}
+
 /* Beyond the paper (docs/techniques/gdm.md): d interpolated across an occluding edge lands
  * between the two surfaces (VDM's lesson, docs/design.md), and the compressed table errs by
  * a tenth of the shell on a weave. The table's answer is checked on the mesostructure: when
@@ -329,10 +445,10 @@ static inline bool inside_mesostructure(const gdm_state *s, meso_vec3 uvw) {
  * bisection where the table is right. Otherwise (the table was wrong here) a few probes
  * from the entry find the first inside point. The segment's end on a solid floor counts as
  * inside whatever its rounding. Returns the hit's distance along V_t, negative for none. */
-static float refine_hit(const gdm_state *s, meso_vec3 t_in, meso_vec3 vt, float d, float dt,
-                        bool solid_floor) {
-#define INSIDE(x)                                                                                  \
-    ((solid_floor && (x) >= dt) || inside_mesostructure(s, meso_vec3_madd(t_in, vt, (x))))
+static float refine_hit(const gdm_state *s, size_t prism, meso_vec3 t_in, meso_vec3 vt, float d,
+                        float dt, bool solid_floor) {
+    ray_probe probe = ray_probe_start(t_in, vt, s->prism_clear ? s->prism_clear[prism] : -1.0f);
+#define INSIDE(x) ((solid_floor && (x) >= dt) || ray_probe_inside(s, &probe, (x)))
     float window = s->refine_window;
     float guess = fminf(fmaxf(d, 0.0f), dt);
     float before = fmaxf(guess - window, 0.0f), after = fminf(guess + 0.5f * window, dt);
@@ -410,11 +526,11 @@ static bool shadowed(const gdm_state *s, meso_vec3 t, meso_vec3 normal_t, meso_v
          * table's error, 0.1 of the shell for a weave at k = 7, is larger than the gaps a
          * light ray threads through) */
         if (d >= boundary - margin) return false;
-        if (inside_mesostructure(s, meso_vec3_madd(t, lt, d + 0.5f * s->refine_window)))
-            return true;
+        ray_probe probe = ray_probe_start(t, lt, s->clear_w);
+        if (ray_probe_inside(s, &probe, d + 0.5f * s->refine_window)) return true;
         for (int k = 0; k < s->shadow_steps; k++) {
             float x = boundary * ((float)k + 0.5f) / (float)s->shadow_steps;
-            if (inside_mesostructure(s, meso_vec3_madd(t, lt, x))) return true;
+            if (ray_probe_inside(s, &probe, x)) return true;
         }
         return false;
     }
@@ -451,7 +567,7 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
     meso_vec3 vt = meso_vec3_scale(segment, 1.0f / dt);
     float d = lookup(s, t_in, vt);
     if (s->refine_steps > 0) {
-        d = refine_hit(s, t_in, vt, d, dt,
+        d = refine_hit(s, prism_index, t_in, vt, d, dt,
                        exit_slot == MESO_PRISM_BOTTOM && floor_is_solid(s, t_out));
         if (d < 0.0f) return false;
     } else if (!(d < dt - s->hit_margin)) {
@@ -475,9 +591,9 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
     f->out_depth = depth > f->depth ? depth : f->depth;
     texture_frame tf = frame_at(mesh, prism, (meso_vec2){hit.x, hit.y}, s->depth);
     meso_vec3 normal, normal_t = texture_normal(s, hit);
-    if (s->heightfield && !s->baked_normals) /* as the reference and the other techniques */
+    if (s->heightfield && !s->baked_normals) /* as the reference and the other techniques; */
         normal = meso_displaced_normal(tf.normal, tf.tangent, tf.bitangent, s->depth,
-                                       meso_heightfield_gradient(s->heightfield, hit.x, hit.y));
+                                       (meso_vec2){-normal_t.x, -normal_t.y}); /* = gradient */
     else
         normal = world_normal(&tf, normal_t);
     float length_t = meso_vec3_length(normal_t);
