@@ -120,6 +120,8 @@ static const view_technique_knobs known_knobs[] = {
     {"vdm", true, true, "eigenfunctions", 8, 1, 64, 0, 1},
     {"tessellation", true, false, "view_threshold", 2.0, 0.25, 64, 2.0, 0},
     {"displacement", true, false, NULL, 0, 0, 0, 0, 0},
+    /* refine_steps 0 is the paper's table-only hit (docs/techniques/gdm.md) */
+    {"gdm", true, false, "refine_steps", 6, 0, 32, 0, 1},
 };
 
 const view_technique_knobs *view_technique_knobs_find(const char *technique) {

@@ -236,9 +236,31 @@ static void test_view_script_errors_name_the_event(void **state) {
     assert_int_equal(view_script_parse("frames 0", e, 2, error, sizeof(error)), -1);
 }
 
+/* Every switch and main option the viewer steps exists in that technique's option table with a
+ * range holding the viewer's default and limits (a renamed option would fail silently). */
+static void test_view_knobs_name_real_options_within_range(void **state) {
+    (void)state;
+    int checked = 0;
+    for (size_t t = 0; t < meso_technique_count(); t++) {
+        const meso_technique_info *technique = meso_technique_get(t);
+        const view_technique_knobs *knobs = view_technique_knobs_find(technique->name);
+        if (knobs->has_shadows) assert_non_null(meso_technique_find_option(technique, "shadows"));
+        if (knobs->has_silhouettes)
+            assert_non_null(meso_technique_find_option(technique, "silhouettes"));
+        if (!knobs->main_option) continue;
+        const meso_technique_option *row = meso_technique_find_option(technique, knobs->main_option);
+        if (!row) fail_msg("%s has no option %s", technique->name, knobs->main_option);
+        assert_true(row->min <= knobs->main_min && knobs->main_max <= row->max);
+        assert_true(knobs->main_default == row->default_value);
+        checked++;
+    }
+    assert_true(checked >= 4);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_view_orbit_yaw_turns_about_up_keeping_distance),
+        cmocka_unit_test(test_view_knobs_name_real_options_within_range),
         cmocka_unit_test(test_view_orbit_pitch_raises_the_eye_and_stops_before_the_pole),
         cmocka_unit_test(test_view_pan_moves_eye_and_target_by_the_view_height),
         cmocka_unit_test(test_view_zoom_steps_ten_percent_within_limits),
