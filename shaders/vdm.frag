@@ -305,11 +305,11 @@ void main() {
     float below = (1.0 - h) * u_depth;
     vec3 position = f.position - t * (offset * vb.x * scale_u) - b * (offset * vb.y * scale_v) -
                     n * below;
-    // the normal of the curved mesh at the hit: turned by c_V per world unit along V_xy
+    // the normal of the curved mesh at the hit: the displaced normal turned by c_V per world
+    // unit along V_xy (as vdm.c)
     vec3 along = position + n * below - f.position;
-    meso_frame at_hit = f;
-    at_hit.normal = normalize(n + along * c_world);
-    vec3 normal = meso_displaced_normal(at_hit, u_depth, meso_height_gradient(p));
+    vec3 normal =
+        normalize(meso_displaced_normal(f, u_depth, meso_height_gradient(p)) + along * c_world);
     float visibility[MESO_MAX_LIGHTS];
     meso_all_visible(visibility);
     float bias = u_shadow_bias >= 0.0 ? u_shadow_bias : (u_refine_steps > 0 ? 0.05 : 0.2);

@@ -706,11 +706,13 @@ static void vdm_shade(const void *state, const meso_frame *frame, const meso_obj
             position = meso_vec3_madd(position, n, -below);
             /* Beyond the paper: the normal of the curved mesh at the hit, not at the entry (the
              * surface has turned by c_V per world unit of the way along V_xy; relief's
-             * relief_curve_normal8 does the same with its quadric). */
+             * relief_curve_normal8 does the same with its quadric). The turn is applied to the
+             * displaced normal: turning N before meso_displaced_normal is lost where the
+             * gradient is 0, since that normal is then T x B whatever N is. */
             meso_vec3 along = meso_vec3_sub(meso_vec3_madd(position, n, below), f->position);
-            meso_vec3 n_hit = meso_vec3_normalize(meso_vec3_madd(n, along, c_world));
-            meso_vec3 normal =
-                meso_displaced_normal(n_hit, f->tangent, f->bitangent, depth_world, gradient);
+            meso_vec3 normal = meso_vec3_normalize(meso_vec3_madd(
+                meso_displaced_normal(n, f->tangent, f->bitangent, depth_world, gradient), along,
+                c_world));
 
             /* Shadow determination (§3.2, Fig. 5), flat-surface approximation, c_L ignored as in
              * the paper: P'' = T' + h tan(theta_L) L; lit when d_L reaches P' (h sec(theta_L)). */
