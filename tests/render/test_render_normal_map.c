@@ -124,6 +124,25 @@ static void check_bad(const char *dir, const char *name, const char *material, c
     free(text);
 }
 
+/* meso info names the map and its convention. */
+static void test_meso_info_reports_the_normal_map(void **state) {
+    (void)state;
+    const char *dir = test_temp_dir();
+    write_png(test_path(dir, "n.png"), 3, NR, NG, NB);
+    const char *json = "{\"objects\": [{\"shape\": \"plane\", \"material\": "
+                       "{\"normal_map\": \"n.png\", \"normal_map_convention\": \"directx\"}}]}";
+    const char *scene = test_path(dir, "info.json");
+    test_write_file(scene, json, strlen(json));
+    char command[4096], out[1200];
+    snprintf(out, sizeof out, "%s.txt", scene);
+    snprintf(command, sizeof command, "%s info %s > %s", MESO_PROGRAM, scene, out);
+    assert_int_equal(system(command), 0);
+    size_t size;
+    char *text = test_read_file(out, &size);
+    if (!strstr(text, ", normal map 4x4 (DirectX),")) fail_msg("meso info said:\n%s", text);
+    free(text);
+}
+
 static void test_a_bad_normal_map_is_one_error_line(void **state) {
     (void)state;
     const char *dir = test_temp_dir();
@@ -139,6 +158,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_a_constant_normal_map_shades_as_lambert_in_every_technique),
         cmocka_unit_test(test_a_bad_normal_map_is_one_error_line),
+        cmocka_unit_test(test_meso_info_reports_the_normal_map),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
