@@ -159,8 +159,8 @@ void meso_shade_batch8(const meso_frame *frame, const meso_object *object,
         vz = select_v(nonzero, vz * inv, vz);
     }
     v8f dr = splat(scene->ambient.x), dg = splat(scene->ambient.y), db = splat(scene->ambient.z);
-    if (scene->environment) meso_environment_ambient8(scene->environment, nx, ny, nz,
-                                                      &dr, &dg, &db);
+    if (scene->environment)
+        meso_environment_ambient8(scene->environment, nx, ny, nz, &dr, &dg, &db);
     v8f sr = splat(0.0f), sg = splat(0.0f), sb = splat(0.0f);
     bool integer_power =
         m->shininess >= 0.0f && m->shininess <= 4096.0f && m->shininess == floorf(m->shininess);

@@ -462,8 +462,9 @@ static meso_result apply_mesh_material(const scene_parser *p, const cJSON *obj,
 
 static meso_result parse_material(const scene_parser *p, const cJSON *item, const scene_key *key,
                                   const meso_image *generated_color, meso_object *object) {
-    static const char *const keys[] = {"albedo",     "color_map", "specular", "shininess",
-                                       "normal_map", "normal_map_convention", NULL};
+    static const char *const keys[] = {"albedo",    "color_map",  "specular",
+                                       "shininess", "normal_map", "normal_map_convention",
+                                       NULL};
     meso_material *mat = &object->material;
     mat->albedo = (meso_vec3){0.8f, 0.8f, 0.8f};
     mat->specular = (meso_vec3){0.0f, 0.0f, 0.0f};

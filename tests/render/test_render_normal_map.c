@@ -69,14 +69,13 @@ static void check_centre(meso_context *ctx, const meso_scene *scene, const char 
     assert_true(fb->coverage[p] > 0.0f);
     for (int c = 0; c < 3; c++)
         if (!(fabsf(fb->color[3 * p + c] - want) < 2e-3f))
-            fail_msg("%s: channel %d is %.5f, want %.5f", technique, c, fb->color[3 * p + c],
-                     want);
+            fail_msg("%s: channel %d is %.5f, want %.5f", technique, c, fb->color[3 * p + c], want);
     meso_framebuffer_destroy(fb);
 }
 
-static const char *const techniques[] = {
-    "flat", "bump", "horizon", "parallax", "relief", "relief_exact", "vdm", "gdm",
-    "tessellation", "displacement", "reference", NULL};
+static const char *const techniques[] = {"flat",         "bump",         "horizon",   "parallax",
+                                         "relief",       "relief_exact", "vdm",       "gdm",
+                                         "tessellation", "displacement", "reference", NULL};
 
 static void test_a_constant_normal_map_shades_as_lambert_in_every_technique(void **state) {
     (void)state;
@@ -105,8 +104,8 @@ static void test_a_constant_normal_map_shades_as_lambert_in_every_technique(void
 /* meso render on a scene whose normal_map is bad: exit 2, one line naming the key. */
 static void check_bad(const char *dir, const char *name, const char *material, const char *why) {
     char json[1024], command[4096], err[1200];
-    snprintf(json, sizeof json,
-             "{\"objects\": [{\"shape\": \"plane\", \"material\": {%s}}]}", material);
+    snprintf(json, sizeof json, "{\"objects\": [{\"shape\": \"plane\", \"material\": {%s}}]}",
+             material);
     const char *scene = test_path(dir, name);
     test_write_file(scene, json, strlen(json));
     snprintf(err, sizeof err, "%s.err", scene);

@@ -141,8 +141,8 @@ static void test_the_scene_uses_the_file_material_unless_it_sets_a_colour(void *
     o = &scene->objects[0];
     assert_non_null(o->material.normal_map);
     assert_true(o->material.normal_map_directx);
-    assert_non_null(strstr(o->mesh_material_note,
-                           "normal texture not used: the scene's material sets one"));
+    assert_non_null(
+        strstr(o->mesh_material_note, "normal texture not used: the scene's material sets one"));
     meso_scene_destroy(scene);
 
     scene = load_scene(ctx, dir, "sets-colour.json", "{\"albedo\": [1, 0, 0]}");

@@ -338,9 +338,9 @@ static inline void relief_bump_lanes(const relief_heights *m, const meso_frame *
     v8vec3 normal = relief_normal8(l, depth, gu, gv);
     *in = (meso_shade_batch){.px = l->position.x, .py = l->position.y, .pz = l->position.z,
                              .nx = normal.x, .ny = normal.y, .nz = normal.z,
-                             .u = l->u, .v = l->v,
-                             .tx = l->tangent.x, .ty = l->tangent.y, .tz = l->tangent.z,
-                             .bx = l->bitangent.x, .by = l->bitangent.y, .bz = l->bitangent.z};
+                             .u = l->u, .v = l->v};
+    in->tx = l->tangent.x, in->ty = l->tangent.y, in->tz = l->tangent.z;
+    in->bx = l->bitangent.x, in->by = l->bitangent.y, in->bz = l->bitangent.z;
     meso_shade_batch_all_visible(in, frame);
 }
 
