@@ -198,6 +198,10 @@ static meso_result info_scene(meso_context *ctx, const char *path) {
         if (o->material.color_map && o->material.color_map->levels[0])
             printf(", colour map %dx%d", o->material.color_map->levels[0]->width,
                    o->material.color_map->levels[0]->height);
+        if (o->material.normal_map && o->material.normal_map->levels[0])
+            printf(", normal map %dx%d (%s)", o->material.normal_map->levels[0]->width,
+                   o->material.normal_map->levels[0]->height,
+                   o->material.normal_map_directx ? "DirectX" : "OpenGL");
         print_vec3(", specular ", o->material.specular);
         printf(", shininess %g\n", o->material.shininess);
         if (o->mesh_material_note[0])

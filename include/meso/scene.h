@@ -52,6 +52,11 @@ typedef struct meso_material {
     meso_texture *color_map; /* linear RGB, NULL when none; owned by the scene */
     meso_vec3 specular;      /* Blinn-Phong, 0 = none */
     float shininess;
+    /* tangent-space normal map (linear RGB, OpenGL convention: +x along dP/du, +y along dP/dv,
+     * +z the normal), NULL when none; owned by the scene. It replaces the shading normal
+     * (docs/scene-format.md, "normal_map"). */
+    meso_texture *normal_map;
+    bool normal_map_directx; /* the map's green points along -dP/dv (flipped when read) */
 } meso_material;
 
 typedef enum meso_mesostructure_kind {

@@ -508,8 +508,7 @@ bool reference_direct_sample(const meso_reference *reference, const meso_frame *
     }
     float visibility[MESO_SCENE_MAX_LIGHTS];
     reference_light_visibility(reference, out_hit->origin, out_hit->position, visibility);
-    meso_vec3 shaded = meso_shade_point(frame, out_hit->ref->object, out_hit->position,
-                                        out_hit->normal, out_hit->uv, visibility);
+    meso_vec3 shaded = reference_shade_hit(frame, out_hit, visibility);
     c[0] = shaded.x;
     c[1] = shaded.y;
     c[2] = shaded.z;

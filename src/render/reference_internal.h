@@ -175,6 +175,24 @@ typedef struct reference_hit {
     reference_base base;        /* where it lies on the base mesh */
 } reference_hit;
 
+/* The shading model at a hit (meso_shade_point_tb): the base mesh's tangent and bitangent at
+ * the hit's base point orient the object's normal map as the rasterizer's fragments do. */
+static inline meso_vec3 reference_shade_hit(const meso_frame *frame, const reference_hit *hit,
+                                            const float *visibility) {
+    const meso_mesh *mesh = hit->ref->object->mesh;
+    meso_vec3 t = {0.0f, 0.0f, 0.0f}, b = {0.0f, 0.0f, 0.0f};
+    if (hit->ref->object->material.normal_map && mesh->tangents && mesh->bitangents) {
+        const uint32_t *tri = mesh->indices + 3 * hit->base.triangle;
+        const float *w = hit->base.weights;
+        t = meso_vec3_barycentric(mesh->tangents[tri[0]], mesh->tangents[tri[1]],
+                                  mesh->tangents[tri[2]], w[0], w[1], w[2]);
+        b = meso_vec3_barycentric(mesh->bitangents[tri[0]], mesh->bitangents[tri[1]],
+                                  mesh->bitangents[tri[2]], w[0], w[1], w[2]);
+    }
+    return meso_shade_point_tb(frame, hit->ref->object, hit->position, hit->normal, t, b, hit->uv,
+                               visibility);
+}
+
 /* True when the ray origin + t dir, t in [0, tfar), hits nothing in `scene`. Thread-safe. */
 static inline bool reference_unoccluded(RTCScene scene, struct RTCIntersectContext *context,
                                         meso_vec3 origin, meso_vec3 dir, float tfar) {

@@ -103,8 +103,7 @@ typedef struct path_job {
 
 /* The shading model's diffuse albedo at a hit (albedo x colour map, exactly as it shades). */
 static meso_vec3 albedo_at(const path_job *pj, const reference_hit *hit) {
-    return meso_shade_point(&pj->albedo_frame, hit->ref->object, hit->position, hit->normal,
-                            hit->uv, NULL);
+    return reference_shade_hit(&pj->albedo_frame, hit, NULL);
 }
 
 /* The shading normal on the ray's side: interpolated normals may face away from the
@@ -187,10 +186,8 @@ static meso_vec3 rtv_reflected(const path_job *pj, const meso_frame *frame,
     const meso_mesh *mesh = hit->ref->object->mesh;
     meso_vec3 albedo = albedo_at(pj, hit);
     if (!pj->rtvs[o]) {
-        meso_vec3 full = meso_shade_point(frame, hit->ref->object, hit->position, hit->normal,
-                                          hit->uv, NULL);
-        meso_vec3 none = meso_shade_point(&pj->direct_frame, hit->ref->object, hit->position,
-                                          hit->normal, hit->uv, NULL);
+        meso_vec3 full = reference_shade_hit(frame, hit, NULL);
+        meso_vec3 none = reference_shade_hit(&pj->direct_frame, hit, NULL);
         return meso_vec3_sub(full, none);
     }
     const uint32_t *tri = mesh->indices + 3 * hit->base.triangle;

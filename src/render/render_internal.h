@@ -147,9 +147,17 @@ static inline meso_vec3 meso_light_direction(const meso_light *light, meso_vec3 
 meso_vec3 meso_shade_point(const meso_frame *frame, const meso_object *object, meso_vec3 position,
                            meso_vec3 normal, meso_vec2 uv, const float *visibility);
 
+/* meso_shade_point with the base surface's tangent (dP/du) and bitangent (dP/dv) at the point,
+ * which orient an object's normal map (render_shading.c); meso_shade_point passes zero ones
+ * (a normal map is then not applied). */
+meso_vec3 meso_shade_point_tb(const meso_frame *frame, const meso_object *object,
+                              meso_vec3 position, meso_vec3 normal, meso_vec3 tangent,
+                              meso_vec3 bitangent, meso_vec2 uv, const float *visibility);
+
 /* meso_shade_point for every fragment of a batch, 8 at a time, with the same bits:
  * fragments[i].color = meso_shade_point(frame, object, fragments[i].position,
- * fragments[i].normal, fragments[i].uv, visibility ? visibility + i * num_lights : NULL).
+ * fragments[i].normal, fragments[i].uv, visibility ? visibility + i * num_lights : NULL)
+ * (meso_shade_point_tb with fragments[i].tangent, .bitangent).
  * A technique that changes the normal or uv writes them into the fragment first. Pure. */
 void meso_shade_fragments(const meso_frame *frame, const meso_object *object,
                           meso_fragment *fragments, size_t count, const float *visibility);

@@ -90,6 +90,47 @@ static inline v8f rsqrt_safe(v8f len2, v8i *nonzero) {
     return splat(1.0f) / v8_sqrt(len2);
 }
 
+/* The normal map's normal (docs/scene-format.md, "normal_map"): the texel (r, g, b) at uv (level
+ * 0, bilinear, the colour map's wrap) read as x = 2r - 1, y = 2g - 1 (1 - 2g for the DirectX
+ * convention), z = 2b - 1 in the frame (T', B', N') of the surface being shaded: N' the normal
+ * the technique computed (in->n), T' the base tangent dP/du made orthogonal to N', B' the base
+ * bitangent dP/dv made orthogonal to N' and T' (Gram-Schmidt, so B' keeps the side of dP/dv:
+ * mirrored uvs stay right). n = normalize(T' x + B' y + N' z); the normal stays N' where the
+ * frame is degenerate (no uvs, T or B along N') or uv is not finite. */
+static void apply_normal_map(const meso_material *m, const meso_shade_batch *in, v8f *nx, v8f *ny,
+                             v8f *nz) {
+    v8f r, g, b;
+    sample_color_map(m->normal_map, in->u, in->v, &r, &g, &b);
+    v8f x = r * splat(2.0f) - splat(1.0f), y = g * splat(2.0f) - splat(1.0f);
+    v8f z = b * splat(2.0f) - splat(1.0f);
+    if (m->normal_map_directx) y = -y;
+    v8f Nx = *nx, Ny = *ny, Nz = *nz;
+    v8f d = Nx * in->tx + Ny * in->ty + Nz * in->tz;
+    v8f tx = in->tx - Nx * d, ty = in->ty - Ny * d, tz = in->tz - Nz * d;
+    v8f t2 = tx * tx + ty * ty + tz * tz;
+    v8i ok = t2 > splat(0.0f);
+    t2 = select_v(ok, t2, splat(1.0f));
+    d = Nx * in->bx + Ny * in->by + Nz * in->bz;
+    v8f bx = in->bx - Nx * d, by = in->by - Ny * d, bz = in->bz - Nz * d;
+    d = (tx * bx + ty * by + tz * bz) / t2;
+    bx -= tx * d, by -= ty * d, bz -= tz * d;
+    v8f b2 = bx * bx + by * by + bz * bz;
+    ok &= b2 > splat(0.0f);
+    b2 = select_v(ok, b2, splat(1.0f));
+    v8f ti = splat(1.0f) / v8_sqrt(t2), bi = splat(1.0f) / v8_sqrt(b2);
+    v8f px = tx * ti * x + bx * bi * y + Nx * z;
+    v8f py = ty * ti * x + by * bi * y + Ny * z;
+    v8f pz = tz * ti * x + bz * bi * y + Nz * z;
+    v8f p2 = px * px + py * py + pz * pz;
+    /* a non-finite uv or frame fails one of these (NaN compares false) */
+    ok &= (p2 > splat(0.0f)) & (p2 < splat(INFINITY)) & ((in->u - in->u) == splat(0.0f)) &
+          ((in->v - in->v) == splat(0.0f));
+    v8f pi = splat(1.0f) / v8_sqrt(select_v(ok, p2, splat(1.0f)));
+    *nx = select_v(ok, px * pi, Nx);
+    *ny = select_v(ok, py * pi, Ny);
+    *nz = select_v(ok, pz * pi, Nz);
+}
+
 /* colour = albedo map(uv) (ambient + sum_i c_i max(0, N.L_i) v_i) + sum_i spec c_i (N.H_i)^s v_i
  * (DESIGN.md); with an environment, ambient + E(N) / pi (render_environment.h), specular only where N.L_i > 0 and N.H_i > 0. */
 void meso_shade_batch8(const meso_frame *frame, const meso_object *object,
@@ -105,6 +146,8 @@ void meso_shade_batch8(const meso_frame *frame, const meso_object *object,
         sample_color_map(m->color_map, in->u, in->v, &tr, &tg, &tb);
         br *= tr, bg *= tg, bb *= tb;
     }
+    v8f nx = in->nx, ny = in->ny, nz = in->nz;
+    if (m->normal_map) apply_normal_map(m, in, &nx, &ny, &nz);
     bool has_specular = m->specular.x > 0.0f || m->specular.y > 0.0f || m->specular.z > 0.0f;
     v8f vx = splat(0.0f), vy = splat(0.0f), vz = splat(0.0f);
     v8i nonzero;
@@ -116,8 +159,8 @@ void meso_shade_batch8(const meso_frame *frame, const meso_object *object,
         vz = select_v(nonzero, vz * inv, vz);
     }
     v8f dr = splat(scene->ambient.x), dg = splat(scene->ambient.y), db = splat(scene->ambient.z);
-    if (scene->environment) meso_environment_ambient8(scene->environment, in->nx, in->ny, in->nz,
-                                                      &dr, &dg, &db);
+    if (scene->environment)
+        meso_environment_ambient8(scene->environment, nx, ny, nz, &dr, &dg, &db);
     v8f sr = splat(0.0f), sg = splat(0.0f), sb = splat(0.0f);
     bool integer_power =
         m->shininess >= 0.0f && m->shininess <= 4096.0f && m->shininess == floorf(m->shininess);
@@ -134,7 +177,7 @@ void meso_shade_batch8(const meso_frame *frame, const meso_object *object,
             lx = select_v(nonzero, lx * inv, lx), ly = select_v(nonzero, ly * inv, ly);
             lz = select_v(nonzero, lz * inv, lz);
         }
-        v8f ndl = in->nx * lx + in->ny * ly + in->nz * lz;
+        v8f ndl = nx * lx + ny * ly + nz * lz;
         v8f vis = in->visibility[li];
         v8i lit = (ndl > splat(0.0f)) & (vis > splat(0.0f));
         if (!v8_any(lit)) continue;
@@ -148,7 +191,7 @@ void meso_shade_batch8(const meso_frame *frame, const meso_object *object,
         v8f inv = rsqrt_safe(hx * hx + hy * hy + hz * hz, &nonzero);
         hx = select_v(nonzero, hx * inv, hx), hy = select_v(nonzero, hy * inv, hy);
         hz = select_v(nonzero, hz * inv, hz);
-        v8f ndh = in->nx * hx + in->ny * hy + in->nz * hz;
+        v8f ndh = nx * hx + ny * hy + nz * hz;
         v8i on = lit & (ndh > splat(0.0f));
         v8f p;
         if (integer_power) { /* exact repeated squaring: the usual 8, 32, 64... */
@@ -175,10 +218,19 @@ void meso_shade_batch8(const meso_frame *frame, const meso_object *object,
 
 meso_vec3 meso_shade_point(const meso_frame *frame, const meso_object *object, meso_vec3 position,
                            meso_vec3 normal, meso_vec2 uv, const float *visibility) {
+    meso_vec3 zero = {0.0f, 0.0f, 0.0f};
+    return meso_shade_point_tb(frame, object, position, normal, zero, zero, uv, visibility);
+}
+
+meso_vec3 meso_shade_point_tb(const meso_frame *frame, const meso_object *object,
+                              meso_vec3 position, meso_vec3 normal, meso_vec3 tangent,
+                              meso_vec3 bitangent, meso_vec2 uv, const float *visibility) {
     meso_shade_batch in;
     in.px = splat(position.x), in.py = splat(position.y), in.pz = splat(position.z);
     in.nx = splat(normal.x), in.ny = splat(normal.y), in.nz = splat(normal.z);
     in.u = splat(uv.x), in.v = splat(uv.y);
+    in.tx = splat(tangent.x), in.ty = splat(tangent.y), in.tz = splat(tangent.z);
+    in.bx = splat(bitangent.x), in.by = splat(bitangent.y), in.bz = splat(bitangent.z);
     for (int i = 0; i < frame->scene->num_lights; i++)
         in.visibility[i] = splat(visibility ? visibility[i] : 1.0f);
     v8f r, g, b;
@@ -200,6 +252,8 @@ void meso_shade_fragments(const meso_frame *frame, const meso_object *object,
             in.px[i] = f->position.x, in.py[i] = f->position.y, in.pz[i] = f->position.z;
             in.nx[i] = f->normal.x, in.ny[i] = f->normal.y, in.nz[i] = f->normal.z;
             in.u[i] = f->uv.x, in.v[i] = f->uv.y;
+            in.tx[i] = f->tangent.x, in.ty[i] = f->tangent.y, in.tz[i] = f->tangent.z;
+            in.bx[i] = f->bitangent.x, in.by[i] = f->bitangent.y, in.bz[i] = f->bitangent.z;
             for (int li = 0; visibility && li < num_lights; li++)
                 in.visibility[li][i] = visibility[k * (size_t)num_lights + li];
         }

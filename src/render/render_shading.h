@@ -12,6 +12,9 @@ typedef struct meso_shade_batch {
     v8f px, py, pz; /* position, world space */
     v8f nx, ny, nz; /* unit normal */
     v8f u, v;       /* colour-map coordinates */
+    /* the base surface's tangent (dP/du) and bitangent (dP/dv), any length: read only for an
+     * object with a normal map (render_shading.c, apply_normal_map) */
+    v8f tx, ty, tz, bx, by, bz;
     /* visibility[i]: light i's visibility per lane (1: every light visible), the first
      * scene->num_lights entries are read */
     v8f visibility[MESO_SCENE_MAX_LIGHTS];

@@ -358,6 +358,33 @@ static meso_result load_color_map(const scene_parser *p, const scene_key *key, c
     return r == MESO_OK ? load_color_map_file(p, key, path, wrap, out_texture) : r;
 }
 
+/* A normal map at a resolved path: linear (no sRGB decoding), RGB (x, y, z in [-1, 1] as
+ * 2 c - 1). */
+static meso_result load_normal_map_file(const scene_parser *p, const scene_key *key,
+                                        const char *path, meso_wrap wrap,
+                                        meso_texture **out_texture) {
+    meso_result r = scene_check_readable(p, key, path);
+    if (r != MESO_OK) return r;
+    meso_image *image = NULL;
+    r = meso_image_load_png(p->ctx, path, &image);
+    if (r != MESO_OK) return scene_relog_at_key(p, key, r);
+    if (image->channels < 3) {
+        meso_image_destroy(image);
+        return scene_error(p, MESO_ERROR_FORMAT, key,
+                           "a normal map needs RGB channels (this PNG has %d)", image->channels);
+    }
+    /* the image and the texture made from it with its mip levels (a third more) */
+    uint64_t texels = (uint64_t)image->width * (uint64_t)image->height;
+    uint64_t image_bytes = texels * (uint64_t)image->channels * sizeof(float);
+    if ((r = scene_account_memory(p, key, image_bytes + image_bytes / 3 * 4)) != MESO_OK) {
+        meso_image_destroy(image);
+        return r;
+    }
+    r = meso_texture_create(p->ctx, image, wrap, true, out_texture);
+    meso_image_destroy(image);
+    return r;
+}
+
 static void append_note(char *text, size_t size, const char *note) {
     size_t used = strlen(text);
     snprintf(text + used, size - used, "%s%s", used ? ", " : "", note);
@@ -403,8 +430,28 @@ static meso_result apply_mesh_material(const scene_parser *p, const cJSON *obj,
             append_note(note, note_size, "colour texture used");
         }
     }
-    if (from_file->normal_map[0])
-        append_note(note, note_size, "normal texture not used (normal maps are not implemented)");
+    const char *normal = from_file->normal_map;
+    if (normal[0] && cJSON_GetObjectItemCaseSensitive(material, "normal_map")) {
+        append_note(note, note_size, "normal texture not used: the scene's material sets one");
+    } else if (normal[0] && (normal[0] == '/' || strstr(normal, ".."))) {
+        append_note(note, note_size, "normal texture not used: not beside the mesh file");
+    } else if (normal[0]) {
+        char path[SCENE_PATH_MAX];
+        const char *slash = strrchr(mesh_path, '/');
+        int folder = slash ? (int)(slash - mesh_path) : 1;
+        int n = snprintf(path, sizeof path, "%.*s/%s", folder, slash ? mesh_path : ".", normal);
+        scene_key k = scene_key_child(key, "shape");
+        if (n < 0 || n >= (int)sizeof path)
+            return scene_error(p, MESO_ERROR_LIMIT, &k, "texture path too long");
+        const meso_mesostructure *m = &object->mesostructure;
+        meso_wrap wrap = m->kind != MESO_MESOSTRUCTURE_NONE ? m->wrap : MESO_WRAP_REPEAT;
+        meso_result r = load_normal_map_file(p, &k, path, wrap, &object->material.normal_map);
+        if (r != MESO_OK) return r;
+        append_note(note, note_size,
+                    object->material.normal_map_directx
+                        ? "normal texture used (DirectX convention, from the scene)"
+                        : "normal texture used (OpenGL convention)");
+    }
     if (from_file->ignored[0]) {
         char ignored[600];
         snprintf(ignored, sizeof ignored, "ignored: %s", from_file->ignored);
@@ -415,7 +462,9 @@ static meso_result apply_mesh_material(const scene_parser *p, const cJSON *obj,
 
 static meso_result parse_material(const scene_parser *p, const cJSON *item, const scene_key *key,
                                   const meso_image *generated_color, meso_object *object) {
-    static const char *const keys[] = {"albedo", "color_map", "specular", "shininess", NULL};
+    static const char *const keys[] = {"albedo",    "color_map",  "specular",
+                                       "shininess", "normal_map", "normal_map_convention",
+                                       NULL};
     meso_material *mat = &object->material;
     mat->albedo = (meso_vec3){0.8f, 0.8f, 0.8f};
     mat->specular = (meso_vec3){0.0f, 0.0f, 0.0f};
@@ -429,10 +478,28 @@ static meso_result parse_material(const scene_parser *p, const cJSON *item, cons
         (r = scene_get_positive(p, item, key, "shininess", false, false, &mat->shininess)) ||
         (r = scene_get_string(p, item, key, "color_map", false, &color_map)))
         return r;
-    if (!color_map) return MESO_OK;
-    scene_key k = scene_key_child(key, "color_map");
     const meso_mesostructure *m = &object->mesostructure;
     meso_wrap wrap = m->kind != MESO_MESOSTRUCTURE_NONE ? m->wrap : MESO_WRAP_REPEAT;
+    const char *normal_map = NULL, *convention = NULL;
+    if ((r = scene_get_string(p, item, key, "normal_map", false, &normal_map)) ||
+        (r = scene_get_string(p, item, key, "normal_map_convention", false, &convention)))
+        return r;
+    if (convention) {
+        scene_key k = scene_key_child(key, "normal_map_convention");
+        if (strcmp(convention, "directx") == 0)
+            mat->normal_map_directx = true;
+        else if (strcmp(convention, "opengl") != 0)
+            return scene_error(p, MESO_ERROR_FORMAT, &k, "must be \"opengl\" or \"directx\"");
+    }
+    if (normal_map) {
+        scene_key k = scene_key_child(key, "normal_map");
+        char path[SCENE_PATH_MAX];
+        if ((r = scene_resolve_path(p, &k, normal_map, path)) ||
+            (r = load_normal_map_file(p, &k, path, wrap, &mat->normal_map)))
+            return r;
+    }
+    if (!color_map) return MESO_OK;
+    scene_key k = scene_key_child(key, "color_map");
     if (strcmp(color_map, "mesostructure") == 0) {
         if (!generated_color)
             return scene_error(p, MESO_ERROR_FORMAT, &k,
@@ -733,6 +800,7 @@ uint64_t scene_objects_memory_estimate(const cJSON *objects) {
 void scene_object_deinit(meso_object *object) {
     meso_mesh_destroy(object->mesh);
     meso_texture_destroy(object->material.color_map);
+    meso_texture_destroy(object->material.normal_map);
     meso_heightfield_destroy(object->mesostructure.height_field);
     meso_solid_destroy(object->mesostructure.solid);
     memset(object, 0, sizeof(*object));

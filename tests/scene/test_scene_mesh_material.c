@@ -114,6 +114,7 @@ static void test_the_scene_uses_the_file_material_unless_it_sets_a_colour(void *
     const char *dir = test_temp_dir();
     write_text(dir, "painted.gltf", gltf_triangle);
     write_png(test_path(dir, "c.png"), 0.5f);
+    write_png(test_path(dir, "n.png"), 0.5f);
     meso_context *ctx = test_context(1);
 
     meso_scene *scene = load_scene(ctx, dir, "uses-file.json", NULL);
@@ -126,8 +127,22 @@ static void test_the_scene_uses_the_file_material_unless_it_sets_a_colour(void *
     assert_float_equal(o->material.color_map->levels[0]->pixels[0], 0.214f, 2e-3f);
     assert_non_null(strstr(o->mesh_material_note, "base colour used"));
     assert_non_null(strstr(o->mesh_material_note, "colour texture used"));
-    assert_non_null(strstr(o->mesh_material_note, "normal texture not used"));
+    /* the normalTexture is the normal map, linear (no sRGB decoding: 0.5 stays 0.5) */
+    assert_non_null(o->material.normal_map);
+    assert_float_equal(o->material.normal_map->levels[0]->pixels[0], 0.5f, 3e-3f);
+    assert_false(o->material.normal_map_directx);
+    assert_non_null(strstr(o->mesh_material_note, "normal texture used (OpenGL convention)"));
     assert_non_null(strstr(o->mesh_material_note, "ignored: occlusion texture"));
+    meso_scene_destroy(scene);
+
+    /* a scene normal_map wins over the file's */
+    scene = load_scene(ctx, dir, "sets-normal.json",
+                       "{\"normal_map\": \"c.png\", \"normal_map_convention\": \"directx\"}");
+    o = &scene->objects[0];
+    assert_non_null(o->material.normal_map);
+    assert_true(o->material.normal_map_directx);
+    assert_non_null(
+        strstr(o->mesh_material_note, "normal texture not used: the scene's material sets one"));
     meso_scene_destroy(scene);
 
     scene = load_scene(ctx, dir, "sets-colour.json", "{\"albedo\": [1, 0, 0]}");
@@ -169,6 +184,7 @@ static void test_meso_info_says_what_was_read_and_ignored(void **state) {
     const char *dir = test_temp_dir();
     write_text(dir, "painted.gltf", gltf_triangle);
     write_png(test_path(dir, "c.png"), 0.5f);
+    write_png(test_path(dir, "n.png"), 0.5f);
     char command[4096], out_path[1200];
     snprintf(out_path, sizeof out_path, "%s/info.txt", dir);
     const char *scene = write_text(dir, "info-scene.json",
@@ -177,7 +193,8 @@ static void test_meso_info_says_what_was_read_and_ignored(void **state) {
     assert_int_equal(system(command), 0);
     size_t size;
     char *text = test_read_file(out_path, &size);
-    if (!strstr(text, "material of the mesh file: base colour used, colour texture used"))
+    if (!strstr(text, "material of the mesh file: base colour used, colour texture used, "
+                      "normal texture used (OpenGL convention)"))
         fail_msg("meso info said:\n%s", text);
     free(text);
     snprintf(command, sizeof command, "%s info %s/painted.gltf > %s", MESO_PROGRAM, dir, out_path);

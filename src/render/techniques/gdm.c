@@ -600,6 +600,8 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
     normal_t = length_t > 0.0f ? meso_vec3_scale(normal_t, 1.0f / length_t) : (meso_vec3){0, 0, -1};
     f->position = position;
     f->normal = normal;
+    f->tangent = tf.tangent; /* the base surface's frame at the hit: orients a normal map */
+    f->bitangent = tf.bitangent;
     f->uv = (meso_vec2){hit.x, hit.y};
     *out_hit = (gdm_gi_hit){hit, prism};
     const meso_scene *scene = frame->scene;

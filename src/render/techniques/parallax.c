@@ -75,6 +75,8 @@ static void shade(const void *state, const meso_frame *frame, const meso_object 
         meso_shade_batch in = {.px = l.position.x, .py = l.position.y, .pz = l.position.z,
                                .nx = normal.x, .ny = normal.y, .nz = normal.z,
                                .u = l.u + uo, .v = l.v + vo};
+        in.tx = l.tangent.x, in.ty = l.tangent.y, in.tz = l.tangent.z;
+        in.bx = l.bitangent.x, in.by = l.bitangent.y, in.bz = l.bitangent.z;
         meso_shade_batch_all_visible(&in, frame);
         relief_shade_store(frame, object, &in, f, n);
     }

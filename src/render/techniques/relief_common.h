@@ -339,6 +339,8 @@ static inline void relief_bump_lanes(const relief_heights *m, const meso_frame *
     *in = (meso_shade_batch){.px = l->position.x, .py = l->position.y, .pz = l->position.z,
                              .nx = normal.x, .ny = normal.y, .nz = normal.z,
                              .u = l->u, .v = l->v};
+    in->tx = l->tangent.x, in->ty = l->tangent.y, in->tz = l->tangent.z;
+    in->bx = l->bitangent.x, in->by = l->bitangent.y, in->bz = l->bitangent.z;
     meso_shade_batch_all_visible(in, frame);
 }
 
@@ -581,6 +583,9 @@ static inline void relief_shade_fragments(const relief_heights *m, const relief_
             in[g].px = hit_pos[g].x, in[g].py = hit_pos[g].y, in[g].pz = hit_pos[g].z;
             in[g].nx = normal[g].x, in[g].ny = normal[g].y, in[g].nz = normal[g].z;
             in[g].u = hit_u[g], in[g].v = hit_v[g];
+            in[g].tx = l[g].tangent.x, in[g].ty = l[g].tangent.y, in[g].tz = l[g].tangent.z;
+            in[g].bx = l[g].bitangent.x, in[g].by = l[g].bitangent.y;
+            in[g].bz = l[g].bitangent.z;
             v8f r, gr, b;
             meso_shade_batch8(frame, object, &in[g], n[g], &r, &gr, &b);
             for (int k = 0; k < n[g]; ++k) {
