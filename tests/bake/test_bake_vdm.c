@@ -201,7 +201,7 @@ static void test_vdm_all_eigenfunctions_reproduce_the_table(void **state) {
     /* the reported RMSE for k = 2 is the measured one */
     meso_vdm_compression comp = meso_vdm_get_compression(vdm);
     double rmse2 = sqrt(err2 / (rows * 32.0));
-    assert_float_equal(comp.rmse[1], rmse2, 1e-3 * rmse2 + 1e-6);
+    assert_float_equal(comp.rmse[1], rmse2, (float)(1e-3 * rmse2 + 1e-6));
     assert_true(comp.rmse[0] >= comp.rmse[1] && comp.rmse[1] >= comp.rmse[7]);
     assert_true(comp.raw_bytes == rows * 36 * 4);
     meso_vdm_destroy(vdm);

@@ -34,13 +34,13 @@ static void test_environment_hdr_round_trip(void **state) {
         assert_float_equal(b, a, 0.01f * largest + 1e-6f);
     }
     for (int k = 0; k < MESO_SH_COUNT; k++)
-        assert_float_equal(loaded->sh[1][k], sky->sh[1][k], 0.01 * fabs(sky->sh[1][0]));
+        assert_float_equal(loaded->sh[1][k], sky->sh[1][k], (float)(0.01 * fabs(sky->sh[1][0])));
     /* intensity scales the map and the projection */
     meso_environment *unit = NULL;
     assert_int_equal(meso_environment_create_sky(ctx, &(meso_sky_desc){.width = 64}, 1.0f, &unit),
                      MESO_OK);
     for (int k = 0; k < MESO_SH_COUNT; k++)
-        assert_float_equal(sky->sh[2][k], 2.0 * unit->sh[2][k], 1e-5 * fabs(sky->sh[2][0]));
+        assert_float_equal(sky->sh[2][k], 2.0 * unit->sh[2][k], (float)(1e-5 * fabs(sky->sh[2][0])));
     meso_environment_destroy(unit);
     meso_environment_destroy(loaded);
     meso_environment_destroy(sky);
@@ -161,7 +161,7 @@ static void test_environment_sampling_density_matches_the_map(void **state) {
         sum += meso_environment_radiance(env, d).y / pdf;
     }
     double expected = env->sh[1][0] * sqrt(4.0 * M_PI);
-    assert_float_equal(sum / samples, expected, 0.02 * expected);
+    assert_float_equal(sum / samples, expected, (float)(0.02 * expected));
     meso_environment_destroy(env);
     meso_context_destroy(ctx);
 }

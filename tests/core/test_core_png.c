@@ -29,7 +29,7 @@ static void round_trip(int channels, int bit_depth) {
     assert_int_equal(loaded->channels, channels);
     size_t count = 37u * 19u * (size_t)channels;
     for (size_t i = 0; i < count; i++)
-        assert_float_equal(loaded->pixels[i], image->pixels[i], 0.5 / 255.0 + 1e-6);
+        assert_float_equal(loaded->pixels[i], image->pixels[i], (float)(0.5 / 255.0 + 1e-6));
     meso_image_destroy(loaded);
     meso_image_destroy(image);
     meso_context_destroy(ctx);

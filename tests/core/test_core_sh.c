@@ -141,7 +141,7 @@ static void test_sh_rotation_is_exact_for_band_limited_functions(void **state) {
     /* each band's matrix is orthogonal (rotations keep the L2 norm) */
     double before = 0, after = 0;
     for (int k = 0; k < MESO_SH_COUNT; k++) before += c[k] * c[k], after += rotated[k] * rotated[k];
-    assert_float_equal(after, before, 1e-5 * before);
+    assert_float_equal(after, before, (float)(1e-5 * before));
 }
 
 typedef struct rotated_source {
@@ -167,7 +167,7 @@ static void test_sh_rotating_coefficients_matches_rotating_the_map(void **state)
     double norm = 0;
     for (int k = 0; k < MESO_SH_COUNT; k++) norm += rotated[k] * rotated[k];
     for (int k = 0; k < MESO_SH_COUNT; k++)
-        assert_float_equal(rotated[k], turned->sh[0][k], 2e-3 * sqrt(norm));
+        assert_float_equal(rotated[k], turned->sh[0][k], (float)(2e-3 * sqrt(norm)));
     /* the rotation is not the identity here: the coefficients move by far more than the
      * tolerance */
     double moved = 0;

@@ -38,7 +38,7 @@ static void test_gi_open_plane_receives_the_sky(void **state) {
     float *radiance = NULL;
     assert_int_equal(meso_gi_vertex_radiance(ctx, plane, env, NULL, &radiance), MESO_OK);
     for (size_t v = 0; v < plane->num_vertices; v++)
-        assert_float_equal(vertex_irradiance(radiance, v, 0), M_PI, 0.01 * M_PI);
+        assert_float_equal(vertex_irradiance(radiance, v, 0), M_PI, (float)(0.01 * M_PI));
     free(radiance);
     meso_environment_destroy(env);
     /* the default sky (a sun): the plane's local frame sees what the world frame sees at +y */
@@ -76,7 +76,7 @@ static void test_gi_torus_hole_is_darker_than_its_outside(void **state) {
     print_message("torus: inner equator E = %.3f, outer %.3f (pi = %.3f)\n", e_inner, e_outer,
                   M_PI);
     /* outside nothing occludes; inside, the far side of the ring fills much of the view */
-    assert_float_equal(e_outer, M_PI, 0.02 * M_PI);
+    assert_float_equal(e_outer, M_PI, (float)(0.02 * M_PI));
     assert_true(e_inner < 0.8f * e_outer);
     assert_true(e_inner > 0.0f);
     /* the same with any number of threads */

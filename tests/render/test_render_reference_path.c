@@ -151,7 +151,7 @@ static void test_path_and_sh_ambient_agree_on_an_open_plane(void **state) {
         assert_int_equal(meso_render_scene(ctx, scene, &desc, &flat), MESO_OK);
         double a = gi_mean_covered(flat, NULL), b = gi_mean_covered(truth, NULL);
         print_message("sky %d: flat with SH ambient %.4f, path traced %.4f\n", k, a, b);
-        assert_float_equal(a, b, tolerance[k] * b + 0.002);
+        assert_float_equal(a, b, (float)(tolerance[k] * b + 0.002));
         /* and it is not the ambient term alone (0 here) */
         assert_true(a > 0.2);
         meso_framebuffer_destroy(flat);
@@ -197,7 +197,7 @@ static void test_rtv_mode_against_the_closed_form_and_the_truth(void **state) {
      * 0.063: on this small plane the RTV is no better; on bark-cylinder at 256^2 it is (32.4
      * against 28.3 dB covered, docs/techniques/gdm-gi.md). The test holds it to 10 % of the
      * truth's mean and the shading of the RTV below the unshadowed sky (it shadows). */
-    assert_float_equal(a, b, 0.1 * b);
+    assert_float_equal(a, b, (float)(0.1 * b));
     assert_true(a < c);
     meso_framebuffer_destroy(unshadowed);
     meso_framebuffer_destroy(truth);

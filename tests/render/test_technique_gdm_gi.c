@@ -78,7 +78,7 @@ static void test_bricks_agree_with_the_rtv_at_the_true_hits_and_shadow_the_sky(v
                   c);
     /* the same model at gdm's hits and at the true ones: the hits and the shadows differ by
      * gdm's own error (docs/techniques/gdm.md), the light is the same */
-    assert_float_equal(a, b, 0.05 * b);
+    assert_float_equal(a, b, (float)(0.05 * b));
     assert_true(a < c); /* the RTV shadows the sky in the mortar */
     meso_framebuffer_destroy(rtv);
     meso_framebuffer_destroy(unshadowed);

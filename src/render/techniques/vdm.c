@@ -413,9 +413,9 @@ static inline float lookup(const vdm_state *s, meso_vec2 uv, float theta, float 
         }
         v8f m = {0};
         for (int j = 0; j < chunks; j++) {
-            v8f e = (1.0f - cs.c.w) * load8(s->mvm_t + (size_t)cs.c.i0 * lanes + 8 * j) +
-                    cs.c.w * load8(s->mvm_t + (size_t)cs.c.i1 * lanes + 8 * j);
-            m += w[j] * e;
+            v8f e_mvm = (1.0f - cs.c.w) * load8(s->mvm_t + (size_t)cs.c.i0 * lanes + 8 * j) +
+                        cs.c.w * load8(s->mvm_t + (size_t)cs.c.i1 * lanes + 8 * j);
+            m += w[j] * e_mvm;
         }
         *out_max_theta = sum8(m);
     }
