@@ -5,7 +5,7 @@ BUILD_CLANG ?= build-clang
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps build demo test test-asan test-clang bench install clean format
+.PHONY: all deps build demo test test-asan test-clang bench install clean format format-check
 
 all: build
 
@@ -50,6 +50,10 @@ install: build
 
 format:
 	clang-format -i $$(git ls-files '*.c' '*.h')
+
+# CI: the tree as .clang-format has it (Debian's clang-format 14).
+format-check: deps
+	clang-format --dry-run --Werror $$(git ls-files '*.c' '*.h')
 
 clean:
 	rm -rf $(BUILD) $(BUILD_ASAN) $(BUILD_CLANG)

@@ -77,20 +77,20 @@ typedef struct app_option {
     const char *name;  /* "--size" */
     const char *alias; /* "-o", or NULL */
     app_option_type type;
-    void *target; /* bool *, int *, double *, const char **, app_size *, app_settings * */
-    const char *metavar;      /* "WxH" (not for flags) */
-    const char *help;         /* one line */
+    void *target;        /* bool *, int *, double *, const char **, app_size *, app_settings * */
+    const char *metavar; /* "WxH" (not for flags) */
+    const char *help;    /* one line */
     const char *default_text; /* "the scene's", or NULL for none */
     double min, max;          /* INT and DOUBLE bounds (both 0: no bounds) */
 } app_option;
 
 /* Options every subcommand takes. */
 typedef struct app_globals {
-    int threads;   /* --threads N: 0 = every core */
-    bool progress; /* --progress: the bar even when stderr is not a terminal */
-    bool quiet;    /* --quiet: only errors */
-    bool verbose;  /* --verbose: the library's info lines too */
-    bool help;     /* --help */
+    int threads;              /* --threads N: 0 = every core */
+    bool progress;            /* --progress: the bar even when stderr is not a terminal */
+    bool quiet;               /* --quiet: only errors */
+    bool verbose;             /* --verbose: the library's info lines too */
+    bool help;                /* --help */
     const char *memory_limit; /* --memory-limit SIZE: "4G", "512M", bytes; NULL: the default */
 } app_globals;
 
@@ -277,8 +277,7 @@ void app_compare_all_json(const app_compare_all *all, const char *scene_name, ap
  * Writes nothing, and removes an earlier run's plot, when no technique has metrics (the
  * reference did not render). */
 meso_result app_plot_error_vs_time(meso_context *ctx, const app_compare_all *all,
-                                   const char *scene_name, const char *path,
-                                   const char *png_path);
+                                   const char *scene_name, const char *path, const char *png_path);
 
 /* A sheet of labelled cells saved as sRGB PNG: images are linear RGB, NULL cells are drawn as
  * empty (background grey). */

@@ -80,9 +80,9 @@ typedef struct bench_scene {
 } bench_scene;
 
 /* Time frames of a prepared renderer: the median in ms, frames counted in *out_frames. */
-static meso_result time_frames(app_renderer *renderer, meso_framebuffer *fb,
-                               const bench_options *o, double *times, double *cycles,
-                               double *out_ms, double *out_cycles, int *out_frames) {
+static meso_result time_frames(app_renderer *renderer, meso_framebuffer *fb, const bench_options *o,
+                               double *times, double *cycles, double *out_ms, double *out_cycles,
+                               int *out_frames) {
     double warmup_start = meso_time_seconds();
     for (int i = 0; i < WARMUP_FRAMES && meso_time_seconds() - warmup_start < WARMUP_SECONDS; i++) {
         meso_result result = app_renderer_render(renderer, fb);
@@ -165,8 +165,10 @@ static meso_result bench_one(meso_context *ctx, const bench_scene *s, const char
     if (result == MESO_OK) {
         row->prepare_ms = 1000.0 * app_renderer_get_stats(&renderer).prepare_seconds;
         double frame_cycles;
-        result = time_frames(&renderer, fb, o, times, cycles, &row->ms, &frame_cycles, &row->frames);
-        if (threads == 1 && !renderer.gl) row->ms_single = row->ms, row->cycles_single = frame_cycles;
+        result =
+            time_frames(&renderer, fb, o, times, cycles, &row->ms, &frame_cycles, &row->frames);
+        if (threads == 1 && !renderer.gl)
+            row->ms_single = row->ms, row->cycles_single = frame_cycles;
     }
     /* the GL draws with its own threads (llvmpipe: LP_NUM_THREADS): no one-thread column */
     if (result == MESO_OK && threads > 1 && !renderer.gl) {
@@ -210,8 +212,8 @@ static void print_table(const bench_row *rows, size_t count, int threads) {
 /* The cost model (--profile): per covered pixel at one thread. */
 static void print_profile(const bench_row *rows, size_t count) {
     printf("\nper covered pixel, one thread (cycles: time-stamp counter)\n");
-    printf("%-20s %-14s %10s %8s %9s %9s %7s %8s\n", "scene", "technique", "covered px",
-           "frag/px", "ns/px", "cyc/px", "steps", "ns/step");
+    printf("%-20s %-14s %10s %8s %9s %9s %7s %8s\n", "scene", "technique", "covered px", "frag/px",
+           "ns/px", "cyc/px", "steps", "ns/step");
     for (size_t i = 0; i < count; i++) {
         const bench_row *r = &rows[i];
         if (!(r->covered > 0.0)) {
@@ -358,8 +360,9 @@ int meso_cmd_bench(int argc, char **argv) {
     double *times = calloc(MAX_FRAMES, sizeof(*times));
     double *cycles = calloc(MAX_FRAMES, sizeof(*cycles));
     size_t num_rows = 0;
-    meso_result result = rows && times && cycles ? load_scenes(ctx, paths, num_paths, scenes, &num_scenes)
-                                       : MESO_ERROR_OUT_OF_MEMORY;
+    meso_result result = rows && times && cycles
+                             ? load_scenes(ctx, paths, num_paths, scenes, &num_scenes)
+                             : MESO_ERROR_OUT_OF_MEMORY;
 
     char machine[320], date[32];
     app_machine_description(machine, sizeof(machine));
@@ -388,9 +391,8 @@ int meso_cmd_bench(int argc, char **argv) {
                 if (app_backend_is_gl(&backends[b]) && strcmp(o.techniques, "all") == 0 &&
                     !meso_gl_technique_supported(names[t]))
                     continue;
-                meso_result r =
-                    bench_one(ctx, &scenes[s], names[t], &backends[b], &o, times, cycles,
-                              &rows[num_rows]);
+                meso_result r = bench_one(ctx, &scenes[s], names[t], &backends[b], &o, times,
+                                          cycles, &rows[num_rows]);
                 if (r == MESO_OK)
                     num_rows++;
                 else if (r == MESO_ERROR_OUT_OF_MEMORY)

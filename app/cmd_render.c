@@ -21,8 +21,8 @@ typedef struct render_options {
     bool wireframe;
     const char *coverage;
     bool linear;
-    int bits; /* --bits: PNG bit depth (0: 8) */
-    app_settings settings; /* --set */
+    int bits;                   /* --bits: PNG bit depth (0: 8) */
+    app_settings settings;      /* --set */
     int orbit;                  /* frames of a turntable into folder OUT (0: none) */
     app_camera_override camera; /* --eye, --target, --fov, --light */
     app_backend backend;        /* --backend, --shader-dir */
@@ -195,7 +195,8 @@ static int render_all(meso_context *ctx, const meso_scene *scene, const render_o
     if (result == MESO_OK) result = write_reports(ctx, &all, scene, o->output);
     if (result == MESO_OK) print_results(&all);
     if (result == MESO_OK && !quiet)
-        fprintf(stderr, "meso: render: %zu images, sheet.png, results.csv, results.json and "
+        fprintf(stderr,
+                "meso: render: %zu images, sheet.png, results.csv, results.json and "
                 "error-vs-time.svg/.png in %s\n",
                 rendered, o->output);
     int status = result == MESO_OK ? APP_EXIT_OK : app_fail(ctx, result);
@@ -349,18 +350,18 @@ int meso_cmd_render(int argc, char **argv) {
         else if ((status = app_camera_override_apply("render", &o.camera, scene)) >= 0)
             ; /* the override's message is printed */
         else if (o.orbit)
-            status = o.techniques
-                         ? app_render_orbit_techniques(
-                               ctx, scene, names, num_names, &orbit_desc,
-                               o.size.width ? o.size.width : scene->width,
-                               o.size.height ? o.size.height : scene->height,
-                               o.linear ? MESO_ENCODING_LINEAR : scene->encoding, o.orbit,
-                               scene_options.output, globals.quiet)
-                         : app_render_orbit(ctx, scene, &orbit_desc,
-                                            o.size.width ? o.size.width : scene->width,
-                                            o.size.height ? o.size.height : scene->height,
-                                            o.linear ? MESO_ENCODING_LINEAR : scene->encoding,
-                                            o.orbit, scene_options.output, globals.quiet);
+            status =
+                o.techniques
+                    ? app_render_orbit_techniques(ctx, scene, names, num_names, &orbit_desc,
+                                                  o.size.width ? o.size.width : scene->width,
+                                                  o.size.height ? o.size.height : scene->height,
+                                                  o.linear ? MESO_ENCODING_LINEAR : scene->encoding,
+                                                  o.orbit, scene_options.output, globals.quiet)
+                    : app_render_orbit(ctx, scene, &orbit_desc,
+                                       o.size.width ? o.size.width : scene->width,
+                                       o.size.height ? o.size.height : scene->height,
+                                       o.linear ? MESO_ENCODING_LINEAR : scene->encoding, o.orbit,
+                                       scene_options.output, globals.quiet);
         else if (o.techniques)
             status = render_all(ctx, scene, &scene_options, names, num_names, globals.quiet);
         else

@@ -15,23 +15,27 @@ typedef struct app_camera_override {
 } app_camera_override;
 
 /* The four option rows of an app_camera_override `o`, for a command's option table. */
-#define APP_CAMERA_OVERRIDE_OPTIONS(o)                                                           \
-    {"--eye", NULL, APP_OPTION_STRING, &(o).eye, "X,Y,Z", "the camera's position",               \
-     "the scene's", 0, 0},                                                                       \
-    {"--target", NULL, APP_OPTION_STRING, &(o).target, "X,Y,Z", "the point the camera looks at", \
-     "the scene's", 0, 0},                                                                       \
-    {"--fov", NULL, APP_OPTION_DOUBLE, &(o).fov, "D", "vertical field of view, degrees",         \
-     "the scene's", 1, 179},                                                                     \
-    {"--light", NULL, APP_OPTION_STRING, &(o).light, "X,Y,Z",                                    \
-     "the first light: direction toward it (directional) or position (point); a scene without "  \
-     "lights gets a white directional one",                                                      \
-     "the scene's", 0, 0}
+#define APP_CAMERA_OVERRIDE_OPTIONS(o)                                                             \
+    {"--eye", NULL, APP_OPTION_STRING, &(o).eye, "X,Y,Z", "the camera's position", "the scene's",  \
+     0,       0},                                                                                  \
+        {"--target",    NULL,    APP_OPTION_STRING,                                                \
+         &(o).target,   "X,Y,Z", "the point the camera looks at",                                  \
+         "the scene's", 0,       0},                                                               \
+        {"--fov",       NULL, APP_OPTION_DOUBLE,                                                   \
+         &(o).fov,      "D",  "vertical field of view, degrees",                                   \
+         "the scene's", 1,    179},                                                                \
+    {                                                                                              \
+        "--light", NULL, APP_OPTION_STRING, &(o).light, "X,Y,Z",                                   \
+            "the first light: direction toward it (directional) or position (point); a scene "     \
+            "without "                                                                             \
+            "lights gets a white directional one",                                                 \
+            "the scene's", 0, 0                                                                    \
+    }
 
 /* Apply the overrides to the scene. A malformed value prints a usage error for `command` and
  * returns 2; an eye on the target or an unusable up prints "meso: <scene>: ..." and returns 2;
  * otherwise -1 (go on). */
-int app_camera_override_apply(const char *command, const app_camera_override *o,
-                              meso_scene *scene);
+int app_camera_override_apply(const char *command, const app_camera_override *o, meso_scene *scene);
 
 /* "X,Y,Z" (three finite numbers) into out; false when malformed. */
 bool app_parse_vec3(const char *text, meso_vec3 *out);
@@ -49,16 +53,14 @@ meso_camera app_camera_from_view(const view_camera *camera);
  * (frame k turned by 360 k / count degrees; frame 0 is the scene's view) with one renderer,
  * into dir/frame-0000.png, ... (numbered for ffmpeg). Prints a summary line unless quiet.
  * The scene's camera is changed during the call and restored. Returns an exit status. */
-int app_render_orbit(meso_context *ctx, meso_scene *scene, const meso_render_desc *desc,
-                     int width, int height, meso_encoding encoding, int count, const char *dir,
-                     bool quiet);
+int app_render_orbit(meso_context *ctx, meso_scene *scene, const meso_render_desc *desc, int width,
+                     int height, meso_encoding encoding, int count, const char *dir, bool quiet);
 
 /* app_render_orbit for each technique of `names` that can draw the scene, into
  * dir/<technique>/frame-0000.png ... (one strip of frames each; one that cannot draw the scene
  * is skipped with a note). Returns an exit status: the first failure's, or 0. */
 int app_render_orbit_techniques(meso_context *ctx, meso_scene *scene, const char *const *names,
-                                int num_names, const meso_render_desc *desc, int width,
-                                int height, meso_encoding encoding, int count, const char *dir,
-                                bool quiet);
+                                int num_names, const meso_render_desc *desc, int width, int height,
+                                meso_encoding encoding, int count, const char *dir, bool quiet);
 
 #endif

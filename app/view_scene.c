@@ -27,8 +27,7 @@ static meso_option *find_option(meso_object *object, const char *technique, cons
 }
 
 /* Set technique's option `name` keyed by the technique, over whatever the scene says. */
-static void set_option(meso_object *object, const char *technique, const char *name,
-                       double value) {
+static void set_option(meso_object *object, const char *technique, const char *name, double value) {
     meso_option *option = find_option(object, technique, name);
     if (!option || !option->technique[0]) {
         if (object->num_options >= MESO_OPTIONS_MAX) return; /* the scene's own fill the table */

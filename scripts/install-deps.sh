@@ -15,6 +15,7 @@ packages=(
     libopenexr-dev        # .exr outputs (OpenEXRCore's C API)
     libcairo2-dev fonts-dejavu-core   # labels of sheets and plots (DejaVu Sans Mono)
     clang libclang-rt-14-dev libomp-dev   # make test-clang (UBSan, float-cast-overflow), fuzzing
+    clang-format          # make format-check (CI)
     libsdl2-dev           # meso view (optional: without it the viewer is not built)
     python3-numpy python3-pil   # the docs' measuring scripts (scripts/error_bands.py)
     libegl-dev libepoxy-dev     # the OpenGL back end: EGL headless, GL entry points

@@ -16,8 +16,8 @@ int main(int argc, char **argv) {
     meso_sky_desc sky = {0};
     if (argc >= 3) sky.width = atoi(argv[2]);
     if (argc == 6)
-        sky.sun_direction = (meso_vec3){strtof(argv[3], NULL), strtof(argv[4], NULL),
-                                        strtof(argv[5], NULL)};
+        sky.sun_direction =
+            (meso_vec3){strtof(argv[3], NULL), strtof(argv[4], NULL), strtof(argv[5], NULL)};
     meso_context *ctx = NULL;
     if (meso_context_create(&(meso_context_desc){0}, &ctx) != MESO_OK) return 1;
     meso_environment *env = NULL;

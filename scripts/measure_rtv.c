@@ -11,8 +11,8 @@
 static void report(const char *name, const meso_rtv *rtv) {
     printf("%s: %dx%dx%d voxels, %dx%d views, %d eigenfunctions: %.1f s; raw %.2f MB, "
            "compressed %.2f MB\n  RMSE k=1..8:",
-           name, rtv->width, rtv->height, rtv->layers, rtv->num_theta, rtv->num_phi,
-           rtv->num_eigen, rtv->bake_seconds, rtv->raw_bytes / 1e6, rtv->compressed_bytes / 1e6);
+           name, rtv->width, rtv->height, rtv->layers, rtv->num_theta, rtv->num_phi, rtv->num_eigen,
+           rtv->bake_seconds, rtv->raw_bytes / 1e6, rtv->compressed_bytes / 1e6);
     for (int k = 0; k < 8; k++) printf(" %.4f", rtv->rmse[k]);
     printf("\n");
 }
@@ -28,11 +28,14 @@ int main(int argc, char **argv) {
     meso_heightfield *bark = NULL;
     meso_solid *weave = NULL;
     meso_rtv *rtv = NULL;
-    meso_rtv_desc desc = {.width = width, .height = width, .layers = layers,
-                          .num_theta = atoi(argv[3]), .num_phi = atoi(argv[4])};
+    meso_rtv_desc desc = {.width = width,
+                          .height = width,
+                          .layers = layers,
+                          .num_theta = atoi(argv[3]),
+                          .num_phi = atoi(argv[4])};
     /* examples/bark-cylinder.json: depth 0.08 over tiles about 0.94 x 1.2 wide */
-    meso_heightfield_desc bark_desc = {.kind = MESO_HEIGHTFIELD_BARK, .resolution = 512,
-                                       .bevel = 0.01f};
+    meso_heightfield_desc bark_desc = {
+        .kind = MESO_HEIGHTFIELD_BARK, .resolution = 512, .bevel = 0.01f};
     meso_result r = meso_heightfield_create_procedural(ctx, &bark_desc, &bark, NULL);
     if (r == MESO_OK) {
         desc.heightfield = bark, desc.aspect = 0.08f / 1.07f;
@@ -41,8 +44,9 @@ int main(int argc, char **argv) {
         rtv = NULL;
     }
     /* examples/weave-teapot.json: depth 0.04, a tile about 0.2 wide on the body */
-    if (r == MESO_OK && (r = meso_solid_create_procedural(
-                             ctx, &(meso_solid_desc){.kind = MESO_SOLID_WEAVE}, &weave)) == MESO_OK) {
+    if (r == MESO_OK &&
+        (r = meso_solid_create_procedural(ctx, &(meso_solid_desc){.kind = MESO_SOLID_WEAVE},
+                                          &weave)) == MESO_OK) {
         desc.heightfield = NULL, desc.solid = weave, desc.aspect = 0.2f;
         if ((r = meso_bake_rtv(ctx, &desc, &rtv)) == MESO_OK) report("weave-teapot", rtv);
         meso_rtv_destroy(rtv);

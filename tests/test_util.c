@@ -24,8 +24,8 @@ static void use_test_cache(void) {
 meso_context *test_context(int num_threads) {
     use_test_cache();
     meso_context *ctx = NULL;
-    meso_context_desc desc = {.num_threads = num_threads, .log = capture_log,
-                              .progress = MESO_PROGRESS_NEVER};
+    meso_context_desc desc = {
+        .num_threads = num_threads, .log = capture_log, .progress = MESO_PROGRESS_NEVER};
     assert_int_equal(meso_context_create(&desc, &ctx), MESO_OK);
     last_warning[0] = 0;
     return ctx;

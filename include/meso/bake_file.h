@@ -54,10 +54,10 @@ typedef struct meso_bake_array {
 } meso_bake_array;
 
 typedef struct meso_bake_file {
-    char kind[32];        /* "vdm", "horizon", ... */
+    char kind[32]; /* "vdm", "horizon", ... */
     uint32_t kind_version;
     uint64_t source_hash;
-    char *params_json;    /* owned when loaded; borrowed when saving */
+    char *params_json; /* owned when loaded; borrowed when saving */
     int num_arrays;
     meso_bake_array arrays[MESO_BAKE_MAX_ARRAYS];
 } meso_bake_file;

@@ -76,8 +76,8 @@ meso_result meso_bake_isosurface(meso_context *ctx, const meso_solid *solid,
 
 /* The same for any periodic field (tests build a slab or a sphere with it). `field` is called
  * from several threads at once and must be pure. */
-meso_result meso_bake_isosurface_function(meso_context *ctx, meso_scalar_field_fn field,
-                                          void *user, const meso_isosurface_desc *desc,
+meso_result meso_bake_isosurface_function(meso_context *ctx, meso_scalar_field_fn field, void *user,
+                                          const meso_isosurface_desc *desc,
                                           meso_isosurface **out_isosurface);
 
 /* Free; NULL does nothing. */

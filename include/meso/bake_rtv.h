@@ -61,14 +61,14 @@ extern "C" {
 typedef struct meso_rtv_desc {
     const meso_heightfield *heightfield; /* read during the call only */
     const meso_solid *solid;             /* read during the call only */
-    float aspect;         /* shell depth / tile side in world units: required, (0, 100] */
-    int width, height;    /* voxels in u, v (32 x 32) */
-    int layers;           /* voxels in w, >= 2 (8) */
-    int directions;       /* incident directions over the sphere, spherical Fibonacci (256) */
-    float albedo;         /* of the interreflection bounce (0.7); negative: none */
-    float max_tiles;      /* a ray inside the shell this far (tiles) escapes (2) */
+    float aspect;           /* shell depth / tile side in world units: required, (0, 100] */
+    int width, height;      /* voxels in u, v (32 x 32) */
+    int layers;             /* voxels in w, >= 2 (8) */
+    int directions;         /* incident directions over the sphere, spherical Fibonacci (256) */
+    float albedo;           /* of the interreflection bounce (0.7); negative: none */
+    float max_tiles;        /* a ray inside the shell this far (tiles) escapes (2) */
     int num_theta, num_phi; /* views (4 x 8) */
-    int eigen;            /* eigenfunctions kept per coefficient (4), <= views */
+    int eigen;              /* eigenfunctions kept per coefficient (4), <= views */
 } meso_rtv_desc;
 
 #define MESO_RTV_KIND "rtv"
@@ -101,8 +101,8 @@ meso_result meso_rtv_save(meso_context *ctx, const meso_rtv *rtv, const char *pa
 meso_result meso_rtv_load(meso_context *ctx, const char *path, meso_rtv **out_rtv);
 /* An RTV from a loaded bake file, validated as meso_rtv_load does; `name` names it in
  * messages. The bake file may be destroyed afterwards. */
-meso_result meso_rtv_from_bake_file(meso_context *ctx, const meso_bake_file *bake,
-                                    const char *name, meso_rtv **out_rtv);
+meso_result meso_rtv_from_bake_file(meso_context *ctx, const meso_bake_file *bake, const char *name,
+                                    meso_rtv **out_rtv);
 /* A text report of a bake file of kind "rtv" for `meso info`: voxels, views, eigenfunctions,
  * raw and compressed size, RMSE for k = 1..16. Writes at most size bytes (NUL-terminated)
  * like snprintf and returns the length it needed; 0 when the file is not an rtv bake whose

@@ -25,12 +25,12 @@ typedef struct meso_compare_desc {
 } meso_compare_desc;
 
 typedef struct meso_compare_result {
-    double psnr;          /* dB, whole image; INFINITY when identical */
-    double psnr_covered;  /* dB, over pixels both cover; NAN when none */
+    double psnr;         /* dB, whole image; INFINITY when identical */
+    double psnr_covered; /* dB, over pixels both cover; NAN when none */
     double rmse, rmse_covered;
-    double ssim;          /* whole image, mean over windows */
-    double max_error;     /* largest absolute channel difference */
-    double coverage_iou;  /* |A and B| / |A or B|; 1 when neither covers anything */
+    double ssim;         /* whole image, mean over windows */
+    double max_error;    /* largest absolute channel difference */
+    double coverage_iou; /* |A and B| / |A or B|; 1 when neither covers anything */
     size_t covered_both, covered_only_a, covered_only_b;
 } meso_compare_result;
 

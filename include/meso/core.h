@@ -37,15 +37,15 @@ extern "C" {
 /* ---- Results ------------------------------------------------------------------------------ */
 
 /* The one list of results; it also generates meso_result_string(). */
-#define MESO_RESULT_LIST(X)                                                                      \
-    X(MESO_OK, "ok")                                                                             \
-    X(MESO_ERROR_INVALID_ARGUMENT, "invalid argument")                                           \
-    X(MESO_ERROR_IO, "input/output error")                                                       \
-    X(MESO_ERROR_FORMAT, "malformed input")                                                      \
-    X(MESO_ERROR_LIMIT, "input exceeds a documented limit")                                      \
-    X(MESO_ERROR_OUT_OF_MEMORY, "out of memory")                                                 \
-    X(MESO_ERROR_UNSUPPORTED, "unsupported")                                                     \
-    X(MESO_ERROR_CANCELLED, "cancelled")                                                         \
+#define MESO_RESULT_LIST(X)                                                                        \
+    X(MESO_OK, "ok")                                                                               \
+    X(MESO_ERROR_INVALID_ARGUMENT, "invalid argument")                                             \
+    X(MESO_ERROR_IO, "input/output error")                                                         \
+    X(MESO_ERROR_FORMAT, "malformed input")                                                        \
+    X(MESO_ERROR_LIMIT, "input exceeds a documented limit")                                        \
+    X(MESO_ERROR_OUT_OF_MEMORY, "out of memory")                                                   \
+    X(MESO_ERROR_UNSUPPORTED, "unsupported")                                                       \
+    X(MESO_ERROR_CANCELLED, "cancelled")                                                           \
     X(MESO_ERROR_INTERNAL, "internal error")
 
 typedef enum meso_result {
@@ -83,8 +83,8 @@ typedef enum meso_progress_mode {
 } meso_progress_mode;
 
 typedef struct meso_context_desc {
-    int num_threads;            /* 0: every core (omp_get_max_threads(): OMP_NUM_THREADS) */
-    meso_log_fn log;            /* NULL: warnings and errors are only kept, not printed */
+    int num_threads; /* 0: every core (omp_get_max_threads(): OMP_NUM_THREADS) */
+    meso_log_fn log; /* NULL: warnings and errors are only kept, not printed */
     void *log_user;
     meso_progress_mode progress;
     meso_progress_fn on_progress; /* NULL: none; called in addition to the bar */

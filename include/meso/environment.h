@@ -59,8 +59,8 @@ typedef struct meso_sky_desc {
 meso_sky_desc meso_sky_desc_defaults(const meso_sky_desc *desc);
 
 typedef struct meso_environment {
-    meso_image *map;  /* W x H RGB linear radiance, intensity applied; owned */
-    float intensity;  /* as given (already applied to map and sh) */
+    meso_image *map; /* W x H RGB linear radiance, intensity applied; owned */
+    float intensity; /* as given (already applied to map and sh) */
     /* The projection onto spherical harmonics, per channel (sh[0] red ... sh[2] blue), of the
      * piecewise-constant map: c_i = sum over texels L Y_i(texel centre) dw(texel). */
     float sh[3][MESO_SH_COUNT];
@@ -69,7 +69,7 @@ typedef struct meso_environment {
     float *column_cdf; /* H x (W + 1) values: columns within each row */
     double weight_sum; /* sum of luminance x dw over texels (0: a black map, sampled uniformly) */
     char source[MESO_ENVIRONMENT_SOURCE_MAX]; /* the file name or "sky", for labels and logs */
-    uint64_t hash;     /* of the map's texels and size: caches of what is baked from it */
+    uint64_t hash; /* of the map's texels and size: caches of what is baked from it */
 } meso_environment;
 
 /* Load a Radiance .hdr (RGBE) equirectangular map, radiance times `intensity` (finite, >= 0,

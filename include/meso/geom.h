@@ -108,17 +108,17 @@ meso_result meso_mesh_load(meso_context *ctx, const char *path, meso_mesh **out_
  * (glTF's baseColorFactor is linear; MTL's Kd is taken as linear). Paths are as written in
  * the file, relative to its folder; "" when absent. */
 typedef struct meso_mesh_material {
-    bool has_color;                                /* glTF baseColorFactor, MTL Kd */
+    bool has_color; /* glTF baseColorFactor, MTL Kd */
     meso_vec3 color;
-    char color_map[MESO_MESH_MATERIAL_PATH_MAX];   /* glTF baseColorTexture, MTL map_Kd */
-    char normal_map[MESO_MESH_MATERIAL_PATH_MAX];  /* glTF normalTexture, MTL norm */
+    char color_map[MESO_MESH_MATERIAL_PATH_MAX];  /* glTF baseColorTexture, MTL map_Kd */
+    char normal_map[MESO_MESH_MATERIAL_PATH_MAX]; /* glTF normalTexture, MTL norm */
     char ignored[512]; /* what the file holds that meso does not use, comma-separated, or "" */
 } meso_mesh_material;
 
 /* meso_mesh_load, and the mesh's material in *out_material (zeroed when the file has none:
  * assimp's default material of an OBJ without MTL or of a PLY is "none"). */
-meso_result meso_mesh_load_with_material(meso_context *ctx, const char *path,
-                                         meso_mesh **out_mesh, meso_mesh_material *out_material);
+meso_result meso_mesh_load_with_material(meso_context *ctx, const char *path, meso_mesh **out_mesh,
+                                         meso_mesh_material *out_material);
 
 /* An empty mesh with the given counts; positions, normals, indices allocated (zeroed), uvs too
  * when with_uvs. For generators and importers. */

@@ -90,7 +90,6 @@ void meso_gl_renderer_destroy(meso_gl_renderer *renderer);
 meso_result meso_gl_export_textures(meso_context *ctx, const meso_scene *scene,
                                     const meso_render_desc *desc, const char *dir);
 
-
 #ifdef __cplusplus
 }
 #endif

@@ -118,7 +118,7 @@ typedef enum meso_wrap {
 #define MESO_TEXTURE_MAX_LEVELS 16
 
 typedef struct meso_texture {
-    int num_levels;                          /* 1 + floor(log2(max side)) with mips, else 1 */
+    int num_levels;                              /* 1 + floor(log2(max side)) with mips, else 1 */
     meso_image *levels[MESO_TEXTURE_MAX_LEVELS]; /* level 0 is the full image; all RGBA */
     meso_wrap wrap;
     /* NULL, or level 0's RGB as 8-bit sRGB codes, R in bits 0-7, G 8-15, B 16-23, one uint32 a

@@ -11,24 +11,44 @@
 #include <stdint.h>
 #include <string.h>
 
-typedef struct meso_vec2 { float x, y; } meso_vec2;
-typedef struct meso_vec3 { float x, y, z; } meso_vec3;
-typedef struct meso_vec4 { float x, y, z, w; } meso_vec4;
-typedef struct meso_mat4 { float m[16]; } meso_mat4;
+typedef struct meso_vec2 {
+    float x, y;
+} meso_vec2;
+typedef struct meso_vec3 {
+    float x, y, z;
+} meso_vec3;
+typedef struct meso_vec4 {
+    float x, y, z, w;
+} meso_vec4;
+typedef struct meso_mat4 {
+    float m[16];
+} meso_mat4;
 
 #define MESO_PI 3.14159265358979323846f
 
 static inline meso_vec2 meso_vec2_make(float x, float y) { return (meso_vec2){x, y}; }
 static inline meso_vec3 meso_vec3_make(float x, float y, float z) { return (meso_vec3){x, y, z}; }
-static inline meso_vec3 meso_vec3_add(meso_vec3 a, meso_vec3 b) { return (meso_vec3){a.x + b.x, a.y + b.y, a.z + b.z}; }
-static inline meso_vec3 meso_vec3_sub(meso_vec3 a, meso_vec3 b) { return (meso_vec3){a.x - b.x, a.y - b.y, a.z - b.z}; }
+static inline meso_vec3 meso_vec3_add(meso_vec3 a, meso_vec3 b) {
+    return (meso_vec3){a.x + b.x, a.y + b.y, a.z + b.z};
+}
+static inline meso_vec3 meso_vec3_sub(meso_vec3 a, meso_vec3 b) {
+    return (meso_vec3){a.x - b.x, a.y - b.y, a.z - b.z};
+}
 /* Component-wise product (colours: albedo times radiance). */
-static inline meso_vec3 meso_vec3_mul(meso_vec3 a, meso_vec3 b) { return (meso_vec3){a.x * b.x, a.y * b.y, a.z * b.z}; }
-static inline meso_vec3 meso_vec3_scale(meso_vec3 a, float s) { return (meso_vec3){a.x * s, a.y * s, a.z * s}; }
+static inline meso_vec3 meso_vec3_mul(meso_vec3 a, meso_vec3 b) {
+    return (meso_vec3){a.x * b.x, a.y * b.y, a.z * b.z};
+}
+static inline meso_vec3 meso_vec3_scale(meso_vec3 a, float s) {
+    return (meso_vec3){a.x * s, a.y * s, a.z * s};
+}
 /* a + b * s */
-static inline meso_vec3 meso_vec3_madd(meso_vec3 a, meso_vec3 b, float s) { return (meso_vec3){a.x + b.x * s, a.y + b.y * s, a.z + b.z * s}; }
+static inline meso_vec3 meso_vec3_madd(meso_vec3 a, meso_vec3 b, float s) {
+    return (meso_vec3){a.x + b.x * s, a.y + b.y * s, a.z + b.z * s};
+}
 static inline meso_vec3 meso_vec3_negate(meso_vec3 a) { return (meso_vec3){-a.x, -a.y, -a.z}; }
-static inline float meso_vec3_dot(meso_vec3 a, meso_vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static inline float meso_vec3_dot(meso_vec3 a, meso_vec3 b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
 static inline meso_vec3 meso_vec3_cross(meso_vec3 a, meso_vec3 b) {
     return (meso_vec3){a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
@@ -38,16 +58,25 @@ static inline meso_vec3 meso_vec3_normalize(meso_vec3 a) {
     float len2 = meso_vec3_dot(a, a);
     return len2 > 0.0f ? meso_vec3_scale(a, 1.0f / sqrtf(len2)) : a;
 }
-static inline meso_vec3 meso_vec3_lerp(meso_vec3 a, meso_vec3 b, float t) { return meso_vec3_madd(a, meso_vec3_sub(b, a), t); }
-/* b0*a + b1*b + b2*c: barycentric interpolation. */
-static inline meso_vec3 meso_vec3_barycentric(meso_vec3 a, meso_vec3 b, meso_vec3 c, float b0, float b1, float b2) {
-    return (meso_vec3){a.x * b0 + b.x * b1 + c.x * b2, a.y * b0 + b.y * b1 + c.y * b2, a.z * b0 + b.z * b1 + c.z * b2};
+static inline meso_vec3 meso_vec3_lerp(meso_vec3 a, meso_vec3 b, float t) {
+    return meso_vec3_madd(a, meso_vec3_sub(b, a), t);
 }
-static inline meso_vec2 meso_vec2_barycentric(meso_vec2 a, meso_vec2 b, meso_vec2 c, float b0, float b1, float b2) {
+/* b0*a + b1*b + b2*c: barycentric interpolation. */
+static inline meso_vec3 meso_vec3_barycentric(meso_vec3 a, meso_vec3 b, meso_vec3 c, float b0,
+                                              float b1, float b2) {
+    return (meso_vec3){a.x * b0 + b.x * b1 + c.x * b2, a.y * b0 + b.y * b1 + c.y * b2,
+                       a.z * b0 + b.z * b1 + c.z * b2};
+}
+static inline meso_vec2 meso_vec2_barycentric(meso_vec2 a, meso_vec2 b, meso_vec2 c, float b0,
+                                              float b1, float b2) {
     return (meso_vec2){a.x * b0 + b.x * b1 + c.x * b2, a.y * b0 + b.y * b1 + c.y * b2};
 }
-static inline int meso_vec3_is_finite(meso_vec3 a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.z); }
-static inline float meso_clampf(float x, float lo, float hi) { return x < lo ? lo : (x > hi ? hi : x); }
+static inline int meso_vec3_is_finite(meso_vec3 a) {
+    return isfinite(a.x) && isfinite(a.y) && isfinite(a.z);
+}
+static inline float meso_clampf(float x, float lo, float hi) {
+    return x < lo ? lo : (x > hi ? hi : x);
+}
 
 static inline meso_mat4 meso_mat4_identity(void) {
     return (meso_mat4){{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}};
@@ -78,7 +107,9 @@ static inline meso_vec3 meso_mat4_transform_direction(meso_mat4 a, meso_vec3 d) 
 }
 static inline meso_mat4 meso_mat4_translate(meso_vec3 t) {
     meso_mat4 r = meso_mat4_identity();
-    r.m[12] = t.x; r.m[13] = t.y; r.m[14] = t.z;
+    r.m[12] = t.x;
+    r.m[13] = t.y;
+    r.m[14] = t.z;
     return r;
 }
 static inline meso_mat4 meso_mat4_scale(float s) {
@@ -90,9 +121,9 @@ static inline meso_mat4 meso_mat4_scale(float s) {
 static inline meso_mat4 meso_mat4_rotate(meso_vec3 axis, float radians) {
     float c = cosf(radians), s = sinf(radians), t = 1.0f - c;
     float x = axis.x, y = axis.y, z = axis.z;
-    return (meso_mat4){{t * x * x + c, t * x * y + s * z, t * x * z - s * y, 0,
-                        t * x * y - s * z, t * y * y + c, t * y * z + s * x, 0,
-                        t * x * z + s * y, t * y * z - s * x, t * z * z + c, 0, 0, 0, 0, 1}};
+    return (meso_mat4){{t * x * x + c, t * x * y + s * z, t * x * z - s * y, 0, t * x * y - s * z,
+                        t * y * y + c, t * y * z + s * x, 0, t * x * z + s * y, t * y * z - s * x,
+                        t * z * z + c, 0, 0, 0, 0, 1}};
 }
 /* World-to-camera transform: the camera at eye looks down -z toward target. */
 static inline meso_mat4 meso_mat4_look_at(meso_vec3 eye, meso_vec3 target, meso_vec3 up) {
@@ -103,7 +134,8 @@ static inline meso_mat4 meso_mat4_look_at(meso_vec3 eye, meso_vec3 target, meso_
                         -meso_vec3_dot(s, eye), -meso_vec3_dot(u, eye), meso_vec3_dot(f, eye), 1}};
 }
 /* OpenGL perspective projection: clip w = view-space distance in front of the camera. */
-static inline meso_mat4 meso_mat4_perspective(float fov_y_radians, float aspect, float z_near, float z_far) {
+static inline meso_mat4 meso_mat4_perspective(float fov_y_radians, float aspect, float z_near,
+                                              float z_far) {
     float f = 1.0f / tanf(0.5f * fov_y_radians);
     meso_mat4 r = {{0}};
     r.m[0] = f / aspect;

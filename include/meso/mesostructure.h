@@ -33,7 +33,7 @@ typedef struct meso_heightfield {
     int width, height;
     float *heights; /* width * height, row 0 at the top; owned */
     meso_wrap wrap;
-    uint64_t hash;  /* of the texels and wrap: bake caches are keyed by it */
+    uint64_t hash; /* of the texels and wrap: bake caches are keyed by it */
 } meso_heightfield;
 
 typedef enum meso_heightfield_kind {
@@ -52,15 +52,15 @@ typedef enum meso_heightfield_kind {
 /* Zero fields take the defaults of meso_heightfield_desc_defaults(). */
 typedef struct meso_heightfield_desc {
     meso_heightfield_kind kind;
-    int resolution;     /* texels a side (512) */
-    int rows, columns;  /* repeats per tile: bricks 4 x 2, bumps 4 x 4, weave 4 x 4, tiles 4 x 4,
-                           bark 3 x 6 (rows: cracks along v; columns: plates around u) */
-    float gap;          /* mortar / groove / grout width as a fraction of a cell (0.08; bark's
-                           furrows 0.3) */
-    float bevel;        /* rounded edge width, fraction of a cell (0.04) */
-    float roughness;    /* amplitude of deterministic noise on tops, in height units (0.0) */
-    uint32_t seed;      /* noise seed (1) */
-    meso_wrap wrap;     /* default repeat */
+    int resolution;    /* texels a side (512) */
+    int rows, columns; /* repeats per tile: bricks 4 x 2, bumps 4 x 4, weave 4 x 4, tiles 4 x 4,
+                          bark 3 x 6 (rows: cracks along v; columns: plates around u) */
+    float gap;         /* mortar / groove / grout width as a fraction of a cell (0.08; bark's
+                          furrows 0.3) */
+    float bevel;       /* rounded edge width, fraction of a cell (0.04) */
+    float roughness;   /* amplitude of deterministic noise on tops, in height units (0.0) */
+    uint32_t seed;     /* noise seed (1) */
+    meso_wrap wrap;    /* default repeat */
 } meso_heightfield_desc;
 
 meso_heightfield_desc meso_heightfield_desc_defaults(const meso_heightfield_desc *desc);
@@ -189,8 +189,8 @@ meso_result meso_solid_create_procedural(meso_context *ctx, const meso_solid_des
  * Threads: uses every worker of ctx; the grid is independent of the thread count. */
 meso_result meso_solid_create_from_triangles(meso_context *ctx, const meso_vec3 *positions,
                                              size_t num_vertices, const uint32_t *indices,
-                                             size_t num_triangles, const char *name,
-                                             int resolution, meso_solid **out_solid);
+                                             size_t num_triangles, const char *name, int resolution,
+                                             meso_solid **out_solid);
 /* A solid from a whole model for a relief impostor (Policarpo & Oliveira 2006 §4): positions
  * already in the unit box (the caller maps the model's bounds there), not periodic, clamped
  * at the box, and not required to be closed: a node is inside when it lies behind the face

@@ -67,7 +67,7 @@ typedef enum meso_technique_kind {
 
 /* What a technique needs of an object's mesostructure. */
 enum {
-    MESO_TECHNIQUE_ACCEPTS_NONE = 1u << 0,         /* objects without mesostructure */
+    MESO_TECHNIQUE_ACCEPTS_NONE = 1u << 0, /* objects without mesostructure */
     MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD = 1u << 1,
     MESO_TECHNIQUE_ACCEPTS_SOLID = 1u << 2,
 };
@@ -94,7 +94,7 @@ typedef struct meso_technique_info {
     const char *summary; /* one line */
     const char *paper;   /* "Policarpo & Oliveira 2006, §2.1" */
     meso_technique_kind kind;
-    unsigned accepts;    /* MESO_TECHNIQUE_ACCEPTS_* */
+    unsigned accepts;                     /* MESO_TECHNIQUE_ACCEPTS_* */
     const meso_technique_option *options; /* the option table (NULL when it has none) */
     size_t num_options;
 } meso_technique_info;
@@ -140,10 +140,10 @@ typedef struct meso_render_desc {
     /* Report progress (the context's bar and callback, docs/cli.md --progress) of the
      * reference's build and of every frame: for one long render, not for loops of frames. */
     bool progress;
-    bool fallback;         /* with `technique`: an object it cannot draw (its mesostructure is
-                              not one it accepts) is drawn with the object's own scene technique
-                              (or `flat` when that is `reference` or cannot draw it either)
-                              instead of failing; see meso_renderer_object_technique */
+    bool fallback; /* with `technique`: an object it cannot draw (its mesostructure is
+                      not one it accepts) is drawn with the object's own scene technique
+                      (or `flat` when that is `reference` or cannot draw it either)
+                      instead of failing; see meso_renderer_object_technique */
 } meso_render_desc;
 
 /* The memory a frame of width x height with desc's samples needs besides the scene (the
@@ -163,11 +163,11 @@ meso_result meso_technique_options_values(meso_context *ctx, const meso_scene *s
                                           double *out_values);
 
 typedef struct meso_render_stats {
-    double prepare_seconds;     /* meso_renderer_create */
-    double last_frame_seconds;  /* the last meso_renderer_render */
-    uint64_t triangles;         /* rasterized or traced in the last frame */
-    uint64_t fragments;         /* shaded in the last frame */
-    size_t memory_bytes;        /* baked data, acceleration structures */
+    double prepare_seconds;    /* meso_renderer_create */
+    double last_frame_seconds; /* the last meso_renderer_render */
+    uint64_t triangles;        /* rasterized or traced in the last frame */
+    uint64_t fragments;        /* shaded in the last frame */
+    size_t memory_bytes;       /* baked data, acceleration structures */
 } meso_render_stats;
 
 /* The camera of a frame of width x height pixels, as the rasterizer and the reference use it:

@@ -73,7 +73,7 @@ typedef struct meso_mesostructure {
     float offset; /* how far the mesh was moved along its normals to make the scene's "height"
                      convention inward (0 for inward; docs/scene-format.md) */
     meso_wrap wrap;
-    char source[MESO_NAME_MAX];     /* "bricks" or the file name, for labels and logs */
+    char source[MESO_NAME_MAX]; /* "bricks" or the file name, for labels and logs */
 } meso_mesostructure;
 
 /* A technique parameter: numbers and booleans (true = 1). From the scene, keyed by technique
@@ -89,8 +89,8 @@ typedef struct meso_option {
 } meso_option;
 
 typedef struct meso_object {
-    char name[MESO_NAME_MAX];  /* "objects[0]" unless the scene names it */
-    meso_mesh *mesh;           /* world space, uv_scale applied, tangents/curvature/quadrics */
+    char name[MESO_NAME_MAX]; /* "objects[0]" unless the scene names it */
+    meso_mesh *mesh;          /* world space, uv_scale applied, tangents/curvature/quadrics */
     meso_material material;
     meso_mesostructure mesostructure;
     char technique[MESO_NAME_MAX]; /* as written in the scene ("flat" when absent) */
@@ -102,9 +102,9 @@ typedef struct meso_object {
 } meso_object;
 
 typedef struct meso_scene {
-    char path[1024];       /* the file it came from, or the name given to meso_scene_parse */
-    int width, height;     /* 512 x 512 when absent */
-    meso_vec3 background;  /* linear RGB */
+    char path[1024];      /* the file it came from, or the name given to meso_scene_parse */
+    int width, height;    /* 512 x 512 when absent */
+    meso_vec3 background; /* linear RGB */
     meso_encoding encoding;
     meso_camera camera;
     meso_vec3 ambient;

@@ -382,8 +382,8 @@ bool meso_bake_params_number(const char *json, const char *key, double *out) {
     return true;
 }
 
-const void *meso_bake_file_expect(const meso_bake_file *bake, const char *name,
-                                  meso_bake_type type, int num_dims, const uint64_t *dims) {
+const void *meso_bake_file_expect(const meso_bake_file *bake, const char *name, meso_bake_type type,
+                                  int num_dims, const uint64_t *dims) {
     const meso_bake_array *a = meso_bake_file_find(bake, name);
     if (!a || a->type != type || a->num_dims != num_dims) return NULL;
     for (int i = 0; i < num_dims; i++)

@@ -21,10 +21,10 @@
 #include "meso/bake_isosurface.h"
 
 typedef struct grid {
-    int ru, rv, rw;   /* cells per tile */
-    int nu, nv, nw;   /* nodes: ru + 1, rv + 1, rw + 3 (one padding layer each side) */
-    int cw;           /* cell layers: nw - 1 */
-    float *values;    /* nu * nv * nw */
+    int ru, rv, rw;        /* cells per tile */
+    int nu, nv, nw;        /* nodes: ru + 1, rv + 1, rw + 3 (one padding layer each side) */
+    int cw;                /* cell layers: nw - 1 */
+    float *values;         /* nu * nv * nw */
     uint32_t *cell_vertex; /* extended cells (ru + 1) x (rv + 1) x cw, i and j from -1 */
     meso_scalar_field_fn field;
     void *user;
@@ -219,8 +219,8 @@ static void quads_column(void *user, size_t job, int thread_index) {
 
 /* ---- Entry points ------------------------------------------------------------------------- */
 
-meso_result meso_bake_isosurface_function(meso_context *ctx, meso_scalar_field_fn field,
-                                          void *user, const meso_isosurface_desc *desc,
+meso_result meso_bake_isosurface_function(meso_context *ctx, meso_scalar_field_fn field, void *user,
+                                          const meso_isosurface_desc *desc,
                                           meso_isosurface **out_isosurface) {
     *out_isosurface = NULL;
     if (!field) return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "isosurface: no field");
@@ -229,11 +229,13 @@ meso_result meso_bake_isosurface_function(meso_context *ctx, meso_scalar_field_f
     int res[3] = {d.resolution_u, d.resolution_v, d.resolution_w};
     for (int a = 0; a < 3; a++)
         if (res[a] < 2 || res[a] > MESO_ISOSURFACE_MAX_RESOLUTION)
-            return meso_log_error(ctx, MESO_ERROR_LIMIT,
-                                  "isosurface: %s: %d is outside [2, %d]", names[a], res[a],
-                                  MESO_ISOSURFACE_MAX_RESOLUTION);
-    grid g = {.ru = d.resolution_u, .rv = d.resolution_v, .rw = d.resolution_w,
-              .field = field, .user = user};
+            return meso_log_error(ctx, MESO_ERROR_LIMIT, "isosurface: %s: %d is outside [2, %d]",
+                                  names[a], res[a], MESO_ISOSURFACE_MAX_RESOLUTION);
+    grid g = {.ru = d.resolution_u,
+              .rv = d.resolution_v,
+              .rw = d.resolution_w,
+              .field = field,
+              .user = user};
     g.nu = g.ru + 1;
     g.nv = g.rv + 1;
     g.nw = g.rw + 3;
@@ -241,8 +243,8 @@ meso_result meso_bake_isosurface_function(meso_context *ctx, meso_scalar_field_f
     size_t nodes = (size_t)g.nu * (size_t)g.nv * (size_t)g.nw;
     if (nodes > MESO_ISOSURFACE_MAX_NODES)
         return meso_log_error(ctx, MESO_ERROR_LIMIT,
-                              "isosurface: %d x %d x %d cells: %zu nodes exceed the limit %u",
-                              g.ru, g.rv, g.rw, nodes, MESO_ISOSURFACE_MAX_NODES);
+                              "isosurface: %d x %d x %d cells: %zu nodes exceed the limit %u", g.ru,
+                              g.rv, g.rw, nodes, MESO_ISOSURFACE_MAX_NODES);
     size_t columns = (size_t)g.ru * (size_t)g.rv;
     size_t cells = (size_t)(g.ru + 1) * (size_t)(g.rv + 1) * (size_t)g.cw;
     meso_result result = MESO_OK;
@@ -287,8 +289,8 @@ meso_result meso_bake_isosurface_function(meso_context *ctx, meso_scalar_field_f
         iso->column_offsets[c] = (uint32_t)num_triangles;
         num_triangles += column_counts[c];
         if (num_triangles >= UINT32_MAX / 3) {
-            result = meso_log_error(ctx, MESO_ERROR_LIMIT,
-                                    "isosurface: more than %u triangles", UINT32_MAX / 3);
+            result = meso_log_error(ctx, MESO_ERROR_LIMIT, "isosurface: more than %u triangles",
+                                    UINT32_MAX / 3);
             goto fail;
         }
     }

@@ -24,7 +24,8 @@ typedef struct rtv_job {
  * unit world direction d moves (u, v, w) by (d.x, d.y, -d.z / aspect). */
 static bool occupied(const meso_rtv_desc *d, meso_vec3 uvw) {
     if (uvw.z >= 1.0f) return true; /* below the shell's bottom: solid */
-    if (d->heightfield) return uvw.z >= 1.0f - meso_heightfield_sample(d->heightfield, uvw.x, uvw.y);
+    if (d->heightfield)
+        return uvw.z >= 1.0f - meso_heightfield_sample(d->heightfield, uvw.x, uvw.y);
     return meso_solid_distance(d->solid, uvw) <= 0.0f;
 }
 
@@ -82,7 +83,8 @@ static bool escapes(const rtv_job *rj, meso_vec3 p, meso_vec3 w, meso_vec3 *out_
 }
 
 /* The first pass's coefficients at (u, v, w): trilinear, periodic in u and v. */
-static void lookup(const meso_rtv *rtv, const float *table, meso_vec3 uvw, float out[MESO_SH_COUNT]) {
+static void lookup(const meso_rtv *rtv, const float *table, meso_vec3 uvw,
+                   float out[MESO_SH_COUNT]) {
     float x = (uvw.x - floorf(uvw.x)) * (float)rtv->width - 0.5f;
     float v = uvw.y - floorf(uvw.y);
     float y = (1.0f - v) * (float)rtv->height - 0.5f;
@@ -100,7 +102,9 @@ static void lookup(const meso_rtv *rtv, const float *table, meso_vec3 uvw, float
             for (int c = 0; c < 2; c++) {
                 float weight = wx[a] * wy[b] * wz[c];
                 const float *t = table + (((size_t)ls[c] * (size_t)rtv->height + (size_t)js[b]) *
-                                              (size_t)rtv->width + (size_t)is[a]) * MESO_SH_COUNT;
+                                              (size_t)rtv->width +
+                                          (size_t)is[a]) *
+                                             MESO_SH_COUNT;
                 for (int k = 0; k < MESO_SH_COUNT; k++) out[k] += weight * t[k];
             }
 }
@@ -118,14 +122,16 @@ static void bake_row(void *user, size_t job, int thread_index) {
     const meso_rtv_desc *d = &rj->desc;
     int l = (int)(job / (size_t)d->height), j = (int)(job % (size_t)d->height);
     for (int i = 0; i < d->width; i++) {
-        meso_vec3 c = {((float)i + 0.5f) / (float)d->width, 1.0f - ((float)j + 0.5f) / (float)d->height,
+        meso_vec3 c = {((float)i + 0.5f) / (float)d->width,
+                       1.0f - ((float)j + 0.5f) / (float)d->height,
                        (float)l / (float)(d->layers - 1)};
         meso_vec3 p, n;
         surface_at(d, c, &p, &n);
         /* start just off the surface, on its open side */
         p = meso_vec3_madd(p, (meso_vec3){n.x, n.y, -n.z / d->aspect}, 0.5f * rj->step);
-        float *out = rj->out + (((size_t)l * (size_t)d->height + (size_t)j) * (size_t)d->width +
-                                (size_t)i) * MESO_SH_COUNT;
+        float *out =
+            rj->out + (((size_t)l * (size_t)d->height + (size_t)j) * (size_t)d->width + (size_t)i) *
+                          MESO_SH_COUNT;
         memset(out, 0, MESO_SH_COUNT * sizeof(float));
         for (int k = 0; k < d->directions; k++) {
             meso_vec3 w = rj->direction[k];
@@ -191,7 +197,8 @@ static void view_row(void *user, size_t job, int thread_index) {
         meso_vec3 c = {((float)i + 0.5f) / (float)rtv->width,
                        1.0f - ((float)j + 0.5f) / (float)rtv->height,
                        (float)l / (float)(rtv->layers - 1)};
-        size_t voxel = ((size_t)l * (size_t)rtv->height + (size_t)j) * (size_t)rtv->width + (size_t)i;
+        size_t voxel =
+            ((size_t)l * (size_t)rtv->height + (size_t)j) * (size_t)rtv->width + (size_t)i;
         for (int t = 0; t < rtv->num_theta; t++)
             for (int p = 0; p < rtv->num_phi; p++) {
                 meso_vec3 q = seen_point(vj->rj, c, view_direction(rtv, t, p));
@@ -252,8 +259,8 @@ static meso_result compress(meso_context *ctx, const rtv_job *rj, meso_rtv *rtv)
     double entries = (double)MESO_SH_COUNT * (double)voxels * (double)views;
     for (int e = 0; e < MESO_RTV_RMSE_COUNT; e++) rtv->rmse[e] = (float)sqrt(tail[e] / entries);
     rtv->raw_bytes = (uint64_t)entries * sizeof(float);
-    rtv->compressed_bytes =
-        (uint64_t)MESO_SH_COUNT * ((uint64_t)voxels + (uint64_t)views) * (uint64_t)k * sizeof(float);
+    rtv->compressed_bytes = (uint64_t)MESO_SH_COUNT * ((uint64_t)voxels + (uint64_t)views) *
+                            (uint64_t)k * sizeof(float);
 done:
     free(vectors);
     free(singular);
@@ -277,8 +284,8 @@ meso_result meso_bake_rtv(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "rtv: needs exactly one of a height field and a solid");
     if (!(d.aspect > 0.0f && d.aspect <= 100.0f))
-        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "rtv: aspect: %g is not in (0, 100]",
-                              (double)d.aspect);
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "rtv: aspect: %g is not in (0, 100]", (double)d.aspect);
     if (d.width < 1 || d.height < 1 || d.layers < 2 || d.width > 4096 || d.height > 4096 ||
         d.layers > 4096)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
@@ -289,9 +296,10 @@ meso_result meso_bake_rtv(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv
                               "rtv: directions: %d is not in [16, 65536]", d.directions);
     if (d.num_theta < 1 || d.num_phi < 1 || d.num_theta * d.num_phi > 4096 || d.eigen < 1 ||
         d.eigen > d.num_theta * d.num_phi)
-        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
-                              "rtv: %d x %d views (at most 4096) with %d eigenfunctions (1 .. views)",
-                              d.num_theta, d.num_phi, d.eigen);
+        return meso_log_error(
+            ctx, MESO_ERROR_INVALID_ARGUMENT,
+            "rtv: %d x %d views (at most 4096) with %d eigenfunctions (1 .. views)", d.num_theta,
+            d.num_phi, d.eigen);
     if (!(d.albedo <= 1.0f) || !(d.max_tiles > 0.0f && d.max_tiles <= 64.0f))
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "rtv: albedo must be at most 1 and max_tiles in (0, 64]");
@@ -301,8 +309,9 @@ meso_result meso_bake_rtv(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv
                               (unsigned long long)voxels, (unsigned long long)MESO_RTV_MAX_VOXELS);
     bool bounce = d.albedo > 0.0f;
     uint64_t views = (uint64_t)d.num_theta * (uint64_t)d.num_phi;
-    meso_result r = meso_memory_check(
-        ctx, "rtv", voxels * MESO_SH_COUNT * sizeof(float) * ((bounce ? 2u : 1u) + views + d.eigen));
+    meso_result r = meso_memory_check(ctx, "rtv",
+                                      voxels * MESO_SH_COUNT * sizeof(float) *
+                                          ((bounce ? 2u : 1u) + views + d.eigen));
     if (r != MESO_OK) return r;
     double start = meso_time_seconds();
     meso_rtv *rtv = calloc(1, sizeof *rtv);
@@ -325,10 +334,15 @@ meso_result meso_bake_rtv(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv
         direction[k] = (meso_vec3){(float)(s * cos(phi)), (float)(s * sin(phi)), (float)z};
     }
     /* march steps of half a texel of the source (solids: of a 256 grid) */
-    int texels = d.heightfield ? (d.heightfield->width > d.heightfield->height ? d.heightfield->width
-                                                                              : d.heightfield->height)
-                               : 256;
-    rtv_job rj = {d, direction, (float)(4.0 * M_PI / d.directions), 0.5f / (float)texels, NULL,
+    int texels = d.heightfield
+                     ? (d.heightfield->width > d.heightfield->height ? d.heightfield->width
+                                                                     : d.heightfield->height)
+                     : 256;
+    rtv_job rj = {d,
+                  direction,
+                  (float)(4.0 * M_PI / d.directions),
+                  0.5f / (float)texels,
+                  NULL,
                   bounce ? first : rtv->coefficients};
     pass_job pj = {&rj, rtv};
     size_t rows = (size_t)d.layers * (size_t)d.height;
@@ -372,15 +386,18 @@ void meso_rtv_cell_at(const meso_rtv *rtv, meso_vec3 uvw, meso_vec3 view, meso_r
     int l1 = l0 + 1 < rtv->layers ? l0 + 1 : l0;
     for (int c = 0; c < 8; c++) {
         int ii = c & 1 ? i1 : i0, jj = c & 2 ? j1 : j0, ll = c & 4 ? l1 : l0;
-        out->corner[c] = ((size_t)ll * (size_t)rtv->height + (size_t)jj) * (size_t)rtv->width + (size_t)ii;
-        out->corner_weight[c] = (c & 1 ? x - fx : 1.0f - (x - fx)) * (c & 2 ? y - fy : 1.0f - (y - fy)) *
+        out->corner[c] =
+            ((size_t)ll * (size_t)rtv->height + (size_t)jj) * (size_t)rtv->width + (size_t)ii;
+        out->corner_weight[c] = (c & 1 ? x - fx : 1.0f - (x - fx)) *
+                                (c & 2 ? y - fy : 1.0f - (y - fy)) *
                                 (c & 4 ? z - fz : 1.0f - (z - fz));
     }
     float theta = acosf(meso_clampf(view.z, 0.0f, 1.0f));
     float t = meso_clampf(theta / (0.5f * (float)M_PI) * (float)rtv->num_theta - 0.5f, 0.0f,
                           (float)(rtv->num_theta - 1));
     float phi = atan2f(view.y, view.x);
-    float p = (phi < 0.0f ? phi + 2.0f * (float)M_PI : phi) / (2.0f * (float)M_PI) * (float)rtv->num_phi;
+    float p =
+        (phi < 0.0f ? phi + 2.0f * (float)M_PI : phi) / (2.0f * (float)M_PI) * (float)rtv->num_phi;
     int t0 = (int)t, t1 = t0 + 1 < rtv->num_theta ? t0 + 1 : t0;
     int p0 = (int)p % rtv->num_phi, p1 = (p0 + 1) % rtv->num_phi;
     float tt = t - (float)t0, tp = p - floorf(p);
@@ -405,7 +422,8 @@ void meso_rtv_evaluate(const meso_rtv *rtv, meso_vec3 uvw, meso_vec3 view,
         for (int e = 0; e < k; e++) {
             const float *w = rtv->weights + (size_t)i * voxels * (size_t)k;
             float weight = 0.0f;
-            for (int c = 0; c < 8; c++) weight += corner_weight[c] * w[corner[c] * (size_t)k + (size_t)e];
+            for (int c = 0; c < 8; c++)
+                weight += corner_weight[c] * w[corner[c] * (size_t)k + (size_t)e];
             const float *eig = rtv->eigen + ((size_t)i * (size_t)k + (size_t)e) * (size_t)views;
             float value = 0.0f;
             for (int v = 0; v < 4; v++) value += view_weight[v] * eig[view_index[v]];
@@ -424,18 +442,25 @@ static meso_bake_file to_bake_file(const meso_rtv *rtv, int32_t shape[5]) {
     uint64_t views = (uint64_t)rtv->num_theta * (uint64_t)rtv->num_phi;
     shape[0] = rtv->width, shape[1] = rtv->height, shape[2] = rtv->layers;
     shape[3] = rtv->num_theta, shape[4] = rtv->num_phi;
-    meso_bake_file bake = {.kind = MESO_RTV_KIND, .kind_version = 1, .params_json = "{}",
-                           .num_arrays = 4};
-    bake.arrays[0] = (meso_bake_array){.name = "shape", .type = MESO_BAKE_I32, .num_dims = 1,
-                                       .dims = {5}, .data = shape};
-    bake.arrays[1] = (meso_bake_array){.name = "weights", .type = MESO_BAKE_F32, .num_dims = 3,
+    meso_bake_file bake = {
+        .kind = MESO_RTV_KIND, .kind_version = 1, .params_json = "{}", .num_arrays = 4};
+    bake.arrays[0] = (meso_bake_array){
+        .name = "shape", .type = MESO_BAKE_I32, .num_dims = 1, .dims = {5}, .data = shape};
+    bake.arrays[1] = (meso_bake_array){.name = "weights",
+                                       .type = MESO_BAKE_F32,
+                                       .num_dims = 3,
                                        .dims = {MESO_SH_COUNT, voxels, (uint64_t)rtv->num_eigen},
                                        .data = rtv->weights};
-    bake.arrays[2] = (meso_bake_array){.name = "eigen", .type = MESO_BAKE_F32, .num_dims = 3,
+    bake.arrays[2] = (meso_bake_array){.name = "eigen",
+                                       .type = MESO_BAKE_F32,
+                                       .num_dims = 3,
                                        .dims = {MESO_SH_COUNT, (uint64_t)rtv->num_eigen, views},
                                        .data = rtv->eigen};
-    bake.arrays[3] = (meso_bake_array){.name = "rmse", .type = MESO_BAKE_F32, .num_dims = 1,
-                                       .dims = {MESO_RTV_RMSE_COUNT}, .data = (void *)rtv->rmse};
+    bake.arrays[3] = (meso_bake_array){.name = "rmse",
+                                       .type = MESO_BAKE_F32,
+                                       .num_dims = 1,
+                                       .dims = {MESO_RTV_RMSE_COUNT},
+                                       .data = (void *)rtv->rmse};
     return bake;
 }
 
@@ -447,19 +472,21 @@ meso_result meso_rtv_save(meso_context *ctx, const meso_rtv *rtv, const char *pa
 
 /* The array `name` with `type` and `num_dims`, or NULL after logging what is wrong. */
 static const meso_bake_array *expect_array(meso_context *ctx, const meso_bake_file *bake,
-                                           const char *path, const char *name,
-                                           meso_bake_type type, int num_dims) {
+                                           const char *path, const char *name, meso_bake_type type,
+                                           int num_dims) {
     const meso_bake_array *a = meso_bake_file_find(bake, name);
     if (!a || a->type != type || a->num_dims != num_dims) {
-        meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: rtv: array \"%s\" is missing or not %d-D of "
-                       "the right type", path, name, num_dims);
+        meso_log_error(ctx, MESO_ERROR_FORMAT,
+                       "%s: rtv: array \"%s\" is missing or not %d-D of "
+                       "the right type",
+                       path, name, num_dims);
         return NULL;
     }
     return a;
 }
 
-meso_result meso_rtv_from_bake_file(meso_context *ctx, const meso_bake_file *bake,
-                                    const char *path, meso_rtv **out_rtv) {
+meso_result meso_rtv_from_bake_file(meso_context *ctx, const meso_bake_file *bake, const char *path,
+                                    meso_rtv **out_rtv) {
     *out_rtv = NULL;
     meso_result r = MESO_OK;
     meso_rtv *rtv = NULL;
@@ -531,8 +558,8 @@ meso_result meso_rtv_load(meso_context *ctx, const char *path, meso_rtv **out_rt
 
 /* The cache key: the source's hash and every field that changes the table. */
 static uint64_t cache_key(const meso_rtv_desc *d, uint64_t source_hash) {
-    float fields[6] = {d->aspect, (float)d->width, (float)d->height, (float)d->layers,
-                       (float)d->directions, d->albedo};
+    float fields[6] = {d->aspect,        (float)d->width,      (float)d->height,
+                       (float)d->layers, (float)d->directions, d->albedo};
     float more[4] = {d->max_tiles, (float)d->num_theta, (float)d->num_phi, (float)d->eigen};
     uint64_t key = meso_hash64(&source_hash, sizeof source_hash, MESO_HASH_SEED);
     key = meso_hash64(fields, sizeof fields, key);
@@ -579,7 +606,8 @@ size_t meso_rtv_describe(const meso_bake_file *bake, char *buffer, size_t size) 
     const float *e = rmse->data;
     uint64_t voxels = weights->dims[1], views = eigen->dims[2];
     double raw = (double)MESO_SH_COUNT * (double)voxels * (double)views * 4.0;
-    double compressed = 4.0 * (double)(meso_bake_array_count(weights) + meso_bake_array_count(eigen));
+    double compressed =
+        4.0 * (double)(meso_bake_array_count(weights) + meso_bake_array_count(eigen));
     int n = snprintf(buffer, size,
                      "rtv: %dx%dx%d voxels, %dx%d views, %llu eigenfunctions a coefficient; raw "
                      "%.2f MB, compressed %.2f MB\nRMSE with k eigenfunctions, k = 1..16:",

@@ -71,8 +71,8 @@ meso_result meso_bake_svd_streamed(meso_context *ctx, const char *name,
         float *target = out_raw ? out_raw + first * columns : block;
         if (!fetch_block(ctx, source, NULL, first, count, target)) goto cancelled;
         for (size_t i = 0; i < count * columns; i++) block_d[i] = target[i];
-        cblas_dsyrk(CblasColMajor, CblasUpper, CblasNoTrans, (int)columns, (int)count, 1.0,
-                    block_d, (int)columns, 1.0, gram, (int)columns);
+        cblas_dsyrk(CblasColMajor, CblasUpper, CblasNoTrans, (int)columns, (int)count, 1.0, block_d,
+                    (int)columns, 1.0, gram, (int)columns);
     }
     if (source->choose_scale) {
         for (size_t c = 0; c < columns; c++) eigenvalues[c] = gram[c * columns + c];
@@ -86,8 +86,8 @@ meso_result meso_bake_svd_streamed(meso_context *ctx, const char *name,
     lapack_int info = LAPACKE_dsyevd(LAPACK_COL_MAJOR, 'V', 'U', (lapack_int)columns, gram,
                                      (lapack_int)columns, eigenvalues);
     if (info != 0) {
-        result = meso_log_error(ctx, MESO_ERROR_INTERNAL,
-                                "%s: SVD: LAPACK dsyevd failed (info %d)", name, (int)info);
+        result = meso_log_error(ctx, MESO_ERROR_INTERNAL, "%s: SVD: LAPACK dsyevd failed (info %d)",
+                                name, (int)info);
         goto done;
     }
     for (size_t i = 0; i < columns; i++) {
@@ -107,8 +107,8 @@ meso_result meso_bake_svd_streamed(meso_context *ctx, const char *name,
         size_t count = first + block_rows < rows ? block_rows : rows - first;
         if (!fetch_block(ctx, source, out_raw, first, count, block)) goto cancelled;
         for (size_t i = 0; i < count * columns; i++) block_d[i] = block[i];
-        cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, (int)count, keep, (int)columns,
-                    1.0, block_d, (int)columns, projection, keep, 0.0, weights_d, keep);
+        cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasNoTrans, (int)count, keep, (int)columns, 1.0,
+                    block_d, (int)columns, projection, keep, 0.0, weights_d, keep);
         for (size_t i = 0; i < count * (size_t)keep; i++)
             out_weights[first * (size_t)keep + i] = (float)weights_d[i];
     }

@@ -410,7 +410,8 @@ static void balance_mvm(void *user, const double *column_energy, float *column_s
     int vdm_columns = job->desc.num_theta * job->desc.num_curvatures;
     int columns = columns_of(&job->desc);
     double energy_vdm = 0.0, energy_mvm = 0.0;
-    for (int c = 0; c < columns; c++) *(c < vdm_columns ? &energy_vdm : &energy_mvm) += column_energy[c];
+    for (int c = 0; c < columns; c++)
+        *(c < vdm_columns ? &energy_vdm : &energy_mvm) += column_energy[c];
     float mvm_scale =
         energy_mvm > 0.0 && energy_vdm > 0.0 ? (float)sqrt(energy_vdm / energy_mvm) : 1.0f;
     for (int c = 0; c < columns; c++) column_scale[c] = c < vdm_columns ? 1.0f : mvm_scale;
@@ -479,8 +480,8 @@ meso_result meso_bake_vdm(meso_context *ctx, const meso_vdm_desc *desc, meso_vdm
         .choose_scale = balance_mvm,
         .progress = meso_progress_begin(ctx, "vdm bake", (table ? 1u : 2u) * (uint64_t)rows)};
     /* §3.3: A = U lambda E^T = W E^T, the MVM part weighted (balance_mvm) */
-    result = meso_bake_svd_streamed(ctx, "vdm", &source, kw, vdm->singular, vectors,
-                                    vdm->weights, table);
+    result = meso_bake_svd_streamed(ctx, "vdm", &source, kw, vdm->singular, vectors, vdm->weights,
+                                    table);
     if (table != vdm->raw) free(table);
     meso_progress_end(source.progress);
     if (result != MESO_OK) goto fail;
@@ -552,7 +553,8 @@ static lookup_axes axes_of(const meso_vdm *vdm, float u, float v, float theta, f
         a.y = meso_bake_axis_wrap(y, d->height);
     }
     a.phi = meso_bake_axis_wrap(phi * (float)d->num_phi / (float)TWO_PI, d->num_phi);
-    a.theta = meso_bake_axis_clamp(theta * (float)d->num_theta / (float)HALF_PI - 0.5f, d->num_theta);
+    a.theta =
+        meso_bake_axis_clamp(theta * (float)d->num_theta / (float)HALF_PI - 0.5f, d->num_theta);
     float cn = d->num_curvatures > 1
                    ? (c - d->curvature_min) / (d->curvature_max - d->curvature_min) *
                          (float)(d->num_curvatures - 1)

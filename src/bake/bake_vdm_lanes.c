@@ -32,7 +32,8 @@ meso_result meso_vdm_lanes_init(meso_context *ctx, const meso_vdm_view *v, int k
         memcpy(level + r * lanes, v->weights + r * v->num_weights, sizeof(float) * copy);
     out->level_width[0] = v->width;
     out->level_height[0] = v->height;
-    for (size_t i = 0; i < rows * (size_t)lanes; i++) out->level_weights[0][i] = meso_half_from_float(level[i]);
+    for (size_t i = 0; i < rows * (size_t)lanes; i++)
+        out->level_weights[0][i] = meso_half_from_float(level[i]);
     while (
         mipmap && out->num_levels < MESO_VDM_MAX_LEVELS &&
         (out->level_width[out->num_levels - 1] > 1 || out->level_height[out->num_levels - 1] > 1)) {

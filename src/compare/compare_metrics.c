@@ -73,8 +73,8 @@ static meso_result compute_ssim(meso_context *ctx, const meso_image *a, const me
     if (!buffers)
         return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "compare: SSIM of %dx%d", w, h);
     float *ya = buffers, *yb = ya + n, *prod = yb + n, *tmp = prod + n;
-    float *mu_a = tmp + n, *mu_b = mu_a + n, *s_aa = mu_b + n, *s_bb = s_aa + n,
-          *s_ab = s_bb + n, *sq = s_ab + n, *sq2 = sq + n;
+    float *mu_a = tmp + n, *mu_b = mu_a + n, *s_aa = mu_b + n, *s_bb = s_aa + n, *s_ab = s_bb + n,
+          *sq = s_ab + n, *sq2 = sq + n;
     float kernel[2 * SSIM_RADIUS + 1];
     for (int k = -SSIM_RADIUS; k <= SSIM_RADIUS; k++)
         kernel[k + SSIM_RADIUS] = expf(-(float)(k * k) / (2.0f * 1.5f * 1.5f));
@@ -84,8 +84,8 @@ static meso_result compute_ssim(meso_context *ctx, const meso_image *a, const me
     }
     blur(ya, mu_a, tmp, w, h, kernel);
     blur(yb, mu_b, tmp, w, h, kernel);
-    for (size_t p = 0; p < n; p++) sq[p] = ya[p] * ya[p], sq2[p] = yb[p] * yb[p],
-                                   prod[p] = ya[p] * yb[p];
+    for (size_t p = 0; p < n; p++)
+        sq[p] = ya[p] * ya[p], sq2[p] = yb[p] * yb[p], prod[p] = ya[p] * yb[p];
     blur(sq, s_aa, tmp, w, h, kernel);
     blur(sq2, s_bb, tmp, w, h, kernel);
     blur(prod, s_ab, tmp, w, h, kernel);
@@ -122,8 +122,8 @@ meso_result meso_image_compare(meso_context *ctx, const meso_image *a, const mes
         if (masks[m] && (masks[m]->width != a->width || masks[m]->height != a->height))
             return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                                   "compare: coverage mask of %s: %dx%d, the images are %dx%d",
-                                  m == 0 ? "A" : "B", masks[m]->width, masks[m]->height,
-                                  a->width, a->height);
+                                  m == 0 ? "A" : "B", masks[m]->width, masks[m]->height, a->width,
+                                  a->height);
     size_t n = (size_t)a->width * (size_t)a->height;
     double sum = 0.0, sum_covered = 0.0, max_error = 0.0;
     size_t both = 0, only_a = 0, only_b = 0;

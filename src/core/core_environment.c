@@ -62,13 +62,15 @@ static int search_cdf(const float *cdf, int n, float x) {
     int lo = 0, hi = n; /* cdf[lo] <= x < cdf[hi] */
     while (hi - lo > 1) {
         int mid = lo + (hi - lo) / 2;
-        if (cdf[mid] <= x) lo = mid; else hi = mid;
+        if (cdf[mid] <= x)
+            lo = mid;
+        else
+            hi = mid;
     }
     return lo;
 }
 
-meso_vec3 meso_environment_sample(const meso_environment *env, float u1, float u2,
-                                  float *out_pdf) {
+meso_vec3 meso_environment_sample(const meso_environment *env, float u1, float u2, float *out_pdf) {
     if (env->weight_sum <= 0.0) {
         float z = 1.0f - 2.0f * u1, r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
         float phi = (float)TWO_PI * u2;
@@ -83,7 +85,8 @@ meso_vec3 meso_environment_sample(const meso_environment *env, float u1, float u
      * solid angle (uniform in cos theta and phi) */
     float row_width = env->row_cdf[j + 1] - env->row_cdf[j];
     float column_width = columns[i + 1] - columns[i];
-    float fy = row_width > 0.0f ? meso_clampf((u1 - env->row_cdf[j]) / row_width, 0.0f, 1.0f) : 0.5f;
+    float fy =
+        row_width > 0.0f ? meso_clampf((u1 - env->row_cdf[j]) / row_width, 0.0f, 1.0f) : 0.5f;
     float fx =
         column_width > 0.0f ? meso_clampf((u2 - columns[i]) / column_width, 0.0f, 1.0f) : 0.5f;
     double c0 = cos(M_PI * j / h), c1 = cos(M_PI * (j + 1) / h);
@@ -193,10 +196,9 @@ static meso_result check_size(meso_context *ctx, const char *source, int width, 
                               height);
     if (width > MESO_ENVIRONMENT_MAX_SIDE || height > MESO_ENVIRONMENT_MAX_SIDE ||
         (uint64_t)width * (uint64_t)height > MESO_ENVIRONMENT_MAX_PIXELS)
-        return meso_log_error(ctx, MESO_ERROR_LIMIT,
-                              "%s: %dx%d exceeds the limit of %d a side and %u texels", source,
-                              width, height, MESO_ENVIRONMENT_MAX_SIDE,
-                              MESO_ENVIRONMENT_MAX_PIXELS);
+        return meso_log_error(
+            ctx, MESO_ERROR_LIMIT, "%s: %dx%d exceeds the limit of %d a side and %u texels", source,
+            width, height, MESO_ENVIRONMENT_MAX_SIDE, MESO_ENVIRONMENT_MAX_PIXELS);
     /* the map, the sampling tables and the projection's row sums */
     uint64_t bytes = (uint64_t)width * (uint64_t)height * (3 + 1) * sizeof(float) +
                      (uint64_t)height * ROW_SUMS * sizeof(double);
@@ -281,9 +283,12 @@ static int reader_read(void *user, char *out, int size) {
 
 static void reader_skip(void *user, int n) {
     memory_reader *m = user;
-    if (n < 0 && (size_t)-n > m->position) m->position = 0;
-    else if (n > 0 && (size_t)n > m->size - m->position) m->position = m->size, m->past_end = true;
-    else m->position = (size_t)((long long)m->position + n);
+    if (n < 0 && (size_t)-n > m->position)
+        m->position = 0;
+    else if (n > 0 && (size_t)n > m->size - m->position)
+        m->position = m->size, m->past_end = true;
+    else
+        m->position = (size_t)((long long)m->position + n);
 }
 
 static int reader_eof(void *user) {
@@ -340,7 +345,7 @@ done:
 meso_sky_desc meso_sky_desc_defaults(const meso_sky_desc *desc) {
     meso_sky_desc d = desc ? *desc : (meso_sky_desc){0};
     meso_vec3 zero = {0, 0, 0};
-#define DEFAULT_VEC(field, x, y, z) \
+#define DEFAULT_VEC(field, x, y, z)                                                                \
     if (memcmp(&d.field, &zero, sizeof zero) == 0) d.field = (meso_vec3){x, y, z}
     DEFAULT_VEC(zenith, 0.25f, 0.42f, 0.85f);
     DEFAULT_VEC(horizon, 0.85f, 0.88f, 0.92f);
@@ -390,8 +395,8 @@ meso_result meso_environment_create_sky(meso_context *ctx, const meso_sky_desc *
     float sun_radius = d.sun_size_deg * (float)M_PI / 180.0f;
     for (int j = 0; j < height; j++)
         for (int i = 0; i < width; i++) {
-            meso_vec3 dir = meso_environment_direction((i + 0.5f) / (float)width,
-                                                       (j + 0.5f) / (float)height);
+            meso_vec3 dir =
+                meso_environment_direction((i + 0.5f) / (float)width, (j + 0.5f) / (float)height);
             meso_vec3 c = d.ground;
             if (dir.y >= 0.0f) {
                 float t = powf(dir.y, d.gradient);

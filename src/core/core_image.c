@@ -12,7 +12,8 @@ meso_result meso_image_create(meso_context *ctx, int width, int height, int chan
     *out_image = NULL;
     if (width <= 0 || height <= 0 || channels < 1 || channels > 4)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
-                              "image: invalid size %dx%d with %d channels", width, height, channels);
+                              "image: invalid size %dx%d with %d channels", width, height,
+                              channels);
     if (width > MESO_IMAGE_MAX_SIDE || height > MESO_IMAGE_MAX_SIDE ||
         (uint64_t)width * (uint64_t)height > MESO_IMAGE_MAX_PIXELS)
         return meso_log_error(ctx, MESO_ERROR_LIMIT,
@@ -35,7 +36,8 @@ meso_result meso_image_clone(meso_context *ctx, const meso_image *image, meso_im
     meso_result r = meso_image_create(ctx, image->width, image->height, image->channels, out_image);
     if (r == MESO_OK)
         memcpy((*out_image)->pixels, image->pixels,
-               (size_t)image->width * (size_t)image->height * (size_t)image->channels * sizeof(float));
+               (size_t)image->width * (size_t)image->height * (size_t)image->channels *
+                   sizeof(float));
     return r;
 }
 
@@ -53,10 +55,23 @@ static void to_rgba(const meso_image *src, meso_image *dst) {
         const float *s = src->pixels + i * (size_t)src->channels;
         float *d = dst->pixels + i * 4;
         switch (src->channels) {
-        case 1: d[0] = d[1] = d[2] = s[0]; d[3] = 1.0f; break;
-        case 2: d[0] = d[1] = d[2] = s[0]; d[3] = s[1]; break;
-        case 3: d[0] = s[0]; d[1] = s[1]; d[2] = s[2]; d[3] = 1.0f; break;
-        default: memcpy(d, s, 4 * sizeof(float)); break;
+        case 1:
+            d[0] = d[1] = d[2] = s[0];
+            d[3] = 1.0f;
+            break;
+        case 2:
+            d[0] = d[1] = d[2] = s[0];
+            d[3] = s[1];
+            break;
+        case 3:
+            d[0] = s[0];
+            d[1] = s[1];
+            d[2] = s[2];
+            d[3] = 1.0f;
+            break;
+        default:
+            memcpy(d, s, 4 * sizeof(float));
+            break;
         }
     }
 }
@@ -164,8 +179,8 @@ static inline int wrap_index(int i, int n, meso_wrap wrap) {
 }
 
 static meso_vec4 fetch(const meso_image *level, int i, int j, meso_wrap wrap) {
-    const float *p = meso_image_at(level, wrap_index(i, level->width, wrap),
-                                   wrap_index(j, level->height, wrap));
+    const float *p =
+        meso_image_at(level, wrap_index(i, level->width, wrap), wrap_index(j, level->height, wrap));
     return (meso_vec4){p[0], p[1], p[2], p[3]};
 }
 

@@ -19,7 +19,10 @@ static void on_png_error(png_structp png, png_const_charp message) {
     png_longjmp(png, 1);
 }
 
-static void on_png_warning(png_structp png, png_const_charp message) { (void)png; (void)message; }
+static void on_png_warning(png_structp png, png_const_charp message) {
+    (void)png;
+    (void)message;
+}
 
 static uint32_t read_u32(const unsigned char *p) {
     return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3];
@@ -53,8 +56,8 @@ meso_result meso_image_load_png(meso_context *ctx, const char *path, meso_image 
     }
     fseek(file, 8, SEEK_SET);
     png_error_state state = {ctx, path, ""};
-    png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &state, on_png_error,
-                                             on_png_warning);
+    png_structp png =
+        png_create_read_struct(PNG_LIBPNG_VER_STRING, &state, on_png_error, on_png_warning);
     png_infop info = png ? png_create_info_struct(png) : NULL;
     /* volatile: assigned between setjmp and a possible longjmp */
     meso_image *volatile image = NULL;
@@ -77,10 +80,9 @@ meso_result meso_image_load_png(meso_context *ctx, const char *path, meso_image 
     /* The declared size is checked before any pixel memory exists. */
     if (width > MESO_IMAGE_MAX_SIDE || height > MESO_IMAGE_MAX_SIDE ||
         (uint64_t)width * height > MESO_IMAGE_MAX_PIXELS) {
-        r = meso_log_error(ctx, MESO_ERROR_LIMIT,
-                           "%s: %ux%u exceeds the limit of %d a side and %u pixels", path,
-                           (unsigned)width, (unsigned)height, MESO_IMAGE_MAX_SIDE,
-                           MESO_IMAGE_MAX_PIXELS);
+        r = meso_log_error(
+            ctx, MESO_ERROR_LIMIT, "%s: %ux%u exceeds the limit of %d a side and %u pixels", path,
+            (unsigned)width, (unsigned)height, MESO_IMAGE_MAX_SIDE, MESO_IMAGE_MAX_PIXELS);
         goto done;
     }
     int color_type = png_get_color_type(png, info);
@@ -160,8 +162,8 @@ meso_result meso_image_write_png(meso_context *ctx, const meso_image *image, FIL
                                       PNG_COLOR_TYPE_RGB, PNG_COLOR_TYPE_RGB_ALPHA};
     meso_result r = MESO_OK;
     png_error_state state = {ctx, path, ""};
-    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &state, on_png_error,
-                                              on_png_warning);
+    png_structp png =
+        png_create_write_struct(PNG_LIBPNG_VER_STRING, &state, on_png_error, on_png_warning);
     png_infop info = png ? png_create_info_struct(png) : NULL;
     size_t row_bytes = (size_t)image->width * (size_t)channels * (size_t)(bit_depth / 8);
     unsigned char *volatile row = malloc(row_bytes);

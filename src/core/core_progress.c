@@ -6,7 +6,7 @@
 
 #include "core_internal.h"
 
-#define PROGRESS_DELAY_SECONDS 1.0  /* no bar for work shorter than this */
+#define PROGRESS_DELAY_SECONDS 1.0 /* no bar for work shorter than this */
 #define PROGRESS_REDRAW_SECONDS 0.1
 #define PROGRESS_BAR_WIDTH 30
 
@@ -43,8 +43,7 @@ meso_progress *meso_progress_begin(meso_context *ctx, const char *label, uint64_
 static void draw(meso_progress *p, uint64_t done, double now) {
     double fraction = (double)done / (double)p->total;
     if (fraction > 1.0) fraction = 1.0;
-    if (p->ctx->on_progress &&
-        p->ctx->on_progress(p->ctx->progress_user, p->label, fraction))
+    if (p->ctx->on_progress && p->ctx->on_progress(p->ctx->progress_user, p->label, fraction))
         atomic_store(&p->cancelled, true);
     if (!p->show_bar || now - p->start < PROGRESS_DELAY_SECONDS) return;
     int filled = (int)(fraction * PROGRESS_BAR_WIDTH + 0.5);
@@ -54,8 +53,8 @@ static void draw(meso_progress *p, uint64_t done, double now) {
     bar[PROGRESS_BAR_WIDTH] = 0;
     double elapsed = now - p->start;
     double eta = fraction > 0.0 ? elapsed * (1.0 - fraction) / fraction : 0.0;
-    fprintf(stderr, "\r%-24s [%s] %3d%%  %.1fs, %.1fs left ", p->label, bar, (int)(fraction * 100.0),
-            elapsed, eta);
+    fprintf(stderr, "\r%-24s [%s] %3d%%  %.1fs, %.1fs left ", p->label, bar,
+            (int)(fraction * 100.0), elapsed, eta);
     fflush(stderr);
     p->drawn = true;
 }

@@ -39,7 +39,8 @@ float meso_sh_irradiance(const float radiance[MESO_SH_COUNT], meso_vec3 n) {
     float basis[MESO_SH_COUNT], sum = 0.0f;
     meso_sh_basis(n, basis);
     for (int l = 0; l < MESO_SH_ORDER; l++)
-        for (int i = l * l; i < (l + 1) * (l + 1); i++) sum += band_scale[l] * radiance[i] * basis[i];
+        for (int i = l * l; i < (l + 1) * (l + 1); i++)
+            sum += band_scale[l] * radiance[i] * basis[i];
     return sum;
 }
 
@@ -117,9 +118,12 @@ void meso_sh_rotation_init(const float frame[3][3], meso_sh_rotation *out_rotati
         for (int r = 0; r < n; r++)
             for (int c = 0; c < n; c++) {
                 float v = (float)x[r][c];
-                if (l == 1) out_rotation->band1[r][c] = v;
-                else if (l == 2) out_rotation->band2[r][c] = v;
-                else out_rotation->band3[r][c] = v;
+                if (l == 1)
+                    out_rotation->band1[r][c] = v;
+                else if (l == 2)
+                    out_rotation->band2[r][c] = v;
+                else
+                    out_rotation->band3[r][c] = v;
             }
     }
 }

@@ -201,7 +201,8 @@ static void read_texture(const struct aiMaterial *material, enum aiTextureType t
                          const char *what, char *out, meso_mesh_material *m) {
     struct aiString path;
     if (aiGetMaterialTexture(material, type, 0, &path, NULL, NULL, NULL, NULL, NULL, NULL) !=
-            aiReturn_SUCCESS || path.length == 0)
+            aiReturn_SUCCESS ||
+        path.length == 0)
         return;
     char ignored[96];
     if (path.data[0] == '*' || strncmp(path.data, "data:", 5) == 0) {
@@ -266,8 +267,8 @@ meso_result meso_mesh_load(meso_context *ctx, const char *path, meso_mesh **out_
     return meso_mesh_load_with_material(ctx, path, out_mesh, NULL);
 }
 
-meso_result meso_mesh_load_with_material(meso_context *ctx, const char *path,
-                                         meso_mesh **out_mesh, meso_mesh_material *out_material) {
+meso_result meso_mesh_load_with_material(meso_context *ctx, const char *path, meso_mesh **out_mesh,
+                                         meso_mesh_material *out_material) {
     *out_mesh = NULL;
     if (out_material) memset(out_material, 0, sizeof(*out_material));
     FILE *probe = NULL; /* a regular file only: assimp would block on a FIFO */

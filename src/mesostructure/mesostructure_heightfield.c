@@ -121,10 +121,8 @@ meso_result meso_heightfield_load_png(meso_context *ctx, const char *path, meso_
 /* ---- Kinds and defaults ------------------------------------------------------------------- */
 
 static const char *const heightfield_kind_names[] = {
-    [MESO_HEIGHTFIELD_BRICKS] = "bricks",
-    [MESO_HEIGHTFIELD_BUMPS] = "bumps",
-    [MESO_HEIGHTFIELD_WEAVE] = "weave",
-    [MESO_HEIGHTFIELD_TILES] = "tiles",
+    [MESO_HEIGHTFIELD_BRICKS] = "bricks", [MESO_HEIGHTFIELD_BUMPS] = "bumps",
+    [MESO_HEIGHTFIELD_WEAVE] = "weave",   [MESO_HEIGHTFIELD_TILES] = "tiles",
     [MESO_HEIGHTFIELD_BARK] = "bark",
 };
 

@@ -199,8 +199,8 @@ static void eval_bark(const pattern *p, float u, float v, texel_value *out) {
     /* fibres: noise stretched along v (a tile-periodic lattice 8x finer in u than in v) */
     float fibre = periodic_value_noise(u * (float)(32 * d->columns), v * (float)(4 * d->rows),
                                        32 * d->columns, 4 * d->rows, d->seed + 31u);
-    float top = 0.8f + 0.12f * periodic_fbm(u, v, 4 * d->columns, d->seed + 37u) +
-                0.06f * (fibre - 0.5f);
+    float top =
+        0.8f + 0.12f * periodic_fbm(u, v, 4 * d->columns, d->seed + 37u) + 0.06f * (fibre - 0.5f);
     top -= d->roughness * 0.5f * (1.0f + periodic_fbm(u, v, 16 * d->columns, d->seed + 41u));
     float plate = top * (1.0f - crack_depth * (1.0f - crack));
     out->height = 0.04f + (plate - 0.04f) * across;
@@ -286,10 +286,8 @@ meso_result meso_heightfield_create_procedural(meso_context *ctx, const meso_hei
     p.color = out_color != NULL;
 
     static const eval_fn evals[] = {
-        [MESO_HEIGHTFIELD_BRICKS] = eval_bricks,
-        [MESO_HEIGHTFIELD_BUMPS] = eval_bumps,
-        [MESO_HEIGHTFIELD_WEAVE] = eval_weave,
-        [MESO_HEIGHTFIELD_TILES] = eval_tiles,
+        [MESO_HEIGHTFIELD_BRICKS] = eval_bricks, [MESO_HEIGHTFIELD_BUMPS] = eval_bumps,
+        [MESO_HEIGHTFIELD_WEAVE] = eval_weave,   [MESO_HEIGHTFIELD_TILES] = eval_tiles,
         [MESO_HEIGHTFIELD_BARK] = eval_bark,
     };
     meso_heightfield *hf = NULL;

@@ -16,11 +16,13 @@
 #include "render_internal.h"
 
 #define RASTER_TILE_SIZE 32 /* samples a side of a screen tile */
-#define RASTER_CHUNK_TRIANGLES 256 /* source triangles per setup chunk (times num_tiles /      \
+#define RASTER_CHUNK_TRIANGLES                                                                     \
+    256                            /* source triangles per setup chunk (times num_tiles /          \
                                       RASTER_CHUNK_TILES above that many tiles) */
 #define RASTER_CHUNKS_PER_MESH 128 /* chunks grow beyond this many a mesh (raster_setup.c) */
-#define RASTER_CHUNK_TILES 2048 /* tiles above which chunks grow: a chunk's tile table (4 bytes a \
-                                   tile) stays within ~32 bytes a triangle */
+#define RASTER_CHUNK_TILES                                                                         \
+    2048                       /* tiles above which chunks grow: a chunk's tile table (4 bytes a   \
+                                  tile) stays within ~32 bytes a triangle */
 #define RASTER_SUBPIXEL_BITS 8 /* vertices snap to 1/256 sample */
 #define RASTER_SUBPIXEL_ONE (1 << RASTER_SUBPIXEL_BITS)
 #define RASTER_GUARD_SAMPLES 262144.0 /* |screen coordinate| bound after guard-band clipping */

@@ -12,7 +12,7 @@
 
 #include "raster_internal.h"
 
-#define MAX_POLYGON 9 /* 3 vertices + one per clip plane (5) + 1 */
+#define MAX_POLYGON 9          /* 3 vertices + one per clip plane (5) + 1 */
 #define RESERVE_FIRST_ITEMS 64 /* first capacity of a chunk's growing arrays */
 
 typedef struct clip_vertex {

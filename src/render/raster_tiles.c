@@ -129,8 +129,7 @@ typedef struct covered_samples {
  * their tile-buffer indices to `pixels`; returns how many. Coverage and the depth test compact
  * their survivors without branches (small triangles make those branches unpredictable). */
 static size_t cover_triangle(const raster_triangle *tri, int x0, int y0, int x1, int y1, int tx0,
-                             int ty0, const float *depth, covered_samples *out,
-                             uint32_t *pixels) {
+                             int ty0, const float *depth, covered_samples *out, uint32_t *pixels) {
     const int64_t half = RASTER_SUBPIXEL_ONE / 2;
     int64_t px = ((int64_t)x0 << RASTER_SUBPIXEL_BITS) + half;
     int64_t py = ((int64_t)y0 << RASTER_SUBPIXEL_BITS) + half;
@@ -268,8 +267,8 @@ typedef struct tile_batch {
     const raster_object *object;
     const meso_frame *frame;
     meso_fragment *fragments;
-    uint32_t *pixels;  /* tile-buffer index of each fragment */
-    uint8_t *pending;  /* per tile sample: 1 while a fragment of the batch covers it */
+    uint32_t *pixels; /* tile-buffer index of each fragment */
+    uint8_t *pending; /* per tile sample: 1 while a fragment of the batch covers it */
     float *color, *coverage, *depth; /* the tile's buffers */
     size_t count;
     uint64_t shaded; /* fragments shaded in the tile so far */

@@ -20,7 +20,6 @@
 
 #include "reference_internal.h"
 
-
 #define REFERENCE_LOW_QUALITY_TRIANGLES 2000000
 
 /* ---- Small geometry helpers shared by the reference files --------------------------------- */
@@ -96,7 +95,10 @@ size_t reference_base_triangle(const reference_object *ref, uint64_t triangle) {
     size_t lo = 0, hi = ref->num_base; /* base_offsets[lo] <= triangle < base_offsets[hi] */
     while (hi - lo > 1) {
         size_t mid = lo + (hi - lo) / 2;
-        if (ref->base_offsets[mid] <= triangle) lo = mid; else hi = mid;
+        if (ref->base_offsets[mid] <= triangle)
+            lo = mid;
+        else
+            hi = mid;
     }
     return lo;
 }
@@ -124,15 +126,14 @@ static meso_result build_plain(meso_context *ctx, RTCGeometry geometry, referenc
     if (*total + mesh->num_triangles > MESO_REFERENCE_MAX_TRIANGLES)
         return meso_log_error(ctx, MESO_ERROR_LIMIT,
                               "%s: reference: %llu triangles exceed the limit %llu",
-                              ref->object->name,
-                              (unsigned long long)(*total + mesh->num_triangles),
+                              ref->object->name, (unsigned long long)(*total + mesh->num_triangles),
                               (unsigned long long)MESO_REFERENCE_MAX_TRIANGLES);
-    float *vertices = rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0,
-                                              RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                              mesh->num_vertices);
-    uint32_t *indices = rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0,
-                                                RTC_FORMAT_UINT3, 3 * sizeof(uint32_t),
-                                                mesh->num_triangles);
+    float *vertices =
+        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                3 * sizeof(float), mesh->num_vertices);
+    uint32_t *indices =
+        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                3 * sizeof(uint32_t), mesh->num_triangles);
     if (!vertices || !indices)
         return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: reference: %zu triangles",
                               ref->object->name, mesh->num_triangles);
@@ -191,8 +192,8 @@ meso_result meso_reference_create_with(meso_context *ctx, const meso_scene *scen
     snprintf(config, sizeof config, "threads=%d", meso_context_num_threads(ctx));
     reference->device = rtcNewDevice(config);
     if (!reference->device) {
-        result = meso_log_error(ctx, MESO_ERROR_INTERNAL, "reference: Embree: no device (%s)",
-                                config);
+        result =
+            meso_log_error(ctx, MESO_ERROR_INTERNAL, "reference: Embree: no device (%s)", config);
         goto fail;
     }
     uint64_t limit = meso_context_memory_limit(ctx);
@@ -216,7 +217,8 @@ meso_result meso_reference_create_with(meso_context *ctx, const meso_scene *scen
         if (kind != MESO_MESOSTRUCTURE_NONE && !object->mesh->uvs) {
             result = meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                                     "%s: mesostructure needs texture coordinates, the mesh has "
-                                    "none", object->name);
+                                    "none",
+                                    object->name);
             goto fail;
         }
         if (kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD && !object->mesostructure.height_field) {
@@ -225,18 +227,18 @@ meso_result meso_reference_create_with(meso_context *ctx, const meso_scene *scen
             goto fail;
         }
         if (object->mesh->num_triangles == 0) continue; /* nothing to trace */
-        RTCGeometry geometry = rtcNewGeometry(reference->device,
-                                              kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD
-                                                  ? RTC_GEOMETRY_TYPE_GRID
-                                              : kind == MESO_MESOSTRUCTURE_SOLID
-                                                  ? RTC_GEOMETRY_TYPE_QUAD
-                                                  : RTC_GEOMETRY_TYPE_TRIANGLE);
+        RTCGeometry geometry = rtcNewGeometry(
+            reference->device, kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD ? RTC_GEOMETRY_TYPE_GRID
+                               : kind == MESO_MESOSTRUCTURE_SOLID      ? RTC_GEOMETRY_TYPE_QUAD
+                                                                  : RTC_GEOMETRY_TYPE_TRIANGLE);
         reference_options options;
         result = reference_read_options(ctx, scene, object, &desc, &options);
         if (result == MESO_OK) {
             /* frame-wide settings: the most any object asks for */
-            if (options.samples > reference->path_samples) reference->path_samples = options.samples;
-            if (options.bounces > reference->path_bounces) reference->path_bounces = options.bounces;
+            if (options.samples > reference->path_samples)
+                reference->path_samples = options.samples;
+            if (options.bounces > reference->path_bounces)
+                reference->path_bounces = options.bounces;
             if (options.rtv) reference->path_rtv = true;
         }
         if (result != MESO_OK) {
@@ -264,8 +266,8 @@ meso_result meso_reference_create_with(meso_context *ctx, const meso_scene *scen
     /* the scene's quality picks the builder: Morton (LOW) builds several times faster than
      * SAH (MEDIUM) and costs little tracing time at one ray per pixel plus shadow rays */
     bool low = total > REFERENCE_LOW_QUALITY_TRIANGLES;
-    rtcSetSceneBuildQuality(reference->scene, low ? RTC_BUILD_QUALITY_LOW
-                                                  : RTC_BUILD_QUALITY_MEDIUM);
+    rtcSetSceneBuildQuality(reference->scene,
+                            low ? RTC_BUILD_QUALITY_LOW : RTC_BUILD_QUALITY_MEDIUM);
     build_progress build = {desc.progress ? meso_progress_begin(ctx, "reference BVH", 1000) : NULL,
                             0};
     if (build.progress) rtcSetSceneProgressMonitorFunction(reference->scene, report_build, &build);
@@ -280,9 +282,9 @@ meso_result meso_reference_create_with(meso_context *ctx, const meso_scene *scen
         goto fail;
     }
     if (error != RTC_ERROR_NONE) {
-        result = meso_log_error(ctx, error == RTC_ERROR_OUT_OF_MEMORY ? MESO_ERROR_OUT_OF_MEMORY
-                                                                       : MESO_ERROR_INTERNAL,
-                                "reference: Embree error %d while building", (int)error);
+        result = meso_log_error(
+            ctx, error == RTC_ERROR_OUT_OF_MEMORY ? MESO_ERROR_OUT_OF_MEMORY : MESO_ERROR_INTERNAL,
+            "reference: Embree error %d while building", (int)error);
         goto fail;
     }
     float diagonal = meso_vec3_length(meso_vec3_sub(hi, lo));
@@ -358,11 +360,10 @@ void reference_surface_at(const reference_object *ref, unsigned primitive, float
          * diagonal, (q2, q3, q1) with (u+v-1, 1-u, 1-v) above it */
         const uint32_t *q = ref->indices + 4 * (size_t)primitive;
         meso_vec3 x = hu + hv <= 1.0f
-                          ? meso_vec3_barycentric(ref->uvws[q[0]], ref->uvws[q[1]],
-                                                  ref->uvws[q[3]], 1.0f - hu - hv, hu, hv)
-                          : meso_vec3_barycentric(ref->uvws[q[2]], ref->uvws[q[3]],
-                                                  ref->uvws[q[1]], hu + hv - 1.0f, 1.0f - hu,
-                                                  1.0f - hv);
+                          ? meso_vec3_barycentric(ref->uvws[q[0]], ref->uvws[q[1]], ref->uvws[q[3]],
+                                                  1.0f - hu - hv, hu, hv)
+                          : meso_vec3_barycentric(ref->uvws[q[2]], ref->uvws[q[3]], ref->uvws[q[1]],
+                                                  hu + hv - 1.0f, 1.0f - hu, 1.0f - hv);
         uv = (meso_vec2){x.x, x.y};
         w = x.z;
         base = reference_base_triangle(ref, primitive);
@@ -394,8 +395,8 @@ void reference_surface_at(const reference_object *ref, unsigned primitive, float
             reference_triangle_gradients(bp, buv, &t, &bt_vec);
         }
         const meso_mesostructure *ms = &ref->object->mesostructure;
-        *out_normal = meso_displaced_normal(n, t, bt_vec, ms->depth,
-                                            meso_heightfield_gradient(ms->height_field, uv.x, uv.y));
+        *out_normal = meso_displaced_normal(
+            n, t, bt_vec, ms->depth, meso_heightfield_gradient(ms->height_field, uv.x, uv.y));
         return;
     }
     /* solid: the field's gradient through the Jacobian of the prism map
@@ -423,7 +424,8 @@ void reference_surface_at(const reference_object *ref, unsigned primitive, float
           ref->field(ref->field_user, (meso_vec3){local.x, local.y - h, local.z});
     g.z = ref->field(ref->field_user, (meso_vec3){local.x, local.y, local.z + h}) -
           ref->field(ref->field_user, (meso_vec3){local.x, local.y, local.z - h});
-    meso_vec3 cu = meso_vec3_cross(jv, jw), cv = meso_vec3_cross(jw, ju), cw = meso_vec3_cross(ju, jv);
+    meso_vec3 cu = meso_vec3_cross(jv, jw), cv = meso_vec3_cross(jw, ju),
+              cw = meso_vec3_cross(ju, jv);
     float det = meso_vec3_dot(ju, cu);
     meso_vec3 m = meso_vec3_add(meso_vec3_add(meso_vec3_scale(cu, g.x), meso_vec3_scale(cv, g.y)),
                                 meso_vec3_scale(cw, g.z));
@@ -471,9 +473,10 @@ void reference_light_visibility(const meso_reference *reference, meso_vec3 origi
     rtcInitIntersectContext(&shadow);
     for (int l = 0; l < scene->num_lights; l++) {
         const meso_light *light = &scene->lights[l];
-        float tfar = light->type == MESO_LIGHT_DIRECTIONAL
-                         ? INFINITY
-                         : meso_vec3_length(meso_vec3_sub(light->position, origin)) * (1.0f - 1e-5f);
+        float tfar =
+            light->type == MESO_LIGHT_DIRECTIONAL
+                ? INFINITY
+                : meso_vec3_length(meso_vec3_sub(light->position, origin)) * (1.0f - 1e-5f);
         visibility[l] = reference_unoccluded(reference->scene, &shadow, origin,
                                              meso_light_direction(light, position), tfar)
                             ? 1.0f
@@ -544,10 +547,14 @@ meso_result meso_reference_render(meso_context *ctx, const meso_reference *refer
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "reference: render: no target");
     if (reference->path_samples > 0 || reference->path_rtv)
         return reference_path_render(ctx, reference, frame, color, coverage, depth);
-    render_job rj = {.reference = reference, .frame = frame, .color = color,
-                     .coverage = coverage, .depth = depth,
+    render_job rj = {.reference = reference,
+                     .frame = frame,
+                     .color = color,
+                     .coverage = coverage,
+                     .depth = depth,
                      .tiles_x = (frame->width + REFERENCE_TILE - 1) / REFERENCE_TILE};
-    size_t tiles = (size_t)rj.tiles_x * (size_t)((frame->height + REFERENCE_TILE - 1) / REFERENCE_TILE);
+    size_t tiles =
+        (size_t)rj.tiles_x * (size_t)((frame->height + REFERENCE_TILE - 1) / REFERENCE_TILE);
     atomic_init(&rj.cancelled, false);
     rj.progress = meso_progress_begin(ctx, "reference: trace", tiles);
     meso_parallel_for(ctx, tiles, render_tile, &rj);

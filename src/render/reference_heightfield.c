@@ -39,7 +39,7 @@
 #include "reference_internal.h"
 
 typedef struct hf_edge {
-    uint64_t key; /* low vertex << 32 | high vertex */
+    uint64_t key;  /* low vertex << 32 | high vertex */
     uint32_t slot; /* triangle * 3 + edge */
 } hf_edge;
 
@@ -48,14 +48,14 @@ typedef struct hf_build {
     const meso_heightfield *hf;
     float depth;
     float subdivision;
-    float view_adaptive;      /* segments per pixel, 0: off */
+    float view_adaptive; /* segments per pixel, 0: off */
     meso_vec3 eye;
-    float pixel_angle;        /* 2 tan(fov/2) / height: a pixel's size at distance 1 */
-    uint32_t *tri_n;           /* per base triangle */
-    uint32_t *tri_edge;        /* per base triangle edge: edge id */
+    float pixel_angle;  /* 2 tan(fov/2) / height: a pixel's size at distance 1 */
+    uint32_t *tri_n;    /* per base triangle */
+    uint32_t *tri_edge; /* per base triangle edge: edge id */
     uint32_t *edge_lo, *edge_hi, *edge_n;
     size_t num_edges, num_grids;
-    float *vertices;           /* Embree vertex buffer, 3 floats a vertex */
+    float *vertices;              /* Embree vertex buffer, 3 floats a vertex */
     const uint64_t *grid_offsets; /* first vertex of each grid */
     const reference_grid *grids;
 } hf_build;
@@ -100,8 +100,8 @@ static uint32_t edge_segments(const hf_build *b, uint32_t lo, uint32_t hi) {
 static void write_vertex(const hf_build *b, uint64_t index, uint32_t i0, uint32_t i1, uint32_t i2,
                          float w0, float w1, float w2) {
     const meso_mesh *m = b->mesh;
-    meso_vec3 p = meso_vec3_barycentric(m->positions[i0], m->positions[i1], m->positions[i2], w0,
-                                        w1, w2);
+    meso_vec3 p =
+        meso_vec3_barycentric(m->positions[i0], m->positions[i1], m->positions[i2], w0, w1, w2);
     meso_vec3 n = meso_vec3_normalize(
         meso_vec3_barycentric(m->normals[i0], m->normals[i1], m->normals[i2], w0, w1, w2));
     meso_vec2 uv = meso_vec2_barycentric(m->uvs[i0], m->uvs[i1], m->uvs[i2], w0, w1, w2);
@@ -125,9 +125,12 @@ static void write_point(const hf_build *b, size_t t, uint32_t n, const uint32_t 
         }
     int e = -1;
     uint32_t position = 0; /* along edge e from its first vertex, 0 < position < n */
-    if (k[2] == 0) e = 0, position = k[1];      /* v0 -> v1 */
-    else if (k[0] == 0) e = 1, position = k[2]; /* v1 -> v2 */
-    else if (k[1] == 0) e = 2, position = k[0]; /* v2 -> v0 */
+    if (k[2] == 0)
+        e = 0, position = k[1]; /* v0 -> v1 */
+    else if (k[0] == 0)
+        e = 1, position = k[2]; /* v1 -> v2 */
+    else if (k[1] == 0)
+        e = 2, position = k[0]; /* v2 -> v0 */
     if (e < 0) {
         write_vertex(b, index, tv[0], tv[1], tv[2], (float)k[0] / (float)n, (float)k[1] / (float)n,
                      (float)k[2] / (float)n);
@@ -185,7 +188,8 @@ static size_t pair_triangles(const hf_build *b, const hf_edge *edges, reference_
     size_t nt = mesh->num_triangles, slots = 3 * nt;
     for (size_t i = 0; i < slots; i++) neighbour[i] = UINT32_MAX;
     for (size_t i = 0; i + 1 < slots; i++)
-        if (edges[i].key == edges[i + 1].key && (i + 2 >= slots || edges[i + 2].key != edges[i].key) &&
+        if (edges[i].key == edges[i + 1].key &&
+            (i + 2 >= slots || edges[i + 2].key != edges[i].key) &&
             (i == 0 || edges[i - 1].key != edges[i].key)) {
             neighbour[edges[i].slot] = edges[i + 1].slot;
             neighbour[edges[i + 1].slot] = edges[i].slot;
@@ -203,8 +207,8 @@ static size_t pair_triangles(const hf_build *b, const hf_edge *edges, reference_
             int f = (int)(slot % 3);
             const uint32_t *sv = mesh->indices + 3 * t2;
             /* consistently oriented neighbours run the shared edge the other way */
-            if (paired[t2] || t2 == t || b->tri_n[t2] != b->tri_n[t] ||
-                sv[f] != tv[(e + 1) % 3] || sv[(f + 1) % 3] != tv[e])
+            if (paired[t2] || t2 == t || b->tri_n[t2] != b->tri_n[t] || sv[f] != tv[(e + 1) % 3] ||
+                sv[(f + 1) % 3] != tv[e])
                 continue;
             meso_vec2 d = {mesh->uvs[tv[(e + 1) % 3]].x - mesh->uvs[tv[e]].x,
                            mesh->uvs[tv[(e + 1) % 3]].y - mesh->uvs[tv[e]].y};
@@ -219,8 +223,8 @@ static size_t pair_triangles(const hf_build *b, const hf_edge *edges, reference_
         }
         uint32_t slot = neighbour[3 * t + (size_t)best];
         paired[slot / 3] = true;
-        grids[count++] = (reference_grid){(uint32_t)t, slot / 3, (uint8_t)best,
-                                          (uint8_t)(slot % 3)};
+        grids[count++] =
+            (reference_grid){(uint32_t)t, slot / 3, (uint8_t)best, (uint8_t)(slot % 3)};
     }
     return count;
 }
@@ -231,11 +235,13 @@ meso_result reference_build_heightfield(meso_context *ctx, const meso_scene *sce
     const meso_object *object = ref->object;
     const meso_mesh *mesh = object->mesh;
     meso_result result = MESO_OK;
-    hf_build b = {.mesh = mesh, .hf = object->mesostructure.height_field,
+    hf_build b = {.mesh = mesh,
+                  .hf = object->mesostructure.height_field,
                   .depth = object->mesostructure.depth};
     b.subdivision = options->subdivision;
     float fov = scene->camera.fov_y_deg > 0.0f && scene->camera.fov_y_deg < 179.0f
-                    ? scene->camera.fov_y_deg : 40.0f;
+                    ? scene->camera.fov_y_deg
+                    : 40.0f;
     b.view_adaptive = options->view_adaptive > 0.0f ? options->view_adaptive : 0.0f;
     b.eye = scene->camera.eye;
     b.pixel_angle = 2.0f * tanf(0.5f * fov * MESO_PI / 180.0f) /

@@ -48,12 +48,13 @@ meso_result meso_reference_create_with(meso_context *ctx, const meso_scene *scen
 #include <string.h>
 
 typedef enum reference_kind {
-    REFERENCE_PLAIN = 0,   /* the mesh itself */
+    REFERENCE_PLAIN = 0,    /* the mesh itself */
     REFERENCE_HEIGHT_FIELD, /* displaced micro-triangles */
-    REFERENCE_SOLID,       /* the isosurface mapped into the shell's prisms */
+    REFERENCE_SOLID,        /* the isosurface mapped into the shell's prisms */
 } reference_kind;
 
-/* A height field's Embree grid: one base triangle, or two sharing an edge (reference_heightfield.c). */
+/* A height field's Embree grid: one base triangle, or two sharing an edge
+ * (reference_heightfield.c). */
 typedef struct reference_grid {
     uint32_t first, second; /* base triangles; second = UINT32_MAX: a single one */
     uint8_t first_edge;     /* the edge of `first` on the grid's diagonal (shared with second) */
@@ -90,7 +91,7 @@ typedef struct reference_object {
     size_t num_base;
     meso_scalar_field_fn field; /* solid */
     void *field_user;
-    size_t side_bytes;       /* uvws, base_offsets, grids */
+    size_t side_bytes; /* uvws, base_offsets, grids */
 } reference_object;
 
 /* The options an object gives the reference ("technique_options": {"reference": {...}}),
@@ -112,7 +113,7 @@ struct meso_reference {
     reference_object *objects;
     int num_objects;
     uint64_t num_triangles;
-    float epsilon;         /* shadow-ray offset, world units */
+    float epsilon;                  /* shadow-ray offset, world units */
     _Atomic long long embree_bytes; /* Embree's own allocations (memory monitor) */
     long long embree_peak;
     long long memory_limit;   /* the context's budget: Embree allocations beyond it fail */
@@ -165,7 +166,7 @@ void reference_surface_at(const reference_object *ref, unsigned primitive, float
 /* What a ray hit. */
 typedef struct reference_hit {
     const reference_object *ref;
-    float t;                    /* the ray's parameter at the hit */
+    float t; /* the ray's parameter at the hit */
     meso_vec3 position;
     meso_vec3 normal;           /* the mesostructure's shading normal */
     meso_vec2 uv;               /* shading uv */

@@ -71,9 +71,8 @@ static meso_vec3 cosine_direction(meso_vec3 n, float u1, float u2) {
     meso_vec3 s = {b, sign + n.y * n.y * a, -n.y};
     float r = sqrtf(u1), phi = 6.28318530718f * u2;
     float x = r * cosf(phi), y = r * sinf(phi), z = sqrtf(fmaxf(0.0f, 1.0f - u1));
-    return meso_vec3_normalize(
-        meso_vec3_add(meso_vec3_add(meso_vec3_scale(t, x), meso_vec3_scale(s, y)),
-                      meso_vec3_scale(n, z)));
+    return meso_vec3_normalize(meso_vec3_add(
+        meso_vec3_add(meso_vec3_scale(t, x), meso_vec3_scale(s, y)), meso_vec3_scale(n, z)));
 }
 
 /* ---- Light transport ---------------------------------------------------------------------- */
@@ -89,7 +88,7 @@ typedef struct path_job {
     meso_scene direct_scene;
     const meso_environment *environment; /* NULL: none */
     int samples, bounces;
-    int pass;        /* the pass running: samples [pass * PASS_SAMPLES, ...) */
+    int pass; /* the pass running: samples [pass * PASS_SAMPLES, ...) */
     int tiles_x;
     float *color, *coverage, *depth;
     double *reflected; /* per pixel, RGB: the sum over samples of albedo E / pi */
@@ -198,10 +197,10 @@ static meso_vec3 rtv_reflected(const path_job *pj, const meso_frame *frame,
     /* the tangent frame as the vertices' (render_gi_transfer.c): T made orthogonal to N */
     meso_vec3 n = meso_vec3_normalize(meso_vec3_barycentric(
         mesh->normals[tri[0]], mesh->normals[tri[1]], mesh->normals[tri[2]], b[0], b[1], b[2]));
-    meso_vec3 t = mesh->tangents ? meso_vec3_barycentric(mesh->tangents[tri[0]],
-                                                         mesh->tangents[tri[1]],
-                                                         mesh->tangents[tri[2]], b[0], b[1], b[2])
-                                 : (meso_vec3){1, 0, 0};
+    meso_vec3 t = mesh->tangents
+                      ? meso_vec3_barycentric(mesh->tangents[tri[0]], mesh->tangents[tri[1]],
+                                              mesh->tangents[tri[2]], b[0], b[1], b[2])
+                      : (meso_vec3){1, 0, 0};
     t = meso_vec3_normalize(meso_vec3_sub(t, meso_vec3_scale(n, meso_vec3_dot(n, t))));
     meso_vec3 bt = meso_vec3_cross(n, t);
     meso_vec3 v = meso_vec3_normalize(meso_vec3_sub(frame->eye, hit->position));
@@ -228,11 +227,10 @@ static meso_result prepare_rtv(meso_context *ctx, path_job *pj) {
         const meso_object *object = reference->objects[o].object;
         if (!object || object->mesostructure.kind == MESO_MESOSTRUCTURE_NONE) continue;
         const meso_mesostructure *ms = &object->mesostructure;
-        meso_rtv_desc desc = {.heightfield = ms->kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD
-                                                 ? ms->height_field
-                                                 : NULL,
-                              .solid = ms->kind == MESO_MESOSTRUCTURE_SOLID ? ms->solid : NULL,
-                              .aspect = meso_gi_shell_aspect(object)};
+        meso_rtv_desc desc = {
+            .heightfield = ms->kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD ? ms->height_field : NULL,
+            .solid = ms->kind == MESO_MESOSTRUCTURE_SOLID ? ms->solid : NULL,
+            .aspect = meso_gi_shell_aspect(object)};
         meso_result r = meso_rtv_bake_cached(ctx, &desc, &pj->rtvs[o]);
         if (r == MESO_OK)
             r = meso_gi_vertex_radiance(ctx, object->mesh, scene->environment, NULL,
@@ -299,8 +297,8 @@ meso_result reference_path_render(meso_context *ctx, const meso_reference *refer
                                   const meso_frame *frame, float *color, float *coverage,
                                   float *depth) {
     size_t pixels = (size_t)frame->width * (size_t)frame->height;
-    meso_result r = meso_memory_check(ctx, "reference: path tracing",
-                                      (uint64_t)pixels * 3 * sizeof(double));
+    meso_result r =
+        meso_memory_check(ctx, "reference: path tracing", (uint64_t)pixels * 3 * sizeof(double));
     if (r != MESO_OK) return r;
     path_job *pj = calloc(1, sizeof *pj);
     double *reflected = calloc(pixels * 3, sizeof(double));
@@ -335,7 +333,8 @@ meso_result reference_path_render(meso_context *ctx, const meso_reference *refer
     pj->color = color, pj->coverage = coverage, pj->depth = depth;
     pj->reflected = reflected;
     atomic_init(&pj->cancelled, false);
-    size_t tiles = (size_t)pj->tiles_x * (size_t)((frame->height + REFERENCE_TILE - 1) / REFERENCE_TILE);
+    size_t tiles =
+        (size_t)pj->tiles_x * (size_t)((frame->height + REFERENCE_TILE - 1) / REFERENCE_TILE);
     int passes = (pj->samples + PASS_SAMPLES - 1) / PASS_SAMPLES;
     double start = meso_time_seconds();
     pj->progress = meso_progress_begin(ctx, "reference: path trace", tiles * (size_t)passes);
@@ -352,7 +351,6 @@ meso_result reference_path_render(meso_context *ctx, const meso_reference *refer
     release_rtv(pj, reference->num_objects);
     free(reflected);
     free(pj);
-    if (cancelled)
-        return meso_log_error(ctx, MESO_ERROR_CANCELLED, "reference: render: cancelled");
+    if (cancelled) return meso_log_error(ctx, MESO_ERROR_CANCELLED, "reference: render: cancelled");
     return MESO_OK;
 }

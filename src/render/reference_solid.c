@@ -12,8 +12,8 @@
  * to the triangle (Sutherland-Hodgman, in the uv plane, w carried along). So that neighbouring
  * prisms meet without a gap, every point on a base edge is computed the same way from both
  * sides: edges are oriented canonically (lower mesh vertex first, meso_prism_edge), the side
- * test is the same cross product, a cut through a part of an original iso-edge is computed from that edge's
- * end points in a canonical order, and points on an edge are mapped with the edge's two
+ * test is the same cross product, a cut through a part of an original iso-edge is computed from
+ * that edge's end points in a canonical order, and points on an edge are mapped with the edge's two
  * vertices only (the third weight exactly 0).
  */
 #include <stdlib.h>
@@ -123,10 +123,14 @@ static meso_vec3 cut(const meso_prism_edge *e, meso_vec3 p, meso_vec3 q) {
 /* The original iso-edge both poly vertices lie on, or -1. */
 static int shared_iso_edge(const poly_vertex *a, const poly_vertex *b) {
     int ea[2] = {-1, -1}, eb[2] = {-1, -1};
-    if (a->original >= 0) ea[0] = a->original, ea[1] = (a->original + 2) % 3;
-    else ea[0] = a->iso_edge;
-    if (b->original >= 0) eb[0] = b->original, eb[1] = (b->original + 2) % 3;
-    else eb[0] = b->iso_edge;
+    if (a->original >= 0)
+        ea[0] = a->original, ea[1] = (a->original + 2) % 3;
+    else
+        ea[0] = a->iso_edge;
+    if (b->original >= 0)
+        eb[0] = b->original, eb[1] = (b->original + 2) % 3;
+    else
+        eb[0] = b->iso_edge;
     for (int i = 0; i < 2; i++)
         for (int j = 0; j < 2; j++)
             if (ea[i] >= 0 && ea[i] == eb[j]) return ea[i];
@@ -156,8 +160,8 @@ static void clip_triangle(emitter *em, const uint32_t iso_tri[3], meso_vec3 tile
             if (da >= 0.0f) out[n_out++] = *a;
             if ((da >= 0.0f) != (dc >= 0.0f) && da != 0.0f && dc != 0.0f) {
                 int k = shared_iso_edge(a, c);
-                meso_vec3 x = k >= 0 ? cut(edge, original[k], original[(k + 1) % 3])
-                                     : cut(edge, a->x, c->x);
+                meso_vec3 x =
+                    k >= 0 ? cut(edge, original[k], original[(k + 1) % 3]) : cut(edge, a->x, c->x);
                 out[n_out++] = (poly_vertex){x, -1, k, e};
             }
         }
@@ -170,12 +174,11 @@ static void clip_triangle(emitter *em, const uint32_t iso_tri[3], meso_vec3 tile
     const poly_vertex *p = poly[which];
     for (int i = 0; i < count; i++)
         index[i] = p[i].original >= 0 ? iso_vertex(em, iso_tri[p[i].original], tile)
-                                       : new_vertex(em, p[i].x, p[i].on_edge);
+                                      : new_vertex(em, p[i].x, p[i].on_edge);
     /* the clipped piece is convex and planar: any split along its inner diagonals keeps its
      * outline, so the fan goes out as quads (p0, pi, pi+1, pi+2) and a last triangle */
     int i = 1;
-    for (; i + 2 < count; i += 2)
-        emit_quad(em, index[0], index[i], index[i + 1], index[i + 2]);
+    for (; i + 2 < count; i += 2) emit_quad(em, index[0], index[i], index[i + 1], index[i + 2]);
     if (i + 1 < count) emit_quad(em, index[0], index[i], index[i + 1], index[i + 1]);
 }
 
@@ -257,7 +260,8 @@ static void triangle_job(void *user, size_t job, int thread_index) {
     solid_pass *pass = user;
     solid_build *b = pass->b;
     size_t nv_iso = b->iso->num_vertices ? b->iso->num_vertices : 1;
-    emitter em = {.b = b, .write = pass->write,
+    emitter em = {.b = b,
+                  .write = pass->write,
                   .remap = b->remap + (size_t)thread_index * nv_iso,
                   .stamp = b->stamp + (size_t)thread_index * nv_iso,
                   .current = b->stamp_counter[thread_index]};
@@ -299,8 +303,8 @@ meso_result reference_build_solid(meso_context *ctx, const meso_reference_desc *
         idesc.resolution_w = options->resolution / 4 > 2 ? options->resolution / 4 : 2;
     }
     ref->field = desc->solid_field ? desc->solid_field : solid_distance_field;
-    ref->field_user = desc->solid_field ? desc->solid_field_user
-                                        : (void *)object->mesostructure.solid;
+    ref->field_user =
+        desc->solid_field ? desc->solid_field_user : (void *)object->mesostructure.solid;
     if (!desc->solid_field && !object->mesostructure.solid)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: mesostructure: no solid",
                               object->name);
@@ -326,9 +330,8 @@ meso_result reference_build_solid(meso_context *ctx, const meso_reference_desc *
     meso_isosurface *iso = NULL;
     result = meso_bake_isosurface_function(ctx, ref->field, ref->field_user, &idesc, &iso);
     if (result != MESO_OK) return result;
-    meso_log_info(ctx, "%s: reference: isosurface %d x %d x %d: %zu triangles a tile",
-                  object->name, iso->resolution_u, iso->resolution_v, iso->resolution_w,
-                  iso->num_triangles);
+    meso_log_info(ctx, "%s: reference: isosurface %d x %d x %d: %zu triangles a tile", object->name,
+                  iso->resolution_u, iso->resolution_v, iso->resolution_w, iso->num_triangles);
 
     size_t nt = mesh->num_triangles;
     size_t threads = (size_t)meso_context_num_threads(ctx);
@@ -343,10 +346,9 @@ meso_result reference_build_solid(meso_context *ctx, const meso_reference_desc *
     b.stamp = calloc(threads * nv_iso, sizeof *b.stamp);
     b.stamp_counter = calloc(threads, sizeof *b.stamp_counter);
     if (!b.triangle_counts || !b.vertex_counts || !b.real_counts || !triangle_offsets ||
-        !vertex_offsets ||
-        !b.remap || !b.stamp || !b.stamp_counter) {
-        result = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: reference: solid",
-                                object->name);
+        !vertex_offsets || !b.remap || !b.stamp || !b.stamp_counter) {
+        result =
+            meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: reference: solid", object->name);
         goto fail;
     }
 

@@ -26,9 +26,8 @@ static inline void meso_environment_ambient8(const meso_environment *env, v8f nx
                     v8_splat(1.092548430592079f) * nx * nz,
                     v8_splat(0.546274215296040f) * (nx * nx - ny * ny)};
     /* A_l / pi: 1, 2/3, 1/4 */
-    static const float band_scale[9] = {1.0f,         2.0f / 3.0f, 2.0f / 3.0f,
-                                        2.0f / 3.0f,  0.25f,       0.25f,
-                                        0.25f,        0.25f,       0.25f};
+    static const float band_scale[9] = {1.0f,  2.0f / 3.0f, 2.0f / 3.0f, 2.0f / 3.0f, 0.25f,
+                                        0.25f, 0.25f,       0.25f,       0.25f};
     v8f *out[3] = {r, g, b};
     for (int c = 0; c < 3; c++) {
         v8f sum = v8_splat(0.0f);

@@ -107,9 +107,8 @@ static meso_result save_framebuffer(meso_context *ctx, const meso_framebuffer *f
         const meso_image *images[2] = {color, coverage};
         const char *paths[2] = {path, coverage_path};
         /* the mask is a fraction, not a colour: written linearly */
-        const meso_png_desc descs[2] = {*desc,
-                                        {.bit_depth = desc->bit_depth,
-                                         .encoding = MESO_ENCODING_LINEAR}};
+        const meso_png_desc descs[2] = {
+            *desc, {.bit_depth = desc->bit_depth, .encoding = MESO_ENCODING_LINEAR}};
         size_t count = coverage_path ? 2 : 1;
         r = format_from_extension ? meso_image_save_all(ctx, count, images, paths, descs)
                                   : meso_image_save_png_all(ctx, count, images, paths, descs);

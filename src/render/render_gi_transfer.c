@@ -14,9 +14,9 @@ typedef struct transfer_job {
     const meso_mesh *mesh;
     RTCScene scene;
     int directions;
-    const meso_vec3 *direction;   /* the fixed sample directions */
-    const float *weighted;        /* per direction: 3 x 16 of w L(d) Y_i(d) */
-    float epsilon;                /* ray offset along the normal, world units */
+    const meso_vec3 *direction; /* the fixed sample directions */
+    const float *weighted;      /* per direction: 3 x 16 of w L(d) Y_i(d) */
+    float epsilon;              /* ray offset along the normal, world units */
     float *radiance;
 } transfer_job;
 
@@ -44,7 +44,8 @@ float meso_gi_shell_aspect(const meso_object *object) {
     double side = 0.0;
     size_t counted = 0;
     for (size_t v = 0; mesh->tangents && mesh->bitangents && v < mesh->num_vertices; v++) {
-        float s = 0.5f * (meso_vec3_length(mesh->tangents[v]) + meso_vec3_length(mesh->bitangents[v]));
+        float s =
+            0.5f * (meso_vec3_length(mesh->tangents[v]) + meso_vec3_length(mesh->bitangents[v]));
         if (s > 0.0f && isfinite(s)) side += s, counted++;
     }
     float mean = counted ? (float)(side / (double)counted) : 1.0f;
@@ -141,14 +142,14 @@ meso_result meso_gi_vertex_radiance(meso_context *ctx, const meso_mesh *mesh,
     device = rtcNewDevice(config);
     scene = device ? rtcNewScene(device) : NULL;
     RTCGeometry geometry = scene ? rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE) : NULL;
-    float *vertices = geometry ? rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0,
-                                                         RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                                         mesh->num_vertices)
-                               : NULL;
-    uint32_t *indices = geometry ? rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0,
-                                                           RTC_FORMAT_UINT3, 3 * sizeof(uint32_t),
-                                                           mesh->num_triangles)
-                                 : NULL;
+    float *vertices =
+        geometry ? rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                           3 * sizeof(float), mesh->num_vertices)
+                 : NULL;
+    uint32_t *indices =
+        geometry ? rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                           3 * sizeof(uint32_t), mesh->num_triangles)
+                 : NULL;
     if (!vertices || !indices) {
         if (geometry) rtcReleaseGeometry(geometry);
         r = meso_log_error(ctx, MESO_ERROR_INTERNAL, "vertex radiance: Embree could not start");

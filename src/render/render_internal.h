@@ -18,12 +18,12 @@
 
 typedef struct meso_frame {
     const meso_scene *scene;
-    int width, height;       /* the target's size in samples (pixels x supersampling factor) */
+    int width, height; /* the target's size in samples (pixels x supersampling factor) */
     meso_vec3 eye;
-    meso_vec3 forward;       /* unit camera axis: view depth of P = dot(P - eye, forward) */
-    meso_vec3 pixel_right;   /* world step of one sample to the right on the plane depth = 1 */
-    meso_vec3 pixel_down;    /* world step of one sample down on the plane depth = 1 */
-    meso_vec3 corner;        /* eye-relative direction to the top-left corner (0,0) at depth 1 */
+    meso_vec3 forward;     /* unit camera axis: view depth of P = dot(P - eye, forward) */
+    meso_vec3 pixel_right; /* world step of one sample to the right on the plane depth = 1 */
+    meso_vec3 pixel_down;  /* world step of one sample down on the plane depth = 1 */
+    meso_vec3 corner;      /* eye-relative direction to the top-left corner (0,0) at depth 1 */
     meso_mat4 view, projection, view_projection;
     float z_near, z_far;
     meso_progress *progress; /* NULL, or advanced by each tile's samples (width x height in all) */
@@ -53,11 +53,11 @@ typedef struct meso_fragment {
     meso_vec2 uv;                 /* interpolated, uv_scale applied */
     float depth;                  /* view depth of `position` */
     /* outputs, preset by the rasterizer */
-    meso_vec3 color;              /* linear RGB (preset 0) */
-    float out_depth;              /* preset to depth; a technique may replace it (depth
-                                     correction); it must not be smaller than `depth` except
-                                     on back faces of a both_faces technique */
-    bool discard;                 /* preset false; true: nothing is drawn (silhouettes) */
+    meso_vec3 color; /* linear RGB (preset 0) */
+    float out_depth; /* preset to depth; a technique may replace it (depth
+                        correction); it must not be smaller than `depth` except
+                        on back faces of a both_faces technique */
+    bool discard;    /* preset false; true: nothing is drawn (silhouettes) */
 } meso_fragment;
 
 /* ---- Techniques --------------------------------------------------------------------------- */

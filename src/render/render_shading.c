@@ -132,10 +132,10 @@ static void apply_normal_map(const meso_material *m, const meso_shade_batch *in,
 }
 
 /* colour = albedo map(uv) (ambient + sum_i c_i max(0, N.L_i) v_i) + sum_i spec c_i (N.H_i)^s v_i
- * (DESIGN.md); with an environment, ambient + E(N) / pi (render_environment.h), specular only where N.L_i > 0 and N.H_i > 0. */
+ * (DESIGN.md); with an environment, ambient + E(N) / pi (render_environment.h), specular only where
+ * N.L_i > 0 and N.H_i > 0. */
 void meso_shade_batch8(const meso_frame *frame, const meso_object *object,
-                       const meso_shade_batch *in, int lanes, v8f *out_r, v8f *out_g,
-                       v8f *out_b) {
+                       const meso_shade_batch *in, int lanes, v8f *out_r, v8f *out_g, v8f *out_b) {
     const meso_scene *scene = frame->scene;
     const meso_material *m = &object->material;
     v8f br = splat(m->albedo.x), bg = splat(m->albedo.y), bb = splat(m->albedo.z);

@@ -24,8 +24,7 @@ typedef struct meso_shade_batch {
  * bits; the other lanes of `in` must hold finite values (e.g. repeat lane 0), the other lanes
  * of out are undefined. Pure, thread-safe. */
 void meso_shade_batch8(const meso_frame *frame, const meso_object *object,
-                       const meso_shade_batch *in, int lanes, v8f *out_r, v8f *out_g,
-                       v8f *out_b);
+                       const meso_shade_batch *in, int lanes, v8f *out_r, v8f *out_g, v8f *out_b);
 
 /* visibility[i] = 1 in every lane for the scene's lights. */
 static inline void meso_shade_batch_all_visible(meso_shade_batch *in, const meso_frame *frame) {

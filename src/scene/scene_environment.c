@@ -6,8 +6,8 @@
 
 static meso_result parse_sky(const scene_parser *p, const cJSON *item, const scene_key *key,
                              meso_sky_desc *sky) {
-    static const char *const keys[] = {"zenith", "horizon",  "ground",       "gradient",
-                                       "sun",    "sun_color", "sun_size_deg", "width", NULL};
+    static const char *const keys[] = {"zenith",    "horizon",      "ground", "gradient", "sun",
+                                       "sun_color", "sun_size_deg", "width",  NULL};
     *sky = meso_sky_desc_defaults(NULL);
     double gradient = sky->gradient, sun_size = sky->sun_size_deg;
     long width = sky->width;
@@ -66,8 +66,7 @@ meso_result scene_parse_environment(const scene_parser *p, const cJSON *item, me
         if (r != MESO_OK) return scene_relog_at_key(p, &k, r);
     } else {
         scene_key k = scene_key_child(&key, "sky");
-        if (!cJSON_IsObject(sky))
-            return scene_error(p, MESO_ERROR_FORMAT, &k, "must be an object");
+        if (!cJSON_IsObject(sky)) return scene_error(p, MESO_ERROR_FORMAT, &k, "must be an object");
         meso_sky_desc desc;
         if ((r = parse_sky(p, sky, &k, &desc))) return r;
         r = meso_environment_create_sky(p->ctx, &desc, (float)intensity, &scene->environment);

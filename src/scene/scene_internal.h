@@ -12,8 +12,8 @@
 
 typedef struct scene_parser {
     meso_context *ctx;
-    const char *file;     /* the scene's name in messages */
-    const char *base_dir; /* relative paths resolve against it */
+    const char *file;          /* the scene's name in messages */
+    const char *base_dir;      /* relative paths resolve against it */
     uint64_t *memory_estimate; /* bytes the objects parsed so far need (the memory budget) */
 } scene_parser;
 

@@ -40,9 +40,9 @@ static meso_result parse_procedural_heightfield(const scene_parser *p, const cJS
     meso_heightfield_desc desc = {.wrap = wrap};
     if (!meso_heightfield_kind_from_name(name, &desc.kind)) {
         scene_key k = scene_key_child(key, "procedural");
-        return scene_error(p, MESO_ERROR_FORMAT, &k,
-                           "unknown procedural height field \"%s\" (bricks, bumps, weave, tiles, bark)",
-                           name);
+        return scene_error(
+            p, MESO_ERROR_FORMAT, &k,
+            "unknown procedural height field \"%s\" (bricks, bumps, weave, tiles, bark)", name);
     }
     long resolution = 0, rows = 0, columns = 0, seed = 0;
     float gap = 0.0f, bevel = 0.0f, roughness = 0.0f;
@@ -304,7 +304,8 @@ static meso_result parse_height_map_or_solid(const scene_parser *p, const cJSON 
             (r = scene_check_readable(p, &k, path)))
             return r;
         meso_mesh *tile = NULL;
-        if ((r = meso_mesh_load(p->ctx, path, &tile)) != MESO_OK) return scene_relog_at_key(p, &k, r);
+        if ((r = meso_mesh_load(p->ctx, path, &tile)) != MESO_OK)
+            return scene_relog_at_key(p, &k, r);
         r = meso_solid_create_from_triangles(p->ctx, tile->positions, tile->num_vertices,
                                              tile->indices, tile->num_triangles, path, 0,
                                              &m->solid);
@@ -418,8 +419,8 @@ static meso_result apply_mesh_material(const scene_parser *p, const cJSON *obj,
             char path[SCENE_PATH_MAX];
             const char *slash = strrchr(mesh_path, '/');
             int folder = slash ? (int)(slash - mesh_path) : 1;
-            int n = snprintf(path, sizeof path, "%.*s/%s", folder, slash ? mesh_path : ".",
-                             texture);
+            int n =
+                snprintf(path, sizeof path, "%.*s/%s", folder, slash ? mesh_path : ".", texture);
             scene_key k = scene_key_child(key, "shape");
             if (n < 0 || n >= (int)sizeof path)
                 return scene_error(p, MESO_ERROR_LIMIT, &k, "texture path too long");

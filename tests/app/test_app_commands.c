@@ -48,9 +48,9 @@ static void test_app_bench_prints_table_and_writes_json(void **state) {
     assert_non_null(strstr(out, "flat"));
     assert_non_null(strstr(out, "bump"));
     char *json = read_text(json_path);
-    static const char *const keys[] = {"\"machine\"", "\"threads\": 2",       "\"width\": 32",
+    static const char *const keys[] = {"\"machine\"",   "\"threads\": 2",         "\"width\": 32",
                                        "\"median_ms\"", "\"median_ms_1_thread\"", "\"scaling\"",
-                                       "\"fps\"",      "\"frames\": 2"};
+                                       "\"fps\"",       "\"frames\": 2"};
     for (size_t i = 0; i < sizeof(keys) / sizeof(keys[0]); i++)
         if (!strstr(json, keys[i])) fail_msg("bench.json lacks %s:\n%s", keys[i], json);
     free(json);
@@ -77,8 +77,8 @@ static void test_app_bench_profile_reports_cost_per_pixel(void **state) {
         if (!row) fail_msg("no profile row for %s:\n%s", techniques[t], out);
         double covered = 0.0, per_fragment = 0.0, ns = 0.0, cycles = 0.0;
         char steps[32] = "";
-        int fields = sscanf(row + strlen(key), "%lf %lf %lf %lf %31s", &covered, &per_fragment,
-                            &ns, &cycles, steps);
+        int fields = sscanf(row + strlen(key), "%lf %lf %lf %lf %31s", &covered, &per_fragment, &ns,
+                            &cycles, steps);
         assert_int_equal(fields, 5);
         if (!(covered > 0.0 && covered <= 64.0 * 48.0)) fail_msg("covered %g", covered);
         if (!(per_fragment >= 1.0)) fail_msg("fragments a pixel %g", per_fragment);
@@ -136,10 +136,13 @@ static void test_app_info_describes_scene_png_and_bake(void **state) {
     assert_non_null(strstr(out, "min 0.2500  max 0.2500"));
 
     float values[6] = {1, 2, 3, 4, 5, 6};
-    meso_bake_file bake = {.kind = "test", .kind_version = 3, .source_hash = 0xabcdef,
-                           .params_json = "{\"answer\": 42}", .num_arrays = 1};
-    bake.arrays[0] = (meso_bake_array){.name = "values", .type = MESO_BAKE_F32, .num_dims = 2,
-                                       .dims = {2, 3}, .data = values};
+    meso_bake_file bake = {.kind = "test",
+                           .kind_version = 3,
+                           .source_hash = 0xabcdef,
+                           .params_json = "{\"answer\": 42}",
+                           .num_arrays = 1};
+    bake.arrays[0] = (meso_bake_array){
+        .name = "values", .type = MESO_BAKE_F32, .num_dims = 2, .dims = {2, 3}, .data = values};
     const char *bake_path = test_path(test_temp_dir(), "test.mesobake");
     assert_int_equal(meso_bake_file_save(ctx, &bake, bake_path), MESO_OK);
     meso_context_destroy(ctx);

@@ -108,10 +108,11 @@ static void test_install_to_a_prefix_builds_the_readme_example(void **state) {
                              "add_executable(app ../app.c)\n"
                              "target_link_libraries(app PRIVATE meso::meso)\n";
     test_write_file(lists, cmake_text, strlen(cmake_text));
-    shell(dir, "cmake -S cmake-consumer -B cmake-build -DCMAKE_PREFIX_PATH=\"$PWD/prefix\" "
-               "-DCMAKE_C_COMPILER='" MESO_C_COMPILER "' -DCMAKE_C_FLAGS=\"" MESO_SANITIZE_FLAGS "\" && "
-               "cmake --build cmake-build && MESO_CACHE_DIR=off ./cmake-build/app && "
-               "test -s bricks.png");
+    shell(dir,
+          "cmake -S cmake-consumer -B cmake-build -DCMAKE_PREFIX_PATH=\"$PWD/prefix\" "
+          "-DCMAKE_C_COMPILER='" MESO_C_COMPILER "' -DCMAKE_C_FLAGS=\"" MESO_SANITIZE_FLAGS "\" && "
+          "cmake --build cmake-build && MESO_CACHE_DIR=off ./cmake-build/app && "
+          "test -s bricks.png");
 #if MESO_SHARED_BUILD
     shell(dir, "readelf -d cmake-build/app | grep -q 'NEEDED.*libmeso\\.so' && "
                "test -L prefix/lib/libmeso.so && "

@@ -248,7 +248,8 @@ static void test_view_knobs_name_real_options_within_range(void **state) {
         if (knobs->has_silhouettes)
             assert_non_null(meso_technique_find_option(technique, "silhouettes"));
         if (!knobs->main_option) continue;
-        const meso_technique_option *row = meso_technique_find_option(technique, knobs->main_option);
+        const meso_technique_option *row =
+            meso_technique_find_option(technique, knobs->main_option);
         if (!row) fail_msg("%s has no option %s", technique->name, knobs->main_option);
         assert_true(row->min <= knobs->main_min && knobs->main_max <= row->max);
         assert_true(knobs->main_default == row->default_value);

@@ -117,9 +117,8 @@ static void test_one_and_two_threads_bake_the_same_bytes(void **state) {
 static void test_bake_keeps_to_the_memory_budget(void **state) {
     (void)state;
     meso_context *tiny = NULL;
-    assert_int_equal(meso_context_create(&(meso_context_desc){.num_threads = 1,
-                                                              .memory_limit = 16u << 10},
-                                         &tiny),
+    assert_int_equal(meso_context_create(
+                         &(meso_context_desc){.num_threads = 1, .memory_limit = 16u << 10}, &tiny),
                      MESO_OK);
     meso_heightfield *hf = make_field(tiny, 40, 24, 0.7f);
     meso_horizon_map *map = NULL;

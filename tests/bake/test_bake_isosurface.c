@@ -146,13 +146,11 @@ static void test_isosurface_resolution_limits_name_the_field(void **state) {
     meso_context *ctx = test_context(1);
     meso_isosurface *iso = (meso_isosurface *)(uintptr_t)1;
     meso_isosurface_desc desc = {.resolution_u = 4, .resolution_v = 5000, .resolution_w = 4};
-    assert_int_equal(meso_bake_isosurface_function(ctx, ball, NULL, &desc, &iso),
-                     MESO_ERROR_LIMIT);
+    assert_int_equal(meso_bake_isosurface_function(ctx, ball, NULL, &desc, &iso), MESO_ERROR_LIMIT);
     assert_null(iso);
     assert_non_null(strstr(meso_context_last_error(ctx), "resolution_v"));
     desc = (meso_isosurface_desc){.resolution_u = 1000, .resolution_v = 1000, .resolution_w = 1000};
-    assert_int_equal(meso_bake_isosurface_function(ctx, ball, NULL, &desc, &iso),
-                     MESO_ERROR_LIMIT);
+    assert_int_equal(meso_bake_isosurface_function(ctx, ball, NULL, &desc, &iso), MESO_ERROR_LIMIT);
     assert_int_equal(meso_bake_isosurface(ctx, NULL, NULL, &iso), MESO_ERROR_INVALID_ARGUMENT);
     meso_isosurface_desc d = meso_isosurface_desc_defaults(NULL);
     assert_int_equal(d.resolution_u, 128);

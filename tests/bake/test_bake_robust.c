@@ -244,8 +244,13 @@ static void test_every_truncation_and_bit_flip_of_a_gdm_file_is_refused(void **s
     (void)state;
     meso_context *ctx = test_context(2);
     meso_heightfield *hf = make_bumps(8);
-    meso_gdm_desc desc = {.heightfield = hf, .width = 4, .layers = 3, .num_theta = 4,
-                          .num_phi = 2, .eigenmaps = 2, .keep_raw = true};
+    meso_gdm_desc desc = {.heightfield = hf,
+                          .width = 4,
+                          .layers = 3,
+                          .num_theta = 4,
+                          .num_phi = 2,
+                          .eigenmaps = 2,
+                          .keep_raw = true};
     meso_gdm *gdm = NULL;
     assert_int_equal(meso_bake_gdm(ctx, &desc, &gdm), MESO_OK);
     const char *path = test_path(test_temp_dir(), "gdm.mesobake");

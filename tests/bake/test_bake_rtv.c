@@ -10,7 +10,8 @@
 /* Uniform radiance 1 in every direction: only c_0 = sqrt(4 pi). */
 static void uniform_radiance(float out[3][MESO_SH_COUNT]) {
     for (int c = 0; c < 3; c++)
-        for (int k = 0; k < MESO_SH_COUNT; k++) out[c][k] = k == 0 ? sqrtf(4.0f * (float)M_PI) : 0.0f;
+        for (int k = 0; k < MESO_SH_COUNT; k++)
+            out[c][k] = k == 0 ? sqrtf(4.0f * (float)M_PI) : 0.0f;
 }
 
 static meso_heightfield *field(meso_context *ctx, int size, float (*h)(float u, float v)) {
@@ -33,7 +34,11 @@ static void test_rtv_flat_surface_is_the_cosine_lobe(void **state) {
     meso_context *ctx = test_context(2);
     meso_heightfield *hf = field(ctx, 16, flat);
     meso_rtv *rtv = NULL;
-    meso_rtv_desc desc = {.heightfield = hf, .aspect = 0.2f, .width = 4, .height = 4, .layers = 3,
+    meso_rtv_desc desc = {.heightfield = hf,
+                          .aspect = 0.2f,
+                          .width = 4,
+                          .height = 4,
+                          .layers = 3,
                           .directions = 1024};
     assert_int_equal(meso_bake_rtv(ctx, &desc, &rtv), MESO_OK);
     /* nothing shadows: T_i = 1/pi integral over the upper hemisphere of cos Y_i:
@@ -64,8 +69,13 @@ static void test_rtv_groove_is_shadowed_and_filled_by_interreflection(void **sta
     meso_heightfield *hf = field(ctx, 64, groove);
     float radiance[3][MESO_SH_COUNT], no_bounce[3], bounce[3], top[3];
     uniform_radiance(radiance);
-    meso_rtv_desc desc = {.heightfield = hf, .aspect = 0.5f, .width = 16, .height = 2,
-                          .layers = 3, .directions = 512, .albedo = -1.0f};
+    meso_rtv_desc desc = {.heightfield = hf,
+                          .aspect = 0.5f,
+                          .width = 16,
+                          .height = 2,
+                          .layers = 3,
+                          .directions = 512,
+                          .albedo = -1.0f};
     meso_rtv *direct = NULL, *bounced = NULL;
     assert_int_equal(meso_bake_rtv(ctx, &desc, &direct), MESO_OK);
     desc.albedo = 0.7f;
@@ -114,8 +124,8 @@ static void test_rtv_file_round_trip_and_corruption(void **state) {
     meso_context *ctx = test_context(2);
     meso_heightfield *hf = field(ctx, 32, groove);
     meso_rtv *rtv = NULL, *loaded = NULL;
-    meso_rtv_desc desc = {.heightfield = hf, .aspect = 0.5f, .width = 8, .height = 2, .layers = 3,
-                          .directions = 128};
+    meso_rtv_desc desc = {
+        .heightfield = hf, .aspect = 0.5f, .width = 8, .height = 2, .layers = 3, .directions = 128};
     assert_int_equal(meso_bake_rtv(ctx, &desc, &rtv), MESO_OK);
     const char *path = test_path(test_temp_dir(), "groove.mesobake");
     assert_int_equal(meso_rtv_save(ctx, rtv, path), MESO_OK);
@@ -153,16 +163,25 @@ static void test_rtv_file_round_trip_and_corruption(void **state) {
     assert_null(none);
     free(bytes);
     int32_t shape[5] = {9, 2, 3, 4, 8}; /* one voxel column more than the weights hold */
-    meso_bake_file wrong = {.kind = MESO_RTV_KIND, .kind_version = 1, .params_json = "{}",
-                            .num_arrays = 4};
-    wrong.arrays[0] = (meso_bake_array){.name = "shape", .type = MESO_BAKE_I32, .num_dims = 1,
-                                        .dims = {5}, .data = shape};
-    wrong.arrays[1] = (meso_bake_array){.name = "weights", .type = MESO_BAKE_F32, .num_dims = 3,
-                                        .dims = {MESO_SH_COUNT, 8 * 2 * 3, 4}, .data = rtv->weights};
-    wrong.arrays[2] = (meso_bake_array){.name = "eigen", .type = MESO_BAKE_F32, .num_dims = 3,
-                                        .dims = {MESO_SH_COUNT, 4, 32}, .data = rtv->eigen};
-    wrong.arrays[3] = (meso_bake_array){.name = "rmse", .type = MESO_BAKE_F32, .num_dims = 1,
-                                        .dims = {MESO_RTV_RMSE_COUNT}, .data = rtv->rmse};
+    meso_bake_file wrong = {
+        .kind = MESO_RTV_KIND, .kind_version = 1, .params_json = "{}", .num_arrays = 4};
+    wrong.arrays[0] = (meso_bake_array){
+        .name = "shape", .type = MESO_BAKE_I32, .num_dims = 1, .dims = {5}, .data = shape};
+    wrong.arrays[1] = (meso_bake_array){.name = "weights",
+                                        .type = MESO_BAKE_F32,
+                                        .num_dims = 3,
+                                        .dims = {MESO_SH_COUNT, 8 * 2 * 3, 4},
+                                        .data = rtv->weights};
+    wrong.arrays[2] = (meso_bake_array){.name = "eigen",
+                                        .type = MESO_BAKE_F32,
+                                        .num_dims = 3,
+                                        .dims = {MESO_SH_COUNT, 4, 32},
+                                        .data = rtv->eigen};
+    wrong.arrays[3] = (meso_bake_array){.name = "rmse",
+                                        .type = MESO_BAKE_F32,
+                                        .num_dims = 1,
+                                        .dims = {MESO_RTV_RMSE_COUNT},
+                                        .data = rtv->rmse};
     assert_int_equal(meso_bake_file_save(ctx, &wrong, bad), MESO_OK);
     assert_int_equal(meso_rtv_load(ctx, bad, &none), MESO_ERROR_FORMAT);
     if (!strstr(meso_context_last_error(ctx), "sizes do not agree"))
@@ -190,8 +209,12 @@ static void test_rtv_cache_returns_the_same_table(void **state) {
     /* an empty cache of its own, so the first call bakes */
     setenv("MESO_CACHE_DIR", test_temp_dir(), 1);
     meso_heightfield *hf = field(ctx, 16, groove);
-    meso_rtv_desc desc = {.heightfield = hf, .aspect = 0.3141f, .width = 4, .height = 2,
-                          .layers = 2, .directions = 64};
+    meso_rtv_desc desc = {.heightfield = hf,
+                          .aspect = 0.3141f,
+                          .width = 4,
+                          .height = 2,
+                          .layers = 2,
+                          .directions = 64};
     meso_rtv *baked = NULL, *cached = NULL;
     assert_int_equal(meso_rtv_bake_cached(ctx, &desc, &baked), MESO_OK);
     assert_int_equal(meso_rtv_bake_cached(ctx, &desc, &cached), MESO_OK);
@@ -220,11 +243,13 @@ static void test_rtv_bad_descs_are_refused(void **state) {
     assert_null(rtv);
     assert_int_equal(meso_bake_rtv(ctx, &(meso_rtv_desc){.aspect = 1}, &rtv),
                      MESO_ERROR_INVALID_ARGUMENT);
-    assert_int_equal(meso_bake_rtv(ctx,
-                                   &(meso_rtv_desc){.heightfield = hf, .aspect = 1, .width = 4096,
-                                                    .height = 4096, .layers = 4},
-                                   &rtv),
-                     MESO_ERROR_LIMIT);
+    assert_int_equal(
+        meso_bake_rtv(
+            ctx,
+            &(meso_rtv_desc){
+                .heightfield = hf, .aspect = 1, .width = 4096, .height = 4096, .layers = 4},
+            &rtv),
+        MESO_ERROR_LIMIT);
     meso_heightfield_destroy(hf);
     meso_context_destroy(ctx);
 }

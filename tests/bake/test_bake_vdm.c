@@ -174,7 +174,8 @@ static void test_vdm_all_eigenfunctions_reproduce_the_table(void **state) {
                           .keep_raw = true,
                           .depth = 0.08f,
                           .vdm_eigenfunctions = 36,
-                          .mvm_eigenfunctions = 36, .float_weights = true};
+                          .mvm_eigenfunctions = 36,
+                          .float_weights = true};
     meso_vdm *vdm = NULL;
     assert_int_equal(meso_bake_vdm(ctx, &desc, &vdm), MESO_OK);
     meso_vdm_view view = meso_vdm_get_view(vdm);
@@ -352,12 +353,16 @@ static void test_vdm_cached_bake_is_reused(void **state) {
  * with no room to hold its table between the SVD's passes casts it twice, to the same map. */
 static void test_vdm_bake_keeps_to_the_memory_budget(void **state) {
     meso_heightfield *hf = make_bumps(16);
-    meso_vdm_desc desc = {.heightfield = hf, .width = 16, .num_theta = 8, .num_phi = 4,
-                          .num_curvatures = 4, .vdm_eigenfunctions = 4, .mvm_eigenfunctions = 2};
+    meso_vdm_desc desc = {.heightfield = hf,
+                          .width = 16,
+                          .num_theta = 8,
+                          .num_phi = 4,
+                          .num_curvatures = 4,
+                          .vdm_eigenfunctions = 4,
+                          .mvm_eigenfunctions = 2};
     meso_context *tiny = NULL;
-    assert_int_equal(meso_context_create(&(meso_context_desc){.num_threads = 1,
-                                                              .memory_limit = 1u << 20},
-                                         &tiny),
+    assert_int_equal(meso_context_create(
+                         &(meso_context_desc){.num_threads = 1, .memory_limit = 1u << 20}, &tiny),
                      MESO_OK);
     meso_vdm *vdm = (meso_vdm *)1;
     assert_int_equal(meso_bake_vdm(tiny, &desc, &vdm), MESO_ERROR_LIMIT);
@@ -366,16 +371,14 @@ static void test_vdm_bake_keeps_to_the_memory_budget(void **state) {
     meso_context_destroy(tiny);
     /* the essentials (3.6 MB, mostly the SVD's blocks) fit; the 147 KB table does not */
     meso_context *tight = NULL, *roomy = test_context(1);
-    assert_int_equal(meso_context_create(&(meso_context_desc){.num_threads = 1,
-                                                              .memory_limit = 3650000},
-                                         &tight),
+    assert_int_equal(meso_context_create(
+                         &(meso_context_desc){.num_threads = 1, .memory_limit = 3650000}, &tight),
                      MESO_OK);
     meso_vdm *streamed = NULL, *held = NULL;
     assert_int_equal(meso_bake_vdm(tight, &desc, &streamed), MESO_OK);
     assert_int_equal(meso_bake_vdm(roomy, &desc, &held), MESO_OK);
     meso_vdm_view a = meso_vdm_get_view(streamed), b = meso_vdm_get_view(held);
-    assert_memory_equal(a.weights, b.weights,
-                        sizeof(float) * 16 * 16 * 4 * (size_t)a.num_weights);
+    assert_memory_equal(a.weights, b.weights, sizeof(float) * 16 * 16 * 4 * (size_t)a.num_weights);
     meso_vdm_destroy(streamed);
     meso_vdm_destroy(held);
     meso_context_destroy(tight);

@@ -15,7 +15,8 @@ static void test_result_strings_cover_every_result(void **state) {
 static void test_log_error_returns_the_code_and_keeps_the_message(void **state) {
     meso_context *ctx = test_context(1);
     assert_string_equal(meso_context_last_error(ctx), "");
-    assert_int_equal(meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: bad %d", "a.json", 3), MESO_ERROR_FORMAT);
+    assert_int_equal(meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: bad %d", "a.json", 3),
+                     MESO_ERROR_FORMAT);
     assert_string_equal(meso_context_last_error(ctx), "a.json: bad 3");
     meso_log_warning(ctx, "w %d", 1);
     assert_string_equal(test_last_warning(), "w 1");
@@ -23,7 +24,9 @@ static void test_log_error_returns_the_code_and_keeps_the_message(void **state) 
     meso_context_destroy(ctx);
 }
 
-typedef struct squares { uint64_t *out; } squares;
+typedef struct squares {
+    uint64_t *out;
+} squares;
 static void square_job(void *user, size_t job, int thread) {
     squares *s = user;
     s->out[job] = (uint64_t)job * job + (uint64_t)thread * 0; /* thread index must not matter */
@@ -78,8 +81,8 @@ static bool cancel_at_half(void *user, const char *label, double fraction) {
 static void test_progress_reports_and_cancels(void **state) {
     double seen = -1.0;
     meso_context *ctx = NULL;
-    meso_context_desc desc = {.progress = MESO_PROGRESS_NEVER, .on_progress = cancel_at_half,
-                              .progress_user = &seen};
+    meso_context_desc desc = {
+        .progress = MESO_PROGRESS_NEVER, .on_progress = cancel_at_half, .progress_user = &seen};
     assert_int_equal(meso_context_create(&desc, &ctx), MESO_OK);
     meso_progress *p = meso_progress_begin(ctx, "work", 10);
     assert_non_null(p);
@@ -89,7 +92,8 @@ static void test_progress_reports_and_cancels(void **state) {
         if (!cancelled) {
             /* the callback is rate-limited; wait past the redraw interval */
             double until = meso_time_seconds() + 0.11;
-            while (meso_time_seconds() < until) {}
+            while (meso_time_seconds() < until) {
+            }
         }
     }
     meso_progress_end(p);

@@ -40,7 +40,8 @@ static void test_environment_hdr_round_trip(void **state) {
     assert_int_equal(meso_environment_create_sky(ctx, &(meso_sky_desc){.width = 64}, 1.0f, &unit),
                      MESO_OK);
     for (int k = 0; k < MESO_SH_COUNT; k++)
-        assert_float_equal(sky->sh[2][k], 2.0 * unit->sh[2][k], (float)(1e-5 * fabs(sky->sh[2][0])));
+        assert_float_equal(sky->sh[2][k], 2.0 * unit->sh[2][k],
+                           (float)(1e-5 * fabs(sky->sh[2][0])));
     meso_environment_destroy(unit);
     meso_environment_destroy(loaded);
     meso_environment_destroy(sky);
@@ -105,7 +106,8 @@ static void test_environment_bad_files_are_refused(void **state) {
     /* and one whose run-length data holds counts of 0 (crafted): the bytes after the header of
      * a 16-wide scanline, "2 2 0 16", then zeros up to the end */
     char crafted[256];
-    int start = snprintf(crafted, sizeof crafted, "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 16\n");
+    int start =
+        snprintf(crafted, sizeof crafted, "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 16\n");
     memset(crafted + start, 0, sizeof crafted - (size_t)start);
     crafted[start] = 2;
     crafted[start + 1] = 2;
@@ -118,9 +120,8 @@ static void test_environment_bad_files_are_refused(void **state) {
 
     assert_int_equal(meso_environment_load(ctx, test_path(dir, "missing.hdr"), 1.0f, &env),
                      MESO_ERROR_IO);
-    assert_int_equal(
-        meso_environment_load(ctx, MESO_SOURCE_DIR "/examples/sky.hdr", -1.0f, &env),
-        MESO_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(meso_environment_load(ctx, MESO_SOURCE_DIR "/examples/sky.hdr", -1.0f, &env),
+                     MESO_ERROR_INVALID_ARGUMENT);
     assert_int_equal(meso_environment_create_sky(ctx, &(meso_sky_desc){.width = 7}, 1.0f, &env),
                      MESO_ERROR_INVALID_ARGUMENT);
     assert_string_equal(meso_context_last_error(ctx),

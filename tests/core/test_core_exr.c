@@ -10,9 +10,9 @@
 /* A value, its neighbours in the image differ: a ramp with HDR, negative and tiny values. */
 static float test_value(int x, int y, int c) {
     float base = (float)(x * 7 + y * 13 + c * 29) / 97.0f;
-    if ((x + y) % 5 == 0) return base * 40.0f;      /* above 1: not clamped */
-    if ((x + y) % 7 == 0) return -base;              /* negative */
-    if ((x + y) % 11 == 0) return base * 1e-5f;      /* near half's subnormals */
+    if ((x + y) % 5 == 0) return base * 40.0f;  /* above 1: not clamped */
+    if ((x + y) % 7 == 0) return -base;         /* negative */
+    if ((x + y) % 11 == 0) return base * 1e-5f; /* near half's subnormals */
     return base;
 }
 

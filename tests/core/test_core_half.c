@@ -41,16 +41,16 @@ static void test_known_values_round_to_nearest_even(void **state) {
     (void)state;
     assert_int_equal(meso_half_from_float(1.0f), 0x3c00);
     assert_int_equal(meso_half_from_float(-2.0f), 0xc000);
-    assert_int_equal(meso_half_from_float(65504.0f), 0x7bff);     /* largest half */
-    assert_int_equal(meso_half_from_float(65519.996f), 0x7bff);   /* below the tie */
-    assert_int_equal(meso_half_from_float(65520.0f), 0x7c00);     /* tie: to even = Inf */
+    assert_int_equal(meso_half_from_float(65504.0f), 0x7bff);   /* largest half */
+    assert_int_equal(meso_half_from_float(65519.996f), 0x7bff); /* below the tie */
+    assert_int_equal(meso_half_from_float(65520.0f), 0x7c00);   /* tie: to even = Inf */
     assert_int_equal(meso_half_from_float(1e30f), 0x7c00);
     assert_int_equal(meso_half_from_float(-INFINITY), 0xfc00);
-    assert_int_equal(meso_half_from_float(0x1p-24f), 0x0001);     /* smallest subnormal */
-    assert_int_equal(meso_half_from_float(0x1p-25f), 0x0000);     /* tie: to even = 0 */
+    assert_int_equal(meso_half_from_float(0x1p-24f), 0x0001); /* smallest subnormal */
+    assert_int_equal(meso_half_from_float(0x1p-25f), 0x0000); /* tie: to even = 0 */
     assert_int_equal(meso_half_from_float(0x1.8p-25f), 0x0001);
-    assert_int_equal(meso_half_from_float(0x1.8p-24f), 0x0002);   /* tie 1.5: to even 2 */
-    assert_int_equal(meso_half_from_float(0x1p-14f), 0x0400);     /* smallest normal */
+    assert_int_equal(meso_half_from_float(0x1.8p-24f), 0x0002);      /* tie 1.5: to even 2 */
+    assert_int_equal(meso_half_from_float(0x1p-14f), 0x0400);        /* smallest normal */
     assert_int_equal(meso_half_from_float(1.0f + 0x1p-11f), 0x3c00); /* tie: to even */
     assert_int_equal(meso_half_from_float(1.0f + 0x1.8p-11f), 0x3c01);
     assert_true(isnan(meso_half_to_float(meso_half_from_float(NAN))));
@@ -109,8 +109,8 @@ static void test_floats_convert_as_the_cpu_and_compiler_do(void **state) {
     for (uint64_t bits = 0; bits <= 0xffffffffu; bits += 4099) check_float((uint32_t)bits);
     /* the ties between two halves and their float neighbours, for every half */
     for (uint32_t h = 0; h < 0x7c00; h++) {
-        uint32_t tie = float_bits((meso_half_to_float((uint16_t)h) +
-                                   meso_half_to_float((uint16_t)(h + 1))) * 0.5f);
+        uint32_t tie = float_bits(
+            (meso_half_to_float((uint16_t)h) + meso_half_to_float((uint16_t)(h + 1))) * 0.5f);
         for (uint32_t d = 0; d < 3; d++) {
             check_float(tie - 1 + d);
             check_float((tie - 1 + d) | 0x80000000u);

@@ -139,7 +139,8 @@ static void test_image_create_checks_limits(void **state) {
     meso_context *ctx = test_context(1);
     meso_image *image = NULL;
     assert_int_equal(meso_image_create(ctx, 0, 4, 3, &image), MESO_ERROR_INVALID_ARGUMENT);
-    assert_int_equal(meso_image_create(ctx, MESO_IMAGE_MAX_SIDE + 1, 4, 3, &image), MESO_ERROR_LIMIT);
+    assert_int_equal(meso_image_create(ctx, MESO_IMAGE_MAX_SIDE + 1, 4, 3, &image),
+                     MESO_ERROR_LIMIT);
     assert_int_equal(meso_image_create(ctx, 16384, 16384, 1, &image), MESO_ERROR_LIMIT);
     assert_null(image);
     meso_context_destroy(ctx);

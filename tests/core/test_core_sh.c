@@ -21,8 +21,8 @@ static meso_environment *environment_of(meso_context *ctx, int width,
     assert_int_equal(meso_image_create(ctx, width, height, 3, &image), MESO_OK);
     for (int j = 0; j < height; j++)
         for (int i = 0; i < width; i++) {
-            meso_vec3 d = meso_environment_direction((i + 0.5f) / (float)width,
-                                                     (j + 0.5f) / (float)height);
+            meso_vec3 d =
+                meso_environment_direction((i + 0.5f) / (float)width, (j + 0.5f) / (float)height);
             float v = fn(d, user);
             float *p = meso_image_at(image, i, j);
             p[0] = p[1] = p[2] = v;

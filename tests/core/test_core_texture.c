@@ -22,10 +22,14 @@ static void test_texture_texel_centres_follow_opengl(void **state) {
     meso_image_at(image, 1, 1)[0] = 0.4f;
     meso_texture *t = NULL;
     assert_int_equal(meso_texture_create(ctx, image, MESO_WRAP_CLAMP, false, &t), MESO_OK);
-    assert_float_equal(meso_texture_sample(t, (meso_vec2){0.25f, 0.75f}, 0, MESO_FILTER_BILINEAR).x, 0.1f, 1e-6);
-    assert_float_equal(meso_texture_sample(t, (meso_vec2){0.75f, 0.75f}, 0, MESO_FILTER_BILINEAR).x, 0.2f, 1e-6);
-    assert_float_equal(meso_texture_sample(t, (meso_vec2){0.25f, 0.25f}, 0, MESO_FILTER_BILINEAR).x, 0.3f, 1e-6);
-    assert_float_equal(meso_texture_sample(t, (meso_vec2){0.5f, 0.5f}, 0, MESO_FILTER_BILINEAR).x, 0.25f, 1e-6);
+    assert_float_equal(meso_texture_sample(t, (meso_vec2){0.25f, 0.75f}, 0, MESO_FILTER_BILINEAR).x,
+                       0.1f, 1e-6);
+    assert_float_equal(meso_texture_sample(t, (meso_vec2){0.75f, 0.75f}, 0, MESO_FILTER_BILINEAR).x,
+                       0.2f, 1e-6);
+    assert_float_equal(meso_texture_sample(t, (meso_vec2){0.25f, 0.25f}, 0, MESO_FILTER_BILINEAR).x,
+                       0.3f, 1e-6);
+    assert_float_equal(meso_texture_sample(t, (meso_vec2){0.5f, 0.5f}, 0, MESO_FILTER_BILINEAR).x,
+                       0.25f, 1e-6);
     /* grey spreads to RGB, alpha is 1 */
     meso_vec4 s = meso_texture_sample(t, (meso_vec2){0.75f, 0.25f}, 0, MESO_FILTER_NEAREST);
     assert_float_equal(s.y, 0.4f, 1e-6);
@@ -45,7 +49,8 @@ static void test_texture_repeat_and_clamp_differ_at_the_border(void **state) {
     assert_float_equal(meso_texture_sample(clamp, border, 0, MESO_FILTER_BILINEAR).x, 0.0f, 1e-6);
     /* repeat: one tile over gives the same value */
     meso_vec2 a = {0.3f, 0.6f}, b = {1.3f, -0.4f};
-    assert_float_equal(meso_texture_sample(repeat, a, 0, 0).x, meso_texture_sample(repeat, b, 0, 0).x, 1e-5);
+    assert_float_equal(meso_texture_sample(repeat, a, 0, 0).x,
+                       meso_texture_sample(repeat, b, 0, 0).x, 1e-5);
     meso_texture_destroy(repeat);
     meso_texture_destroy(clamp);
     meso_context_destroy(ctx);
@@ -58,9 +63,15 @@ static void test_texture_mip_pyramid_averages(void **state) {
     assert_int_equal(t->levels[2]->width, 1);
     assert_float_equal(t->levels[1]->pixels[0], 0.5f, 1e-6);
     /* trilinear at lod 2 is the mean; at lod 0 the checker itself */
-    assert_float_equal(meso_texture_sample(t, (meso_vec2){0.125f, 0.875f}, 2.0f, MESO_FILTER_TRILINEAR).x, 0.5f, 1e-6);
-    assert_float_equal(meso_texture_sample(t, (meso_vec2){0.125f, 0.875f}, 0.0f, MESO_FILTER_TRILINEAR).x, 0.0f, 1e-6);
-    assert_float_equal(meso_texture_sample(t, (meso_vec2){0.125f, 0.875f}, 0.5f, MESO_FILTER_TRILINEAR).x, 0.25f, 1e-6);
+    assert_float_equal(
+        meso_texture_sample(t, (meso_vec2){0.125f, 0.875f}, 2.0f, MESO_FILTER_TRILINEAR).x, 0.5f,
+        1e-6);
+    assert_float_equal(
+        meso_texture_sample(t, (meso_vec2){0.125f, 0.875f}, 0.0f, MESO_FILTER_TRILINEAR).x, 0.0f,
+        1e-6);
+    assert_float_equal(
+        meso_texture_sample(t, (meso_vec2){0.125f, 0.875f}, 0.5f, MESO_FILTER_TRILINEAR).x, 0.25f,
+        1e-6);
     meso_texture_destroy(t);
     meso_context_destroy(ctx);
 }

@@ -256,7 +256,8 @@ static void test_png_height_map_round_trips(void **state) {
     assert_int_equal(hf->wrap, MESO_WRAP_CLAMP);
     for (int j = 0; j < 20; j++)
         for (int i = 0; i < 40; i++)
-            assert_float_equal(texel(hf, i, j), *meso_image_at(image, i, j), (float)(1.0 / 65535.0));
+            assert_float_equal(texel(hf, i, j), *meso_image_at(image, i, j),
+                               (float)(1.0 / 65535.0));
     meso_heightfield_destroy(hf);
     meso_image_destroy(image);
 

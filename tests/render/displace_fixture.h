@@ -41,8 +41,8 @@ static void fixture_heights(fixture *f, int size, fixture_field kind, float valu
             }
             f->heights[(size_t)j * (size_t)size + (size_t)i] = h;
         }
-    f->heightfield = (meso_heightfield){.width = size, .height = size, .heights = f->heights,
-                                        .wrap = MESO_WRAP_REPEAT};
+    f->heightfield = (meso_heightfield){
+        .width = size, .height = size, .heights = f->heights, .wrap = MESO_WRAP_REPEAT};
 }
 
 static void fixture_alloc_frames(fixture *f) {
@@ -55,9 +55,9 @@ static void fixture_alloc_frames(fixture *f) {
 /* The built-in plane's parametrisation (DESIGN.md) on a cells x cells grid, side 2. */
 static void fixture_plane(fixture *f, int cells) {
     size_t side = (size_t)cells + 1;
-    assert_int_equal(meso_mesh_create(f->ctx, side * side, (size_t)cells * (size_t)cells * 2, true,
-                                      &f->mesh),
-                     MESO_OK);
+    assert_int_equal(
+        meso_mesh_create(f->ctx, side * side, (size_t)cells * (size_t)cells * 2, true, &f->mesh),
+        MESO_OK);
     fixture_alloc_frames(f);
     for (size_t j = 0; j < side; j++)
         for (size_t i = 0; i < side; i++) {
@@ -93,7 +93,8 @@ static void fixture_torus(fixture *f, int nu, int nv) {
             size_t k = j * su + i;
             m->uvs[k] = (meso_vec2){2.0f * (float)i / (float)nu, (float)j / (float)nv};
             if (i == (size_t)nu || j == (size_t)nv) continue; /* copied below */
-            float a = 2.0f * MESO_PI * (float)i / (float)nu, b = 2.0f * MESO_PI * (float)j / (float)nv;
+            float a = 2.0f * MESO_PI * (float)i / (float)nu,
+                  b = 2.0f * MESO_PI * (float)j / (float)nv;
             meso_vec3 ring = {cosf(a), 0.0f, -sinf(a)};
             meso_vec3 n = {cosf(b) * ring.x, sinf(b), cosf(b) * ring.z};
             m->positions[k] = meso_vec3_add(ring, meso_vec3_scale(n, 0.4f));
@@ -160,8 +161,10 @@ static void fixture_sphere(fixture *f, int subdivisions) {
                 mid[k] = edge_m[e];
             }
             const uint32_t *v = &tri[t * 3];
-            const uint32_t kids[4][3] = {{v[0], mid[0], mid[2]}, {mid[0], v[1], mid[1]},
-                                         {mid[2], mid[1], v[2]}, {mid[0], mid[1], mid[2]}};
+            const uint32_t kids[4][3] = {{v[0], mid[0], mid[2]},
+                                         {mid[0], v[1], mid[1]},
+                                         {mid[2], mid[1], v[2]},
+                                         {mid[0], mid[1], mid[2]}};
             for (int c = 0; c < 4; c++)
                 for (int k = 0; k < 3; k++) next[count++] = kids[c][k];
         }
@@ -190,9 +193,10 @@ static void fixture_init(fixture *f, int threads) {
     f->scene.camera = (meso_camera){{0.0f, 1.5f, 3.5f}, {0, 0, 0}, {0, 1, 0}, 40.0f};
     f->scene.ambient = (meso_vec3){0.1f, 0.1f, 0.1f};
     f->scene.num_lights = 1;
-    f->scene.lights[0] = (meso_light){.type = MESO_LIGHT_DIRECTIONAL,
-                                      .direction = meso_vec3_normalize((meso_vec3){0.5f, 0.7f, 0.3f}),
-                                      .color = {1, 1, 1}};
+    f->scene.lights[0] =
+        (meso_light){.type = MESO_LIGHT_DIRECTIONAL,
+                     .direction = meso_vec3_normalize((meso_vec3){0.5f, 0.7f, 0.3f}),
+                     .color = {1, 1, 1}};
     f->scene.objects = &f->object;
     f->scene.num_objects = 1;
     snprintf(f->object.name, sizeof(f->object.name), "objects[0]");

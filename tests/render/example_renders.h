@@ -9,11 +9,10 @@
 
 /* Small bakes for the techniques that bake, keyed by technique as --set passes them. */
 static const meso_option example_small_bakes[] = {
-    {"vdm", "resolution", 32},         {"vdm", "num_theta", 16},
-    {"vdm", "num_curvatures", 4},      {"relief_layers", "size", 64},
-    {"gdm", "resolution", 16},         {"gdm", "layers", 8},
-    {"gdm", "num_theta", 8},           {"gdm", "num_phi", 8},
-    {"gdm", "gi_resolution", 16},      {"gdm", "gi_layers", 4},
+    {"vdm", "resolution", 32},     {"vdm", "num_theta", 16},  {"vdm", "num_curvatures", 4},
+    {"relief_layers", "size", 64}, {"gdm", "resolution", 16}, {"gdm", "layers", 8},
+    {"gdm", "num_theta", 8},       {"gdm", "num_phi", 8},     {"gdm", "gi_resolution", 16},
+    {"gdm", "gi_layers", 4},
 };
 
 /* examples/<name>.json, its image made side x side. */
@@ -32,11 +31,11 @@ static inline meso_scene *example_scene_load(meso_context *ctx, const char *name
 static inline meso_framebuffer *example_render(const meso_scene *scene, const char *technique,
                                                int threads) {
     meso_context *ctx = test_context(threads);
-    meso_render_desc desc = {
-        .technique = technique,
-        .fallback = true,
-        .options = example_small_bakes,
-        .num_options = (int)(sizeof example_small_bakes / sizeof example_small_bakes[0])};
+    meso_render_desc desc = {.technique = technique,
+                             .fallback = true,
+                             .options = example_small_bakes,
+                             .num_options =
+                                 (int)(sizeof example_small_bakes / sizeof example_small_bakes[0])};
     meso_framebuffer *fb = NULL;
     if (meso_render_scene(ctx, scene, &desc, &fb) != MESO_OK)
         fail_msg("%s with %s, %d threads (%s techniques): %s", scene->path, technique, threads,

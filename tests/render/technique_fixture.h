@@ -91,5 +91,4 @@ static meso_heightfield *field(void *unused, int width, int height, float (*h)(i
     return hf;
 }
 
-
 #endif

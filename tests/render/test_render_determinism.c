@@ -9,8 +9,8 @@
 #include "example_renders.h"
 
 /* The examples as shipped in examples/ (the effect scenes there are bricks-plane re-lit). */
-static const char *const examples[] = {"bricks-plane",    "bricks-teapot", "bumps-sphere",
-                                       "weave-plane",     "weave-torus",   "chainmail-plane",
+static const char *const examples[] = {"bricks-plane",   "bricks-teapot", "bumps-sphere",
+                                       "weave-plane",    "weave-torus",   "chainmail-plane",
                                        "teapot-impostor"};
 
 static void test_every_example_and_technique_is_identical_for_1_2_and_7_threads(void **state) {
@@ -32,8 +32,8 @@ static void test_every_example_and_technique_is_identical_for_1_2_and_7_threads(
                 meso_framebuffer *many = example_render(scene, technique->name, threads);
                 if (memcmp(one->color, many->color, bytes) != 0 ||
                     memcmp(one->depth, many->depth, bytes / 3) != 0)
-                    fail_msg("%s with %s: 1 and %d threads differ", examples[e],
-                             technique->name, threads);
+                    fail_msg("%s with %s: 1 and %d threads differ", examples[e], technique->name,
+                             threads);
                 meso_framebuffer_destroy(many);
                 compared++;
             }

@@ -8,8 +8,11 @@
 #include "test_util.h"
 
 static meso_environment *uniform_sky(meso_context *ctx) {
-    meso_sky_desc sky = {.zenith = {1, 1, 1}, .horizon = {1, 1, 1}, .ground = {1, 1, 1},
-                         .no_sun = true, .width = 64};
+    meso_sky_desc sky = {.zenith = {1, 1, 1},
+                         .horizon = {1, 1, 1},
+                         .ground = {1, 1, 1},
+                         .no_sun = true,
+                         .width = 64};
     meso_environment *env = NULL;
     assert_int_equal(meso_environment_create_sky(ctx, &sky, 1.0f, &env), MESO_OK);
     return env;
@@ -101,8 +104,8 @@ static void test_gi_bad_arguments_are_refused(void **state) {
                      MESO_ERROR_INVALID_ARGUMENT);
     assert_null(radiance);
     meso_environment *env = uniform_sky(ctx);
-    assert_int_equal(meso_gi_vertex_radiance(ctx, plane, env, &(meso_gi_vertex_desc){.directions = 8},
-                                             &radiance),
+    assert_int_equal(meso_gi_vertex_radiance(ctx, plane, env,
+                                             &(meso_gi_vertex_desc){.directions = 8}, &radiance),
                      MESO_ERROR_INVALID_ARGUMENT);
     assert_string_equal(meso_context_last_error(ctx),
                         "vertex radiance: directions: 8 is not in [16, 65536]");

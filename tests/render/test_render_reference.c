@@ -117,11 +117,11 @@ static float height_half(float u, float v) { return 0.5f; }
 static void test_reference_constant_one_renders_like_flat(void **state) {
     meso_context *ctx = test_context(2);
     char json[2048];
-    meso_scene *scene = parse(ctx, plane_scene(json, sizeof json, 96, 72, "[0.3, 1.4, 2.4]",
-                                               "[0, 0, 0]",
-                                               "{\"height_map\": {\"procedural\": \"bricks\","
-                                               " \"resolution\": 32}, \"depth\": 0.2}",
-                                               NULL));
+    meso_scene *scene =
+        parse(ctx, plane_scene(json, sizeof json, 96, 72, "[0.3, 1.4, 2.4]", "[0, 0, 0]",
+                               "{\"height_map\": {\"procedural\": \"bricks\","
+                               " \"resolution\": 32}, \"depth\": 0.2}",
+                               NULL));
     set_heights(ctx, scene, 32, 32, height_one);
     target ref = trace(ctx, scene, &texel_rule_only);
     meso_framebuffer *fb = NULL;
@@ -141,15 +141,15 @@ static void test_reference_constant_one_renders_like_flat(void **state) {
 static void test_reference_zero_height_is_the_mesh_offset_by_depth(void **state) {
     meso_context *ctx = test_context(2);
     char json[2048];
-    meso_scene *displaced = parse(
-        ctx, plane_scene(json, sizeof json, 96, 72, "[0.3, 1.4, 2.4]", "[0, 0, 0]",
-                         "{\"height_map\": {\"procedural\": \"bricks\", \"resolution\": 16},"
-                         " \"depth\": 0.25}",
-                         NULL));
+    meso_scene *displaced =
+        parse(ctx, plane_scene(json, sizeof json, 96, 72, "[0.3, 1.4, 2.4]", "[0, 0, 0]",
+                               "{\"height_map\": {\"procedural\": \"bricks\", \"resolution\": 16},"
+                               " \"depth\": 0.25}",
+                               NULL));
     set_heights(ctx, displaced, 16, 16, height_zero);
-    meso_scene *moved = parse(ctx, plane_scene(json, sizeof json, 96, 72, "[0.3, 1.4, 2.4]",
-                                               "[0, 0, 0]", NULL,
-                                               ", \"transform\": {\"translate\": [0, -0.25, 0]}"));
+    meso_scene *moved =
+        parse(ctx, plane_scene(json, sizeof json, 96, 72, "[0.3, 1.4, 2.4]", "[0, 0, 0]", NULL,
+                               ", \"transform\": {\"translate\": [0, -0.25, 0]}"));
     target a = trace(ctx, displaced, &texel_rule_only);
     target b = trace(ctx, moved, &texel_rule_only);
     assert_true(assert_same_interior(&a, &b, 2e-5f, 1e-5f) > 1000);
@@ -170,8 +170,8 @@ static void test_reference_v_groove_hits_match_the_analytic_intersection(void **
     snprintf(ms, sizeof ms,
              "{\"height_map\": {\"procedural\": \"bricks\", \"resolution\": 64}, \"depth\": %g}",
              depth);
-    meso_scene *scene = parse(ctx, plane_scene(json, sizeof json, 80, 80, "[0.2, 1.5, 1.6]",
-                                               "[0, -0.1, 0]", ms, NULL));
+    meso_scene *scene = parse(
+        ctx, plane_scene(json, sizeof json, 80, 80, "[0.2, 1.5, 1.6]", "[0, -0.1, 0]", ms, NULL));
     set_heights(ctx, scene, 64, 64, height_v_groove);
     target t = trace(ctx, scene, &texel_rule_only);
     meso_frame frame;
@@ -226,12 +226,12 @@ static void test_reference_solid_slab_renders_like_height_half(void **state) {
     char json[2048];
     meso_scene *solid = parse(ctx, plane_scene(json, sizeof json, 96, 72, "[0.3, 1.4, 2.4]",
                                                "[0, 0, 0]", solid_ms, NULL));
-    meso_scene *half = parse(ctx, plane_scene(json, sizeof json, 96, 72, "[0.3, 1.4, 2.4]",
-                                              "[0, 0, 0]", half_ms, NULL));
+    meso_scene *half = parse(
+        ctx, plane_scene(json, sizeof json, 96, 72, "[0.3, 1.4, 2.4]", "[0, 0, 0]", half_ms, NULL));
     set_heights(ctx, half, 8, 8, height_half);
-    meso_reference_desc desc = {.solid_field = slab_field,
-                                .isosurface = {.resolution_u = 16, .resolution_v = 16,
-                                               .resolution_w = 8}};
+    meso_reference_desc desc = {
+        .solid_field = slab_field,
+        .isosurface = {.resolution_u = 16, .resolution_v = 16, .resolution_w = 8}};
     target a = trace(ctx, solid, &desc);
     target b = trace(ctx, half, &texel_rule_only);
     assert_true(assert_same_interior(&a, &b, 1e-4f, 1e-5f) > 1000);
@@ -247,8 +247,8 @@ static void test_reference_solid_slab_renders_like_height_half(void **state) {
 static void test_reference_rays_grazing_a_shared_prism_edge_never_leak(void **state) {
     meso_context *ctx = test_context(2);
     char json[2048];
-    meso_scene *probe = parse(ctx, plane_scene(json, sizeof json, 8, 8, "[0, 2, 2]", "[0, 0, 0]",
-                                               solid_ms, NULL));
+    meso_scene *probe =
+        parse(ctx, plane_scene(json, sizeof json, 8, 8, "[0, 2, 2]", "[0, 0, 0]", solid_ms, NULL));
     /* the shared edge: the vertex pair used by both triangles */
     const meso_mesh *mesh = probe->objects[0].mesh;
     assert_int_equal(mesh->num_triangles, 2);
@@ -269,11 +269,11 @@ static void test_reference_rays_grazing_a_shared_prism_edge_never_leak(void **st
     char eye[128], target_text[128];
     snprintf(eye, sizeof eye, "[%.9g, 0.25, %.9g]", a.x - 0.4f * along.x, a.z - 0.4f * along.z);
     snprintf(target_text, sizeof target_text, "[%.9g, -0.1, %.9g]", b.x, b.z);
-    meso_scene *scene = parse(ctx, plane_scene(json, sizeof json, 65, 65, eye, target_text,
-                                               solid_ms, NULL));
-    meso_reference_desc desc = {.solid_field = slab_field,
-                                .isosurface = {.resolution_u = 64, .resolution_v = 64,
-                                               .resolution_w = 16}};
+    meso_scene *scene =
+        parse(ctx, plane_scene(json, sizeof json, 65, 65, eye, target_text, solid_ms, NULL));
+    meso_reference_desc desc = {
+        .solid_field = slab_field,
+        .isosurface = {.resolution_u = 64, .resolution_v = 64, .resolution_w = 16}};
     target t = trace(ctx, scene, &desc);
     meso_frame frame;
     meso_frame_init(&frame, scene, t.width, t.height);
@@ -290,7 +290,8 @@ static void test_reference_rays_grazing_a_shared_prism_edge_never_leak(void **st
             size_t p = (size_t)y * t.width + x;
             if (t.coverage[p] != 1.0f) fail_msg("pixel (%d, %d) passes through the shell", x, y);
             if (fabsf(t.depth[p] - tt) > 1e-3f * tt)
-                fail_msg("pixel (%d, %d) hits at depth %g, the slab is at %g", x, y, t.depth[p], tt);
+                fail_msg("pixel (%d, %d) hits at depth %g, the slab is at %g", x, y, t.depth[p],
+                         tt);
         }
     if (expected < 400) fail_msg("only %zu pixels see the slab", expected);
     target_free(&t);
@@ -302,11 +303,11 @@ static void test_reference_rays_grazing_a_shared_prism_edge_never_leak(void **st
 static void test_reference_too_many_triangles_is_a_limit_error_naming_the_object(void **state) {
     meso_context *ctx = test_context(2);
     char json[2048];
-    meso_scene *scene = parse(
-        ctx, plane_scene(json, sizeof json, 16, 16, "[0, 2, 2]", "[0, 0, 0]",
-                         "{\"height_map\": {\"procedural\": \"bricks\", \"resolution\": 512},"
-                         " \"depth\": 0.1}",
-                         ", \"uv_scale\": [64, 64]"));
+    meso_scene *scene =
+        parse(ctx, plane_scene(json, sizeof json, 16, 16, "[0, 2, 2]", "[0, 0, 0]",
+                               "{\"height_map\": {\"procedural\": \"bricks\", \"resolution\": 512},"
+                               " \"depth\": 0.1}",
+                               ", \"uv_scale\": [64, 64]"));
     meso_reference *reference = (meso_reference *)(uintptr_t)1;
     /* 2 x (64 * 512)^2 = 2.1e9 micro-triangles: refused before any is allocated */
     assert_int_equal(meso_reference_create_with(ctx, scene, &texel_rule_only, &reference),
@@ -324,11 +325,11 @@ static void test_reference_too_many_triangles_is_a_limit_error_naming_the_object
 static void test_reference_view_cap_bounds_triangles_by_pixels(void **state) {
     meso_context *ctx = test_context(2);
     char json[2048];
-    meso_scene *scene = parse(
-        ctx, plane_scene(json, sizeof json, 16, 16, "[0, 2, 2]", "[0, 0, 0]",
-                         "{\"height_map\": {\"procedural\": \"bricks\", \"resolution\": 512},"
-                         " \"depth\": 0.1}",
-                         ", \"uv_scale\": [64, 64]"));
+    meso_scene *scene =
+        parse(ctx, plane_scene(json, sizeof json, 16, 16, "[0, 2, 2]", "[0, 0, 0]",
+                               "{\"height_map\": {\"procedural\": \"bricks\", \"resolution\": 512},"
+                               " \"depth\": 0.1}",
+                               ", \"uv_scale\": [64, 64]"));
     meso_reference *reference = NULL;
     assert_int_equal(meso_reference_create(ctx, scene, &reference), MESO_OK);
     uint64_t triangles = meso_reference_triangle_count(reference);
@@ -342,15 +343,15 @@ static void test_reference_view_cap_bounds_triangles_by_pixels(void **state) {
 static void test_reference_output_is_identical_for_any_thread_count(void **state) {
     char json[2048];
     meso_context *one = test_context(1), *two = test_context(2);
-    meso_scene *scene = parse(one, plane_scene(json, sizeof json, 64, 48, "[0.3, 1.4, 2.4]",
-                                               "[0, 0, 0]",
-                                               "{\"height_map\": {\"procedural\": \"bricks\","
-                                               " \"resolution\": 64}, \"depth\": 0.15}",
-                                               NULL));
+    meso_scene *scene =
+        parse(one, plane_scene(json, sizeof json, 64, 48, "[0.3, 1.4, 2.4]", "[0, 0, 0]",
+                               "{\"height_map\": {\"procedural\": \"bricks\","
+                               " \"resolution\": 64}, \"depth\": 0.15}",
+                               NULL));
     meso_scene *solid = parse(one, plane_scene(json, sizeof json, 64, 48, "[0.3, 1.4, 2.4]",
                                                "[0, 0, 0]", solid_ms, ", \"uv_scale\": [3, 2]"));
-    meso_reference_desc weave = {.isosurface = {.resolution_u = 32, .resolution_v = 32,
-                                                .resolution_w = 8}};
+    meso_reference_desc weave = {
+        .isosurface = {.resolution_u = 32, .resolution_v = 32, .resolution_w = 8}};
     const meso_scene *scenes[2] = {scene, solid};
     const meso_reference_desc *descs[2] = {NULL, &weave};
     for (int s = 0; s < 2; s++) {

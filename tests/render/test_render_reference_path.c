@@ -122,8 +122,8 @@ static void test_path_error_falls_as_one_over_sqrt_samples(void **state) {
 static void test_path_output_is_identical_for_any_thread_count(void **state) {
     (void)state;
     meso_context *one = test_context(1), *three = test_context(3);
-    meso_scene *scene = plane_scene(one, 32, "\"environment\": {\"sky\": {\"width\": 32}}", bricks,
-                                    0.7f);
+    meso_scene *scene =
+        plane_scene(one, 32, "\"environment\": {\"sky\": {\"width\": 32}}", bricks, 0.7f);
     meso_framebuffer *a = render(one, scene, 6, 2);
     meso_framebuffer *b = render(three, scene, 6, 2);
     assert_memory_equal(a->color, b->color, 3 * 32 * 32 * sizeof(float));
@@ -182,8 +182,9 @@ static void test_rtv_mode_against_the_closed_form_and_the_truth(void **state) {
     meso_framebuffer_destroy(fb);
     meso_scene_destroy(scene);
 
-    scene = plane_scene(ctx, 24, "\"ambient\": [0, 0, 0], \"environment\": {\"sky\": {\"width\": 64}}",
-                        bricks, 0.7f);
+    scene =
+        plane_scene(ctx, 24, "\"ambient\": [0, 0, 0], \"environment\": {\"sky\": {\"width\": 64}}",
+                    bricks, 0.7f);
     assert_int_equal(meso_render_scene(ctx, scene, &desc, &fb), MESO_OK);
     meso_framebuffer *truth = render(ctx, scene, 64, 1);
     meso_framebuffer *unshadowed = render(ctx, scene, 0, 0); /* the SH ambient, no shadowing */

@@ -118,8 +118,8 @@ static meso_fragment centroid_fragment(const meso_mesh *mesh, size_t t) {
                                          mesh->tangents[i[2]], third, third, third);
     frag.bitangent = meso_vec3_barycentric(mesh->bitangents[i[0]], mesh->bitangents[i[1]],
                                            mesh->bitangents[i[2]], third, third, third);
-    frag.uv = meso_vec2_barycentric(mesh->uvs[i[0]], mesh->uvs[i[1]], mesh->uvs[i[2]], third,
-                                    third, third);
+    frag.uv = meso_vec2_barycentric(mesh->uvs[i[0]], mesh->uvs[i[1]], mesh->uvs[i[2]], third, third,
+                                    third);
     return frag;
 }
 

@@ -190,10 +190,10 @@ static void test_shading_compact_color_map_matches_float_map(void **state) {
         float worst = 0.0f;
         for (int i = 0; i < 64; i++) {
             meso_vec2 uv = {(float)i * 0.173f - 2.0f, (float)(i * i % 17) * 0.0711f};
-            meso_vec3 want = meso_shade_point(&frame, &a, (meso_vec3){0, 0, 0},
-                                              (meso_vec3){0, 1, 0}, uv, NULL);
-            meso_vec3 got = meso_shade_point(&frame, &b, (meso_vec3){0, 0, 0},
-                                             (meso_vec3){0, 1, 0}, uv, NULL);
+            meso_vec3 want =
+                meso_shade_point(&frame, &a, (meso_vec3){0, 0, 0}, (meso_vec3){0, 1, 0}, uv, NULL);
+            meso_vec3 got =
+                meso_shade_point(&frame, &b, (meso_vec3){0, 0, 0}, (meso_vec3){0, 1, 0}, uv, NULL);
             if (exact) assert_memory_equal(&want, &got, sizeof(got));
             worst = fmaxf(worst, fmaxf(fabsf(got.x - want.x),
                                        fmaxf(fabsf(got.y - want.y), fabsf(got.z - want.z))));
@@ -204,8 +204,8 @@ static void test_shading_compact_color_map_matches_float_map(void **state) {
         if (!exact && !(worst > 0.0f)) fail_msg("quantisation left no trace: not the 8-bit path");
         meso_shade_fragments(&frame, &b, frags, 64, NULL);
         for (int i = 0; i < 64; i++) {
-            meso_vec3 one = meso_shade_point(&frame, &b, frags[i].position, frags[i].normal,
-                                             frags[i].uv, NULL);
+            meso_vec3 one =
+                meso_shade_point(&frame, &b, frags[i].position, frags[i].normal, frags[i].uv, NULL);
             assert_memory_equal(&one, &frags[i].color, sizeof(one));
         }
         meso_texture_destroy(plain);
@@ -233,8 +233,8 @@ static void test_shading_samples_the_color_map_like_meso_texture_sample(void **s
     test_scene ts;
     meso_frame frame;
     color_map_frame(&ts, &frame);
-    const meso_vec2 uvs[] = {{0.1f, 0.2f}, {0.95f, 0.03f}, {-0.3f, 1.7f}, {1.0f, 1.0f},
-                             {0.0f, 0.0f}, {-1e-9f, 0.5f}, {3.2f, -7.9f}, {0.5f, NAN},
+    const meso_vec2 uvs[] = {{0.1f, 0.2f},     {0.95f, 0.03f},     {-0.3f, 1.7f},    {1.0f, 1.0f},
+                             {0.0f, 0.0f},     {-1e-9f, 0.5f},     {3.2f, -7.9f},    {0.5f, NAN},
                              {INFINITY, 0.5f}, {0.4999f, 0.5001f}, {123.456f, 0.25f}};
     size_t n = sizeof(uvs) / sizeof(uvs[0]);
     for (int wrap = 0; wrap < 2; wrap++) {
@@ -261,8 +261,8 @@ static void test_shading_samples_the_color_map_like_meso_texture_sample(void **s
         }
         meso_shade_fragments(&frame, &o, frags, n, NULL);
         for (size_t i = 0; i < n; i++) {
-            meso_vec3 one = meso_shade_point(&frame, &o, frags[i].position, frags[i].normal,
-                                             frags[i].uv, NULL);
+            meso_vec3 one =
+                meso_shade_point(&frame, &o, frags[i].position, frags[i].normal, frags[i].uv, NULL);
             assert_memory_equal(&one, &frags[i].color, sizeof(one)); /* the same bits */
         }
         meso_texture_destroy(texture);

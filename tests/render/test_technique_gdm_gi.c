@@ -18,7 +18,8 @@ static meso_scene *plane_scene(meso_context *ctx, int size, const char *extra,
 
 static const char default_sky_and_sun[] =
     "\"ambient\": [0.02, 0.02, 0.02], \"environment\": {\"sky\": {\"width\": 64}},"
-    " \"lights\": [{\"type\": \"directional\", \"direction\": [0.5, 0.7, 0.3], \"color\": [1, 1, 1]}]";
+    " \"lights\": [{\"type\": \"directional\", \"direction\": [0.5, 0.7, 0.3], \"color\": [1, 1, "
+    "1]}]";
 static const char flat_field[] =
     "{\"height_map\": {\"procedural\": \"tiles\", \"resolution\": 16, \"gap\": 0.001, "
     "\"bevel\": 0.001}, \"depth\": 0.02}";
@@ -52,8 +53,8 @@ static void test_flat_slab_under_a_gi_uniform_sky_reflects_the_irradiance(void *
      * vertices' hemisphere-cut radiance: within 2 %, as the reference's rtv mode) */
     size_t covered = 0;
     double mean = gi_mean_covered(fb, &covered);
-    print_message("flat slab under a uniform sky: mean %.4f over %zu pixels (0.5 expected)\n",
-                  mean, covered);
+    print_message("flat slab under a uniform sky: mean %.4f over %zu pixels (0.5 expected)\n", mean,
+                  covered);
     assert_true(covered > 200);
     assert_float_equal(mean, 0.5, 0.01);
     for (size_t p = 0; p < (size_t)fb->width * (size_t)fb->height; p++)

@@ -225,8 +225,8 @@ static void test_tessellation_shades_a_lit_flat_surface_unshadowed(void **state)
         frag.normal = mesh->normals[i[0]];
         frag.tangent = mesh->tangents[i[0]];
         frag.bitangent = mesh->bitangents[i[0]];
-        frag.uv = meso_vec2_barycentric(mesh->uvs[i[0]], mesh->uvs[i[1]], mesh->uvs[i[2]],
-                                        1 / 3.f, 1 / 3.f, 1 / 3.f);
+        frag.uv = meso_vec2_barycentric(mesh->uvs[i[0]], mesh->uvs[i[1]], mesh->uvs[i[2]], 1 / 3.f,
+                                        1 / 3.f, 1 / 3.f);
         technique->shade(st, &f.frame, &f.object, &frag, 1);
         assert_float_equal(frag.color.x, expected, 2e-3f);
         /* the displaced surface is at -(1 - h) depth */

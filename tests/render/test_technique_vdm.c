@@ -17,9 +17,9 @@ static const char *write_grey_png(const char *name, float value, bool groove) {
         for (int i = 0; i < 32; i++)
             meso_image_at(image, i, j)[0] = groove && i >= 12 && i < 20 ? 0.0f : value;
     const char *path = test_path(test_temp_dir(), name);
-    assert_int_equal(meso_image_save_png(ctx, image, path,
-                                         &(meso_png_desc){.encoding = MESO_ENCODING_LINEAR}),
-                     MESO_OK);
+    assert_int_equal(
+        meso_image_save_png(ctx, image, path, &(meso_png_desc){.encoding = MESO_ENCODING_LINEAR}),
+        MESO_OK);
     meso_image_destroy(image);
     meso_context_destroy(ctx);
     return path;
@@ -104,8 +104,9 @@ static void test_vdm_groove_changes_the_picture_and_compressed_matches_raw(void 
     use_test_cache();
     meso_context *ctx = test_context(2);
     const char *png = write_grey_png("groove.png", 1.0f, true);
-    meso_scene *compressed = plane_scene(ctx, png, "vdm", SMALL_BAKE ", \"eigenfunctions\": 36, "
-                                                              "\"mvm_eigenfunctions\": 36");
+    meso_scene *compressed = plane_scene(ctx, png, "vdm",
+                                         SMALL_BAKE ", \"eigenfunctions\": 36, "
+                                                    "\"mvm_eigenfunctions\": 36");
     meso_scene *raw = plane_scene(ctx, png, "vdm", SMALL_BAKE ", \"compressed\": 0");
     meso_scene *flat = plane_scene(ctx, png, "flat", "");
     meso_framebuffer *a = render(ctx, compressed), *b = render(ctx, raw), *f = render(ctx, flat);
@@ -156,9 +157,9 @@ static const char *write_cones_png(void) {
             meso_image_at(image, i, j)[0] = h;
         }
     const char *path = test_path(test_temp_dir(), "cones.png");
-    assert_int_equal(meso_image_save_png(ctx, image, path,
-                                         &(meso_png_desc){.encoding = MESO_ENCODING_LINEAR}),
-                     MESO_OK);
+    assert_int_equal(
+        meso_image_save_png(ctx, image, path, &(meso_png_desc){.encoding = MESO_ENCODING_LINEAR}),
+        MESO_OK);
     meso_image_destroy(image);
     meso_context_destroy(ctx);
     return path;

@@ -39,7 +39,8 @@ static const char gltf_triangle[] =
     "\"textures\":[{\"source\":0},{\"source\":1},{\"source\":2}],"
     "\"images\":[{\"uri\":\"c.png\"},{\"uri\":\"n.png\"},{\"uri\":\"o.png\"}],"
     "\"buffers\":[{\"byteLength\":68,\"uri\":\"data:application/octet-stream;base64,"
-    "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAIA/AAAAAAAAAAAAAIA/AAABAAIAAAA=\"}"
+    "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAIA/AAAAAAAAAAAAAIA/"
+    "AAABAAIAAAA=\"}"
     "],"
     "\"bufferViews\":[{\"buffer\":0,\"byteOffset\":0,\"byteLength\":36},"
     "{\"buffer\":0,\"byteOffset\":36,\"byteLength\":24},"
@@ -97,8 +98,7 @@ static void test_obj_mtl_kd_and_map_kd_are_read_and_no_mtl_is_no_material(void *
 static meso_scene *load_scene(meso_context *ctx, const char *dir, const char *name,
                               const char *material) {
     char text[1024];
-    snprintf(text, sizeof text,
-             "{\"objects\": [{\"shape\": {\"file\": \"painted.gltf\"}%s%s}]}",
+    snprintf(text, sizeof text, "{\"objects\": [{\"shape\": {\"file\": \"painted.gltf\"}%s%s}]}",
              material ? ", \"material\": " : "", material ? material : "");
     const char *path = write_text(dir, name, text);
     meso_scene *scene = NULL;

@@ -61,7 +61,7 @@ static const truth_row truth_rows[] = {
     {"cones-plane", "relief_exact", 34.2, 0.995},  /* measured 35.75 dB, IoU 1.0000 */
     {"cones-plane", "relief_layers", 36.2, 0.995}, /* measured 37.79 dB, IoU 1.0000 */
     {"cones-plane", "vdm", 36.8, 0.995},           /* measured 38.35 dB, IoU 1.0000 */
-    {"cones-plane", "gdm", 35.8, 0.995},          /* measured 37.36 dB, IoU 1.0000 */
+    {"cones-plane", "gdm", 35.8, 0.995},           /* measured 37.36 dB, IoU 1.0000 */
     {"cones-plane", "tessellation", 33.5, 0.995},  /* measured 35.09 dB, IoU 1.0000 */
     {"cones-plane", "displacement", 36.5, 0.995},  /* measured 38.08 dB, IoU 1.0000 */
 
@@ -73,7 +73,7 @@ static const truth_row truth_rows[] = {
     {"cones-clamp", "relief_exact", 36.9, 0.925},  /* measured 38.43 dB, IoU 0.9302 */
     {"cones-clamp", "relief_layers", 37.2, 0.925}, /* measured 38.73 dB, IoU 0.9302 */
     {"cones-clamp", "vdm", 36.4, 0.925},           /* measured 37.90 dB, IoU 0.9302 */
-    {"cones-clamp", "gdm", 33.9, 0.987},          /* measured 35.45 dB, IoU 0.9925 */
+    {"cones-clamp", "gdm", 33.9, 0.987},           /* measured 35.45 dB, IoU 0.9925 */
     {"cones-clamp", "tessellation", 30.5, 0.994},  /* measured 32.07 dB, IoU 0.9998 */
     {"cones-clamp", "displacement", 45.3, 0.994},  /* measured 46.86 dB, IoU 0.9999 */
 
@@ -85,7 +85,7 @@ static const truth_row truth_rows[] = {
     {"cones-mirrored", "relief_exact", 32.1, 0.995},  /* measured 33.69 dB, IoU 1.0000 */
     {"cones-mirrored", "relief_layers", 33.8, 0.995}, /* measured 35.36 dB, IoU 1.0000 */
     {"cones-mirrored", "vdm", 32.9, 0.995},           /* measured 34.47 dB, IoU 1.0000 */
-    {"cones-mirrored", "gdm", 33.7, 0.995},       /* measured 35.28 dB, IoU 1.0000 */
+    {"cones-mirrored", "gdm", 33.7, 0.995},           /* measured 35.28 dB, IoU 1.0000 */
     {"cones-mirrored", "tessellation", 32.9, 0.995},  /* measured 34.49 dB, IoU 1.0000 */
     {"cones-mirrored", "displacement", 34.8, 0.995},  /* measured 36.39 dB, IoU 1.0000 */
 
@@ -97,7 +97,7 @@ static const truth_row truth_rows[] = {
     {"cones-rotated", "relief_exact", 34.8, 0.995},  /* measured 36.33 dB, IoU 1.0000 */
     {"cones-rotated", "relief_layers", 38.2, 0.995}, /* measured 39.77 dB, IoU 1.0000 */
     {"cones-rotated", "vdm", 35.5, 0.995},           /* measured 37.01 dB, IoU 1.0000 */
-    {"cones-rotated", "gdm", 34.6, 0.995},        /* measured 36.11 dB, IoU 1.0000 */
+    {"cones-rotated", "gdm", 34.6, 0.995},           /* measured 36.11 dB, IoU 1.0000 */
     {"cones-rotated", "tessellation", 34.5, 0.995},  /* measured 36.10 dB, IoU 1.0000 */
     {"cones-rotated", "displacement", 37.7, 0.995},  /* measured 39.24 dB, IoU 1.0000 */
 
@@ -109,7 +109,7 @@ static const truth_row truth_rows[] = {
     {"cones-uv-scale", "relief_exact", 31.7, 0.995},  /* measured 33.21 dB, IoU 1.0000 */
     {"cones-uv-scale", "relief_layers", 29.3, 0.995}, /* measured 30.81 dB, IoU 1.0000 */
     {"cones-uv-scale", "vdm", 29.5, 0.995},           /* measured 31.02 dB, IoU 1.0000 */
-    {"cones-uv-scale", "gdm", 26.1, 0.995},       /* measured 27.66 dB, IoU 1.0000 */
+    {"cones-uv-scale", "gdm", 26.1, 0.995},           /* measured 27.66 dB, IoU 1.0000 */
     {"cones-uv-scale", "tessellation", 26.7, 0.995},  /* measured 28.24 dB, IoU 1.0000 */
     {"cones-uv-scale", "displacement", 26.8, 0.995},  /* measured 28.36 dB, IoU 1.0000 */
 
@@ -121,7 +121,7 @@ static const truth_row truth_rows[] = {
     {"cones-sphere", "relief_exact", 26.5, 0.980},  /* measured 28.07 dB, IoU 0.9852 */
     {"cones-sphere", "relief_layers", 26.5, 0.980}, /* measured 28.04 dB, IoU 0.9853 */
     {"cones-sphere", "vdm", 26.7, 0.975},           /* measured 28.29 dB, IoU 0.9801 */
-    {"cones-sphere", "gdm", 30.6, 0.994},         /* measured 32.18 dB, IoU 0.9997 */
+    {"cones-sphere", "gdm", 30.6, 0.994},           /* measured 32.18 dB, IoU 0.9997 */
     {"cones-sphere", "tessellation", 34.3, 0.993},  /* measured 35.88 dB, IoU 0.9988 */
     {"cones-sphere", "displacement", 40.3, 0.994},  /* measured 41.87 dB, IoU 0.9996 */
 };

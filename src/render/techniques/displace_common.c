@@ -55,8 +55,8 @@ void displace_vertex_finish(const displace_surface *surface, displace_vertex *ve
                                                    vertex->texture_uv.y)
                          : 1.0f;
     /* DESIGN.md: P' = P - (1 - h) depth N, N the normalised interpolated vertex normal */
-    vertex->position =
-        meso_vec3_madd(vertex->base, vertex->unit_normal, -(1.0f - vertex->height) * surface->depth);
+    vertex->position = meso_vec3_madd(vertex->base, vertex->unit_normal,
+                                      -(1.0f - vertex->height) * surface->depth);
 }
 
 int displace_texel_level(const displace_surface *surface, int max_level) {
@@ -68,8 +68,8 @@ int displace_texel_level(const displace_surface *surface, int max_level) {
         for (int k = 0; k < 3; k++) {
             meso_vec2 a = mesh->uvs[mesh->indices[t * 3 + (size_t)k]];
             meso_vec2 b = mesh->uvs[mesh->indices[t * 3 + (size_t)(k + 1) % 3]];
-            float len = fmaxf(fabsf(b.x - a.x) * (float)hf->width,
-                              fabsf(b.y - a.y) * (float)hf->height);
+            float len =
+                fmaxf(fabsf(b.x - a.x) * (float)hf->width, fabsf(b.y - a.y) * (float)hf->height);
             if (len > longest) longest = len;
         }
     int level = 0;
@@ -180,8 +180,8 @@ meso_result displace_tessellator_create(meso_context *ctx, const displace_surfac
     *out_tessellator = NULL;
     if (max_level < 0 || max_level > DISPLACE_MAX_LEVEL)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
-                              "%s: tessellation level %d is outside [0, %d]",
-                              surface->object->name, max_level, DISPLACE_MAX_LEVEL);
+                              "%s: tessellation level %d is outside [0, %d]", surface->object->name,
+                              max_level, DISPLACE_MAX_LEVEL);
     displace_tessellator *t = calloc(1, sizeof(*t));
     if (!t) goto fail;
     t->surface = surface;
@@ -190,8 +190,8 @@ meso_result displace_tessellator_create(meso_context *ctx, const displace_surfac
     size_t num_base = surface->base->num_triangles;
     t->num_jobs = num_base < TESS_MAX_JOBS ? num_base : TESS_MAX_JOBS;
     t->jobs = calloc(t->num_jobs, sizeof(*t->jobs));
-    t->corners = calloc(surface->base->num_vertices ? surface->base->num_vertices : 1,
-                        sizeof(*t->corners));
+    t->corners =
+        calloc(surface->base->num_vertices ? surface->base->num_vertices : 1, sizeof(*t->corners));
     if (!t->jobs || !t->corners || !ensure_scratch(t, meso_context_num_threads(ctx))) goto fail;
     for (size_t j = 0; j < t->num_jobs; j++) {
         /* fixed split independent of the thread count (determinism) */
@@ -252,11 +252,11 @@ size_t displace_tessellator_memory(const displace_tessellator *t) {
     return bytes;
 }
 
-#define GROW(ptr, cap, type)                                                                   \
-    do {                                                                                       \
-        type *grown_ = realloc((ptr), (cap) * sizeof(type));                                   \
-        if (!grown_) return false;                                                             \
-        (ptr) = grown_;                                                                        \
+#define GROW(ptr, cap, type)                                                                       \
+    do {                                                                                           \
+        type *grown_ = realloc((ptr), (cap) * sizeof(type));                                       \
+        if (!grown_) return false;                                                                 \
+        (ptr) = grown_;                                                                            \
     } while (0)
 
 static bool job_reserve_vertices(tess_job *job, size_t extra) {
@@ -466,7 +466,8 @@ static bool tessellate_triangle(const displace_tessellator *t, tess_scratch *s, 
             if (!emit_triangle(s, job, &e)) return false;
         } else if (present == 3) {
             /* "Tessellate with selected midpoints": the regular 1-to-4 split */
-            ok = push(s, &top, m[1], m[2], m[0], d, job) && push(s, &top, e.v[2], m[2], m[1], d, job) &&
+            ok = push(s, &top, m[1], m[2], m[0], d, job) &&
+                 push(s, &top, e.v[2], m[2], m[1], d, job) &&
                  push(s, &top, m[0], e.v[1], m[1], d, job) &&
                  push(s, &top, e.v[0], m[0], m[2], d, job);
         } else if (present == 1) {
@@ -573,8 +574,7 @@ meso_result displace_tessellator_run(meso_context *ctx, displace_tessellator *t,
     for (size_t j = 0; j < t->num_jobs; j++) { /* fixed order: deterministic sums */
         tess_job *job = &t->jobs[j];
         if (job->result == MESO_ERROR_LIMIT)
-            return meso_log_error(ctx, MESO_ERROR_LIMIT,
-                                  "%s: tessellation: more than %u triangles",
+            return meso_log_error(ctx, MESO_ERROR_LIMIT, "%s: tessellation: more than %u triangles",
                                   t->surface->object->name, MESO_MESH_MAX_TRIANGLES);
         if (job->result != MESO_OK)
             return meso_log_error(ctx, job->result, "%s: tessellation output",
@@ -673,28 +673,30 @@ meso_result displace_shadows_render(meso_context *ctx, displace_shadows *shadows
             /* square texels: the larger extent on both axes */
             float half = 0.5f * fmaxf(x1 - x0, y1 - y0) + margin;
             float cx = 0.5f * (x0 + x1), cy = 0.5f * (y0 + y1);
-            meso_mat4 proj = ortho(cx - half, cx + half, cy - half, cy + half, d0 - margin,
-                                   d1 + margin);
+            meso_mat4 proj =
+                ortho(cx - half, cx + half, cy - half, cy + half, d0 - margin, d1 + margin);
             map->view_projection = meso_mat4_mul(proj, view);
             map->texel_size = 2.0f * half / (float)size;
         } else {
             meso_vec3 to_center = meso_vec3_sub(center, light->position);
             float distance = meso_vec3_length(to_center);
             if (!(distance > radius * 1.01f)) {
-                meso_log_warning(ctx, "shadow maps: point light %zu lies inside the displaced "
-                                      "mesh's bounds: it casts no shadow map", l);
+                meso_log_warning(ctx,
+                                 "shadow maps: point light %zu lies inside the displaced "
+                                 "mesh's bounds: it casts no shadow map",
+                                 l);
                 continue;
             }
             float fov = 2.0f * asinf(radius / distance) * 1.02f;
             float z_near = fmaxf(distance - radius, 1e-3f * distance) * 0.99f;
-            meso_mat4 view = meso_mat4_look_at(light->position, center,
-                                               pick_up(meso_vec3_normalize(to_center)));
+            meso_mat4 view =
+                meso_mat4_look_at(light->position, center, pick_up(meso_vec3_normalize(to_center)));
             meso_mat4 proj = meso_mat4_perspective(fov, 1.0f, z_near, (distance + radius) * 1.01f);
             map->view_projection = meso_mat4_mul(proj, view);
             map->texel_size = 2.0f * tanf(0.5f * fov) / (float)size;
         }
-        meso_result r = meso_raster_depth_map(ctx, mesh, map->view_projection, (int)size,
-                                              (int)size, depth);
+        meso_result r =
+            meso_raster_depth_map(ctx, mesh, map->view_projection, (int)size, (int)size, depth);
         if (r != MESO_OK) return r;
         map->active = true;
     }
@@ -731,8 +733,7 @@ void displace_shadows_visibility(const displace_shadows *shadows, const meso_sce
             texel *= meso_vec3_length(meso_vec3_sub(light->position, position));
         float offset = shadows->options.bias * texel * (1.0f + slope);
         meso_vec3 p = meso_vec3_madd(position, to_light, offset);
-        meso_vec4 clip =
-            meso_mat4_mul_vec4(map->view_projection, (meso_vec4){p.x, p.y, p.z, 1.0f});
+        meso_vec4 clip = meso_mat4_mul_vec4(map->view_projection, (meso_vec4){p.x, p.y, p.z, 1.0f});
         if (!(clip.w > 0.0f)) continue;
         float nx = clip.x / clip.w, ny = clip.y / clip.w, nz = clip.z / clip.w;
         if (!(nx >= -1.0f && nx <= 1.0f && ny >= -1.0f && ny <= 1.0f)) continue;
@@ -745,9 +746,10 @@ void displace_shadows_visibility(const displace_shadows *shadows, const meso_sce
             float fx = floorf(x), fy = floorf(y);
             int i = (int)fx, j = (int)fy;
             float tx = x - fx, ty = y - fy;
-            float top = lit_tap(map, size, i, j, z) * (1.0f - tx) + lit_tap(map, size, i + 1, j, z) * tx;
-            float bottom =
-                lit_tap(map, size, i, j + 1, z) * (1.0f - tx) + lit_tap(map, size, i + 1, j + 1, z) * tx;
+            float top =
+                lit_tap(map, size, i, j, z) * (1.0f - tx) + lit_tap(map, size, i + 1, j, z) * tx;
+            float bottom = lit_tap(map, size, i, j + 1, z) * (1.0f - tx) +
+                           lit_tap(map, size, i + 1, j + 1, z) * tx;
             visibility[l] = top * (1.0f - ty) + bottom * ty;
         } else {
             visibility[l] = lit_tap(map, size, (int)floorf(x + 0.5f), (int)floorf(y + 0.5f), z);
@@ -782,8 +784,8 @@ void displace_shade(const displace_surface *surface, const displace_shadows *sha
                 /* the bump-map operation on the interpolated BASE frame (slides, "Hardware
                  * Architecture"): the same normal every other technique shades with */
                 meso_vec2 g = displace_gradient(surface, frag->uv);
-                meso_vec3 n3 = meso_displaced_normal(frag->normal, frag->tangent,
-                                                     frag->bitangent, surface->depth, g);
+                meso_vec3 n3 = meso_displaced_normal(frag->normal, frag->tangent, frag->bitangent,
+                                                     surface->depth, g);
                 if (meso_vec3_dot(n3, n3) > 0.0f && meso_vec3_is_finite(n3)) normal = n3;
             }
             /* a batch spans triangles, each one's fragments consecutive: the face normal

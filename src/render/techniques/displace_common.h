@@ -27,7 +27,7 @@
 
 typedef struct displace_surface {
     const meso_object *object;
-    const meso_mesh *base;              /* object->mesh, world space */
+    const meso_mesh *base;               /* object->mesh, world space */
     const meso_heightfield *heightfield; /* NULL: no mesostructure (h = 1 everywhere) */
     float depth;                         /* world units */
     bool repeat;                         /* height field wraps: uv taken modulo 1 */
@@ -55,23 +55,23 @@ meso_vec2 displace_gradient(const displace_surface *surface, meso_vec2 uv);
 /* A vertex of a tessellated base triangle. */
 typedef struct displace_vertex {
     /* interpolated over the flat base triangle (midpoints of midpoints) */
-    meso_vec3 base;                /* P on the base triangle */
-    meso_vec3 normal;              /* interpolated vertex normal, not normalised */
-    meso_vec3 tangent, bitangent;  /* dP/du, dP/dv */
-    meso_vec2 uv;                  /* as the mesh has it (uv_scale applied, not wrapped) */
+    meso_vec3 base;               /* P on the base triangle */
+    meso_vec3 normal;             /* interpolated vertex normal, not normalised */
+    meso_vec3 tangent, bitangent; /* dP/du, dP/dv */
+    meso_vec2 uv;                 /* as the mesh has it (uv_scale applied, not wrapped) */
     /* derived by displace_vertex_finish */
-    meso_vec2 texture_uv;          /* displace_texture_uv(uv) */
-    meso_vec3 unit_normal;         /* N = normalize(normal) */
-    float height;                  /* h(uv) */
-    meso_vec3 position;            /* P' = P - (1 - h) depth N (DESIGN.md) */
+    meso_vec2 texture_uv;  /* displace_texture_uv(uv) */
+    meso_vec3 unit_normal; /* N = normalize(normal) */
+    float height;          /* h(uv) */
+    meso_vec3 position;    /* P' = P - (1 - h) depth N (DESIGN.md) */
     /* filled by the technique's vertex hook (tessellation: the edge tests' inputs) */
-    meso_vec3 surface_normal;      /* normal of the displaced surface (bump-map operation) */
-    meso_vec4 clip;                /* view_projection * position */
+    meso_vec3 surface_normal; /* normal of the displaced surface (bump-map operation) */
+    meso_vec4 clip;           /* view_projection * position */
     /* bookkeeping of the tessellator */
-    int32_t key_b, key_c;          /* barycentric grid coordinates of corners 1 and 2 */
-    int32_t parent_a, parent_b;    /* the edge this vertex halves (-1: a corner) */
-    uint32_t out_index;            /* index in the job's output, UINT32_MAX until emitted */
-    int8_t inserted;               /* the decision on its edge */
+    int32_t key_b, key_c;       /* barycentric grid coordinates of corners 1 and 2 */
+    int32_t parent_a, parent_b; /* the edge this vertex halves (-1: a corner) */
+    uint32_t out_index;         /* index in the job's output, UINT32_MAX until emitted */
+    int8_t inserted;            /* the decision on its edge */
 } displace_vertex;
 
 /* Compute the derived fields from the interpolated ones. */
@@ -134,10 +134,10 @@ void displace_tessellator_destroy(displace_tessellator *tessellator);
 /* ---- Shadow maps -------------------------------------------------------------------------- */
 
 typedef struct displace_shadow_options {
-    bool enabled;      /* "shadows" (1) */
-    int size;          /* "shadow_map_size" (2048) */
-    float bias;        /* "shadow_bias" in shadow-map texels, scaled by the slope (1.5) */
-    bool pcf;          /* "shadow_pcf" (1): 2 x 2 bilinear percentage-closer filtering */
+    bool enabled; /* "shadows" (1) */
+    int size;     /* "shadow_map_size" (2048) */
+    float bias;   /* "shadow_bias" in shadow-map texels, scaled by the slope (1.5) */
+    bool pcf;     /* "shadow_pcf" (1): 2 x 2 bilinear percentage-closer filtering */
 } displace_shadow_options;
 
 /* The option-table rows of the shadow maps, for a struct_type whose `member` is a
@@ -154,18 +154,18 @@ typedef struct displace_shadow_options {
                         "2 x 2 bilinear percentage-closer filtering", struct_type, member.pcf)
 
 typedef struct displace_light_map {
-    bool active;            /* false: the light casts no shadow (visibility 1) */
+    bool active; /* false: the light casts no shadow (visibility 1) */
     meso_mat4 view_projection;
-    float texel_size;       /* world size of a texel (ortho) or its angle in radians (point) */
-    const float *depth;     /* size x size, inside displace_shadows.depth */
+    float texel_size;   /* world size of a texel (ortho) or its angle in radians (point) */
+    const float *depth; /* size x size, inside displace_shadows.depth */
 } displace_light_map;
 
 typedef struct displace_shadows {
     displace_shadow_options options;
     int num_lights;
     displace_light_map lights[MESO_SCENE_MAX_LIGHTS];
-    float *depth;           /* num_lights * size * size, owned */
-    double seconds;         /* time of the last render */
+    float *depth;   /* num_lights * size * size, owned */
+    double seconds; /* time of the last render */
 } displace_shadows;
 
 /* Render a light-space depth map of `mesh` for every light of the scene with

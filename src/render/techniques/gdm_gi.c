@@ -109,7 +109,8 @@ meso_result gdm_gi_create(meso_context *ctx, const meso_scene *scene, const meso
         r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: gdm gi", object->name);
         goto fail;
     }
-    for (size_t v = 0; v < mesh->num_vertices; v++) gi->tangents[v] = meso_gi_vertex_tangent(mesh, v);
+    for (size_t v = 0; v < mesh->num_vertices; v++)
+        gi->tangents[v] = meso_gi_vertex_tangent(mesh, v);
     /* the shell's aspect as the reference's rtv mode takes it: the same cached bake */
     meso_rtv_desc rtv_desc = {
         .heightfield = ms->kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD ? ms->height_field : NULL,
@@ -144,7 +145,8 @@ void gdm_gi_destroy(gdm_gi *gi) {
 size_t gdm_gi_memory(const gdm_gi *gi) {
     if (!gi) return 0;
     return 2 * (size_t)gi->rtv->compressed_bytes + /* the RTV and its packed copy */
-           gi->mesh->num_vertices * (GI_CHANNELS * MESO_SH_COUNT * sizeof(float) + sizeof(meso_vec3));
+           gi->mesh->num_vertices *
+               (GI_CHANNELS * MESO_SH_COUNT * sizeof(float) + sizeof(meso_vec3));
 }
 
 void gdm_gi_begin_frame(gdm_gi *gi, const meso_frame *frame) {
@@ -178,8 +180,8 @@ static bool reflected_at(const gdm_gi *gi, const meso_frame *frame, const meso_f
     meso_gi_radiance_interpolate(gi->radiance, v[0], v[1], v[2], b[0], b[1], b[2], radiance);
     meso_vec3 n = meso_vec3_normalize(meso_vec3_barycentric(
         mesh->normals[v[0]], mesh->normals[v[1]], mesh->normals[v[2]], b[0], b[1], b[2]));
-    meso_vec3 t = meso_vec3_barycentric(gi->tangents[v[0]], gi->tangents[v[1]],
-                                        gi->tangents[v[2]], b[0], b[1], b[2]);
+    meso_vec3 t = meso_vec3_barycentric(gi->tangents[v[0]], gi->tangents[v[1]], gi->tangents[v[2]],
+                                        b[0], b[1], b[2]);
     t = meso_vec3_normalize(meso_vec3_sub(t, meso_vec3_scale(n, meso_vec3_dot(n, t))));
     meso_vec3 bt = meso_vec3_cross(n, t);
     meso_vec3 toward = meso_vec3_normalize(meso_vec3_sub(frame->eye, f->position));
@@ -213,7 +215,8 @@ void gdm_gi_shade(const gdm_gi *gi, const meso_frame *frame, const meso_object *
         /* the albedo: the shading model's own (albedo x colour map) with ambient 1 alone */
         if (m->color_map) {
             meso_shade_fragments(&gi->albedo_frame, object, batch, n, NULL);
-            for (size_t i = 0; i < n; i++) reflected[i] = meso_vec3_mul(reflected[i], batch[i].color);
+            for (size_t i = 0; i < n; i++)
+                reflected[i] = meso_vec3_mul(reflected[i], batch[i].color);
         } else {
             for (size_t i = 0; i < n; i++) reflected[i] = meso_vec3_mul(reflected[i], m->albedo);
         }

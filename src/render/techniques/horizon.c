@@ -151,8 +151,8 @@ static void shade(const void *state, const meso_frame *frame, const meso_object 
                 sin_d = norm > 0.0f ? sin_d / norm : 1.0f;
                 /* (a vector element is assigned, not pointed to: clang has no address of one) */
                 in.visibility[li][k] = cos_d < 0.0f && sin_d < 0.0f
-                           ? 0.0f
-                           : smooth_step(-SOFT_RADIANS, SOFT_RADIANS, sin_d);
+                                           ? 0.0f
+                                           : smooth_step(-SOFT_RADIANS, SOFT_RADIANS, sin_d);
             }
         }
         relief_shade_store(frame, object, &in, f, n);

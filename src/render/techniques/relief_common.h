@@ -336,9 +336,14 @@ static inline void relief_bump_lanes(const relief_heights *m, const meso_frame *
     relief_lanes_texel(m, l, x, y);
     relief_gradient8(m, *x, *y, &gu, &gv);
     v8vec3 normal = relief_normal8(l, depth, gu, gv);
-    *in = (meso_shade_batch){.px = l->position.x, .py = l->position.y, .pz = l->position.z,
-                             .nx = normal.x, .ny = normal.y, .nz = normal.z,
-                             .u = l->u, .v = l->v};
+    *in = (meso_shade_batch){.px = l->position.x,
+                             .py = l->position.y,
+                             .pz = l->position.z,
+                             .nx = normal.x,
+                             .ny = normal.y,
+                             .nz = normal.z,
+                             .u = l->u,
+                             .v = l->v};
     in->tx = l->tangent.x, in->ty = l->tangent.y, in->tz = l->tangent.z;
     in->bx = l->bitangent.x, in->by = l->bitangent.y, in->bz = l->bitangent.z;
     meso_shade_batch_all_visible(in, frame);
@@ -545,10 +550,9 @@ static inline void relief_shade_fragments(const relief_heights *m, const relief_
                 v8f q = batch[g].qa * xl * xl + batch[g].qb * yl * yl;
                 /* The light's elevation over the tangent plane at the hit, not at the entry:
                  * the hit lies t V away, where the curved surface has turned by 2 q. */
-                v8f xv = v8_select(tl > 0.0f, v8_dot(l[g].view, l[g].tangent) / tl,
-                                   v8_splat(0.0f));
-                v8f yv = v8_select(bl > 0.0f, v8_dot(l[g].view, l[g].bitangent) / bl,
-                                   v8_splat(0.0f));
+                v8f xv = v8_select(tl > 0.0f, v8_dot(l[g].view, l[g].tangent) / tl, v8_splat(0.0f));
+                v8f yv =
+                    v8_select(bl > 0.0f, v8_dot(l[g].view, l[g].bitangent) / bl, v8_splat(0.0f));
                 ln += 2.0f * t[g] * (batch[g].qa * xv * xl + batch[g].qb * yv * yl);
                 v8f reach = hd[g] * depth;
                 v8f disc = ln * ln + 4.0f * q * reach;

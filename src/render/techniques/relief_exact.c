@@ -481,16 +481,9 @@ static void shadow(const void *user, const relief_shadow_batch *batches, int cou
         int blocked = 0;
         for (int k = 0; k < b->count; ++k) {
             if (!(b->active_bits >> k & 1)) continue;
-            exact_ray r = {b->x[k],
-                           b->y[k],
-                           b->xd[k],
-                           b->yd[k],
-                           b->d[k],
-                           b->bulge[k] - b->d[k],
-                           -b->bulge[k],
-                           0.0,
-                           1.0,
-                           RELIEF_SHADOW_BIAS};
+            exact_ray r = {
+                b->x[k],      b->y[k], b->xd[k], b->yd[k],          b->d[k], b->bulge[k] - b->d[k],
+                -b->bulge[k], 0.0,     1.0,      RELIEF_SHADOW_BIAS};
             double t;
             if (trace_any(s, &r, &t)) blocked |= 1 << k;
         }

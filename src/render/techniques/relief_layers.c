@@ -55,12 +55,12 @@ static const meso_technique_option layers_option_table[] = {
     MESO_OPTION_ROW(MESO_OPTION_INT, binary_steps, 0, 32, 6,
                     "steps of the binary search after it (Algorithm 2)", layers_options,
                     binary_steps),
-    MESO_OPTION_ROW(MESO_OPTION_BOOL, shadows, 0, 1, 1,
-                    "self-shadows: a search toward each light", layers_options, shadows),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, shadows, 0, 1, 1, "self-shadows: a search toward each light",
+                    layers_options, shadows),
     MESO_OPTION_ROW(MESO_OPTION_INT, shadow_steps, 1, 1024, 16, "steps of the shadow search",
                     layers_options, shadow_steps),
-    MESO_OPTION_ROW(MESO_OPTION_BOOL, silhouettes, 0, 1, 1,
-                    "silhouettes from per-vertex quadrics", layers_options, silhouettes),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, silhouettes, 0, 1, 1, "silhouettes from per-vertex quadrics",
+                    layers_options, silhouettes),
     MESO_OPTION_ROW(MESO_OPTION_BOOL, missed, 0, 1, 0,
                     "a ray that meets nothing: 0 discards it, 1 draws the shell's floor (§3.1)",
                     layers_options, missed),
@@ -114,8 +114,7 @@ static meso_result fill_planes(meso_context *ctx, const meso_object *object, con
     if (s->groups > 0) {
         s->quads = malloc(plane * (size_t)s->groups * 4u * sizeof(float));
         if (!s->quads)
-            return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory",
-                                  object->name);
+            return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
         s->bytes += plane * (size_t)s->groups * 4u * sizeof(float);
     }
     for (int j = 0; j <= H; j++)
@@ -173,8 +172,8 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
                        : object->mesostructure.kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD;
     if (side < 16) {
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
-                              "%s: technique_options.size: %d is below 16 (%s)", object->name,
-                              side, name);
+                              "%s: technique_options.size: %d is below 16 (%s)", object->name, side,
+                              name);
     }
     layers_state *s = calloc(1, sizeof *s);
     if (!s) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
@@ -620,15 +619,19 @@ static void shade(const void *state, const meso_frame *frame, const meso_object 
         bool facing_back = back_facing(frame, object, &fragments[i]);
         if (i > 0 && facing_back == back) continue;
         if (i > start) {
-            if (back) shade_back(s, frame, object, fragments + start, i - start);
-            else shade_front(s, frame, object, fragments + start, i - start);
+            if (back)
+                shade_back(s, frame, object, fragments + start, i - start);
+            else
+                shade_front(s, frame, object, fragments + start, i - start);
         }
         start = i;
         back = facing_back;
     }
     if (count > start) {
-        if (back) shade_back(s, frame, object, fragments + start, count - start);
-        else shade_front(s, frame, object, fragments + start, count - start);
+        if (back)
+            shade_back(s, frame, object, fragments + start, count - start);
+        else
+            shade_front(s, frame, object, fragments + start, count - start);
     }
 }
 

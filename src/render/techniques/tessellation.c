@@ -33,14 +33,14 @@
 #include <string.h>
 
 enum {
-    COUNT_EDGES,        /* edges evaluated (midpoints computed) */
-    COUNT_LIMIT_VETO,   /* refinement limit test rejected */
-    COUNT_VIEW_VETO,    /* view dependent test rejected */
-    COUNT_NORMAL_YES,   /* normal test proposed */
-    COUNT_AREA_YES,     /* area test proposed */
-    COUNT_NO_DETAIL,    /* neither surface test proposed */
+    COUNT_EDGES,      /* edges evaluated (midpoints computed) */
+    COUNT_LIMIT_VETO, /* refinement limit test rejected */
+    COUNT_VIEW_VETO,  /* view dependent test rejected */
+    COUNT_NORMAL_YES, /* normal test proposed */
+    COUNT_AREA_YES,   /* area test proposed */
+    COUNT_NO_DETAIL,  /* neither surface test proposed */
     COUNT_INSERTED,
-    COUNT_SPAN_YES,     /* longer than span_texels: proposed untested */
+    COUNT_SPAN_YES, /* longer than span_texels: proposed untested */
 };
 
 typedef struct tessellation_state {
@@ -100,10 +100,10 @@ static void tests_vertex_static(const void *user, displace_vertex *v) {
     const tessellation_state *s = ft->state;
     if (s->normal_test && s->surface.heightfield) {
         /* the bump-map operation: the height field's gradient in the base frame */
-        meso_vec2 g = meso_heightfield_gradient(s->surface.heightfield, v->texture_uv.x,
-                                                v->texture_uv.y);
-        v->surface_normal = meso_displaced_normal(v->unit_normal, v->tangent, v->bitangent,
-                                                  s->surface.depth, g);
+        meso_vec2 g =
+            meso_heightfield_gradient(s->surface.heightfield, v->texture_uv.x, v->texture_uv.y);
+        v->surface_normal =
+            meso_displaced_normal(v->unit_normal, v->tangent, v->bitangent, s->surface.depth, g);
     }
 }
 
@@ -128,8 +128,10 @@ static bool view_says_long(const frame_tests *ft, const displace_vertex *a,
     bool front_a = a->clip.w > ft->z_near * 0.5f, front_b = b->clip.w > ft->z_near * 0.5f;
     if (!front_a && !front_b) return false; /* behind the camera: invisible */
     if (!front_a || !front_b) return true;  /* crosses the eye plane: keep refining */
-    float ax = a->clip.x / a->clip.w * 0.5f * ft->width, ay = a->clip.y / a->clip.w * 0.5f * ft->height;
-    float bx = b->clip.x / b->clip.w * 0.5f * ft->width, by = b->clip.y / b->clip.w * 0.5f * ft->height;
+    float ax = a->clip.x / a->clip.w * 0.5f * ft->width,
+          ay = a->clip.y / a->clip.w * 0.5f * ft->height;
+    float bx = b->clip.x / b->clip.w * 0.5f * ft->width,
+          by = b->clip.y / b->clip.w * 0.5f * ft->height;
     return fabsf(bx - ax) + fabsf(by - ay) > ft->state->view_threshold;
 }
 
@@ -196,10 +198,9 @@ static bool tests_insert(const void *user, const displace_vertex *a, const displ
             counters[COUNT_INSERTED]++;
             return true;
         }
-        if (s->normal_test && (normals_differ(m->surface_normal, a->surface_normal,
-                                              s->normal_threshold) ||
-                               normals_differ(m->surface_normal, b->surface_normal,
-                                              s->normal_threshold))) {
+        if (s->normal_test &&
+            (normals_differ(m->surface_normal, a->surface_normal, s->normal_threshold) ||
+             normals_differ(m->surface_normal, b->surface_normal, s->normal_threshold))) {
             counters[COUNT_NORMAL_YES]++;
             detail = true;
         }
@@ -263,8 +264,12 @@ static meso_result tessellation_geometry(meso_context *ctx, void *state, const m
                                          const meso_mesh **out_mesh) {
     tessellation_state *s = state;
     *out_mesh = NULL;
-    frame_tests ft = {s, frame->view_projection, frame->eye, (float)frame->width,
-                      (float)frame->height, frame->z_near};
+    frame_tests ft = {s,
+                      frame->view_projection,
+                      frame->eye,
+                      (float)frame->width,
+                      (float)frame->height,
+                      frame->z_near};
     displace_edge_tests tests = {tests_vertex_static, tests_vertex, tests_veto, tests_insert, &ft};
     double start = meso_time_seconds();
     s->mesh = NULL;
@@ -289,21 +294,21 @@ static meso_result tessellation_geometry(meso_context *ctx, void *state, const m
     levels[0] = 0;
     for (int d = 0; d < DISPLACE_MAX_DEPTH && used < sizeof(levels) - 32; d++)
         if (s->stats.per_depth[d])
-            used += (size_t)snprintf(levels + used, sizeof(levels) - used, "%s%d: %llu",
-                                     used ? ", " : "", d,
-                                     (unsigned long long)s->stats.per_depth[d]);
-    meso_log_info(ctx,
-                  "%s: tessellation: %llu triangles (per level %s) in %.2f ms; edges %llu: "
-                  "limit test rejected %llu, view test rejected %llu, long edges split %llu, "
-                  "normal test proposed %llu, area test proposed %llu (of the rest), no detail %llu, "
-                  "inserted %llu, recursion limit %llu",
-                  s->surface.object->name, (unsigned long long)s->stats.triangles, levels,
-                  1e3 * (tessellated - start), (unsigned long long)c[COUNT_EDGES],
-                  (unsigned long long)c[COUNT_LIMIT_VETO], (unsigned long long)c[COUNT_VIEW_VETO],
-                  (unsigned long long)c[COUNT_SPAN_YES], (unsigned long long)c[COUNT_NORMAL_YES],
-                  (unsigned long long)c[COUNT_AREA_YES],
-                  (unsigned long long)c[COUNT_NO_DETAIL], (unsigned long long)c[COUNT_INSERTED],
-                  (unsigned long long)s->stats.grid_limited);
+            used +=
+                (size_t)snprintf(levels + used, sizeof(levels) - used, "%s%d: %llu",
+                                 used ? ", " : "", d, (unsigned long long)s->stats.per_depth[d]);
+    meso_log_info(
+        ctx,
+        "%s: tessellation: %llu triangles (per level %s) in %.2f ms; edges %llu: "
+        "limit test rejected %llu, view test rejected %llu, long edges split %llu, "
+        "normal test proposed %llu, area test proposed %llu (of the rest), no detail %llu, "
+        "inserted %llu, recursion limit %llu",
+        s->surface.object->name, (unsigned long long)s->stats.triangles, levels,
+        1e3 * (tessellated - start), (unsigned long long)c[COUNT_EDGES],
+        (unsigned long long)c[COUNT_LIMIT_VETO], (unsigned long long)c[COUNT_VIEW_VETO],
+        (unsigned long long)c[COUNT_SPAN_YES], (unsigned long long)c[COUNT_NORMAL_YES],
+        (unsigned long long)c[COUNT_AREA_YES], (unsigned long long)c[COUNT_NO_DETAIL],
+        (unsigned long long)c[COUNT_INSERTED], (unsigned long long)s->stats.grid_limited);
     *out_mesh = s->mesh;
     return MESO_OK;
 }
@@ -319,7 +324,8 @@ static size_t tessellation_memory(const void *state) {
     const tessellation_state *s = state;
     if (!s) return 0;
     size_t bytes = displace_tessellator_memory(s->tessellator);
-    if (s->sat) bytes += ((size_t)s->sat->width + 1) * ((size_t)s->sat->height + 1) * sizeof(double);
+    if (s->sat)
+        bytes += ((size_t)s->sat->width + 1) * ((size_t)s->sat->height + 1) * sizeof(double);
     if (s->shadows.depth)
         bytes += (size_t)s->shadows.num_lights * (size_t)s->shadows.options.size *
                  (size_t)s->shadows.options.size * sizeof(float);

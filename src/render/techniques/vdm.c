@@ -25,8 +25,8 @@ typedef struct vdm_state {
     bool nearest_silhouette; /* theta_MVM of the nearest texel (§3.2) or interpolated */
     int num_eigen;           /* k used at render time (<= the bake's) */
     int num_mvm;
-    int refine_steps; /* 0: the paper's interpolated d; else refine_hit with this many steps */
-    int shadow_steps; /* blocked_before's probes where the light's corners disagree */
+    int refine_steps;  /* 0: the paper's interpolated d; else refine_hit with this many steps */
+    int shadow_steps;  /* blocked_before's probes where the light's corners disagree */
     float depth_tiles; /* shell depth in tiles (the bake's "depth") */
     float tile_world;  /* world length of one tile: curvature and offsets */
     float shadow_bias; /* shell depths */
@@ -178,8 +178,8 @@ static meso_result vdm_prepare(meso_context *ctx, const meso_scene *scene,
     refine_steps = options.refine_steps;
     shadow_steps = options.shadow_steps;
     /* Interpolated d errs by a good part of a shell depth at jumps; refined, by far less. */
-    double bias = options.shadow_bias >= 0.0f ? options.shadow_bias
-                                              : (refine_steps > 0 ? 0.05 : 0.2);
+    double bias =
+        options.shadow_bias >= 0.0f ? options.shadow_bias : (refine_steps > 0 ? 0.05 : 0.2);
     float tile = meso_mesh_tile_length(object->mesh);
     if (!(tile > 0.0f))
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
@@ -446,7 +446,7 @@ static inline bool sorted_corners(const float in[8], float out[8]) {
         hi = fmaxf(hi, in[i]);
     }
     if (fmaxf(hi, 0.0f) - fmaxf(lo, 0.0f) < 0.02f) return false; /* most pixels: no sort */
-    for (int i = 0; i < 8; i++) { /* insertion sort */
+    for (int i = 0; i < 8; i++) {                                /* insertion sort */
         float x = in[i] > 0.0f ? in[i] : 0.0f;
         int j = i;
         for (; j > 0 && out[j - 1] > x; j--) out[j] = out[j - 1];
@@ -457,11 +457,10 @@ static inline bool sorted_corners(const float in[8], float out[8]) {
 
 /* r(t) of refine_hit: >= 0 where the point t shell depths along the ray is below the surface. */
 #define RESIDUAL(t)                                                                                \
-    ((t) * vb.z - (1.0f - meso_heightfield_sample(hf, uv.x - (t) * step_u, uv.y - (t) * step_v)))
+    ((t)*vb.z - (1.0f - meso_heightfield_sample(hf, uv.x - (t)*step_u, uv.y - (t)*step_v)))
 
-static float refine_hit(const meso_heightfield *hf, meso_vec2 uv, meso_vec3 vb,
-                        float depth_tiles, const float corners_in[8], float d, int steps,
-                        float past_every_corner) {
+static float refine_hit(const meso_heightfield *hf, meso_vec2 uv, meso_vec3 vb, float depth_tiles,
+                        const float corners_in[8], float d, int steps, float past_every_corner) {
     float corners[8];
     if (!sorted_corners(corners_in, corners)) return d;
     float step_u = depth_tiles * vb.x, step_v = depth_tiles * vb.y;
