@@ -320,24 +320,35 @@ static meso_result parse_height_map_or_solid(const scene_parser *p, const cJSON 
 
 /* ---- Material ----------------------------------------------------------------------------- */
 
-/* A colour map at a resolved path, converted from sRGB to linear. */
-static meso_result load_color_map_file(const scene_parser *p, const scene_key *key,
-                                       const char *path, meso_wrap wrap,
-                                       meso_texture **out_texture) {
+/* A map's PNG at a resolved path, its memory accounted: the image and the texture made from
+ * it with its mip levels (a third more), plus extra_per_texel bytes a texel. */
+static meso_result load_map_image(const scene_parser *p, const scene_key *key, const char *path,
+                                  uint64_t extra_per_texel, meso_image **out_image) {
+    *out_image = NULL;
     meso_result r = scene_check_readable(p, key, path);
     if (r != MESO_OK) return r;
     meso_image *image = NULL;
     r = meso_image_load_png(p->ctx, path, &image);
     if (r != MESO_OK) return scene_relog_at_key(p, key, r);
-    /* the image and the texture made from it with its mip levels (a third more), and its
-     * 8-bit sRGB copy (4 bytes a texel) */
     uint64_t texels = (uint64_t)image->width * (uint64_t)image->height;
     uint64_t image_bytes = texels * (uint64_t)image->channels * sizeof(float);
-    if ((r = scene_account_memory(p, key, image_bytes + image_bytes / 3 * 4 + texels * 4)) !=
-        MESO_OK) {
+    r = scene_account_memory(p, key, image_bytes + image_bytes / 3 * 4 + texels * extra_per_texel);
+    if (r != MESO_OK) {
         meso_image_destroy(image);
         return r;
     }
+    *out_image = image;
+    return MESO_OK;
+}
+
+/* A colour map at a resolved path, converted from sRGB to linear; with its 8-bit sRGB copy
+ * (4 bytes a texel). */
+static meso_result load_color_map_file(const scene_parser *p, const scene_key *key,
+                                       const char *path, meso_wrap wrap,
+                                       meso_texture **out_texture) {
+    meso_image *image = NULL;
+    meso_result r = load_map_image(p, key, path, 4, &image);
+    if (r != MESO_OK) return r;
     /* Colour maps are authored in sRGB; shading is linear (DESIGN.md). Alpha stays linear. */
     int colour_channels = image->channels >= 3 ? 3 : 1;
     size_t n = (size_t)image->width * (size_t)image->height;
@@ -364,22 +375,14 @@ static meso_result load_color_map(const scene_parser *p, const scene_key *key, c
 static meso_result load_normal_map_file(const scene_parser *p, const scene_key *key,
                                         const char *path, meso_wrap wrap,
                                         meso_texture **out_texture) {
-    meso_result r = scene_check_readable(p, key, path);
-    if (r != MESO_OK) return r;
     meso_image *image = NULL;
-    r = meso_image_load_png(p->ctx, path, &image);
-    if (r != MESO_OK) return scene_relog_at_key(p, key, r);
+    meso_result r = load_map_image(p, key, path, 0, &image);
+    if (r != MESO_OK) return r;
     if (image->channels < 3) {
+        int channels = image->channels;
         meso_image_destroy(image);
         return scene_error(p, MESO_ERROR_FORMAT, key,
-                           "a normal map needs RGB channels (this PNG has %d)", image->channels);
-    }
-    /* the image and the texture made from it with its mip levels (a third more) */
-    uint64_t texels = (uint64_t)image->width * (uint64_t)image->height;
-    uint64_t image_bytes = texels * (uint64_t)image->channels * sizeof(float);
-    if ((r = scene_account_memory(p, key, image_bytes + image_bytes / 3 * 4)) != MESO_OK) {
-        meso_image_destroy(image);
-        return r;
+                           "a normal map needs RGB channels (this PNG has %d)", channels);
     }
     r = meso_texture_create(p->ctx, image, wrap, true, out_texture);
     meso_image_destroy(image);
