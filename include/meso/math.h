@@ -160,6 +160,29 @@ static inline meso_mat4 meso_mat4_normal_matrix(meso_mat4 a) {
                         c02 * inv, c12 * inv, c22 * inv, 0, 0, 0, 0, 1}};
 }
 
+/* ---- Multilinear lookups of sampled tables (the VDM, GDM and RTV bakes and their techniques) */
+
+/* One axis of a multilinear lookup: lower index, upper index, weight of the upper. */
+typedef struct meso_axis {
+    int i0, i1;
+    float w;
+} meso_axis;
+
+/* Sample position x in [0, n - 1] clamped at both ends. */
+static inline meso_axis meso_axis_clamp(float x, int n) {
+    if (n <= 1 || x <= 0.0f) return (meso_axis){0, 0, 0.0f};
+    if (x >= (float)(n - 1)) return (meso_axis){n - 1, n - 1, 0.0f};
+    int i = (int)x;
+    return (meso_axis){i, i + 1, x - (float)i};
+}
+/* Sample position x wrapped with period n (x finite, |x| far below 2^31). */
+static inline meso_axis meso_axis_wrap(float x, int n) {
+    float f = floorf(x);
+    int i = (int)f % n;
+    i += i < 0 ? n : 0;
+    return (meso_axis){i, i + 1 == n ? 0 : i + 1, x - f};
+}
+
 /* sRGB transfer functions (IEC 61966-2-1). */
 static inline float meso_srgb_to_linear(float c) {
     return c <= 0.04045f ? c / 12.92f : powf((c + 0.055f) / 1.055f, 2.4f);

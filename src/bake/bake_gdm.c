@@ -714,7 +714,7 @@ static float tile_fraction(float x) {
 }
 
 typedef struct lookup_axes {
-    meso_bake_axis x, y, z, theta, phi;
+    meso_axis x, y, z, theta, phi;
 } lookup_axes;
 
 /* The sample positions of uvw and direction on the five axes (bake_gdm.h, "Conventions"):
@@ -724,27 +724,27 @@ static lookup_axes axes_of(const meso_gdm_desc *d, meso_vec3 uvw, meso_vec3 dire
     lookup_axes a;
     float u = tile_fraction(uvw.x), v = tile_fraction(uvw.y);
     float w = isfinite(uvw.z) ? fminf(fmaxf(uvw.z, 0.0f), 1.0f) : 0.0f;
-    a.x = meso_bake_axis_wrap(u * (float)d->width - 0.5f, d->width);
-    a.y = meso_bake_axis_wrap((1.0f - v) * (float)d->height - 0.5f, d->height);
-    a.z = meso_bake_axis_clamp(w * (float)(d->layers - 1), d->layers);
+    a.x = meso_axis_wrap(u * (float)d->width - 0.5f, d->width);
+    a.y = meso_axis_wrap((1.0f - v) * (float)d->height - 0.5f, d->height);
+    a.z = meso_axis_clamp(w * (float)(d->layers - 1), d->layers);
     float length = meso_vec3_length(direction);
     float cos_theta = length > 0.0f && isfinite(length) ? -direction.z / length : 1.0f;
     cos_theta = fminf(fmaxf(cos_theta, -1.0f), 1.0f);
     float theta = acosf(cos_theta);
     float phi = length > 0.0f && isfinite(length) ? atan2f(direction.y, direction.x) : 0.0f;
     if (phi < 0.0f) phi += (float)TWO_PI;
-    a.theta = meso_bake_axis_clamp(theta * (float)d->num_theta / (float)PI - 0.5f, d->num_theta);
-    a.phi = meso_bake_axis_wrap(phi * (float)d->num_phi / (float)TWO_PI, d->num_phi);
+    a.theta = meso_axis_clamp(theta * (float)d->num_theta / (float)PI - 0.5f, d->num_theta);
+    a.phi = meso_axis_wrap(phi * (float)d->num_phi / (float)TWO_PI, d->num_phi);
     return a;
 }
 
 /* Weight of corner bit `bit` set or not along one axis. */
-static float corner_weight(meso_bake_axis axis, int set) { return set ? axis.w : 1.0f - axis.w; }
+static float corner_weight(meso_axis axis, int set) { return set ? axis.w : 1.0f - axis.w; }
 
 /* Corner `corner` (bits: a, b, c) of a trilinear interpolation over three axes: its indices
  * and its weight. */
-static float trilinear_corner(int corner, meso_bake_axis a, meso_bake_axis b, meso_bake_axis c,
-                              int *out_a, int *out_b, int *out_c) {
+static float trilinear_corner(int corner, meso_axis a, meso_axis b, meso_axis c, int *out_a,
+                              int *out_b, int *out_c) {
     *out_a = corner & 1 ? a.i1 : a.i0;
     *out_b = corner & 2 ? b.i1 : b.i0;
     *out_c = corner & 4 ? c.i1 : c.i0;

@@ -49,25 +49,4 @@ void meso_bake_round_to_halves(float *values, uint16_t *out_halves, size_t count
 /* Widen count IEEE halves to floats. */
 void meso_bake_halves_to_floats(const uint16_t *halves, float *out_values, size_t count);
 
-/* One axis of a multilinear lookup: lower index, upper index, weight of the upper. */
-typedef struct meso_bake_axis {
-    int i0, i1;
-    float w;
-} meso_bake_axis;
-
-/* Sample position x in [0, n - 1] clamped at both ends. */
-static inline meso_bake_axis meso_bake_axis_clamp(float x, int n) {
-    if (n <= 1 || x <= 0.0f) return (meso_bake_axis){0, 0, 0.0f};
-    if (x >= (float)(n - 1)) return (meso_bake_axis){n - 1, n - 1, 0.0f};
-    int i = (int)x;
-    return (meso_bake_axis){i, i + 1, x - (float)i};
-}
-/* Sample position x wrapped with period n (x finite, |x| far below 2^31). */
-static inline meso_bake_axis meso_bake_axis_wrap(float x, int n) {
-    float f = floorf(x);
-    int i = (int)f % n;
-    i += i < 0 ? n : 0;
-    return (meso_bake_axis){i, i + 1 == n ? 0 : i + 1, x - f};
-}
-
 #endif

@@ -538,7 +538,7 @@ meso_vdm_view meso_vdm_get_view(const meso_vdm *vdm) {
 }
 
 typedef struct lookup_axes {
-    meso_bake_axis x, y, phi, theta, c;
+    meso_axis x, y, phi, theta, c;
 } lookup_axes;
 
 static lookup_axes axes_of(const meso_vdm *vdm, float u, float v, float theta, float phi, float c) {
@@ -546,20 +546,19 @@ static lookup_axes axes_of(const meso_vdm *vdm, float u, float v, float theta, f
     lookup_axes a;
     float x = u * (float)d->width - 0.5f, y = (1.0f - v) * (float)d->height - 0.5f;
     if (vdm->wrap == MESO_WRAP_CLAMP) {
-        a.x = meso_bake_axis_clamp(x, d->width);
-        a.y = meso_bake_axis_clamp(y, d->height);
+        a.x = meso_axis_clamp(x, d->width);
+        a.y = meso_axis_clamp(y, d->height);
     } else {
-        a.x = meso_bake_axis_wrap(x, d->width);
-        a.y = meso_bake_axis_wrap(y, d->height);
+        a.x = meso_axis_wrap(x, d->width);
+        a.y = meso_axis_wrap(y, d->height);
     }
-    a.phi = meso_bake_axis_wrap(phi * (float)d->num_phi / (float)TWO_PI, d->num_phi);
-    a.theta =
-        meso_bake_axis_clamp(theta * (float)d->num_theta / (float)HALF_PI - 0.5f, d->num_theta);
+    a.phi = meso_axis_wrap(phi * (float)d->num_phi / (float)TWO_PI, d->num_phi);
+    a.theta = meso_axis_clamp(theta * (float)d->num_theta / (float)HALF_PI - 0.5f, d->num_theta);
     float cn = d->num_curvatures > 1
                    ? (c - d->curvature_min) / (d->curvature_max - d->curvature_min) *
                          (float)(d->num_curvatures - 1)
                    : 0.0f;
-    a.c = meso_bake_axis_clamp(cn, d->num_curvatures);
+    a.c = meso_axis_clamp(cn, d->num_curvatures);
     return a;
 }
 

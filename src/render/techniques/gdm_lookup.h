@@ -62,24 +62,6 @@ static inline size_t gdm_lookup_table_bytes(const gdm_lookup_table *t) {
            sizeof(float);
 }
 
-typedef struct gdm_axis {
-    int i0, i1;
-    float w;
-} gdm_axis;
-
-/* bake_gdm.h's sampling: clamped (z, theta) and wrapped (x, y, phi) sample positions. */
-static inline gdm_axis gdm_axis_clamp(float x, int n) {
-    if (n <= 1 || x <= 0.0f) return (gdm_axis){0, 0, 0.0f};
-    if (x >= (float)(n - 1)) return (gdm_axis){n - 1, n - 1, 0.0f};
-    int i = (int)x;
-    return (gdm_axis){i, i + 1, x - (float)i};
-}
-static inline gdm_axis gdm_axis_wrap(float x, int n) {
-    float f = floorf(x);
-    int i = (int)f % n;
-    i += i < 0 ? n : 0;
-    return (gdm_axis){i, i + 1 == n ? 0 : i + 1, x - f};
-}
 static inline float gdm_tile_fraction(float x) {
     if (!isfinite(x)) return 0.0f;
     float f = x - floorf(x);
@@ -98,9 +80,9 @@ static inline float gdm_lookup8(const gdm_lookup_table *t, meso_vec3 uvw, meso_v
     const float two_pi = 6.28318530717958647692f, pi = 3.14159265358979323846f;
     float u = gdm_tile_fraction(uvw.x), v = gdm_tile_fraction(uvw.y);
     float w = isfinite(uvw.z) ? fminf(fmaxf(uvw.z, 0.0f), 1.0f) : 0.0f;
-    gdm_axis ax = gdm_axis_wrap(u * (float)t->width - 0.5f, t->width);
-    gdm_axis ay = gdm_axis_wrap((1.0f - v) * (float)t->height - 0.5f, t->height);
-    gdm_axis az = gdm_axis_clamp(w * (float)(t->layers - 1), t->layers);
+    meso_axis ax = meso_axis_wrap(u * (float)t->width - 0.5f, t->width);
+    meso_axis ay = meso_axis_wrap((1.0f - v) * (float)t->height - 0.5f, t->height);
+    meso_axis az = meso_axis_clamp(w * (float)(t->layers - 1), t->layers);
     float length = meso_vec3_length(direction);
     bool valid = length > 0.0f && isfinite(length);
     float cos_theta = valid ? -direction.z / length : 1.0f;
@@ -108,8 +90,8 @@ static inline float gdm_lookup8(const gdm_lookup_table *t, meso_vec3 uvw, meso_v
     float theta = acosf(cos_theta);
     float phi = valid ? atan2f(direction.y, direction.x) : 0.0f;
     if (phi < 0.0f) phi += two_pi;
-    gdm_axis at = gdm_axis_clamp(theta * (float)t->num_theta / pi - 0.5f, t->num_theta);
-    gdm_axis ap = gdm_axis_wrap(phi * (float)t->num_phi / two_pi, t->num_phi);
+    meso_axis at = meso_axis_clamp(theta * (float)t->num_theta / pi - 0.5f, t->num_theta);
+    meso_axis ap = meso_axis_wrap(phi * (float)t->num_phi / two_pi, t->num_phi);
     int lanes = 8 * t->chunks;
     /* E(z, theta), bilinear */
     const float *e00 = t->eigen + ((size_t)az.i0 * t->num_theta + (size_t)at.i0) * lanes;

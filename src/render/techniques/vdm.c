@@ -244,26 +244,8 @@ static meso_result vdm_prepare(meso_context *ctx, const meso_scene *scene,
 
 /* ---- Lookups (multilinear over x, y, phi, theta, c; §4: "interpolated") ------------------- */
 
-typedef struct axis {
-    int i0, i1;
-    float w;
-} axis;
-
-static inline axis axis_clamp(float x, int n) {
-    if (n <= 1 || x <= 0.0f) return (axis){0, 0, 0.0f};
-    if (x >= (float)(n - 1)) return (axis){n - 1, n - 1, 0.0f};
-    int i = (int)x;
-    return (axis){i, i + 1, x - (float)i};
-}
-static inline axis axis_wrap(float x, int n) {
-    float f = floorf(x);
-    int i = (int)f % n;
-    i += i < 0 ? n : 0;
-    return (axis){i, i + 1 == n ? 0 : i + 1, x - f};
-}
-
 typedef struct texel_axes {
-    axis x, y, phi;
+    meso_axis x, y, phi;
 } texel_axes;
 
 static inline texel_axes texel_axes_of(const vdm_state *s, meso_vec2 uv, float phi, int width,
@@ -272,13 +254,13 @@ static inline texel_axes texel_axes_of(const vdm_state *s, meso_vec2 uv, float p
     float x = uv.x * (float)width - 0.5f, y = (1.0f - uv.y) * (float)height - 0.5f;
     texel_axes a;
     if (s->clamp) {
-        a.x = axis_clamp(x, width);
-        a.y = axis_clamp(y, height);
+        a.x = meso_axis_clamp(x, width);
+        a.y = meso_axis_clamp(y, height);
     } else {
-        a.x = axis_wrap(x, width);
-        a.y = axis_wrap(y, height);
+        a.x = meso_axis_wrap(x, width);
+        a.y = meso_axis_wrap(y, height);
     }
-    a.phi = axis_wrap(phi * (float)v->num_phi / (2.0f * MESO_PI), v->num_phi);
+    a.phi = meso_axis_wrap(phi * (float)v->num_phi / (2.0f * MESO_PI), v->num_phi);
     return a;
 }
 
@@ -293,16 +275,17 @@ static inline size_t level_row(int width, int num_phi, int ix, int iy, int ip) {
 typedef struct column_set {
     int col[4];
     float w[4];
-    axis c;
+    meso_axis c;
 } column_set;
 
 static inline column_set columns_of(const meso_vdm_view *v, float theta, float c) {
-    axis t = axis_clamp(theta * (float)v->num_theta / (0.5f * MESO_PI) - 0.5f, v->num_theta);
+    meso_axis t =
+        meso_axis_clamp(theta * (float)v->num_theta / (0.5f * MESO_PI) - 0.5f, v->num_theta);
     float cn = v->num_curvatures > 1
                    ? (c - v->curvature_min) / (v->curvature_max - v->curvature_min) *
                          (float)(v->num_curvatures - 1)
                    : 0.0f;
-    axis ca = axis_clamp(cn, v->num_curvatures);
+    meso_axis ca = meso_axis_clamp(cn, v->num_curvatures);
     column_set cs = {
         {ca.i0 * v->num_theta + t.i0, ca.i0 * v->num_theta + t.i1, ca.i1 * v->num_theta + t.i0,
          ca.i1 * v->num_theta + t.i1},
