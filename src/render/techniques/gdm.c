@@ -49,7 +49,7 @@ typedef struct gdm_options {
     bool compressed, shadows;
     int normals, eigenmaps, resolution, layers, num_theta, num_phi, refine_steps, shadow_steps;
     float shadow_bias, hit_margin;
-    bool gi, macro_shadows;
+    bool gi, macro_shadows, gi_inside_sky;
     int gi_resolution, gi_layers, gi_eigen;
 } gdm_options;
 
@@ -99,6 +99,11 @@ static const meso_technique_option gdm_option_table[] = {
                     "transfer volume (shadowed, interreflected; docs/techniques/gdm-gi.md); "
                     "0: the shading model's unshadowed SH ambient",
                     gdm_options, gi),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, gi_inside_sky, 0, 1, 0,
+                    "gi, with macro_shadows: a hit seen from inside the base mesh takes the sky "
+                    "through the shell (64 directions, multi-bounce fit) instead of the "
+                    "unshadowed SH ambient; slow (docs/techniques/gdm-gi.md)",
+                    gdm_options, gi_inside_sky),
     MESO_OPTION_ROW(MESO_OPTION_INT, gi_resolution, 4, 256, 32, "gi: RTV voxels a side in u and v",
                     gdm_options, gi_resolution),
     MESO_OPTION_ROW(MESO_OPTION_INT, gi_layers, 2, 64, 8, "gi: RTV voxels in depth (w)",
@@ -298,7 +303,8 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
         (r = gdm_gi_create(ctx, scene, object,
                            &(gdm_gi_desc){.resolution = options.gi_resolution,
                                           .layers = options.gi_layers,
-                                          .eigen = options.gi_eigen},
+                                          .eigen = options.gi_eigen,
+                                          .shell = options.gi_inside_sky ? s->shell : NULL},
                            &s->gi)) != MESO_OK)
         goto fail;
     *out_state = s;

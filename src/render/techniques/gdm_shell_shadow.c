@@ -227,6 +227,10 @@ static bool next_entry(const gdm_shell *shell, size_t current, meso_vec3 origin,
     return true;
 }
 
+size_t gdm_shell_prism_index(const gdm_shell *shell, const meso_prism *prism) {
+    return (size_t)(prism - shell->desc.layer->prisms);
+}
+
 bool gdm_shell_light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw, meso_vec3 light,
                              bool slab_clear) {
     const gdm_shell_desc *d = &shell->desc;

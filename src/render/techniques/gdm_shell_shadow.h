@@ -54,6 +54,9 @@ void gdm_shell_destroy(gdm_shell *shell);
 /* Bytes held (the BVH estimated). */
 size_t gdm_shell_memory(const gdm_shell *shell);
 
+/* The index of one of the layer's prisms (a pointer into layer->prisms). Pure. */
+size_t gdm_shell_prism_index(const gdm_shell *shell, const meso_prism *prism);
+
 /* Is the light along unit object-space direction `light` seen from texture point uvw of prism
  * `prism` (a point of the mesostructure's surface)?
  * slab_clear true: the caller's own §3.2 test found the light unblocked up to the slab's top;
