@@ -218,11 +218,61 @@ static void test_shell_shadows_darken_and_are_deterministic(void **state) {
     meso_framebuffer_destroy(images[1]);
 }
 
+/* GDM-GI's hits seen from inside the base mesh (a grid plane seen from below, under a uniform
+ * sky of radiance 1, no lights): gi_inside_sky 0 gives them the unshadowed sky, E / pi = 1
+ * times the albedo; 1 the sky through the shell, which the grid's bars block in part (the
+ * multi-bounce fit gives some back): darker on average, nowhere brighter, the same bits on 1
+ * and 2 threads. */
+static void test_inside_sky_is_shadowed_by_the_shell(void **state) {
+    (void)state;
+    const char json[] =
+        "{\"image\": {\"width\": 48, \"height\": 48, \"encoding\": \"linear\"},"
+        " \"camera\": {\"eye\": [0.3, -1.4, 1.0], \"target\": [0, 0, 0], \"fov_y_deg\": 40},"
+        " \"ambient\": [0, 0, 0], \"environment\": {\"sky\": {\"zenith\": [1, 1, 1],"
+        " \"horizon\": [1, 1, 1], \"ground\": [1, 1, 1], \"sun\": false, \"width\": 32}},"
+        " \"objects\": [{\"shape\": \"plane\", \"size\": 2, \"uv_scale\": [2, 2],"
+        " \"mesostructure\": {\"solid\": {\"procedural\": \"grid\"}, \"depth\": 0.1},"
+        " \"material\": {\"albedo\": [0.5, 0.5, 0.5]}, \"technique\": \"gdm\"}]}";
+    meso_framebuffer *fb[3];
+    for (int run = 0; run < 3; run++) {
+        meso_context *ctx = test_context(run == 2 ? 1 : 2);
+        meso_scene *scene = NULL;
+        if (meso_scene_parse(ctx, json, "inside.json", NULL, &scene) != MESO_OK)
+            fail_msg("scene: %s", meso_context_last_error(ctx));
+        meso_option options[NUM_SMALL_BAKE + 1];
+        memcpy(options, small_bake, sizeof small_bake);
+        options[NUM_SMALL_BAKE] = (meso_option){"gdm", "gi_inside_sky", run > 0};
+        meso_render_desc desc = {.options = options, .num_options = NUM_SMALL_BAKE + 1};
+        if (meso_render_scene(ctx, scene, &desc, &fb[run]) != MESO_OK)
+            fail_msg("gdm: %s", meso_context_last_error(ctx));
+        meso_scene_destroy(scene);
+        meso_context_destroy(ctx);
+    }
+    double sum[2] = {0.0, 0.0};
+    size_t covered = 0, pixels = (size_t)fb[0]->width * (size_t)fb[0]->height;
+    for (size_t p = 0; p < pixels; p++) {
+        if (!(fb[0]->coverage[p] > 0.0f)) continue;
+        covered++;
+        for (int run = 0; run < 2; run++) sum[run] += fb[run]->color[3 * p + 1];
+        /* 1 %: the 64 directions' quadrature against the SH's exact irradiance */
+        if (fb[1]->color[3 * p + 1] > 1.01f * fb[0]->color[3 * p + 1])
+            fail_msg("pixel %zu: %g through the shell, %g unshadowed", p,
+                     (double)fb[1]->color[3 * p + 1], (double)fb[0]->color[3 * p + 1]);
+    }
+    print_message("%zu pixels: mean %.4f unshadowed, %.4f through the shell\n", covered,
+                  sum[0] / (double)covered, sum[1] / (double)covered);
+    assert_true(covered > 500);
+    assert_true(sum[1] < 0.97 * sum[0] && sum[1] > 0.3 * sum[0]);
+    assert_true(same_image(fb[1], fb[2]));
+    for (int run = 0; run < 3; run++) meso_framebuffer_destroy(fb[run]);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_light_through_a_hole_of_another_prism_lights_the_point),
         cmocka_unit_test(test_height_field_on_a_plane_is_unchanged),
         cmocka_unit_test(test_shell_shadows_darken_and_are_deterministic),
+        cmocka_unit_test(test_inside_sky_is_shadowed_by_the_shell),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

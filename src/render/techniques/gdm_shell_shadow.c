@@ -194,11 +194,15 @@ static bool crossing_blocked(const gdm_shell_desc *d, const crossing *c) {
     return segment_blocked(d, c->t_in, meso_vec3_scale(segment, 1.0f / length), length);
 }
 
-/* A ray leaving the slab's bottom at texture point t: into the object's body for a height
- * field, into solid where the solid's floor is (gdm.c's floor_is_solid; its hits count the
- * same floor). */
-static bool floor_blocks(const gdm_shell_desc *d, meso_vec3 t) {
-    return d->heightfield || inside(d, (meso_vec3){t.x, t.y, 1.0f - 1e-3f});
+/* A ray leaving the slab's bottom: into the object's body for a height field; for a solid,
+ * through solid where the solid's floor is (gdm.c's floor_is_solid; its hits count the same
+ * floor) -- unless the ray starts on that floor (a point on a bar's underside, its light
+ * below: the stretch is shorter than the margin), which it leaves instead of crossing. */
+static bool floor_blocks(const gdm_shell_desc *d, const crossing *c) {
+    if (d->heightfield) return true;
+    if (!(meso_vec3_length(meso_vec3_sub(c->t_out, c->t_in)) > d->shadow_bias * d->voxel.z))
+        return false;
+    return inside(d, (meso_vec3){c->t_out.x, c->t_out.y, 1.0f - 1e-3f});
 }
 
 /* The next prism face the ray origin + x light (x > 0) enters, not one of prism `current`'s:
@@ -260,7 +264,7 @@ bool gdm_shell_light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw
     for (int n = 0; n < WALK_MAX_PRISMS; n++) {
         if (tested && crossing_blocked(d, &c)) return false;
         if (c.exit_slot == MESO_PRISM_BOTTOM) {
-            if (floor_blocks(d, c.t_out)) return false;
+            if (floor_blocks(d, &c)) return false;
             tested = true; /* out of the slab into the object's open inside */
         } else if (c.exit_slot == MESO_PRISM_TOP) {
             tested = true;
