@@ -154,8 +154,8 @@ static bool segment_blocked(const gdm_shell_desc *d, meso_vec3 t0, meso_vec3 dir
     float margin = d->shadow_bias * d->voxel.z;
     if (!(length > margin)) return false;
     float hit = lookup(d, t0, dir);
+    if (d->refine_steps <= 0) return hit < length - margin;
     if (!(hit < length - margin)) return false;
-    if (d->refine_steps <= 0) return true;
     float past = fminf(fmaxf(hit, 0.0f) + 0.5f * d->refine_window, length);
     if (inside(d, meso_vec3_madd(t0, dir, past))) return true;
     for (int k = 0; k < d->shadow_steps; k++) {
@@ -256,13 +256,29 @@ bool gdm_shell_light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw
     }
     meso_vec3 origin = meso_prism_map(first, d->mesh, layer->depth, t0, -1);
     /* tested: the prisms of this stretch are tested (after the ray left the slab the caller's
-     * test covered) */
+     * test covered). That test ran in one flat slab along the point's own frame: it covered
+     * the ray up to where a flat shell's top would be, w depth / (N . L) away (5 % more for
+     * rounding). Where the surface curves over the point (under a vase's flared rim) the ray
+     * stays in the shell longer, crossing other prisms through their fins: from there on they
+     * are tested. */
     bool tested = !slab_clear;
+    float reach = INFINITY;
+    if (slab_clear) {
+        float b[3];
+        meso_prism_weights(first, (meso_vec2){uvw.x, uvw.y}, b);
+        const uint32_t *v = first->vertices;
+        meso_vec3 n = meso_vec3_normalize(
+            meso_vec3_barycentric(d->mesh->normals[v[0]], d->mesh->normals[v[1]],
+                                  d->mesh->normals[v[2]], b[0], b[1], b[2]));
+        reach = 1.05f * uvw.z * layer->depth / fmaxf(meso_vec3_dot(n, light), 1e-3f) +
+                2.0f * shell->step;
+    }
     crossing c;
     size_t current = prism;
     if (!cross_prism(layer, prism, origin, t0, light, -1, &c)) return true;
     for (int n = 0; n < WALK_MAX_PRISMS; n++) {
         if (tested && crossing_blocked(d, &c)) return false;
+        if (meso_vec3_length(meso_vec3_sub(c.p_out, origin)) > reach) tested = true;
         if (c.exit_slot == MESO_PRISM_BOTTOM) {
             if (floor_blocks(d, &c)) return false;
             tested = true; /* out of the slab into the object's open inside */
