@@ -400,7 +400,7 @@ void main() {
         slot = GDM_FIN + (face - n) % 6;
     }
     vec3 entry = v_position;
-    vec3 t_in = gdm_face_uvw(face, entry);
+    vec3 t_in = gdm_face_uvw(face, entry); // the CPU interpolates it: the same up to rounding
     vec3 view = normalize(entry - u_eye);
     float t;
     int exit_slot;
