@@ -118,9 +118,6 @@ static meso_result buffer_texture(meso_context *ctx, const meso_object *object, 
     return gl_check_upload(ctx, object, "gdm: its tables");
 }
 
-#define PRISM_TEXELS 24
-#define FACE_TEXELS 5
-
 /* Per prism: planes (8), fin convexity, uv[0] and the UV inverse, the vertices' P, N, T, B
  * (T, B of the flat triangle when the mesh has none: gdm.c frame_at). */
 static void pack_prism(const meso_prism_layer *layer, const meso_mesh *mesh, size_t i, float *p) {
@@ -165,6 +162,21 @@ static void pack_face(const meso_prism_layer *layer, size_t f, float *p) {
     }
 }
 
+float *gl_gdm_prism_texels(const meso_prism_layer *layer, const meso_mesh *mesh) {
+    size_t n = layer->num_prisms;
+    float *out = calloc((n ? n : 1) * GL_GDM_PRISM_TEXELS * 4, sizeof(float));
+    for (size_t i = 0; out && i < n; i++)
+        pack_prism(layer, mesh, i, out + i * GL_GDM_PRISM_TEXELS * 4);
+    return out;
+}
+
+float *gl_gdm_face_texels(const meso_prism_layer *layer) {
+    size_t n = layer->faces->num_triangles;
+    float *out = calloc((n ? n : 1) * GL_GDM_FACE_TEXELS * 4, sizeof(float));
+    for (size_t f = 0; out && f < n; f++) pack_face(layer, f, out + f * GL_GDM_FACE_TEXELS * 4);
+    return out;
+}
+
 static meso_result upload(meso_context *ctx, const meso_object *object, const gl_gdm_table *t,
                           bool normals, gl_gdm *g, size_t *memory) {
     const meso_gdm_view *v = &t->view;
@@ -179,8 +191,8 @@ static meso_result upload(meso_context *ctx, const meso_object *object, const gl
     float *weights = gl_gdm_weights_rgba(t), *eigen = gl_gdm_eigen_rgba(t);
     uint16_t *halves = malloc(rows * 4 * (size_t)t->chunks * sizeof(uint16_t));
     float *normal_rgba = calloc(normals ? voxels * 4 : 4, sizeof(float));
-    float *prism_data = calloc((prisms ? prisms : 1) * PRISM_TEXELS * 4, sizeof(float));
-    float *face_data = calloc((faces ? faces : 1) * FACE_TEXELS * 4, sizeof(float));
+    float *prism_data = gl_gdm_prism_texels(layer, object->mesh);
+    float *face_data = gl_gdm_face_texels(layer);
     meso_result r = MESO_OK;
     if (!weights || !eigen || !halves || !normal_rgba || !prism_data || !face_data) {
         r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
@@ -191,9 +203,6 @@ static meso_result upload(meso_context *ctx, const meso_object *object, const gl
         halves[i] = meso_half_from_float(weights[i]);
     for (size_t i = 0; normals && i < voxels; i++)
         memcpy(normal_rgba + 4 * i, v->normals + 3 * i, 3 * sizeof(float));
-    for (size_t i = 0; i < prisms; i++)
-        pack_prism(layer, object->mesh, i, prism_data + i * PRISM_TEXELS * 4);
-    for (size_t f = 0; f < faces; f++) pack_face(layer, f, face_data + f * FACE_TEXELS * 4);
     static const float zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
     if ((r = buffer_texture(ctx, object, GL_RGBA16F, halves, rows * (size_t)t->chunks, 8,
                             &g->buffers[0], &g->textures[0], memory)) != MESO_OK ||
@@ -202,10 +211,11 @@ static meso_result upload(meso_context *ctx, const meso_object *object, const gl
         (r = buffer_texture(ctx, object, GL_RGBA32F, normal_rgba, normals ? voxels : 1, 16,
                             &g->buffers[2], &g->textures[2], memory)) != MESO_OK ||
         (r = buffer_texture(ctx, object, GL_RGBA32F, prism_data,
-                            (prisms ? prisms : 1) * PRISM_TEXELS, 16, &g->buffers[3],
+                            (prisms ? prisms : 1) * GL_GDM_PRISM_TEXELS, 16, &g->buffers[3],
                             &g->textures[3], memory)) != MESO_OK ||
-        (r = buffer_texture(ctx, object, GL_RGBA32F, face_data, (faces ? faces : 1) * FACE_TEXELS,
-                            16, &g->buffers[4], &g->textures[4], memory)) != MESO_OK ||
+        (r = buffer_texture(ctx, object, GL_RGBA32F, face_data,
+                            (faces ? faces : 1) * GL_GDM_FACE_TEXELS, 16, &g->buffers[4],
+                            &g->textures[4], memory)) != MESO_OK ||
         (r = buffer_texture(ctx, object, GL_R32F,
                             g->shape.grid ? (const void *)g->shape.grid : zero, grid, 4,
                             &g->buffers[5], &g->textures[5], memory)) != MESO_OK)

@@ -12,6 +12,7 @@
 #include "meso/bake_gdm.h"
 #include "meso/bake_layers.h"
 #include "meso/bake_vdm.h"
+#include "meso/prism.h"
 #include "meso/gl.h"
 
 /* ---- The shader files, built in (cmake/embed_shaders.cmake) ------------------------------- */
@@ -135,6 +136,14 @@ void gl_gdm_table_release(gl_gdm_table *table);
  * transposed), zero past k: the shader's texel layout. Caller frees; NULL: out of memory. */
 float *gl_gdm_weights_rgba(const gl_gdm_table *table);
 float *gl_gdm_eigen_rgba(const gl_gdm_table *table);
+
+/* The prism layer as the shader reads it: GL_GDM_PRISM_TEXELS RGBA texels a prism (planes,
+ * fin convexity, UV inverse, the vertices' frames; shaders/gdm.frag), GL_GDM_FACE_TEXELS a face
+ * (vertices and their (u, v, w)). Caller frees; NULL: out of memory. */
+#define GL_GDM_PRISM_TEXELS 24
+#define GL_GDM_FACE_TEXELS 5
+float *gl_gdm_prism_texels(const meso_prism_layer *layer, const meso_mesh *mesh);
+float *gl_gdm_face_texels(const meso_prism_layer *layer);
 
 /* The table, the prism layer and the solid uploaded as buffer textures (units 2-7). */
 typedef struct gl_gdm gl_gdm;
