@@ -151,7 +151,7 @@ static void test_vdm_agrees(void **state) {
  * unmoved one at 37-39 dB. So the GL must agree to 40 dB, or, where the CPU does not agree with
  * itself to 40 dB under that nudge, to within 1 dB of that noise floor, and then its coverage
  * may differ off the edge at no more pixels than the nudge flips. A wrong shader is far below
- * either (21 dB for a wrong T_in on weave-torus, docs/gpu.md). */
+ * either (a buggy T_in gave 21 dB on weave-torus, docs/gpu.md). */
 static void check_gdm(const char *example, const meso_option *options, int num_options) {
     meso_context *ctx = test_context(2);
     meso_scene *scene = gl_load_example(ctx, example);
