@@ -1,4 +1,5 @@
-/* meso OpenGL back end: the per-pixel techniques as GLSL shaders (shaders/), drawn headless
+/* meso OpenGL back end: the per-pixel techniques and gdm (its prism layer drawn) as GLSL
+ * shaders (shaders/), drawn headless
  * through EGL with OpenGL 3.3 core, read back into a meso_framebuffer (docs/gpu.md).
  *
  * Usage
@@ -11,7 +12,8 @@
  * The shaders compute what the CPU techniques compute, with the same option tables (each
  * option is the uniform u_<name>), the same texel-centre conventions and the same shading,
  * so a GL image and a CPU image of one scene agree to float rounding except where a search
- * step lands on the other side of an edge (tests/gl). Techniques with a shader:
+ * step lands on the other side of an edge, or where gdm's yes/no decisions flip a pixel as
+ * they do on the CPU under a nudge of the eye (tests/gl). Techniques with a shader:
  * meso_gl_technique_supported. The context is created without any window system: Mesa's
  * surfaceless EGL platform (llvmpipe without a GPU; LIBGL_ALWAYS_SOFTWARE=1 forces it), else
  * the first EGL device.

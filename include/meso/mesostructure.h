@@ -214,6 +214,23 @@ float meso_solid_distance(const meso_solid *solid, meso_vec3 uvw);
  * the kind has an analytic one. Points outward. */
 meso_vec3 meso_solid_gradient(const meso_solid *solid, meso_vec3 uvw);
 
+/* The constants meso_solid_distance computes with, for ports of it to other languages (the GL
+ * back end's shaders/meso_solid.glsl): cell-space terms of the procedural kinds
+ * (mesostructure_solid.c) and, for MESO_SOLID_MESH, the distance grid it interpolates. A
+ * borrowed view, valid while the solid lives. Pure. */
+typedef struct meso_solid_shape {
+    meso_solid_desc desc;     /* defaults filled in */
+    float depth_cells, scale; /* the slab in cells; 1 / (lipschitz max(count, depth_cells)) */
+    float cap;                /* bound on the omitted repeats */
+    float amplitude;          /* weave */
+    float major, half_length; /* chain (major: helix too) */
+    float tilt_cos, tilt_sin, radius; /* squama */
+    const float *grid; /* MESO_SOLID_MESH: n^3 samples, (k n + j) n + i; NULL otherwise */
+    int grid_side;     /* n */
+    bool grid_clamped; /* a model's grid (nodes at i / (n - 1), clamped) */
+} meso_solid_shape;
+meso_solid_shape meso_solid_get_shape(const meso_solid *solid);
+
 #ifdef __cplusplus
 }
 #endif

@@ -236,6 +236,98 @@ static meso_result export_layers(export_object *e, const meso_object *object,
     return r;
 }
 
+/* gdm's table (W half, E and the normals float), its prism layer and, for a tile-mesh solid,
+ * the distance grid as EXRs; the table's sizes and the solid's constants as uniforms. */
+static meso_result export_gdm(export_object *e, const meso_scene *scene, const meso_object *object,
+                              const meso_technique_info *info, const double *options) {
+    gl_gdm_table t;
+    meso_result r = gl_gdm_bake(e->ctx, scene, object, info, options, &t);
+    if (r != MESO_OK) return r;
+    const meso_gdm_view *v = &t.view;
+    meso_prism_layer *layer = NULL;
+    float *weights = gl_gdm_weights_rgba(&t), *eigen = gl_gdm_eigen_rgba(&t);
+    float *prisms = NULL, *faces = NULL;
+    r = meso_prism_layer_create(e->ctx, object->mesh, object->mesostructure.depth, object->name,
+                                &layer);
+    if (r == MESO_OK) {
+        prisms = gl_gdm_prism_texels(layer, object->mesh);
+        faces = gl_gdm_face_texels(layer);
+    }
+    if (r == MESO_OK && (!weights || !eigen || !prisms || !faces))
+        r = meso_log_error(e->ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", e->dir);
+    int lanes = 4 * t.chunks;
+    if (r == MESO_OK)
+        r = save_exr(e, ".gdm-weights.exr", "u_gdm_weights", v->width * v->num_phi, v->height, 'W',
+                     t.k, weights, lanes, false, true,
+                     "W_i(x, y, phi) at pixel (x * num_phi + phi, y), row 0 at v = 1; channels "
+                     "W00.. are i (the shader reads them 4 to an RGBA16F texel of a buffer "
+                     "texture: ((y W + x) P + phi) u_gdm_chunks + j)");
+    if (r == MESO_OK)
+        r = save_exr(e, ".gdm-eigen.exr", "u_gdm_eigen", v->num_theta, v->layers, 'E', t.k, eigen,
+                     lanes, false, false,
+                     "E_i(z, theta) at pixel (theta index, layer z), z = 0 at the mesh; d = sum_i "
+                     "W_i E_i in texture units (a tile 1 wide, the shell 1 deep)");
+    bool heightfield = object->mesostructure.kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD;
+    if (r == MESO_OK)
+        r = save_exr(e, ".gdm-normals.exr", "u_gdm_normals", v->width, v->height * v->layers, 'N',
+                     3, v->normals, 3, false, false,
+                     "unit (u, v, w) normal of the nearest surface at pixel (x, z H + y): layer "
+                     "z's rows under layer z - 1's");
+    if (r == MESO_OK)
+        r = save_exr(e, ".gdm-prisms.exr", "u_gdm_prisms", GL_GDM_PRISM_TEXELS,
+                     (int)layer->num_prisms, 'P', 4, prisms, 4, false, false,
+                     "row = prism (base triangle), pixel k = texel k of shaders/gdm.frag's "
+                     "layout (planes, fin convexity, UV inverse, vertices' P, N, T, B), world "
+                     "space");
+    if (r == MESO_OK)
+        r = save_exr(e, ".gdm-faces.exr", "u_gdm_faces", GL_GDM_FACE_TEXELS,
+                     (int)layer->faces->num_triangles, 'F', 4, faces, 4, false, false,
+                     "row = face (gl_PrimitiveID: tops, fins, bottoms), pixels: (P_c, u_c) c = "
+                     "0..2, (v_0, w_0, v_1, w_1), (v_2, w_2, 0, 0); draw these triangles");
+    meso_solid_shape shape = {0};
+    if (!heightfield) shape = meso_solid_get_shape(object->mesostructure.solid);
+    if (r == MESO_OK && shape.grid)
+        r = save_exr(e, ".solid-grid.exr", "u_solid_grid", shape.grid_side,
+                     shape.grid_side * shape.grid_side, 'G', 1, shape.grid, 1, false, false,
+                     "signed distance samples of the tile mesh at pixel (i, k n + j)");
+    if (r == MESO_OK) {
+        float sizes[3] = {(float)v->width, (float)v->height, (float)v->layers};
+        float directions[2] = {(float)v->num_theta, (float)v->num_phi};
+        float values[15] = {(float)t.chunks,
+                            (float)layer->num_prisms,
+                            heightfield,
+                            (float)shape.desc.kind,
+                            (float)shape.desc.count,
+                            shape.desc.thickness,
+                            shape.depth_cells,
+                            shape.scale,
+                            shape.cap,
+                            shape.amplitude,
+                            shape.major,
+                            shape.half_length,
+                            shape.radius,
+                            (float)shape.grid_side,
+                            shape.grid_clamped};
+        const char *names[15] = {
+            "u_gdm_chunks",   "u_num_prisms",      "u_gdm_heightfield",   "u_solid_kind",
+            "u_solid_count",  "u_solid_thickness", "u_solid_depth_cells", "u_solid_scale",
+            "u_solid_cap",    "u_solid_amplitude", "u_solid_major",       "u_solid_half_length",
+            "u_solid_radius", "u_solid_grid_side", "u_solid_grid_clamped"};
+        float tilt[2] = {shape.tilt_cos, shape.tilt_sin};
+        uniform_value(e, "u_gdm_size", sizes, 3);
+        uniform_value(e, "u_gdm_directions", directions, 2);
+        uniform_value(e, "u_solid_tilt", tilt, 2);
+        for (int i = 0; i < 15; i++) uniform_value(e, names[i], &values[i], 1);
+    }
+    free(weights);
+    free(eigen);
+    free(prisms);
+    free(faces);
+    meso_prism_layer_destroy(layer);
+    gl_gdm_table_release(&t);
+    return r;
+}
+
 static meso_result export_object_textures(meso_context *ctx, const meso_scene *scene, int index,
                                           const meso_render_desc *desc, const char *dir,
                                           cJSON *objects) {
@@ -294,6 +386,8 @@ static meso_result export_object_textures(meso_context *ctx, const meso_scene *s
     if (r == MESO_OK && strcmp(info->name, "relief_exact") == 0) r = export_max_mip(&e, object);
     if (r == MESO_OK && strcmp(info->name, "relief_layers") == 0)
         r = export_layers(&e, object, info, options);
+    if (r == MESO_OK && strcmp(info->name, "gdm") == 0)
+        r = export_gdm(&e, scene, object, info, options);
     return r;
 }
 

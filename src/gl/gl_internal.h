@@ -9,8 +9,10 @@
 #include <epoxy/egl.h>
 #include <epoxy/gl.h>
 
+#include "meso/bake_gdm.h"
 #include "meso/bake_layers.h"
 #include "meso/bake_vdm.h"
+#include "meso/prism.h"
 #include "meso/gl.h"
 
 /* ---- The shader files, built in (cmake/embed_shaders.cmake) ------------------------------- */
@@ -117,5 +119,40 @@ meso_result gl_vdm_create(meso_context *ctx, const meso_object *object,
 /* Bind its textures and set its uniforms on `program` (current). */
 void gl_vdm_bind(const gl_vdm *vdm, GLuint program, float pixel_size);
 void gl_vdm_destroy(gl_vdm *vdm);
+
+/* gdm: the bake (cached, the CPU technique's bake for the same options); no GL needed (texture
+ * export uses it too). Refuses compressed 0 and, in a scene with an environment, gi 1 (scene
+ * may be NULL: no environment). */
+typedef struct gl_gdm_table {
+    meso_gdm *gdm;
+    meso_gdm_view view;
+    int k;      /* eigen-maps used (the option, at most the bake's) */
+    int chunks; /* groups of 4 of them: texels a row of W, a column of E */
+} gl_gdm_table;
+meso_result gl_gdm_bake(meso_context *ctx, const meso_scene *scene, const meso_object *object,
+                        const meso_technique_info *info, const double *options, gl_gdm_table *out);
+void gl_gdm_table_release(gl_gdm_table *table);
+/* W as [height][width][num_phi][4 chunks] floats and E as [layers][num_theta][4 chunks] (E
+ * transposed), zero past k: the shader's texel layout. Caller frees; NULL: out of memory. */
+float *gl_gdm_weights_rgba(const gl_gdm_table *table);
+float *gl_gdm_eigen_rgba(const gl_gdm_table *table);
+
+/* The prism layer as the shader reads it: GL_GDM_PRISM_TEXELS RGBA texels a prism (planes,
+ * fin convexity, UV inverse, the vertices' frames; shaders/gdm.frag), GL_GDM_FACE_TEXELS a face
+ * (vertices and their (u, v, w)). Caller frees; NULL: out of memory. */
+#define GL_GDM_PRISM_TEXELS 24
+#define GL_GDM_FACE_TEXELS 5
+float *gl_gdm_prism_texels(const meso_prism_layer *layer, const meso_mesh *mesh);
+float *gl_gdm_face_texels(const meso_prism_layer *layer);
+
+/* The table, the prism layer and the solid uploaded as buffer textures (units 2-7). */
+typedef struct gl_gdm gl_gdm;
+meso_result gl_gdm_create(meso_context *ctx, const meso_scene *scene, const meso_object *object,
+                          const meso_technique_info *info, const double *options, gl_gdm **out,
+                          size_t *memory);
+/* The prism faces to draw, in face order (the shader reads gl_PrimitiveID as the face). */
+const meso_mesh *gl_gdm_faces(const gl_gdm *gdm);
+void gl_gdm_bind(const gl_gdm *gdm, GLuint program);
+void gl_gdm_destroy(gl_gdm *gdm);
 
 #endif

@@ -28,6 +28,7 @@ typedef struct gl_object {
     gl_vdm *vdm;       /* technique vdm: its table */
     GLuint max_mip;    /* technique relief_exact: the maximum mip-map */
     gl_layers *layers; /* technique relief_layers: its maps */
+    gl_gdm *gdm;       /* technique gdm: its table and prisms (their faces are drawn) */
     int max_mip_levels;
     double options[GL_MAX_OPTIONS];
 } gl_object;
@@ -134,9 +135,8 @@ static meso_result program_for(meso_gl_renderer *r, const char *technique, const
 
 /* The mesh as interleaved vertices: position, normal, tangent, bitangent, uv, quadric,
  * principal curvatures and their directions (meso.vert's locations 0-8), zero where the mesh
- * has no such array. */
-static meso_result upload_mesh(meso_gl_renderer *r, gl_object *o) {
-    const meso_mesh *mesh = o->object->mesh;
+ * has no such array. gdm draws its prism layer's faces instead of the object's mesh. */
+static meso_result upload_mesh(meso_gl_renderer *r, gl_object *o, const meso_mesh *mesh) {
     if (!mesh || mesh->num_triangles == 0) return MESO_OK;
     if (mesh->num_vertices > (size_t)INT32_MAX / GL_FLOATS_PER_VERTEX ||
         mesh->num_triangles > (size_t)INT32_MAX / 3)
@@ -214,8 +214,13 @@ static meso_result prepare_object(meso_gl_renderer *r, int index, const meso_gl_
     if ((result = gl_resolve_technique(r->ctx, object, &desc->render, &o->info)) != MESO_OK ||
         (result = meso_technique_options_values(r->ctx, r->scene, index, &desc->render,
                                                 o->info->name, o->options)) != MESO_OK ||
-        (result = program_for(r, o->info->name, desc->shader_dir, &o->program)) != MESO_OK ||
-        (result = upload_mesh(r, o)) != MESO_OK)
+        (result = program_for(r, o->info->name, desc->shader_dir, &o->program)) != MESO_OK)
+        return result;
+    if (strcmp(o->info->name, "gdm") == 0 &&
+        (result = gl_gdm_create(r->ctx, r->scene, object, o->info, o->options, &o->gdm,
+                                &r->stats.memory_bytes)) != MESO_OK)
+        return result;
+    if ((result = upload_mesh(r, o, o->gdm ? gl_gdm_faces(o->gdm) : object->mesh)) != MESO_OK)
         return result;
     const meso_texture *color_map = object->material.color_map;
     if (color_map &&
@@ -436,6 +441,7 @@ meso_result meso_gl_renderer_render(meso_gl_renderer *r, meso_framebuffer *fb) {
         glBindTexture(GL_TEXTURE_2D, o->height);
         if (o->vdm) gl_vdm_bind(o->vdm, o->program, camera.pixel_size);
         if (o->layers) gl_layers_bind(o->layers, o->program);
+        if (o->gdm) gl_gdm_bind(o->gdm, o->program);
         /* relief_layers draws back faces too: the far wall of a closed mesh through holes of
          * the near one (render_internal.h, both_faces) */
         if (o->layers)
@@ -510,6 +516,7 @@ void meso_gl_renderer_destroy(meso_gl_renderer *r) {
             gl_vdm_destroy(o->vdm);
             if (o->max_mip) glDeleteTextures(1, &o->max_mip);
             gl_layers_destroy(o->layers);
+            gl_gdm_destroy(o->gdm);
         }
         for (int i = 0; i < r->num_programs; i++) glDeleteProgram(r->programs[i].program);
     }

@@ -268,6 +268,22 @@ void meso_solid_destroy(meso_solid *solid) {
 
 meso_solid_desc meso_solid_get_desc(const meso_solid *solid) { return solid->desc; }
 
+meso_solid_shape meso_solid_get_shape(const meso_solid *solid) {
+    return (meso_solid_shape){.desc = solid->desc,
+                              .depth_cells = solid->depth_cells,
+                              .scale = solid->scale,
+                              .cap = solid->cap,
+                              .amplitude = solid->amplitude,
+                              .major = solid->major,
+                              .half_length = solid->half_length,
+                              .tilt_cos = solid->tilt_cos,
+                              .tilt_sin = solid->tilt_sin,
+                              .radius = solid->radius,
+                              .grid = solid->grid,
+                              .grid_side = solid->grid_side,
+                              .grid_clamped = solid->grid_clamped};
+}
+
 uint64_t meso_solid_hash(const meso_solid *solid) {
     if (solid->desc.kind == MESO_SOLID_MESH) return solid->grid_hash;
     /* Version the shapes: a change to a generator must change every cached bake's key. */
