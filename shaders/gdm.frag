@@ -42,7 +42,9 @@
 //   int u_shadow_steps (24), float u_hit_margin (0), int u_normals (0), int u_refine_steps
 //   (6), bool u_compressed (must be true: the GL reads the SVD only), bool u_gi and
 //   u_gi_resolution, u_gi_layers, u_gi_eigen (GDM-GI: drawn on the CPU only; the GL refuses
-//   gi 1 in a scene with an environment, where it would apply).
+//   gi 1 in a scene with an environment, where it would apply), bool u_macro_shadows and
+//   u_gi_inside_sky (the CPU's shadows through the whole shell, gdm_shell_shadow.c: not read
+//   here; the GL's shadows are the slab-local ones, the CPU's with macro_shadows 0).
 
 uniform bool u_compressed;
 uniform int u_eigenmaps;
@@ -60,6 +62,8 @@ uniform bool u_gi;
 uniform int u_gi_resolution;
 uniform int u_gi_layers;
 uniform int u_gi_eigen;
+uniform bool u_macro_shadows;
+uniform bool u_gi_inside_sky;
 
 uniform samplerBuffer u_gdm_weights;
 uniform samplerBuffer u_gdm_eigen;

@@ -17,6 +17,8 @@
 #ifndef MESO_RENDER_GI_H
 #define MESO_RENDER_GI_H
 
+#include <math.h>
+
 #include "meso/environment.h"
 #include "meso/geom.h"
 #include "meso/scene.h"
@@ -34,6 +36,13 @@ typedef struct meso_gi_vertex_desc {
 meso_result meso_gi_vertex_radiance(meso_context *ctx, const meso_mesh *mesh,
                                     const meso_environment *environment,
                                     const meso_gi_vertex_desc *desc, float **out_radiance);
+
+/* Direction k of n over the sphere: a spherical Fibonacci point (equal areas). Pure. */
+static inline meso_vec3 meso_gi_fibonacci_direction(int k, int n) {
+    double z = 1.0 - (2.0 * k + 1.0) / n, r = sqrt(fmax(0.0, 1.0 - z * z));
+    double phi = 2.399963229728653 * k;
+    return (meso_vec3){(float)(r * cos(phi)), (float)z, (float)(r * sin(phi))};
+}
 
 /* The unit tangent T of vertex v's frame: dP/du made orthogonal to the normal (any direction
  * across the normal where the mesh has no usable tangent). The frame is (T, N x T, N). */

@@ -20,13 +20,6 @@ typedef struct transfer_job {
     float *radiance;
 } transfer_job;
 
-/* Direction k of n: a spherical Fibonacci point (equal areas). */
-static meso_vec3 fibonacci_direction(int k, int n) {
-    double z = 1.0 - (2.0 * k + 1.0) / n, r = sqrt(fmax(0.0, 1.0 - z * z));
-    double phi = 2.399963229728653 * k;
-    return (meso_vec3){(float)(r * cos(phi)), (float)z, (float)(r * sin(phi))};
-}
-
 meso_vec3 meso_gi_vertex_tangent(const meso_mesh *mesh, size_t v) {
     meso_vec3 n = meso_vec3_normalize(mesh->normals[v]);
     meso_vec3 t = mesh->tangents ? mesh->tangents[v] : (meso_vec3){0, 0, 0};
@@ -126,7 +119,7 @@ meso_result meso_gi_vertex_radiance(meso_context *ctx, const meso_mesh *mesh,
     /* per direction: w L(d) Y_i(d), L from the environment's SH, clamped at 0 */
     float weight = (float)(4.0 * M_PI / directions);
     for (int d = 0; d < directions; d++) {
-        direction[d] = fibonacci_direction(d, directions);
+        direction[d] = meso_gi_fibonacci_direction(d, directions);
         float basis[MESO_SH_COUNT];
         meso_sh_basis(direction[d], basis);
         for (int c = 0; c < CHANNELS; c++) {

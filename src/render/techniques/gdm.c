@@ -11,6 +11,7 @@
 
 #include "gdm_gi.h"
 #include "gdm_lookup.h"
+#include "gdm_shell_shadow.h"
 #include "meso/bake_gdm.h"
 #include "meso/prism.h"
 #include "render_internal.h"
@@ -41,13 +42,14 @@ typedef struct gdm_state {
     float refine_window; /* texture units: 3 layers */
     float hit_margin;    /* d < dt - hit_margin is a hit */
     gdm_gi *gi;          /* global illumination (gdm_gi.h); NULL: off */
+    gdm_shell *shell;    /* shadows through the shell (gdm_shell_shadow.h); NULL: off */
 } gdm_state;
 
 typedef struct gdm_options {
     bool compressed, shadows;
     int normals, eigenmaps, resolution, layers, num_theta, num_phi, refine_steps, shadow_steps;
     float shadow_bias, hit_margin;
-    bool gi;
+    bool gi, macro_shadows, gi_inside_sky;
     int gi_resolution, gi_layers, gi_eigen;
 } gdm_options;
 
@@ -87,11 +89,21 @@ static const meso_technique_option gdm_option_table[] = {
                     "beyond the paper: check the hit (and a shadow) on the mesostructure and "
                     "bisect this many times; 0: the paper's d < |T_out - T_in| and d_L",
                     gdm_options, refine_steps),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, macro_shadows, 0, 1, 1,
+                    "beyond the paper: a light that leaves the slab is followed through the "
+                    "rest of the shell, GDM-tested in every prism it enters (a solid's light "
+                    "toward the bottom too); 0: the slab only, a light toward its bottom blocked",
+                    gdm_options, macro_shadows),
     MESO_OPTION_ROW(MESO_OPTION_BOOL, gi, 0, 1, 1,
                     "where the scene has an environment: its light through the radiance "
                     "transfer volume (shadowed, interreflected; docs/techniques/gdm-gi.md); "
                     "0: the shading model's unshadowed SH ambient",
                     gdm_options, gi),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, gi_inside_sky, 0, 1, 0,
+                    "gi, with macro_shadows: a hit seen from inside the base mesh takes the sky "
+                    "through the shell (64 directions, multi-bounce fit) instead of the "
+                    "unshadowed SH ambient; slow (docs/techniques/gdm-gi.md)",
+                    gdm_options, gi_inside_sky),
     MESO_OPTION_ROW(MESO_OPTION_INT, gi_resolution, 4, 256, 32, "gi: RTV voxels a side in u and v",
                     gdm_options, gi_resolution),
     MESO_OPTION_ROW(MESO_OPTION_INT, gi_layers, 2, 64, 8, "gi: RTV voxels in depth (w)",
@@ -106,6 +118,7 @@ static void gdm_release(void *state) {
     if (!s) return;
     meso_gdm_destroy(s->gdm);
     gdm_gi_destroy(s->gi);
+    gdm_shell_destroy(s->shell);
     gdm_lookup_table_deinit(&s->table);
     meso_prism_layer_destroy(s->layer);
     free(s->drawn_indices);
@@ -271,11 +284,27 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
             goto fail;
         }
     }
+    if (options.shadows && options.macro_shadows &&
+        (r = gdm_shell_create(ctx,
+                              &(gdm_shell_desc){.layer = s->layer,
+                                                .mesh = object->mesh,
+                                                .gdm = s->gdm,
+                                                .table = s->raw ? NULL : &s->table,
+                                                .heightfield = s->heightfield,
+                                                .solid = s->solid,
+                                                .voxel = s->voxel,
+                                                .shadow_bias = s->shadow_bias,
+                                                .refine_window = s->refine_window,
+                                                .refine_steps = s->refine_steps,
+                                                .shadow_steps = s->shadow_steps},
+                              object->name, &s->shell)) != MESO_OK)
+        goto fail;
     if (options.gi && scene->environment &&
         (r = gdm_gi_create(ctx, scene, object,
                            &(gdm_gi_desc){.resolution = options.gi_resolution,
                                           .layers = options.gi_layers,
-                                          .eigen = options.gi_eigen},
+                                          .eigen = options.gi_eigen,
+                                          .shell = options.gi_inside_sky ? s->shell : NULL},
                            &s->gi)) != MESO_OK)
         goto fail;
     *out_state = s;
@@ -611,7 +640,15 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
         meso_vec3 l = meso_light_direction(&scene->lights[li], position);
         if (meso_vec3_dot(l, normal) <= 0.0f) continue; /* unlit anyway */
         meso_vec3 lt = texture_direction(&tf, l);
-        if (shadowed(s, hit, normal_t, lt)) visibility[li] = 0.0f;
+        /* beyond the paper (gdm_shell_shadow.h): past the slab the light is followed through
+         * the rest of the shell; a solid's light toward the slab's bottom from the point on */
+        bool through_floor = s->shell && s->solid && lt.z >= 0.0f;
+        bool blocked =
+            through_floor
+                ? !gdm_shell_light_visible(s->shell, prism_index, hit, l, false)
+                : shadowed(s, hit, normal_t, lt) ||
+                      (s->shell && !gdm_shell_light_visible(s->shell, prism_index, hit, l, true));
+        if (blocked) visibility[li] = 0.0f;
     }
     return true;
 }
@@ -659,7 +696,7 @@ static size_t gdm_memory(const void *state) {
     return (size_t)c.compressed_bytes + (v.raw ? (size_t)c.raw_bytes : 0) + normals +
            gdm_lookup_table_bytes(&s->table) + meso_prism_layer_memory(s->layer) +
            s->layer->faces->num_triangles * (4 * sizeof(uint32_t) + sizeof(float)) +
-           gdm_gi_memory(s->gi);
+           gdm_gi_memory(s->gi) + gdm_shell_memory(s->shell);
 }
 
 const meso_technique meso_technique_gdm = {

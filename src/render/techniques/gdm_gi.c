@@ -10,7 +10,8 @@
 #include "render_gi.h"
 
 /* GI_MAX_EIGEN: gdm's option gi_eigen is at most the 32 views of the default RTV */
-enum { GI_BATCH = 64, GI_CHANNELS = 3, GI_MAX_EIGEN = 32 };
+/* GI_INSIDE_DIRECTIONS: the sky's directions over the sphere for a hit seen from inside */
+enum { GI_BATCH = 64, GI_CHANNELS = 3, GI_MAX_EIGEN = 32, GI_INSIDE_DIRECTIONS = 64 };
 
 struct gdm_gi {
     meso_rtv *rtv;
@@ -27,6 +28,13 @@ struct gdm_gi {
      * ambient, lights, specular), and with ambient 1 and nothing else (the albedo) */
     meso_scene direct_scene, albedo_scene;
     meso_frame direct_frame, albedo_frame;
+    /* gdm's shadows through the shell (NULL: none), the directions a hit seen from inside
+     * looks for the sky along, and the sky's radiance there times 4 / GI_INSIDE_DIRECTIONS
+     * (the quadrature weight 4 pi / n over pi: E / pi) */
+    const gdm_shell *shell;
+    meso_vec3 albedo; /* the material's (the inside's interreflection) */
+    meso_vec3 inside_direction[GI_INSIDE_DIRECTIONS];
+    meso_vec3 inside_radiance[GI_INSIDE_DIRECTIONS];
 };
 
 static meso_result pack_rtv(meso_context *ctx, gdm_gi *gi, const char *name) {
@@ -125,6 +133,17 @@ meso_result gdm_gi_create(meso_context *ctx, const meso_scene *scene, const meso
     if ((r = meso_gi_vertex_radiance(ctx, mesh, scene->environment, NULL, &gi->radiance)) !=
         MESO_OK)
         goto fail;
+    gi->shell = desc->shell;
+    gi->albedo = object->material.albedo;
+    for (int k = 0; k < GI_INSIDE_DIRECTIONS; k++) {
+        meso_vec3 d = meso_gi_fibonacci_direction(k, GI_INSIDE_DIRECTIONS);
+        float l[GI_CHANNELS];
+        for (int c = 0; c < GI_CHANNELS; c++) /* clamped as the per-vertex transfer's */
+            l[c] = fmaxf(0.0f, meso_sh_evaluate(scene->environment->sh[c], d)) * 4.0f /
+                   (float)GI_INSIDE_DIRECTIONS;
+        gi->inside_direction[k] = d;
+        gi->inside_radiance[k] = (meso_vec3){l[0], l[1], l[2]};
+    }
     *out_gi = gi;
     return MESO_OK;
 fail:
@@ -161,6 +180,33 @@ void gdm_gi_begin_frame(gdm_gi *gi, const meso_frame *frame) {
     gi->albedo_frame.scene = &gi->albedo_scene;
 }
 
+/* The sky's irradiance over pi at a hit seen from inside the base mesh, shadowed by the shell:
+ * the environment's radiance over fixed directions of the normal's hemisphere, each kept
+ * when gdm's walk through the shell (gdm_shell_shadow.h) lets it in -- through the holes of
+ * the near wall, over a rim. The light the inside's walls bounce (the truth has it; without
+ * it the holes measured too dark) enters through Jimenez et al. 2016's multi-bounce fit of
+ * the visible fraction x for albedo a ("Practical Real-Time Strategies for Accurate Indirect
+ * Occlusion", GTAO): max(x, ((p x + q) x + r) x), the surfaces around taken as lit alike. */
+static void inside_sky(const gdm_gi *gi, const meso_fragment *f, const gdm_gi_hit *hit,
+                       meso_vec3 albedo, float out_rgb[3]) {
+    size_t prism = gdm_shell_prism_index(gi->shell, hit->prism);
+    meso_vec3 seen = {0.0f, 0.0f, 0.0f}, all = seen;
+    for (int k = 0; k < GI_INSIDE_DIRECTIONS; k++) {
+        float cosine = meso_vec3_dot(f->normal, gi->inside_direction[k]);
+        if (cosine <= 0.0f) continue;
+        all = meso_vec3_madd(all, gi->inside_radiance[k], cosine);
+        if (gdm_shell_light_visible(gi->shell, prism, hit->uvw, gi->inside_direction[k], false))
+            seen = meso_vec3_madd(seen, gi->inside_radiance[k], cosine);
+    }
+    const float *a = &albedo.x, *s = &seen.x, *u = &all.x;
+    for (int c = 0; c < 3; c++) {
+        float x = u[c] > 0.0f ? s[c] / u[c] : 1.0f;
+        float p = 2.0404f * a[c] - 0.3324f, q = -4.7951f * a[c] + 0.6417f;
+        float r = 2.7552f * a[c] + 0.6903f;
+        out_rgb[c] = u[c] * fmaxf(x, ((x * p + q) * x + r) * x);
+    }
+}
+
 /* RTV(uvw, view) . L per unit albedo at one hit: L interpolated from the prism's vertices at
  * the hit's (u, v), the view in the interpolated tangent frame (as the vertices' frames,
  * render_gi_transfer.c, and the reference's rtv mode).
@@ -187,6 +233,10 @@ static bool reflected_at(const gdm_gi *gi, const meso_frame *frame, const meso_f
     meso_vec3 toward = meso_vec3_normalize(meso_vec3_sub(frame->eye, f->position));
     meso_vec3 view = {meso_vec3_dot(toward, t), meso_vec3_dot(toward, bt),
                       meso_vec3_dot(toward, n)};
+    if (view.z < 0.0f && gi->shell) {
+        inside_sky(gi, f, hit, gi->albedo, out_rgb);
+        return false;
+    }
     if (view.z < 0.0f) {
         v8f r = v8_splat(0.0f), g = r, bl = r;
         meso_environment_ambient8(gi->environment, v8_splat(f->normal.x), v8_splat(f->normal.y),

@@ -18,6 +18,7 @@
 #ifndef MESO_GDM_GI_H
 #define MESO_GDM_GI_H
 
+#include "gdm_shell_shadow.h"
 #include "meso/prism.h"
 #include "render_internal.h"
 
@@ -26,6 +27,9 @@ typedef struct gdm_gi gdm_gi;
 /* The RTV's bake resolution (zero fields: bake_rtv.h's defaults). */
 typedef struct gdm_gi_desc {
     int resolution, layers, eigen;
+    /* gdm's shadows through the shell, borrowed (outliving the gi); NULL: a hit seen from
+     * inside the base mesh takes the unshadowed SH ambient, else the sky through the shell */
+    const gdm_shell *shell;
 } gdm_gi_desc;
 
 /* Where a fragment's ray met the mesostructure: texture space (u, v, w) and its prism. */

@@ -1,0 +1,309 @@
+/* gdm's shadows through the whole shell: the light ray followed from prism to prism, each
+ * tested with GDM's per-prism segment (gdm_shell_shadow.h; GDM §3.2 Fig. 5 applied to the light
+ * ray; docs/techniques/gdm.md). */
+#include "gdm_shell_shadow.h"
+
+#include <embree3/rtcore.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Prisms a light ray may cross before the answer is "visible": a walk stuck on a fin's plane
+ * (a ray in it) ends instead of looping. A grazing ray across a fine mesh crosses tens. */
+enum { WALK_MAX_PRISMS = 256 };
+
+struct gdm_shell {
+    gdm_shell_desc desc;
+    RTCDevice device;
+    RTCScene scene;
+    /* object-space: the Embree ray starts this far back from the point where the ray left a
+     * prism, so that the neighbour's copy of the shared fin lies ahead of it (at `step`) */
+    float step;
+};
+
+/* The prism the ray is in (its faces are not entries) and the ray's direction, for the
+ * filter; Embree hands the context back to it. */
+typedef struct walk_context {
+    struct RTCIntersectContext base; /* first: the filter casts the context back */
+    const meso_prism_layer *layer;
+    size_t current;
+    meso_vec3 direction;
+} walk_context;
+
+/* Keep the faces the ray enters a prism through: a face's outward normal against the ray. A
+ * fin is two coincident triangles, one a prism; this picks the one whose prism lies ahead. */
+static void keep_entries(const struct RTCFilterFunctionNArguments *args) {
+    const walk_context *walk = (const walk_context *)args->context;
+    for (unsigned i = 0; i < args->N; i++) {
+        if (args->valid[i] != -1) continue;
+        /* RTCHitN's layout (rtcore_ray.h: Ng x, y, z, u, v, primID, each N wide); its
+         * accessor is C++ only */
+        unsigned face = ((const unsigned *)args->hit)[5 * args->N + i];
+        int slot;
+        size_t prism = meso_prism_layer_face_prism(walk->layer, face, &slot);
+        const meso_prism_plane *plane =
+            &walk->layer->planes[prism * MESO_PRISM_NUM_FACES + (size_t)slot];
+        if (prism == walk->current || !(meso_vec3_dot(plane->normal, walk->direction) < 0.0f))
+            args->valid[i] = 0;
+    }
+}
+
+meso_result gdm_shell_create(meso_context *ctx, const gdm_shell_desc *desc, const char *name,
+                             gdm_shell **out_shell) {
+    *out_shell = NULL;
+    if (!desc || !desc->layer || !desc->mesh || !desc->gdm || (!desc->heightfield && !desc->solid))
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "%s: gdm shell shadows: needs the prisms, the map and the "
+                              "mesostructure",
+                              name);
+    const meso_mesh *faces = desc->layer->faces;
+    meso_result r =
+        meso_memory_check(ctx, "gdm shell shadows",
+                          (uint64_t)faces->num_triangles * 64 + (uint64_t)faces->num_vertices * 16);
+    if (r != MESO_OK) return r;
+    gdm_shell *shell = calloc(1, sizeof *shell);
+    if (!shell) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: gdm shell", name);
+    shell->desc = *desc;
+    shell->step = 1e-3f * desc->layer->depth;
+    /* one build thread: the BVH, and so which of two equal hits Embree reports, does not
+     * depend on the number of workers (the images are byte-identical for any) */
+    shell->device = rtcNewDevice("threads=1");
+    shell->scene = shell->device ? rtcNewScene(shell->device) : NULL;
+    RTCGeometry geometry =
+        shell->scene ? rtcNewGeometry(shell->device, RTC_GEOMETRY_TYPE_TRIANGLE) : NULL;
+    size_t num_vertices = faces->num_vertices ? faces->num_vertices : 1;
+    size_t num_faces = faces->num_triangles;
+    float *vertices =
+        geometry ? rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                           3 * sizeof(float), num_vertices)
+                 : NULL;
+    uint32_t *indices =
+        geometry && num_faces
+            ? rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                      3 * sizeof(uint32_t), num_faces)
+            : NULL;
+    if (!vertices || (num_faces && !indices)) {
+        if (geometry) rtcReleaseGeometry(geometry);
+        r = meso_log_error(ctx, MESO_ERROR_INTERNAL,
+                           "%s: gdm shell shadows: Embree could not start", name);
+        goto fail;
+    }
+    memset(vertices, 0, 3 * sizeof(float) * num_vertices);
+    for (size_t v = 0; v < faces->num_vertices; v++) {
+        meso_vec3 p = faces->positions[v];
+        vertices[3 * v] = p.x, vertices[3 * v + 1] = p.y, vertices[3 * v + 2] = p.z;
+    }
+    if (num_faces) memcpy(indices, faces->indices, 3 * num_faces * sizeof *indices);
+    rtcSetGeometryIntersectFilterFunction(geometry, keep_entries);
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometry(shell->scene, geometry);
+    rtcReleaseGeometry(geometry);
+    rtcCommitScene(shell->scene);
+    if (rtcGetDeviceError(shell->device) != RTC_ERROR_NONE) {
+        r = meso_log_error(ctx, MESO_ERROR_INTERNAL,
+                           "%s: gdm shell shadows: Embree could not build", name);
+        goto fail;
+    }
+    *out_shell = shell;
+    return MESO_OK;
+fail:
+    gdm_shell_destroy(shell);
+    return r;
+}
+
+void gdm_shell_destroy(gdm_shell *shell) {
+    if (!shell) return;
+    if (shell->scene) rtcReleaseScene(shell->scene);
+    if (shell->device) rtcReleaseDevice(shell->device);
+    free(shell);
+}
+
+size_t gdm_shell_memory(const gdm_shell *shell) {
+    if (!shell) return 0;
+    const meso_mesh *faces = shell->desc.layer->faces;
+    return sizeof *shell + faces->num_vertices * 3 * sizeof(float) +
+           faces->num_triangles * (3 * sizeof(uint32_t) + 32); /* + the BVH, about */
+}
+
+/* ---- The mesostructure: the same tests as gdm.c's --------------------------------------- */
+
+static inline meso_vec3 tile_point(meso_vec3 uvw) {
+    return (meso_vec3){uvw.x - floorf(uvw.x), uvw.y - floorf(uvw.y), uvw.z};
+}
+
+/* Inside the solid (height field: w >= 1 - h(u, v), DESIGN.md). */
+static inline bool inside(const gdm_shell_desc *d, meso_vec3 uvw) {
+    if (d->heightfield)
+        return uvw.z >= 1.0f - meso_heightfield_sample(d->heightfield, uvw.x, uvw.y);
+    return meso_solid_distance(d->solid, tile_point(uvw)) <= 0.0f;
+}
+
+static inline float lookup(const gdm_shell_desc *d, meso_vec3 uvw, meso_vec3 direction) {
+    if (!d->table) return meso_gdm_lookup(d->gdm, uvw, direction, 0, true);
+    return gdm_lookup8(d->table, uvw, direction);
+}
+
+/* Does the mesostructure block the texture-space segment t0 + x dir, x in [0, length] (dir
+ * unit)? §3.2 per prism: d_GDM(t0, dir) short of the segment's end by more than the margin
+ * (the table's error near a boundary, as gdm's local test allows it). With refine_steps the
+ * table's blocker is confirmed on the mesostructure as gdm's shadows confirm it: just past d,
+ * else by shadow_steps probes along the segment (the compressed table errs by more than the
+ * gaps of a weave; the answers then are the mesostructure's). */
+static bool segment_blocked(const gdm_shell_desc *d, meso_vec3 t0, meso_vec3 dir, float length) {
+    float margin = d->shadow_bias * d->voxel.z;
+    if (!(length > margin)) return false;
+    float hit = lookup(d, t0, dir);
+    if (d->refine_steps <= 0) return hit < length - margin;
+    if (!(hit < length - margin)) return false;
+    float past = fminf(fmaxf(hit, 0.0f) + 0.5f * d->refine_window, length);
+    if (inside(d, meso_vec3_madd(t0, dir, past))) return true;
+    for (int k = 0; k < d->shadow_steps; k++) {
+        float x = length * ((float)k + 0.5f) / (float)d->shadow_steps;
+        if (inside(d, meso_vec3_madd(t0, dir, x))) return true;
+    }
+    return false;
+}
+
+/* ---- The walk -------------------------------------------------------------------------- */
+
+/* A prism's stretch of the ray: from `origin` (texture point t_in, entering through face slot
+ * entry_slot; -1 inside) to where it leaves. false: the prism bounds nothing (degenerate). */
+typedef struct crossing {
+    meso_vec3 t_in, t_out, p_out;
+    int exit_slot;
+} crossing;
+
+static bool cross_prism(const meso_prism_layer *layer, size_t prism, meso_vec3 origin,
+                        meso_vec3 t_in, meso_vec3 light, int entry_slot, crossing *out) {
+    float t;
+    if (!meso_prism_layer_exit(layer, prism, origin, light, entry_slot, &t, &out->exit_slot) ||
+        !isfinite(t))
+        return false;
+    out->t_in = t_in;
+    out->p_out = meso_vec3_madd(origin, light, t);
+    out->t_out = meso_prism_layer_face_uvw(
+        layer, meso_prism_layer_face(layer, prism, out->exit_slot), out->p_out);
+    return true;
+}
+
+static bool crossing_blocked(const gdm_shell_desc *d, const crossing *c) {
+    meso_vec3 segment = meso_vec3_sub(c->t_out, c->t_in);
+    float length = meso_vec3_length(segment);
+    if (!(length > 1e-7f) || !isfinite(length)) return false;
+    return segment_blocked(d, c->t_in, meso_vec3_scale(segment, 1.0f / length), length);
+}
+
+/* A ray leaving the slab's bottom: into the object's body for a height field; for a solid,
+ * through solid where the solid's floor is (gdm.c's floor_is_solid; its hits count the same
+ * floor) -- unless the ray starts on that floor (a point on a bar's underside, its light
+ * below: the stretch is shorter than the margin), which it leaves instead of crossing. */
+static bool floor_blocks(const gdm_shell_desc *d, const crossing *c) {
+    if (d->heightfield) return true;
+    if (!(meso_vec3_length(meso_vec3_sub(c->t_out, c->t_in)) > d->shadow_bias * d->voxel.z))
+        return false;
+    return inside(d, (meso_vec3){c->t_out.x, c->t_out.y, 1.0f - 1e-3f});
+}
+
+/* The next prism face the ray origin + x light (x > 0) enters, not one of prism `current`'s:
+ * its prism, slot and point. false: the ray leaves the shell. */
+static bool next_entry(const gdm_shell *shell, size_t current, meso_vec3 origin, meso_vec3 light,
+                       size_t *out_prism, int *out_slot, meso_vec3 *out_point, float *out_t) {
+    walk_context walk;
+    rtcInitIntersectContext(&walk.base);
+    walk.layer = shell->desc.layer;
+    walk.current = current;
+    walk.direction = light;
+    meso_vec3 start = meso_vec3_madd(origin, light, -shell->step);
+    struct RTCRayHit rh;
+    memset(&rh, 0, sizeof rh);
+    rh.ray.org_x = start.x, rh.ray.org_y = start.y, rh.ray.org_z = start.z;
+    rh.ray.dir_x = light.x, rh.ray.dir_y = light.y, rh.ray.dir_z = light.z;
+    rh.ray.tnear = 0.0f;
+    rh.ray.tfar = INFINITY;
+    rh.ray.mask = UINT32_MAX;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(shell->scene, &walk.base, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+    *out_prism = meso_prism_layer_face_prism(shell->desc.layer, rh.hit.primID, out_slot);
+    *out_point = meso_vec3_madd(start, light, rh.ray.tfar);
+    *out_t = rh.ray.tfar;
+    return true;
+}
+
+size_t gdm_shell_prism_index(const gdm_shell *shell, const meso_prism *prism) {
+    return (size_t)(prism - shell->desc.layer->prisms);
+}
+
+bool gdm_shell_light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw, meso_vec3 light,
+                             bool slab_clear) {
+    const gdm_shell_desc *d = &shell->desc;
+    const meso_prism_layer *layer = d->layer;
+    const meso_prism *first = &layer->prisms[prism];
+    if (!first->valid) return true;
+    meso_vec3 t0 = uvw;
+    if (!slab_clear) {
+        /* off the surface as gdm's local test starts (its table is blended with the solid's
+         * zeros at the surface): up for a height field, along the solid's normal */
+        meso_vec3 n = {0.0f, 0.0f, -1.0f};
+        if (d->solid) {
+            meso_vec3 g = meso_solid_gradient(d->solid, tile_point(uvw));
+            float len = meso_vec3_length(g);
+            n = len > 0.0f && isfinite(len) ? meso_vec3_scale(g, 1.0f / len) : n;
+        }
+        t0 = meso_vec3_add(uvw, meso_vec3_mul(n, meso_vec3_scale(d->voxel, d->shadow_bias)));
+        t0.z = fminf(fmaxf(t0.z, 0.0f), 1.0f);
+    }
+    meso_vec3 origin = meso_prism_map(first, d->mesh, layer->depth, t0, -1);
+    /* tested: the prisms of this stretch are tested (after the ray left the slab the caller's
+     * test covered). That test ran in one flat slab along the point's own frame: it covered
+     * the ray up to where a flat shell's top would be, w depth / (N . L) away (5 % more for
+     * rounding). Where the surface curves over the point (under a vase's flared rim) the ray
+     * stays in the shell longer, crossing other prisms through their fins: from there on they
+     * are tested. */
+    bool tested = !slab_clear;
+    float reach = INFINITY;
+    if (slab_clear) {
+        float b[3];
+        meso_prism_weights(first, (meso_vec2){uvw.x, uvw.y}, b);
+        const uint32_t *v = first->vertices;
+        meso_vec3 n = meso_vec3_normalize(
+            meso_vec3_barycentric(d->mesh->normals[v[0]], d->mesh->normals[v[1]],
+                                  d->mesh->normals[v[2]], b[0], b[1], b[2]));
+        reach = 1.05f * uvw.z * layer->depth / fmaxf(meso_vec3_dot(n, light), 1e-3f) +
+                2.0f * shell->step;
+    }
+    crossing c;
+    size_t current = prism;
+    if (!cross_prism(layer, prism, origin, t0, light, -1, &c)) return true;
+    for (int n = 0; n < WALK_MAX_PRISMS; n++) {
+        if (tested && crossing_blocked(d, &c)) return false;
+        if (meso_vec3_length(meso_vec3_sub(c.p_out, origin)) > reach) tested = true;
+        if (c.exit_slot == MESO_PRISM_BOTTOM) {
+            if (floor_blocks(d, &c)) return false;
+            tested = true; /* out of the slab into the object's open inside */
+        } else if (c.exit_slot == MESO_PRISM_TOP) {
+            tested = true;
+        }
+        size_t next;
+        int slot;
+        meso_vec3 point;
+        float t;
+        if (!next_entry(shell, current, c.p_out, light, &next, &slot, &point, &t)) return true;
+        /* through a fin into a prism that is not its neighbour (the ray left the shell at an
+         * open border and met it again farther on): out of the slab */
+        if (t > 3.0f * shell->step) tested = true;
+        /* a height field's body fills every prism below its floor */
+        if (tested && slot == MESO_PRISM_BOTTOM && d->heightfield) return false;
+        meso_vec3 t_in =
+            meso_prism_layer_face_uvw(layer, meso_prism_layer_face(layer, next, slot), point);
+        current = next;
+        if (!cross_prism(layer, next, point, t_in, light, slot, &c)) {
+            /* a degenerate prism: step past it */
+            c.t_in = c.t_out = t_in;
+            c.p_out = point;
+            c.exit_slot = MESO_PRISM_FIN;
+        }
+    }
+    return true;
+}

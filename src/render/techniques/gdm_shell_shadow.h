@@ -1,0 +1,71 @@
+/* gdm's shadows through the whole shell (beyond the paper; docs/techniques/gdm.md, "Beyond the
+ * paper: shadows through the shell"). GDM §3.2 tests a light inside one prism's slab only
+ * ("does not handle shadows from the base geometry or distant mesostructure"), and gdm takes a
+ * light toward the slab's bottom as blocked by the object's body. Both are wrong for a solid
+ * with holes on an open or hollow mesh (grid-vase: the inside lit over the rim and through the
+ * holes; a teapot's spout shadowing its body). Here the light ray is followed through the
+ * shell in object space with GDM's own data: from the point to where it leaves its prism
+ * (meso_prism_layer_exit), then, each time it leaves a prism through the top, a fin or an
+ * open floor, the next prism it enters -- found by Embree among the prism layer's faces (every
+ * face, a filter keeping those the ray enters) -- and in each the paper's per-prism segment
+ * test, d_GDM(T_in, V_t) < |T_out - T_in|, with gdm's probes of the mesostructure confirming
+ * a blocker. Blocked at the first blocker or at a solid floor (a height field's body is
+ * solid: its floor always is); visible when the ray leaves the shell for good.
+ *
+ * Usage (gdm.c):
+ *   gdm_shell_create(ctx, &(gdm_shell_desc){...}, name, &shell);       prepare, once
+ *   gdm_shell_light_visible(shell, prism, uvw, light, slab_clear)     per fragment and light
+ *   gdm_shell_destroy(shell);
+ *
+ * Threads: creation builds the Embree scene on the calling thread (so its BVH, and every
+ * answer, is the same whatever the number of workers); gdm_shell_light_visible is pure and
+ * may run on many threads at once. */
+#ifndef MESO_GDM_SHELL_SHADOW_H
+#define MESO_GDM_SHELL_SHADOW_H
+
+#include "gdm_lookup.h"
+#include "meso/prism.h"
+#include "render_internal.h"
+
+typedef struct gdm_shell gdm_shell;
+
+/* What the walk reads; all borrowed and read during gdm_shell_light_visible: they must
+ * outlive the shell. */
+typedef struct gdm_shell_desc {
+    const meso_prism_layer *layer;
+    const meso_mesh *mesh; /* the base mesh the layer was extruded from */
+    const meso_gdm *gdm;
+    const gdm_lookup_table *table;       /* the compressed map 8-wide; NULL: gdm's raw table */
+    const meso_heightfield *heightfield; /* one of these two */
+    const meso_solid *solid;
+    meso_vec3 voxel;     /* a voxel's sides in texture units */
+    float shadow_bias;   /* voxels: the start's offset off the surface, the lookup's margin */
+    float refine_window; /* texture units: the confirming probe lies this far past d / 2 */
+    int refine_steps;    /* > 0: a blocker the table reports is confirmed by probes; 0: not */
+    int shadow_steps;    /* the probes along a blocked segment */
+} gdm_shell_desc;
+
+/* Build the Embree scene of desc->layer's faces. *out_shell NULL on failure:
+ * MESO_ERROR_INVALID_ARGUMENT (no layer or no mesostructure), MESO_ERROR_OUT_OF_MEMORY,
+ * MESO_ERROR_INTERNAL (Embree). `name` names the object in messages. */
+meso_result gdm_shell_create(meso_context *ctx, const gdm_shell_desc *desc, const char *name,
+                             gdm_shell **out_shell);
+void gdm_shell_destroy(gdm_shell *shell);
+/* Bytes held (the BVH estimated). */
+size_t gdm_shell_memory(const gdm_shell *shell);
+
+/* The index of one of the layer's prisms (a pointer into layer->prisms). Pure. */
+size_t gdm_shell_prism_index(const gdm_shell *shell, const meso_prism *prism);
+
+/* Is the light along unit object-space direction `light` seen from texture point uvw of prism
+ * `prism` (a point of the mesostructure's surface)?
+ * slab_clear true: the caller's own §3.2 test found the light unblocked up to the slab's top;
+ *   the prisms the ray crosses before it leaves the slab are not tested again, the ones it
+ *   enters afterwards are.
+ * slab_clear false: every prism from the point on is tested, the first from `shadow_bias`
+ *   voxels off the surface (a solid's light toward the slab's bottom, which §3.2 cannot see).
+ * Pure; thread-safe. */
+bool gdm_shell_light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw, meso_vec3 light,
+                             bool slab_clear);
+
+#endif
