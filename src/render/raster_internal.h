@@ -111,7 +111,8 @@ typedef struct raster_object {
 typedef struct covered_samples covered_samples;
 
 typedef struct raster_thread_scratch {
-    meso_fragment *fragments;        /* RASTER_TILE_SIZE^2: a batch never repeats a sample */
+    meso_fragment_block *block;      /* the batch: a batch never repeats a sample */
+    meso_fragment *fragments;        /* RASTER_TILE_SIZE^2, for techniques without shade_block */
     uint32_t *pixels;                /* tile-buffer index of each fragment (2 x tile + 1) */
     uint8_t *pending;                /* RASTER_TILE_SIZE^2: samples held by the batch (zeroed) */
     covered_samples *covered;        /* one triangle's samples before their attributes */

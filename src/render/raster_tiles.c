@@ -14,6 +14,7 @@
 #include "render_simd.h"
 
 #define TILE_SAMPLES (RASTER_TILE_SIZE * RASTER_TILE_SIZE)
+_Static_assert(TILE_SAMPLES <= MESO_FRAGMENT_BLOCK_CAPACITY, "a batch holds a whole tile");
 /* Wireframe: an edge sample is drawn when its depth is within this slack of the buffer's (the
  * edge lies on the surface the buffer holds, up to rounding of two different evaluations). */
 #define WIRE_DEPTH_RELATIVE_SLACK 1.001f
@@ -55,28 +56,37 @@ static void load_attributes(const meso_mesh *mesh, uint32_t triangle, vertex_att
 #define splat v8_splat
 
 /* Fill the inputs and preset the outputs of n fragments from their sample positions and view
- * depths, 8 at a time (GCC vector extensions), then scatter into the AoS batch. */
+ * depths, 8 at a time (GCC vector extensions), into lanes first..first+n-1 of the block. The
+ * inputs are padded to whole groups of 8 (cover_triangle), so up to 7 lanes past first+n are
+ * written too; the next triangle's fill or flush_batch's padding writes over them. */
 static void fill_fragments(const raster_triangle *tri, const meso_frame *frame,
                            const vertex_attributes *va, size_t n, const int32_t *xs,
-                           const int32_t *ys, const float *depths, meso_fragment *frags) {
+                           const int32_t *ys, const float *depths, meso_fragment_block *block,
+                           size_t first) {
     const v8f ga0 = splat(tri->ga[0]), ga1 = splat(tri->ga[1]), ga2 = splat(tri->ga[2]);
     const v8f gb0 = splat(tri->gb[0]), gb1 = splat(tri->gb[1]), gb2 = splat(tri->gb[2]);
     const v8f gc0 = splat(tri->gc[0]), gc1 = splat(tri->gc[1]), gc2 = splat(tri->gc[2]);
     const v8f ref_x = splat(tri->ref_x), ref_y = splat(tri->ref_y);
-    for (size_t first = 0; first < n; first += LANES) {
-        int lanes = n - first < LANES ? (int)(n - first) : LANES;
+    const v8i triangle = v8i_splat((int32_t)tri->triangle);
+    const v8f zero = splat(0.0f);
+    const uint64_t no_discard = 0;
+#define STORE(array, value) memcpy(block->array + at, &(value), sizeof(v8f))
+    for (size_t i = 0; i < n; i += LANES) {
+        size_t at = first + i;
         v8i ix, iy;
         v8f d;
         /* the arrays are padded to whole groups of 8 by the caller */
-        memcpy(&ix, xs + first, sizeof(ix));
-        memcpy(&iy, ys + first, sizeof(iy));
-        memcpy(&d, depths + first, sizeof(d));
+        memcpy(&ix, xs + i, sizeof(ix));
+        memcpy(&iy, ys + i, sizeof(iy));
+        memcpy(&d, depths + i, sizeof(d));
         v8f sx = __builtin_convertvector(ix, v8f) + splat(0.5f);
         v8f sy = __builtin_convertvector(iy, v8f) + splat(0.5f);
         v8f fx = sx - ref_x, fy = sy - ref_y;
         v8f b0 = (gc0 + gb0 * fy + ga0 * fx) * d;
         v8f b1 = (gc1 + gb1 * fy + ga1 * fx) * d;
         v8f b2 = (gc2 + gb2 * fy + ga2 * fx) * d;
+        STORE(x, sx), STORE(y, sy), STORE(triangle, triangle);
+        STORE(b0, b0), STORE(b1, b1), STORE(b2, b2);
         /* On the camera ray through the sample centre: the same ray the reference traces
          * (meso_frame_ray_direction). */
         v8f dx = splat(frame->corner.x) +
@@ -87,34 +97,34 @@ static void fill_fragments(const raster_triangle *tri, const meso_frame *frame,
                  (splat(frame->pixel_right.z) * sx + splat(frame->pixel_down.z) * sy);
         v8f px = splat(frame->eye.x) + dx * d, py = splat(frame->eye.y) + dy * d;
         v8f pz = splat(frame->eye.z) + dz * d;
+        STORE(px, px), STORE(py, py), STORE(pz, pz);
 #define INTERP(arr, c) (splat(arr[0].c) * b0 + splat(arr[1].c) * b1 + splat(arr[2].c) * b2)
         v8f nx = INTERP(va->n, x), ny = INTERP(va->n, y), nz = INTERP(va->n, z);
         v8f len2 = nx * nx + ny * ny + nz * nz;
         v8f inv = v8_select(len2 > splat(0.0f), splat(1.0f) / v8_sqrt(len2), splat(1.0f));
         nx *= inv, ny *= inv, nz *= inv;
-        v8f tx = splat(0.0f), ty = tx, tz = tx, bx = tx, by = tx, bz = tx, u = tx, v = tx;
+        STORE(nx, nx), STORE(ny, ny), STORE(nz, nz);
         if (va->has_tangents) {
-            tx = INTERP(va->t, x), ty = INTERP(va->t, y), tz = INTERP(va->t, z);
-            bx = INTERP(va->b, x), by = INTERP(va->b, y), bz = INTERP(va->b, z);
+            v8f tx = INTERP(va->t, x), ty = INTERP(va->t, y), tz = INTERP(va->t, z);
+            v8f bx = INTERP(va->b, x), by = INTERP(va->b, y), bz = INTERP(va->b, z);
+            STORE(tx, tx), STORE(ty, ty), STORE(tz, tz);
+            STORE(bx, bx), STORE(by, by), STORE(bz, bz);
+        } else {
+            STORE(tx, zero), STORE(ty, zero), STORE(tz, zero);
+            STORE(bx, zero), STORE(by, zero), STORE(bz, zero);
         }
-        if (va->has_uvs) u = INTERP(va->uv, x), v = INTERP(va->uv, y);
+        if (va->has_uvs) {
+            v8f u = INTERP(va->uv, x), v = INTERP(va->uv, y);
+            STORE(u, u), STORE(v, v);
+        } else {
+            STORE(u, zero), STORE(v, zero);
+        }
 #undef INTERP
-        for (int i = 0; i < lanes; i++) {
-            meso_fragment *f = &frags[first + (size_t)i];
-            f->x = sx[i], f->y = sy[i];
-            f->triangle = tri->triangle;
-            f->b0 = b0[i], f->b1 = b1[i], f->b2 = b2[i];
-            f->position = (meso_vec3){px[i], py[i], pz[i]};
-            f->normal = (meso_vec3){nx[i], ny[i], nz[i]};
-            f->tangent = (meso_vec3){tx[i], ty[i], tz[i]};
-            f->bitangent = (meso_vec3){bx[i], by[i], bz[i]};
-            f->uv = (meso_vec2){u[i], v[i]};
-            f->depth = d[i];
-            f->color = (meso_vec3){0.0f, 0.0f, 0.0f};
-            f->out_depth = d[i];
-            f->discard = false;
-        }
+        STORE(depth, d), STORE(out_depth, d);
+        STORE(r, zero), STORE(g, zero), STORE(b, zero);
+        memcpy(block->discard + at, &no_discard, sizeof(no_discard));
     }
+#undef STORE
 }
 
 /* The samples of one triangle that pass coverage and the early depth test, before their
@@ -266,9 +276,10 @@ static inline void stream_fence(void) {
 typedef struct tile_batch {
     const raster_object *object;
     const meso_frame *frame;
-    meso_fragment *fragments;
-    uint32_t *pixels; /* tile-buffer index of each fragment */
-    uint8_t *pending; /* per tile sample: 1 while a fragment of the batch covers it */
+    meso_fragment_block *block;
+    meso_fragment *scratch; /* the adapter's fragments (render_fragments.c) */
+    uint32_t *pixels;       /* tile-buffer index of each fragment */
+    uint8_t *pending;       /* per tile sample: 1 while a fragment of the batch covers it */
     float *color, *coverage, *depth; /* the tile's buffers */
     size_t count;
     uint64_t shaded; /* fragments shaded in the tile so far */
@@ -278,19 +289,25 @@ typedef struct tile_batch {
 static void flush_batch(tile_batch *b) {
     if (!b->count) return;
     const raster_object *obj = b->object;
-    obj->technique->shade(obj->state, b->frame, obj->object, b->fragments, b->count);
+    meso_fragment_block *block = b->block;
+    block->count = b->count;
+    /* each triangle's fill pads its own last group; the block's last group is padded here */
+    meso_fragment_block_pad(block);
+    meso_technique_shade_block(obj->technique, obj->state, b->frame, obj->object, block,
+                               b->scratch);
     float *depth = b->depth, *coverage = b->coverage, *color = b->color;
+    const uint32_t *pixels = b->pixels;
     for (size_t i = 0; i < b->count; i++) {
-        const meso_fragment *f = &b->fragments[i];
-        uint32_t p = b->pixels[i];
+        uint32_t p = pixels[i];
         b->pending[p] = 0;
+        float z = block->out_depth[i];
         /* discarded, behind, or NaN: nothing drawn */
-        if (f->discard || !(f->out_depth < depth[p])) continue;
-        depth[p] = f->out_depth;
+        if (block->discard[i] || !(z < depth[p])) continue;
+        depth[p] = z;
         coverage[p] = 1.0f;
-        color[3 * p + 0] = f->color.x;
-        color[3 * p + 1] = f->color.y;
-        color[3 * p + 2] = f->color.z;
+        color[3 * p + 0] = block->r[i];
+        color[3 * p + 1] = block->g[i];
+        color[3 * p + 2] = block->b[i];
     }
     b->shaded += b->count;
     b->count = 0;
@@ -341,7 +358,8 @@ static void draw_tile(void *user, size_t job, int thread_index) {
      * and write-back only lowers depths, so a sample rejected against the batch's older
      * depth would be rejected against the newer one too. The same fragments are shaded and
      * written, hence the same bytes. */
-    tile_batch batch = {.fragments = scratch->fragments,
+    tile_batch batch = {.block = scratch->block,
+                        .scratch = scratch->fragments,
                         .pixels = scratch->pixels,
                         .pending = scratch->pending,
                         .color = color,
@@ -381,8 +399,8 @@ static void draw_tile(void *user, size_t job, int thread_index) {
             }
             vertex_attributes va;
             load_attributes(mesh, tri->triangle, &va);
-            fill_fragments(tri, frame, &va, n, covered->x, covered->y, covered->depth,
-                           batch.fragments + batch.count);
+            fill_fragments(tri, frame, &va, n, covered->x, covered->y, covered->depth, batch.block,
+                           batch.count);
             batch.count += n;
         }
     }
@@ -427,6 +445,7 @@ static meso_result reserve_threads(meso_context *ctx, raster_pass *pass) {
     if (!t) goto oom;
     pass->threads = t;
     for (int i = pass->num_threads; i < threads; i++) {
+        t[i].block = aligned_alloc(32, sizeof(meso_fragment_block));
         t[i].fragments = malloc(TILE_SAMPLES * sizeof(meso_fragment));
         /* a triangle's samples are tested before the check for repeats: up to a tile's
          * worth past a full batch, plus the branch-free compaction's one extra write */
@@ -437,8 +456,9 @@ static meso_result reserve_threads(meso_context *ctx, raster_pass *pass) {
         t[i].color = malloc(3 * TILE_SAMPLES * sizeof(float));
         t[i].coverage = malloc(TILE_SAMPLES * sizeof(float));
         t[i].depth = malloc(TILE_SAMPLES * sizeof(float));
-        if (!t[i].fragments || !t[i].pixels || !t[i].wire || !t[i].color || !t[i].coverage ||
-            !t[i].depth || !t[i].pending || !t[i].covered) {
+        if (!t[i].block || !t[i].fragments || !t[i].pixels || !t[i].wire || !t[i].color ||
+            !t[i].coverage || !t[i].depth || !t[i].pending || !t[i].covered) {
+            free(t[i].block);
             free(t[i].pending);
             free(t[i].covered);
             free(t[i].fragments);
@@ -508,6 +528,7 @@ meso_result raster_draw(meso_context *ctx, raster_pass *pass, const meso_frame *
 void raster_pass_release(raster_pass *pass) {
     raster_bins_release(&pass->bins);
     for (int i = 0; i < pass->num_threads; i++) {
+        free(pass->threads[i].block);
         free(pass->threads[i].fragments);
         free(pass->threads[i].pixels);
         free(pass->threads[i].wire);

@@ -128,7 +128,7 @@ static meso_result resolve_technique(meso_context *ctx, const meso_object *objec
         return meso_log_error(ctx, MESO_ERROR_INTERNAL,
                               "%s: technique '%s' has no geometry function", object->name, name);
     }
-    if (t->info.kind != MESO_TECHNIQUE_REFERENCE && !t->shade) {
+    if (t->info.kind != MESO_TECHNIQUE_REFERENCE && !t->shade && !t->shade_block) {
         return meso_log_error(ctx, MESO_ERROR_INTERNAL, "%s: technique '%s' has no shade function",
                               object->name, name);
     }
