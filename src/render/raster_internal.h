@@ -143,6 +143,18 @@ meso_result raster_draw(meso_context *ctx, raster_pass *pass, const meso_frame *
                         float *depth, uint64_t *out_triangles, uint64_t *out_fragments);
 void raster_pass_release(raster_pass *pass);
 
+#if MESO_HAS_AVX2_TECHNIQUES
+/* raster_tiles.c compiled for AVX2 + FMA + F16C like the techniques (CMakeLists.txt): the same
+ * bits; render_renderer.c calls them when meso_technique_isa() is "avx2". */
+meso_result raster_draw_avx2(meso_context *ctx, raster_pass *pass, const meso_frame *frame,
+                             const raster_object *objects, const meso_mesh *const *meshes,
+                             int num_objects, bool wireframe, float *color, float *coverage,
+                             float *depth, uint64_t *out_triangles, uint64_t *out_fragments);
+void raster_resolve_avx2(meso_context *ctx, int n, int width, int height, const float *sample_color,
+                         const float *sample_coverage, const float *sample_depth, float *color,
+                         float *coverage, float *depth);
+#endif
+
 /* A 64-byte aligned array of floats for render targets (free() releases it); NULL when out of
  * memory. */
 float *meso_render_alloc_floats(size_t count);

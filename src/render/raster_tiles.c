@@ -193,6 +193,16 @@ static size_t cover_triangle(const raster_triangle *tri, int x0, int y0, int x1,
             /* kept when in front of the camera and nearer than the buffer; a NaN fails both */
             int keep = v8_mask_bits((inv_depth > splat(0.0f)) & (d < v8_gather(zrow, column)));
             int lanes = m - first < LANES ? m - first : LANES;
+            if (lanes == LANES && keep == 0xff) { /* all eight kept (inside large triangles) */
+                v8i pixel = v8i_splat((int32_t)base) + column;
+                memcpy(pixels + n, &pixel, sizeof pixel);
+                memcpy(out->depth + n, &d, sizeof d);
+                memcpy(out->x + n, &x, sizeof x);
+                v8i row_y = v8i_splat(y);
+                memcpy(out->y + n, &row_y, sizeof row_y);
+                n += LANES;
+                continue;
+            }
             for (int k = 0; k < lanes; k++) { /* compacted without branches */
                 pixels[n] = base + (uint32_t)column[k];
                 out->depth[n] = d[k];
@@ -297,18 +307,36 @@ static void flush_batch(tile_batch *b) {
                                b->scratch);
     float *depth = b->depth, *coverage = b->coverage, *color = b->color;
     const uint32_t *pixels = b->pixels;
-    for (size_t i = 0; i < b->count; i++) {
-        uint32_t p = pixels[i];
-        b->pending[p] = 0;
-        float z = block->out_depth[i];
-        /* discarded, behind, or NaN: nothing drawn */
-        if (block->discard[i] || !(z < depth[p])) continue;
-        depth[p] = z;
-        coverage[p] = 1.0f;
-        color[3 * p + 0] = block->r[i];
-        color[3 * p + 1] = block->g[i];
-        color[3 * p + 2] = block->b[i];
+    size_t count = b->count;
+    /* The batch never repeats a sample, so the depths it tests against can be read eight at a
+     * time before any is written. */
+    for (size_t first = 0; first < count; first += LANES) {
+        int lanes = count - first < LANES ? (int)(count - first) : LANES;
+        int live = (1 << lanes) - 1;
+        v8i pix;
+        memcpy(&pix, pixels + first, sizeof pix);
+        pix = pix & (v8i)v8_mask_from_bits(live); /* the entries past count are stale */
+        v8f z, old = v8_gather(depth, pix);
+        memcpy(&z, block->out_depth + first, sizeof z);
+        /* behind, or NaN: nothing drawn */
+        for (int keep = v8_mask_bits(z < old) & live; keep; keep &= keep - 1) {
+            int k = __builtin_ctz((unsigned)keep);
+            size_t i = first + (size_t)k;
+            if (block->discard[i]) continue; /* discarded: nothing drawn */
+            uint32_t p = (uint32_t)pix[k];
+            depth[p] = z[k];
+            coverage[p] = 1.0f;
+            color[3 * p + 0] = block->r[i];
+            color[3 * p + 1] = block->g[i];
+            color[3 * p + 2] = block->b[i];
+        }
     }
+    /* release the batch's samples: the whole mask at once when the batch is a large part of
+     * the tile */
+    if (count * 8 > TILE_SAMPLES)
+        memset(b->pending, 0, TILE_SAMPLES);
+    else
+        for (size_t i = 0; i < count; i++) b->pending[pixels[i]] = 0;
     b->shaded += b->count;
     b->count = 0;
 }
