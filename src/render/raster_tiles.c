@@ -261,25 +261,12 @@ static void mark_edges(const raster_triangle *tri, int tx0, int ty0, int tx1, in
     }
 }
 
-/* Copy n floats to the target. The target (megabytes) is written once a frame and not read
- * back by the frame: non-temporal stores skip reading its lines into the cache first. */
-static inline void stream_copy(float *dst, const float *src, size_t n) {
-#if defined(__AVX__)
-    if (((uintptr_t)dst & 31u) == 0) {
-        size_t i = 0;
-        for (; i + 8 <= n; i += 8) _mm256_stream_ps(dst + i, _mm256_loadu_ps(src + i));
-        for (; i < n; i++) dst[i] = src[i];
-        return;
-    }
-#endif
+/* Copy n floats to the target. Plain stores (memcpy), not non-temporal ones: with the tile
+ * pass in the AVX2 copy, _mm256_stream_ps made an empty 512^2 frame 0.27-0.33 ms against
+ * 0.15-0.24 ms for memcpy (meso bench, 5 interleaved runs, issue 16; docs/performance.md): the
+ * next frame and the image conversion read the target back from the cache. */
+static inline void copy_floats(float *dst, const float *src, size_t n) {
     memcpy(dst, src, n * sizeof(float));
-}
-
-/* Non-temporal stores are weakly ordered: fence them before the job ends. */
-static inline void stream_fence(void) {
-#if defined(__AVX__)
-    _mm_sfence();
-#endif
 }
 
 /* Fragments of one object in one tile waiting to be shaded; no two share a sample. */
@@ -365,12 +352,11 @@ static void draw_tile(void *user, size_t job, int thread_index) {
     if (empty) { /* background straight into the target */
         for (int y = ty0; y <= ty1; y++) {
             size_t p = (size_t)y * width + (size_t)tx0;
-            stream_copy(dj->color + 3 * p, pass->clear_color, 3 * tw);
-            stream_copy(dj->coverage + p, pass->clear_coverage, tw);
-            stream_copy(dj->depth + p, pass->clear_depth, tw);
+            copy_floats(dj->color + 3 * p, pass->clear_color, 3 * tw);
+            copy_floats(dj->coverage + p, pass->clear_coverage, tw);
+            copy_floats(dj->depth + p, pass->clear_depth, tw);
         }
         pass->tile_fragments[tile] = 0;
-        stream_fence();
         return;
     }
     /* The tile renders into the thread's own small buffers (they stay in cache) and is copied
@@ -459,11 +445,10 @@ static void draw_tile(void *user, size_t job, int thread_index) {
     for (int y = ty0; y <= ty1; y++) {
         size_t p = (size_t)y * width + (size_t)tx0;
         size_t l = (size_t)(y - ty0) * RASTER_TILE_SIZE;
-        stream_copy(dj->color + 3 * p, color + 3 * l, 3 * tw);
-        stream_copy(dj->coverage + p, coverage + l, tw);
-        stream_copy(dj->depth + p, depth + l, tw);
+        copy_floats(dj->color + 3 * p, color + 3 * l, 3 * tw);
+        copy_floats(dj->coverage + p, coverage + l, tw);
+        copy_floats(dj->depth + p, depth + l, tw);
     }
-    stream_fence();
 }
 
 static meso_result reserve_threads(meso_context *ctx, raster_pass *pass) {

@@ -62,11 +62,12 @@ typedef struct meso_fragment {
 
 /* A block of fragments in structure-of-arrays form (issue 16, STYLE.md "vector lanes kept full"):
  * what the rasterizer hands a technique's shade_block, one (object, screen tile) batch at a time.
- * Fragment i is lane i of every array. The arrays are 32-byte aligned and hold
- * MESO_FRAGMENT_BLOCK_CAPACITY + 8 entries: lanes count..(count rounded up to 8) - 1 repeat
- * fragment count - 1 (finite values a technique may compute on and must not read back), so a
- * technique reads and writes whole groups of 8 with aligned vector loads and stores. The
- * fields mean what meso_fragment's do. */
+ * Fragment i is lane i of every array, in the rasterizer's order (chunks, their triangles,
+ * each triangle's samples row by row), so a triangle's fragments are consecutive. The arrays
+ * are 32-byte aligned and hold MESO_FRAGMENT_BLOCK_CAPACITY + 8 entries: lanes
+ * count..(count rounded up to 8) - 1 repeat fragment count - 1 (finite inputs a technique may
+ * compute on; their outputs are ignored), so a technique reads and writes whole groups of 8
+ * with aligned vector loads and stores. The fields mean what meso_fragment's do. */
 #define MESO_FRAGMENT_BLOCK_CAPACITY 1024 /* a screen tile's samples (raster_internal.h) */
 #define MESO_FRAGMENT_BLOCK_LANES (MESO_FRAGMENT_BLOCK_CAPACITY + 8)
 typedef struct meso_fragment_block {
