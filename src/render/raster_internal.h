@@ -111,7 +111,8 @@ typedef struct raster_object {
 typedef struct covered_samples covered_samples;
 
 typedef struct raster_thread_scratch {
-    meso_fragment *fragments;        /* RASTER_TILE_SIZE^2: a batch never repeats a sample */
+    meso_fragment_block *block;      /* the batch: a batch never repeats a sample */
+    meso_fragment *fragments;        /* RASTER_TILE_SIZE^2, for techniques without shade_block */
     uint32_t *pixels;                /* tile-buffer index of each fragment (2 x tile + 1) */
     uint8_t *pending;                /* RASTER_TILE_SIZE^2: samples held by the batch (zeroed) */
     covered_samples *covered;        /* one triangle's samples before their attributes */
@@ -141,6 +142,18 @@ meso_result raster_draw(meso_context *ctx, raster_pass *pass, const meso_frame *
                         int num_objects, bool wireframe, float *color, float *coverage,
                         float *depth, uint64_t *out_triangles, uint64_t *out_fragments);
 void raster_pass_release(raster_pass *pass);
+
+#if MESO_HAS_AVX2_TECHNIQUES
+/* raster_tiles.c compiled for AVX2 + FMA + F16C like the techniques (CMakeLists.txt): the same
+ * bits; render_renderer.c calls them when meso_technique_isa() is "avx2". */
+meso_result raster_draw_avx2(meso_context *ctx, raster_pass *pass, const meso_frame *frame,
+                             const raster_object *objects, const meso_mesh *const *meshes,
+                             int num_objects, bool wireframe, float *color, float *coverage,
+                             float *depth, uint64_t *out_triangles, uint64_t *out_fragments);
+void raster_resolve_avx2(meso_context *ctx, int n, int width, int height, const float *sample_color,
+                         const float *sample_coverage, const float *sample_depth, float *color,
+                         float *coverage, float *depth);
+#endif
 
 /* A 64-byte aligned array of floats for render targets (free() releases it); NULL when out of
  * memory. */

@@ -14,6 +14,7 @@
 #include "render_simd.h"
 
 #define TILE_SAMPLES (RASTER_TILE_SIZE * RASTER_TILE_SIZE)
+_Static_assert(TILE_SAMPLES <= MESO_FRAGMENT_BLOCK_CAPACITY, "a batch holds a whole tile");
 /* Wireframe: an edge sample is drawn when its depth is within this slack of the buffer's (the
  * edge lies on the surface the buffer holds, up to rounding of two different evaluations). */
 #define WIRE_DEPTH_RELATIVE_SLACK 1.001f
@@ -55,28 +56,37 @@ static void load_attributes(const meso_mesh *mesh, uint32_t triangle, vertex_att
 #define splat v8_splat
 
 /* Fill the inputs and preset the outputs of n fragments from their sample positions and view
- * depths, 8 at a time (GCC vector extensions), then scatter into the AoS batch. */
+ * depths, 8 at a time (GCC vector extensions), into lanes first..first+n-1 of the block. The
+ * inputs are padded to whole groups of 8 (cover_triangle), so up to 7 lanes past first+n are
+ * written too; the next triangle's fill or flush_batch's padding writes over them. */
 static void fill_fragments(const raster_triangle *tri, const meso_frame *frame,
                            const vertex_attributes *va, size_t n, const int32_t *xs,
-                           const int32_t *ys, const float *depths, meso_fragment *frags) {
+                           const int32_t *ys, const float *depths, meso_fragment_block *block,
+                           size_t first) {
     const v8f ga0 = splat(tri->ga[0]), ga1 = splat(tri->ga[1]), ga2 = splat(tri->ga[2]);
     const v8f gb0 = splat(tri->gb[0]), gb1 = splat(tri->gb[1]), gb2 = splat(tri->gb[2]);
     const v8f gc0 = splat(tri->gc[0]), gc1 = splat(tri->gc[1]), gc2 = splat(tri->gc[2]);
     const v8f ref_x = splat(tri->ref_x), ref_y = splat(tri->ref_y);
-    for (size_t first = 0; first < n; first += LANES) {
-        int lanes = n - first < LANES ? (int)(n - first) : LANES;
+    const v8i triangle = v8i_splat((int32_t)tri->triangle);
+    const v8f zero = splat(0.0f);
+    const uint64_t no_discard = 0;
+#define STORE(array, value) memcpy(block->array + at, &(value), sizeof(v8f))
+    for (size_t i = 0; i < n; i += LANES) {
+        size_t at = first + i;
         v8i ix, iy;
         v8f d;
         /* the arrays are padded to whole groups of 8 by the caller */
-        memcpy(&ix, xs + first, sizeof(ix));
-        memcpy(&iy, ys + first, sizeof(iy));
-        memcpy(&d, depths + first, sizeof(d));
+        memcpy(&ix, xs + i, sizeof(ix));
+        memcpy(&iy, ys + i, sizeof(iy));
+        memcpy(&d, depths + i, sizeof(d));
         v8f sx = __builtin_convertvector(ix, v8f) + splat(0.5f);
         v8f sy = __builtin_convertvector(iy, v8f) + splat(0.5f);
         v8f fx = sx - ref_x, fy = sy - ref_y;
         v8f b0 = (gc0 + gb0 * fy + ga0 * fx) * d;
         v8f b1 = (gc1 + gb1 * fy + ga1 * fx) * d;
         v8f b2 = (gc2 + gb2 * fy + ga2 * fx) * d;
+        STORE(x, sx), STORE(y, sy), STORE(triangle, triangle);
+        STORE(b0, b0), STORE(b1, b1), STORE(b2, b2);
         /* On the camera ray through the sample centre: the same ray the reference traces
          * (meso_frame_ray_direction). */
         v8f dx = splat(frame->corner.x) +
@@ -87,34 +97,34 @@ static void fill_fragments(const raster_triangle *tri, const meso_frame *frame,
                  (splat(frame->pixel_right.z) * sx + splat(frame->pixel_down.z) * sy);
         v8f px = splat(frame->eye.x) + dx * d, py = splat(frame->eye.y) + dy * d;
         v8f pz = splat(frame->eye.z) + dz * d;
+        STORE(px, px), STORE(py, py), STORE(pz, pz);
 #define INTERP(arr, c) (splat(arr[0].c) * b0 + splat(arr[1].c) * b1 + splat(arr[2].c) * b2)
         v8f nx = INTERP(va->n, x), ny = INTERP(va->n, y), nz = INTERP(va->n, z);
         v8f len2 = nx * nx + ny * ny + nz * nz;
         v8f inv = v8_select(len2 > splat(0.0f), splat(1.0f) / v8_sqrt(len2), splat(1.0f));
         nx *= inv, ny *= inv, nz *= inv;
-        v8f tx = splat(0.0f), ty = tx, tz = tx, bx = tx, by = tx, bz = tx, u = tx, v = tx;
+        STORE(nx, nx), STORE(ny, ny), STORE(nz, nz);
         if (va->has_tangents) {
-            tx = INTERP(va->t, x), ty = INTERP(va->t, y), tz = INTERP(va->t, z);
-            bx = INTERP(va->b, x), by = INTERP(va->b, y), bz = INTERP(va->b, z);
+            v8f tx = INTERP(va->t, x), ty = INTERP(va->t, y), tz = INTERP(va->t, z);
+            v8f bx = INTERP(va->b, x), by = INTERP(va->b, y), bz = INTERP(va->b, z);
+            STORE(tx, tx), STORE(ty, ty), STORE(tz, tz);
+            STORE(bx, bx), STORE(by, by), STORE(bz, bz);
+        } else {
+            STORE(tx, zero), STORE(ty, zero), STORE(tz, zero);
+            STORE(bx, zero), STORE(by, zero), STORE(bz, zero);
         }
-        if (va->has_uvs) u = INTERP(va->uv, x), v = INTERP(va->uv, y);
+        if (va->has_uvs) {
+            v8f u = INTERP(va->uv, x), v = INTERP(va->uv, y);
+            STORE(u, u), STORE(v, v);
+        } else {
+            STORE(u, zero), STORE(v, zero);
+        }
 #undef INTERP
-        for (int i = 0; i < lanes; i++) {
-            meso_fragment *f = &frags[first + (size_t)i];
-            f->x = sx[i], f->y = sy[i];
-            f->triangle = tri->triangle;
-            f->b0 = b0[i], f->b1 = b1[i], f->b2 = b2[i];
-            f->position = (meso_vec3){px[i], py[i], pz[i]};
-            f->normal = (meso_vec3){nx[i], ny[i], nz[i]};
-            f->tangent = (meso_vec3){tx[i], ty[i], tz[i]};
-            f->bitangent = (meso_vec3){bx[i], by[i], bz[i]};
-            f->uv = (meso_vec2){u[i], v[i]};
-            f->depth = d[i];
-            f->color = (meso_vec3){0.0f, 0.0f, 0.0f};
-            f->out_depth = d[i];
-            f->discard = false;
-        }
+        STORE(depth, d), STORE(out_depth, d);
+        STORE(r, zero), STORE(g, zero), STORE(b, zero);
+        memcpy(block->discard + at, &no_discard, sizeof(no_discard));
     }
+#undef STORE
 }
 
 /* The samples of one triangle that pass coverage and the early depth test, before their
@@ -183,6 +193,16 @@ static size_t cover_triangle(const raster_triangle *tri, int x0, int y0, int x1,
             /* kept when in front of the camera and nearer than the buffer; a NaN fails both */
             int keep = v8_mask_bits((inv_depth > splat(0.0f)) & (d < v8_gather(zrow, column)));
             int lanes = m - first < LANES ? m - first : LANES;
+            if (lanes == LANES && keep == 0xff) { /* all eight kept (inside large triangles) */
+                v8i pixel = v8i_splat((int32_t)base) + column;
+                memcpy(pixels + n, &pixel, sizeof pixel);
+                memcpy(out->depth + n, &d, sizeof d);
+                memcpy(out->x + n, &x, sizeof x);
+                v8i row_y = v8i_splat(y);
+                memcpy(out->y + n, &row_y, sizeof row_y);
+                n += LANES;
+                continue;
+            }
             for (int k = 0; k < lanes; k++) { /* compacted without branches */
                 pixels[n] = base + (uint32_t)column[k];
                 out->depth[n] = d[k];
@@ -241,34 +261,22 @@ static void mark_edges(const raster_triangle *tri, int tx0, int ty0, int tx1, in
     }
 }
 
-/* Copy n floats to the target. The target (megabytes) is written once a frame and not read
- * back by the frame: non-temporal stores skip reading its lines into the cache first. */
-static inline void stream_copy(float *dst, const float *src, size_t n) {
-#if defined(__AVX__)
-    if (((uintptr_t)dst & 31u) == 0) {
-        size_t i = 0;
-        for (; i + 8 <= n; i += 8) _mm256_stream_ps(dst + i, _mm256_loadu_ps(src + i));
-        for (; i < n; i++) dst[i] = src[i];
-        return;
-    }
-#endif
+/* Copy n floats to the target. Plain stores (memcpy), not non-temporal ones: with the tile
+ * pass in the AVX2 copy, _mm256_stream_ps made an empty 512^2 frame 0.27-0.33 ms against
+ * 0.15-0.24 ms for memcpy (meso bench, 5 interleaved runs, issue 16; docs/performance.md): the
+ * next frame and the image conversion read the target back from the cache. */
+static inline void copy_floats(float *dst, const float *src, size_t n) {
     memcpy(dst, src, n * sizeof(float));
-}
-
-/* Non-temporal stores are weakly ordered: fence them before the job ends. */
-static inline void stream_fence(void) {
-#if defined(__AVX__)
-    _mm_sfence();
-#endif
 }
 
 /* Fragments of one object in one tile waiting to be shaded; no two share a sample. */
 typedef struct tile_batch {
     const raster_object *object;
     const meso_frame *frame;
-    meso_fragment *fragments;
-    uint32_t *pixels; /* tile-buffer index of each fragment */
-    uint8_t *pending; /* per tile sample: 1 while a fragment of the batch covers it */
+    meso_fragment_block *block;
+    meso_fragment *scratch; /* the adapter's fragments (render_fragments.c) */
+    uint32_t *pixels;       /* tile-buffer index of each fragment */
+    uint8_t *pending;       /* per tile sample: 1 while a fragment of the batch covers it */
     float *color, *coverage, *depth; /* the tile's buffers */
     size_t count;
     uint64_t shaded; /* fragments shaded in the tile so far */
@@ -278,20 +286,44 @@ typedef struct tile_batch {
 static void flush_batch(tile_batch *b) {
     if (!b->count) return;
     const raster_object *obj = b->object;
-    obj->technique->shade(obj->state, b->frame, obj->object, b->fragments, b->count);
+    meso_fragment_block *block = b->block;
+    block->count = b->count;
+    /* each triangle's fill pads its own last group; the block's last group is padded here */
+    meso_fragment_block_pad(block);
+    meso_technique_shade_block(obj->technique, obj->state, b->frame, obj->object, block,
+                               b->scratch);
     float *depth = b->depth, *coverage = b->coverage, *color = b->color;
-    for (size_t i = 0; i < b->count; i++) {
-        const meso_fragment *f = &b->fragments[i];
-        uint32_t p = b->pixels[i];
-        b->pending[p] = 0;
-        /* discarded, behind, or NaN: nothing drawn */
-        if (f->discard || !(f->out_depth < depth[p])) continue;
-        depth[p] = f->out_depth;
-        coverage[p] = 1.0f;
-        color[3 * p + 0] = f->color.x;
-        color[3 * p + 1] = f->color.y;
-        color[3 * p + 2] = f->color.z;
+    const uint32_t *pixels = b->pixels;
+    size_t count = b->count;
+    /* The batch never repeats a sample, so the depths it tests against can be read eight at a
+     * time before any is written. */
+    for (size_t first = 0; first < count; first += LANES) {
+        int lanes = count - first < LANES ? (int)(count - first) : LANES;
+        int live = (1 << lanes) - 1;
+        v8i pix;
+        memcpy(&pix, pixels + first, sizeof pix);
+        pix = pix & (v8i)v8_mask_from_bits(live); /* the entries past count are stale */
+        v8f z, old = v8_gather(depth, pix);
+        memcpy(&z, block->out_depth + first, sizeof z);
+        /* behind, or NaN: nothing drawn */
+        for (int keep = v8_mask_bits(z < old) & live; keep; keep &= keep - 1) {
+            int k = __builtin_ctz((unsigned)keep);
+            size_t i = first + (size_t)k;
+            if (block->discard[i]) continue; /* discarded: nothing drawn */
+            uint32_t p = (uint32_t)pix[k];
+            depth[p] = z[k];
+            coverage[p] = 1.0f;
+            color[3 * p + 0] = block->r[i];
+            color[3 * p + 1] = block->g[i];
+            color[3 * p + 2] = block->b[i];
+        }
     }
+    /* release the batch's samples: the whole mask at once when the batch is a large part of
+     * the tile */
+    if (count * 8 > TILE_SAMPLES)
+        memset(b->pending, 0, TILE_SAMPLES);
+    else
+        for (size_t i = 0; i < count; i++) b->pending[pixels[i]] = 0;
     b->shaded += b->count;
     b->count = 0;
 }
@@ -320,12 +352,11 @@ static void draw_tile(void *user, size_t job, int thread_index) {
     if (empty) { /* background straight into the target */
         for (int y = ty0; y <= ty1; y++) {
             size_t p = (size_t)y * width + (size_t)tx0;
-            stream_copy(dj->color + 3 * p, pass->clear_color, 3 * tw);
-            stream_copy(dj->coverage + p, pass->clear_coverage, tw);
-            stream_copy(dj->depth + p, pass->clear_depth, tw);
+            copy_floats(dj->color + 3 * p, pass->clear_color, 3 * tw);
+            copy_floats(dj->coverage + p, pass->clear_coverage, tw);
+            copy_floats(dj->depth + p, pass->clear_depth, tw);
         }
         pass->tile_fragments[tile] = 0;
-        stream_fence();
         return;
     }
     /* The tile renders into the thread's own small buffers (they stay in cache) and is copied
@@ -341,7 +372,8 @@ static void draw_tile(void *user, size_t job, int thread_index) {
      * and write-back only lowers depths, so a sample rejected against the batch's older
      * depth would be rejected against the newer one too. The same fragments are shaded and
      * written, hence the same bytes. */
-    tile_batch batch = {.fragments = scratch->fragments,
+    tile_batch batch = {.block = scratch->block,
+                        .scratch = scratch->fragments,
                         .pixels = scratch->pixels,
                         .pending = scratch->pending,
                         .color = color,
@@ -381,8 +413,8 @@ static void draw_tile(void *user, size_t job, int thread_index) {
             }
             vertex_attributes va;
             load_attributes(mesh, tri->triangle, &va);
-            fill_fragments(tri, frame, &va, n, covered->x, covered->y, covered->depth,
-                           batch.fragments + batch.count);
+            fill_fragments(tri, frame, &va, n, covered->x, covered->y, covered->depth, batch.block,
+                           batch.count);
             batch.count += n;
         }
     }
@@ -413,11 +445,10 @@ static void draw_tile(void *user, size_t job, int thread_index) {
     for (int y = ty0; y <= ty1; y++) {
         size_t p = (size_t)y * width + (size_t)tx0;
         size_t l = (size_t)(y - ty0) * RASTER_TILE_SIZE;
-        stream_copy(dj->color + 3 * p, color + 3 * l, 3 * tw);
-        stream_copy(dj->coverage + p, coverage + l, tw);
-        stream_copy(dj->depth + p, depth + l, tw);
+        copy_floats(dj->color + 3 * p, color + 3 * l, 3 * tw);
+        copy_floats(dj->coverage + p, coverage + l, tw);
+        copy_floats(dj->depth + p, depth + l, tw);
     }
-    stream_fence();
 }
 
 static meso_result reserve_threads(meso_context *ctx, raster_pass *pass) {
@@ -427,6 +458,7 @@ static meso_result reserve_threads(meso_context *ctx, raster_pass *pass) {
     if (!t) goto oom;
     pass->threads = t;
     for (int i = pass->num_threads; i < threads; i++) {
+        t[i].block = aligned_alloc(32, sizeof(meso_fragment_block));
         t[i].fragments = malloc(TILE_SAMPLES * sizeof(meso_fragment));
         /* a triangle's samples are tested before the check for repeats: up to a tile's
          * worth past a full batch, plus the branch-free compaction's one extra write */
@@ -437,8 +469,9 @@ static meso_result reserve_threads(meso_context *ctx, raster_pass *pass) {
         t[i].color = malloc(3 * TILE_SAMPLES * sizeof(float));
         t[i].coverage = malloc(TILE_SAMPLES * sizeof(float));
         t[i].depth = malloc(TILE_SAMPLES * sizeof(float));
-        if (!t[i].fragments || !t[i].pixels || !t[i].wire || !t[i].color || !t[i].coverage ||
-            !t[i].depth || !t[i].pending || !t[i].covered) {
+        if (!t[i].block || !t[i].fragments || !t[i].pixels || !t[i].wire || !t[i].color ||
+            !t[i].coverage || !t[i].depth || !t[i].pending || !t[i].covered) {
+            free(t[i].block);
             free(t[i].pending);
             free(t[i].covered);
             free(t[i].fragments);
@@ -508,6 +541,7 @@ meso_result raster_draw(meso_context *ctx, raster_pass *pass, const meso_frame *
 void raster_pass_release(raster_pass *pass) {
     raster_bins_release(&pass->bins);
     for (int i = 0; i < pass->num_threads; i++) {
+        free(pass->threads[i].block);
         free(pass->threads[i].fragments);
         free(pass->threads[i].pixels);
         free(pass->threads[i].wire);

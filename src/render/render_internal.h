@@ -60,6 +60,57 @@ typedef struct meso_fragment {
     bool discard;    /* preset false; true: nothing is drawn (silhouettes) */
 } meso_fragment;
 
+/* A block of fragments in structure-of-arrays form (issue 16, STYLE.md "vector lanes kept full"):
+ * what the rasterizer hands a technique's shade_block, one (object, screen tile) batch at a time.
+ * Fragment i is lane i of every array, in the rasterizer's order (chunks, their triangles,
+ * each triangle's samples row by row), so a triangle's fragments are consecutive. The arrays
+ * are 32-byte aligned and hold MESO_FRAGMENT_BLOCK_CAPACITY + 8 entries: lanes
+ * count..(count rounded up to 8) - 1 repeat fragment count - 1 (finite inputs a technique may
+ * compute on; their outputs are ignored), so a technique reads and writes whole groups of 8
+ * with aligned vector loads and stores. The fields mean what meso_fragment's do. */
+#define MESO_FRAGMENT_BLOCK_CAPACITY 1024 /* a screen tile's samples (raster_internal.h) */
+#define MESO_FRAGMENT_BLOCK_LANES (MESO_FRAGMENT_BLOCK_CAPACITY + 8)
+typedef struct meso_fragment_block {
+    size_t count; /* fragments 0..count-1, at most MESO_FRAGMENT_BLOCK_CAPACITY */
+    /* inputs, set by the rasterizer */
+    _Alignas(32) float x[MESO_FRAGMENT_BLOCK_LANES];
+    _Alignas(32) float y[MESO_FRAGMENT_BLOCK_LANES];
+    _Alignas(32) uint32_t triangle[MESO_FRAGMENT_BLOCK_LANES];
+    _Alignas(32) float b0[MESO_FRAGMENT_BLOCK_LANES];
+    _Alignas(32) float b1[MESO_FRAGMENT_BLOCK_LANES];
+    _Alignas(32) float b2[MESO_FRAGMENT_BLOCK_LANES];
+    _Alignas(32) float px[MESO_FRAGMENT_BLOCK_LANES]; /* position */
+    _Alignas(32) float py[MESO_FRAGMENT_BLOCK_LANES];
+    _Alignas(32) float pz[MESO_FRAGMENT_BLOCK_LANES];
+    _Alignas(32) float nx[MESO_FRAGMENT_BLOCK_LANES]; /* normal, unit */
+    _Alignas(32) float ny[MESO_FRAGMENT_BLOCK_LANES];
+    _Alignas(32) float nz[MESO_FRAGMENT_BLOCK_LANES];
+    _Alignas(32) float tx[MESO_FRAGMENT_BLOCK_LANES]; /* tangent dP/du */
+    _Alignas(32) float ty[MESO_FRAGMENT_BLOCK_LANES];
+    _Alignas(32) float tz[MESO_FRAGMENT_BLOCK_LANES];
+    _Alignas(32) float bx[MESO_FRAGMENT_BLOCK_LANES]; /* bitangent dP/dv */
+    _Alignas(32) float by[MESO_FRAGMENT_BLOCK_LANES];
+    _Alignas(32) float bz[MESO_FRAGMENT_BLOCK_LANES];
+    _Alignas(32) float u[MESO_FRAGMENT_BLOCK_LANES];
+    _Alignas(32) float v[MESO_FRAGMENT_BLOCK_LANES];
+    _Alignas(32) float depth[MESO_FRAGMENT_BLOCK_LANES];
+    /* outputs, preset by the rasterizer as meso_fragment's: colour 0, out_depth = depth,
+     * discard 0 (1: nothing drawn) */
+    _Alignas(32) float r[MESO_FRAGMENT_BLOCK_LANES];
+    _Alignas(32) float g[MESO_FRAGMENT_BLOCK_LANES];
+    _Alignas(32) float b[MESO_FRAGMENT_BLOCK_LANES];
+    _Alignas(32) float out_depth[MESO_FRAGMENT_BLOCK_LANES];
+    _Alignas(32) uint8_t discard[MESO_FRAGMENT_BLOCK_LANES];
+} meso_fragment_block;
+
+/* Fragment i of the block as a meso_fragment, inputs and outputs. */
+void meso_fragment_block_get(const meso_fragment_block *block, size_t i, meso_fragment *out);
+/* Write fragment i of the block from f, inputs and outputs; fragments past count are not
+ * padded (meso_fragment_block_pad does). */
+void meso_fragment_block_set(meso_fragment_block *block, size_t i, const meso_fragment *f);
+/* Fill the lanes count..(count rounded up to 8) - 1 with copies of fragment count - 1. */
+void meso_fragment_block_pad(meso_fragment_block *block);
+
 /* ---- Techniques --------------------------------------------------------------------------- */
 
 typedef struct meso_technique {
@@ -84,6 +135,18 @@ typedef struct meso_technique {
      * threads at once with different fragments; reads the state only. */
     void (*shade)(const void *state, const meso_frame *frame, const meso_object *object,
                   meso_fragment *fragments, size_t count);
+    /* The same batch in structure-of-arrays form (NULL: the rasterizer calls `shade` through
+     * meso_technique_shade_block's adapter). When present the rasterizer calls it instead of
+     * `shade`, and `shade` may be NULL. Everything said of `shade` holds: block->count
+     * fragments (>= 1) of one object in one tile, a triangle's fragments consecutive, no two
+     * sharing a sample, each fragment's result independent of the others and of where the
+     * block is cut. It reads the inputs and writes only the outputs (r, g, b, out_depth,
+     * discard) of lanes 0..count-1; it may write the padding lanes' outputs too (whole groups
+     * of 8) but no other memory, and must not change the inputs. Called from many threads at
+     * once with different blocks; reads the state only. Images are byte-identical whether a
+     * technique is drawn through shade or shade_block, for any thread count. */
+    void (*shade_block)(const void *state, const meso_frame *frame, const meso_object *object,
+                        meso_fragment_block *block);
     /* Bytes of baked data held by the state (NULL: 0). */
     size_t (*memory)(const void *state);
     /* Per-pixel techniques that draw back faces too (relief_layers: a closed mesh's far wall
@@ -99,6 +162,21 @@ typedef struct meso_technique {
 #define MESO_TECHNIQUE(name) extern const meso_technique meso_technique_##name;
 #include "technique_list.h"
 #undef MESO_TECHNIQUE
+
+/* Shade a block with technique t: t->shade_block, or (adapter for techniques written per
+ * fragment) the block as meso_fragments through t->shade and back (render_fragments.c).
+ * `scratch` holds block->count meso_fragments for the adapter (NULL when t has shade_block).
+ * Thread-safe as the technique is. */
+void meso_technique_shade_block(const meso_technique *t, const void *state, const meso_frame *frame,
+                                const meso_object *object, meso_fragment_block *block,
+                                meso_fragment *scratch);
+/* Shade `count` meso_fragments with technique t: t->shade, or (a technique with shade_block
+ * only) through a block, MESO_FRAGMENT_BLOCK_CAPACITY at a time. For callers that build
+ * fragments by hand (tests); returns MESO_ERROR_OUT_OF_MEMORY when the block cannot be
+ * allocated. Thread-safe as the technique is. */
+meso_result meso_technique_shade(const meso_technique *t, const void *state,
+                                 const meso_frame *frame, const meso_object *object,
+                                 meso_fragment *fragments, size_t count);
 
 /* The registry (technique_registry.c, list in techniques/technique_list.h). NULL if unknown. */
 const meso_technique *meso_technique_lookup(const char *name);

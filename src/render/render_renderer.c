@@ -30,7 +30,13 @@ struct meso_renderer {
     float *sample_color, *sample_coverage, *sample_depth;
     size_t sample_capacity;
     meso_render_stats stats;
+    bool avx2; /* the rasterizer's AVX2 copy, with the techniques' (raster_internal.h) */
 };
+
+#if !MESO_HAS_AVX2_TECHNIQUES
+#define raster_draw_avx2 raster_draw
+#define raster_resolve_avx2 raster_resolve
+#endif
 
 static const char *kind_name(meso_mesostructure_kind kind) {
     switch (kind) {
@@ -128,7 +134,7 @@ static meso_result resolve_technique(meso_context *ctx, const meso_object *objec
         return meso_log_error(ctx, MESO_ERROR_INTERNAL,
                               "%s: technique '%s' has no geometry function", object->name, name);
     }
-    if (t->info.kind != MESO_TECHNIQUE_REFERENCE && !t->shade) {
+    if (t->info.kind != MESO_TECHNIQUE_REFERENCE && !t->shade && !t->shade_block) {
         return meso_log_error(ctx, MESO_ERROR_INTERNAL, "%s: technique '%s' has no shade function",
                               object->name, name);
     }
@@ -194,6 +200,7 @@ meso_result meso_renderer_create(meso_context *ctx, const meso_scene *scene,
     size_t slots = count > 0 ? (size_t)count : 1;
     if (!rd) goto oom;
     rd->ctx = ctx;
+    rd->avx2 = strcmp(meso_technique_isa(), "avx2") == 0;
     if (d.num_options > 0) {
         if ((r = make_scene_view(ctx, scene, &d, rd)) != MESO_OK) goto fail;
         scene = rd->scene_view;
@@ -321,13 +328,15 @@ static meso_result draw_frame(meso_renderer *rd, meso_framebuffer *fb, const mes
                 rd->meshes[i] = mesh;
             }
         }
-        r = raster_draw(ctx, &rd->pass, &frame, rd->objects, rd->meshes, count, rd->wireframe,
-                        color, coverage, depth, &triangles, &fragments);
+        r = (rd->avx2 ? raster_draw_avx2 : raster_draw)(ctx, &rd->pass, &frame, rd->objects,
+                                                        rd->meshes, count, rd->wireframe, color,
+                                                        coverage, depth, &triangles, &fragments);
         if (r != MESO_OK) return r;
     }
     if (n > 1) {
-        raster_resolve(ctx, n, fb->width, fb->height, color, coverage, depth, fb->color,
-                       fb->coverage, fb->depth);
+        (rd->avx2 ? raster_resolve_avx2 : raster_resolve)(ctx, n, fb->width, fb->height, color,
+                                                          coverage, depth, fb->color, fb->coverage,
+                                                          fb->depth);
     }
     rd->stats.triangles = triangles;
     rd->stats.fragments = fragments;

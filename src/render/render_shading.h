@@ -5,6 +5,8 @@
 #ifndef MESO_RENDER_SHADING_H
 #define MESO_RENDER_SHADING_H
 
+#include <string.h>
+
 #include "render_internal.h"
 #include "render_simd.h"
 
@@ -29,6 +31,55 @@ void meso_shade_batch8(const meso_frame *frame, const meso_object *object,
 /* visibility[i] = 1 in every lane for the scene's lights. */
 static inline void meso_shade_batch_all_visible(meso_shade_batch *in, const meso_frame *frame) {
     for (int i = 0; i < frame->scene->num_lights; i++) in->visibility[i] = v8_splat(1.0f);
+}
+
+/* Lanes first..first+7 of a block's array (first a multiple of 8: aligned, inside the padding). */
+static inline v8f meso_block_load(const float *array, size_t first) {
+    v8f r;
+    memcpy(&r, array + first, sizeof r);
+    return r;
+}
+static inline void meso_block_store(float *array, size_t first, v8f value) {
+    memcpy(array + first, &value, sizeof value);
+}
+
+/* The shading inputs of lanes first..first+7 of a block as they are (position, normal, uv,
+ * tangent, bitangent), every light visible. */
+static inline void meso_shade_batch_from_block(meso_shade_batch *in, const meso_frame *frame,
+                                               const meso_fragment_block *b, size_t first) {
+    in->px = meso_block_load(b->px, first), in->py = meso_block_load(b->py, first);
+    in->pz = meso_block_load(b->pz, first);
+    in->nx = meso_block_load(b->nx, first), in->ny = meso_block_load(b->ny, first);
+    in->nz = meso_block_load(b->nz, first);
+    in->u = meso_block_load(b->u, first), in->v = meso_block_load(b->v, first);
+    in->tx = meso_block_load(b->tx, first), in->ty = meso_block_load(b->ty, first);
+    in->tz = meso_block_load(b->tz, first);
+    in->bx = meso_block_load(b->bx, first), in->by = meso_block_load(b->by, first);
+    in->bz = meso_block_load(b->bz, first);
+    meso_shade_batch_all_visible(in, frame);
+}
+
+/* Shade lanes first..first+7 of `in` into the block's colours (lanes past count: padding). */
+static inline void meso_shade_batch_to_block(const meso_frame *frame, const meso_object *object,
+                                             const meso_shade_batch *in, meso_fragment_block *b,
+                                             size_t first) {
+    int lanes = b->count - first < V8_LANES ? (int)(b->count - first) : V8_LANES;
+    v8f r, g, bl;
+    meso_shade_batch8(frame, object, in, lanes, &r, &g, &bl);
+    meso_block_store(b->r, first, r);
+    meso_block_store(b->g, first, g);
+    meso_block_store(b->b, first, bl);
+}
+
+/* meso_shade_fragments for a block, every light visible: the colour of each fragment from its
+ * own position, normal, uv, tangent and bitangent, with the same bits. */
+static inline void meso_shade_block(const meso_frame *frame, const meso_object *object,
+                                    meso_fragment_block *b) {
+    for (size_t first = 0; first < b->count; first += V8_LANES) {
+        meso_shade_batch in;
+        meso_shade_batch_from_block(&in, frame, b, first);
+        meso_shade_batch_to_block(frame, object, &in, b, first);
+    }
 }
 
 #endif

@@ -74,7 +74,7 @@ static void shade_with(fixture *fx, const char *name, meso_fragment *f, size_t c
     assert_non_null(t);
     void *state = NULL;
     assert_int_equal(t->prepare(fx->ctx, &fx->scene, &fx->object, &state), MESO_OK);
-    t->shade(state, &fx->frame, &fx->object, f, count);
+    assert_int_equal(meso_technique_shade(t, state, &fx->frame, &fx->object, f, count), MESO_OK);
     t->release(state);
 }
 

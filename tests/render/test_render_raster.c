@@ -365,6 +365,126 @@ static void test_raster_depth_map_is_thread_independent_and_bounded(void **state
 
 /* ---- Renderer errors ------------------------------------------------------------------------ */
 
+/* ---- Blocks and fragments: a technique written per block sees exactly what one written per
+ * fragment sees (render_internal.h, shade_block). ------------------------------------------ */
+
+static meso_fragment *g_seen; /* per sample: the fragment a technique was handed */
+static int g_seen_width;
+
+/* Every field equal to the bit (the struct's padding after `discard` is not compared). */
+static void assert_same_fragment(const meso_fragment *a, const meso_fragment *b) {
+    assert_memory_equal(a, b, offsetof(meso_fragment, discard));
+    assert_int_equal(a->discard, b->discard);
+}
+
+static void record_shade(const void *state, const meso_frame *frame, const meso_object *object,
+                         meso_fragment *fragments, size_t count) {
+    (void)state;
+    (void)frame;
+    (void)object;
+    for (size_t i = 0; i < count; i++) {
+        meso_fragment *f = &fragments[i];
+        g_seen[(int)f->y * g_seen_width + (int)f->x] = *f;
+        /* a colour from the inputs, so the image checks the write-back too */
+        f->color = (meso_vec3){f->uv.x, f->normal.y, f->b1};
+        f->discard = f->triangle % 3 == 2;
+    }
+}
+
+static void record_shade_block(const void *state, const meso_frame *frame,
+                               const meso_object *object, meso_fragment_block *block) {
+    (void)state;
+    (void)frame;
+    (void)object;
+    size_t n = block->count;
+    assert_true(n >= 1 && n <= MESO_FRAGMENT_BLOCK_CAPACITY);
+    meso_fragment last, pad;
+    meso_fragment_block_get(block, n - 1, &last);
+    for (size_t i = n; i % 8; i++) { /* the padding repeats the last fragment */
+        meso_fragment_block_get(block, i, &pad);
+        assert_same_fragment(&pad, &last);
+    }
+    for (size_t i = 0; i < n; i++) {
+        meso_fragment f;
+        meso_fragment_block_get(block, i, &f);
+        g_seen[(int)f.y * g_seen_width + (int)f.x] = f;
+        block->r[i] = f.uv.x, block->g[i] = f.normal.y, block->b[i] = f.b1;
+        block->discard[i] = f.triangle % 3 == 2;
+    }
+}
+
+static void test_raster_block_and_fragment_techniques_see_the_same_fragments(void **state) {
+    (void)state;
+    const meso_technique per_fragment = {
+        .info = {.name = "record", .accepts = MESO_TECHNIQUE_ACCEPTS_NONE}, .shade = record_shade};
+    const meso_technique per_block = {
+        .info = {.name = "record", .accepts = MESO_TECHNIQUE_ACCEPTS_NONE},
+        .shade_block = record_shade_block};
+    meso_context *ctx = test_context(2);
+    test_scene ts;
+    test_scene_init(&ts, 97, 83);
+    /* a sphere over a plane: triangles of every size, overlaps, batches split on repeats */
+    test_scene_add(&ts, test_shape(ctx, MESO_SHAPE_PLANE, 1.6f, 7, (meso_vec3){0}), "flat");
+    test_scene_add(&ts, test_shape(ctx, MESO_SHAPE_SPHERE, 0.8f, 24, (meso_vec3){0, 0.3f, 0}),
+                   "flat");
+    const int w = 97, h = 83;
+    size_t samples = (size_t)w * (size_t)h;
+    float *color[2], *coverage[2], *depth[2];
+    meso_fragment *seen[2];
+    const meso_technique *techniques[2] = {&per_fragment, &per_block};
+    g_seen_width = w;
+    for (int k = 0; k < 2; k++) {
+        color[k] = malloc(3 * samples * sizeof(float));
+        coverage[k] = malloc(samples * sizeof(float));
+        depth[k] = malloc(samples * sizeof(float));
+        seen[k] = g_seen = calloc(samples, sizeof(meso_fragment));
+        draw_with(ctx, &ts.scene, techniques[k], w, h, color[k], coverage[k], depth[k], NULL);
+    }
+    int covered = 0;
+    for (size_t i = 0; i < samples; i++) covered += coverage[0][i] > 0.0f;
+    assert_true(covered > (int)(samples / 10));
+    for (size_t i = 0; i < samples; i++) assert_same_fragment(&seen[0][i], &seen[1][i]);
+    assert_memory_equal(color[0], color[1], 3 * samples * sizeof(float));
+    assert_memory_equal(coverage[0], coverage[1], samples * sizeof(float));
+    assert_memory_equal(depth[0], depth[1], samples * sizeof(float));
+    for (int k = 0; k < 2; k++) free(color[k]), free(coverage[k]), free(depth[k]), free(seen[k]);
+    test_scene_free(&ts);
+    meso_context_destroy(ctx);
+}
+
+/* flat through its block and through meso_technique_shade's adapter: the same colours as
+ * meso_shade_point_tb fragment by fragment, counts that are not multiples of 8 included. */
+static void test_flat_block_matches_shade_point(void **state) {
+    (void)state;
+    test_scene ts;
+    test_scene_init(&ts, 16, 16);
+    meso_object *o = test_scene_add(&ts, NULL, "flat");
+    o->material.specular = (meso_vec3){0.3f, 0.3f, 0.3f};
+    meso_frame frame;
+    meso_frame_init(&frame, &ts.scene, 16, 16);
+    const meso_technique *flat = meso_technique_lookup("flat");
+    assert_non_null(flat);
+    assert_non_null(flat->shade_block);
+    meso_fragment frags[13];
+    for (size_t n = 1; n <= 13; n += 4) {
+        for (size_t i = 0; i < n; i++) {
+            float a = 0.3f * (float)i;
+            frags[i] =
+                (meso_fragment){.position = {0.1f * (float)i, 0.0f, -0.2f},
+                                .normal = meso_vec3_normalize((meso_vec3){sinf(a), 1.0f, cosf(a)}),
+                                .uv = {0.05f * (float)i, 0.5f}};
+        }
+        assert_int_equal(meso_technique_shade(flat, NULL, &frame, o, frags, n), MESO_OK);
+        for (size_t i = 0; i < n; i++) {
+            meso_vec3 want =
+                meso_shade_point(&frame, o, frags[i].position, frags[i].normal, frags[i].uv, NULL);
+            assert_memory_equal(&frags[i].color, &want, sizeof want);
+            assert_false(frags[i].discard);
+        }
+    }
+    test_scene_free(&ts);
+}
+
 static void test_renderer_unknown_technique_names_object_and_known_ones(void **state) {
     (void)state;
     meso_context *ctx = test_context(1);
@@ -451,6 +571,8 @@ int main(void) {
         cmocka_unit_test(test_raster_fragments_lie_on_the_frame_rays),
         cmocka_unit_test(test_raster_wireframe_draws_edges),
         cmocka_unit_test(test_raster_depth_map_is_thread_independent_and_bounded),
+        cmocka_unit_test(test_raster_block_and_fragment_techniques_see_the_same_fragments),
+        cmocka_unit_test(test_flat_block_matches_shade_point),
         cmocka_unit_test(test_renderer_unknown_technique_names_object_and_known_ones),
         cmocka_unit_test(test_renderer_rejects_technique_for_wrong_mesostructure),
         cmocka_unit_test(test_renderer_rejects_reference_mixed_with_others),

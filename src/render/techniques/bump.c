@@ -32,20 +32,21 @@ static meso_result bump_prepare(meso_context *ctx, const meso_scene *scene,
     return MESO_OK;
 }
 
-static void bump_shade(const void *state, const meso_frame *frame, const meso_object *object,
-                       meso_fragment *fragments, size_t count) {
+/* Whole blocks (render_internal.h): eight lanes at a time straight from the rasterizer's
+ * arrays to the shading model. */
+static void bump_shade_block(const void *state, const meso_frame *frame, const meso_object *object,
+                             meso_fragment_block *block) {
     const bump_state *s = state;
     const relief_heights *m = &s->heights;
     float depth = object->mesostructure.depth;
-    for (size_t start = 0; start < count; start += RELIEF_LANES) {
-        int n = count - start < RELIEF_LANES ? (int)(count - start) : RELIEF_LANES;
-        meso_fragment *f = fragments + start;
+    for (size_t first = 0; first < block->count; first += RELIEF_LANES) {
         /* Blinn 1978: the perturbed normal from dh/du, dh/dv */
         relief_lanes l;
         v8f x, y;
         meso_shade_batch in;
-        relief_bump_lanes(m, frame, f, n, depth, &l, &x, &y, &in);
-        relief_shade_store(frame, object, &in, f, n);
+        relief_lanes_load_block(&l, frame, block, first);
+        relief_bump_loaded_lanes(m, frame, depth, &l, &x, &y, &in);
+        meso_shade_batch_to_block(frame, object, &in, block, first);
     }
 }
 
@@ -61,6 +62,6 @@ const meso_technique meso_technique_bump = {
              .accepts = MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD},
     .prepare = bump_prepare,
     .release = bump_release,
-    .shade = bump_shade,
+    .shade_block = bump_shade_block,
     .memory = bump_memory,
 };

@@ -1,6 +1,6 @@
 /* flat: the base mesh shaded with its smooth interpolated normal; the mesostructure is ignored.
  * The baseline every other technique improves on (docs/techniques/flat.md). */
-#include "render_internal.h"
+#include "render_shading.h"
 
 static meso_result flat_prepare(meso_context *ctx, const meso_scene *scene,
                                 const meso_object *object, void **out_state) {
@@ -12,10 +12,12 @@ static meso_result flat_prepare(meso_context *ctx, const meso_scene *scene,
 
 static void flat_release(void *state) { (void)state; }
 
-static void flat_shade(const void *state, const meso_frame *frame, const meso_object *object,
-                       meso_fragment *fragments, size_t count) {
+/* Whole blocks (render_internal.h): the rasterizer's lanes go to the shading model as they
+ * are, no gather into eight-lane batches. */
+static void flat_shade_block(const void *state, const meso_frame *frame, const meso_object *object,
+                             meso_fragment_block *block) {
     (void)state;
-    meso_shade_fragments(frame, object, fragments, count, NULL);
+    meso_shade_block(frame, object, block);
 }
 
 const meso_technique meso_technique_flat = {
@@ -27,5 +29,5 @@ const meso_technique meso_technique_flat = {
                         MESO_TECHNIQUE_ACCEPTS_SOLID},
     .prepare = flat_prepare,
     .release = flat_release,
-    .shade = flat_shade,
+    .shade_block = flat_shade_block,
 };

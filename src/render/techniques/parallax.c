@@ -48,16 +48,16 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
     return MESO_OK;
 }
 
-static void shade(const void *state, const meso_frame *frame, const meso_object *object,
-                  meso_fragment *fragments, size_t count) {
+/* Whole blocks (render_internal.h): eight lanes at a time straight from the rasterizer's
+ * arrays to the shading model. */
+static void shade_block(const void *state, const meso_frame *frame, const meso_object *object,
+                        meso_fragment_block *block) {
     const parallax_state *s = state;
     const relief_heights *m = &s->heights;
     float depth = object->mesostructure.depth;
-    for (size_t start = 0; start < count; start += RELIEF_LANES) {
-        int n = count - start < RELIEF_LANES ? (int)(count - start) : RELIEF_LANES;
-        meso_fragment *f = fragments + start;
+    for (size_t first = 0; first < block->count; first += RELIEF_LANES) {
         relief_lanes l;
-        relief_lanes_load(&l, frame, f, n);
+        relief_lanes_load_block(&l, frame, block, first);
         v8f x, y;
         relief_lanes_texel(m, &l, &x, &y);
         v8f cu = v8_dot(l.view, l.bn), cv = v8_dot(l.view, l.nt), cn = v8_dot(l.view, l.tb);
@@ -83,7 +83,7 @@ static void shade(const void *state, const meso_frame *frame, const meso_object 
         in.tx = l.tangent.x, in.ty = l.tangent.y, in.tz = l.tangent.z;
         in.bx = l.bitangent.x, in.by = l.bitangent.y, in.bz = l.bitangent.z;
         meso_shade_batch_all_visible(&in, frame);
-        relief_shade_store(frame, object, &in, f, n);
+        meso_shade_batch_to_block(frame, object, &in, block, first);
     }
 }
 
@@ -101,6 +101,6 @@ const meso_technique meso_technique_parallax = {
              .num_options = MESO_OPTION_COUNT(parallax_option_table)},
     .prepare = prepare,
     .release = release,
-    .shade = shade,
+    .shade_block = shade_block,
     .memory = memory,
 };

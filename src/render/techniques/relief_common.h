@@ -258,6 +258,22 @@ typedef struct relief_lanes {
     int frame_bits; /* lanes whose frame is not degenerate */
 } relief_lanes;
 
+/* The view vector and the dual basis of loaded lanes (relief_lanes). */
+static inline void relief_lanes_basis(relief_lanes *l, const meso_frame *frame) {
+    int count = l->count;
+    v8vec3 eye = v8_splat3(frame->eye);
+    l->view = (v8vec3){l->position.x - eye.x, l->position.y - eye.y, l->position.z - eye.z};
+    v8vec3 bn = v8_cross(l->bitangent, l->normal), nt = v8_cross(l->normal, l->tangent);
+    v8vec3 tb = v8_cross(l->tangent, l->bitangent);
+    v8f det = v8_dot(l->tangent, bn);
+    v8i ok = (det > 1e-20f) | (det < -1e-20f);
+    l->frame_bits = v8_mask_bits(ok) & ((1 << count) - 1);
+    v8f inv = v8_select(ok, 1.0f / v8_select(ok, det, v8_splat(1.0f)), v8_splat(0.0f));
+    l->bn = (v8vec3){bn.x * inv, bn.y * inv, bn.z * inv};
+    l->nt = (v8vec3){nt.x * inv, nt.y * inv, nt.z * inv};
+    l->tb = (v8vec3){tb.x * inv, tb.y * inv, tb.z * inv};
+}
+
 static inline void relief_lanes_load(relief_lanes *l, const meso_frame *frame,
                                      const meso_fragment *f, int count) {
     l->count = count;
@@ -279,17 +295,25 @@ static inline void relief_lanes_load(relief_lanes *l, const meso_frame *frame,
         l->v[k] = g->uv.y;
         l->depth[k] = g->depth;
     }
-    v8vec3 eye = v8_splat3(frame->eye);
-    l->view = (v8vec3){l->position.x - eye.x, l->position.y - eye.y, l->position.z - eye.z};
-    v8vec3 bn = v8_cross(l->bitangent, l->normal), nt = v8_cross(l->normal, l->tangent);
-    v8vec3 tb = v8_cross(l->tangent, l->bitangent);
-    v8f det = v8_dot(l->tangent, bn);
-    v8i ok = (det > 1e-20f) | (det < -1e-20f);
-    l->frame_bits = v8_mask_bits(ok) & ((1 << count) - 1);
-    v8f inv = v8_select(ok, 1.0f / v8_select(ok, det, v8_splat(1.0f)), v8_splat(0.0f));
-    l->bn = (v8vec3){bn.x * inv, bn.y * inv, bn.z * inv};
-    l->nt = (v8vec3){nt.x * inv, nt.y * inv, nt.z * inv};
-    l->tb = (v8vec3){tb.x * inv, tb.y * inv, tb.z * inv};
+    relief_lanes_basis(l, frame);
+}
+
+/* relief_lanes_load from lanes first..first+7 of a block (render_internal.h): the same values,
+ * read as vectors; the block's padding lanes repeat its last fragment instead of lane 0. */
+static inline void relief_lanes_load_block(relief_lanes *l, const meso_frame *frame,
+                                           const meso_fragment_block *b, size_t first) {
+    l->count = b->count - first < RELIEF_LANES ? (int)(b->count - first) : RELIEF_LANES;
+    l->position = (v8vec3){meso_block_load(b->px, first), meso_block_load(b->py, first),
+                           meso_block_load(b->pz, first)};
+    l->normal = (v8vec3){meso_block_load(b->nx, first), meso_block_load(b->ny, first),
+                         meso_block_load(b->nz, first)};
+    l->tangent = (v8vec3){meso_block_load(b->tx, first), meso_block_load(b->ty, first),
+                          meso_block_load(b->tz, first)};
+    l->bitangent = (v8vec3){meso_block_load(b->bx, first), meso_block_load(b->by, first),
+                            meso_block_load(b->bz, first)};
+    l->u = meso_block_load(b->u, first), l->v = meso_block_load(b->v, first);
+    l->depth = meso_block_load(b->depth, first);
+    relief_lanes_basis(l, frame);
 }
 
 /* Texel-centre coordinates of the fragments' uv. */
@@ -325,13 +349,10 @@ static inline v8vec3 relief_normal8(const relief_lanes *l, float depth, v8f gu, 
                     v8_select(keep, l->normal.z, n.z * inv)};
 }
 
-/* Up to eight fragments with the bump-mapped normal at their own uv (Blinn 1978; no shift):
- * lanes loaded, texel-centre coordinates in *x, *y, and the shading inputs in *in with every
- * light visible. bump draws this as is; horizon adds its visibility. */
-static inline void relief_bump_lanes(const relief_heights *m, const meso_frame *frame,
-                                     const meso_fragment *f, int count, float depth,
-                                     relief_lanes *l, v8f *x, v8f *y, meso_shade_batch *in) {
-    relief_lanes_load(l, frame, f, count);
+/* relief_bump_lanes on lanes already loaded (relief_lanes_load, relief_lanes_load_block). */
+static inline void relief_bump_loaded_lanes(const relief_heights *m, const meso_frame *frame,
+                                            float depth, const relief_lanes *l, v8f *x, v8f *y,
+                                            meso_shade_batch *in) {
     v8f gu, gv;
     relief_lanes_texel(m, l, x, y);
     relief_gradient8(m, *x, *y, &gu, &gv);
@@ -347,6 +368,16 @@ static inline void relief_bump_lanes(const relief_heights *m, const meso_frame *
     in->tx = l->tangent.x, in->ty = l->tangent.y, in->tz = l->tangent.z;
     in->bx = l->bitangent.x, in->by = l->bitangent.y, in->bz = l->bitangent.z;
     meso_shade_batch_all_visible(in, frame);
+}
+
+/* Up to eight fragments with the bump-mapped normal at their own uv (Blinn 1978; no shift):
+ * lanes loaded, texel-centre coordinates in *x, *y, and the shading inputs in *in with every
+ * light visible. bump draws this as is; horizon adds its visibility. */
+static inline void relief_bump_lanes(const relief_heights *m, const meso_frame *frame,
+                                     const meso_fragment *f, int count, float depth,
+                                     relief_lanes *l, v8f *x, v8f *y, meso_shade_batch *in) {
+    relief_lanes_load(l, frame, f, count);
+    relief_bump_loaded_lanes(m, frame, depth, l, x, y, in);
 }
 
 /* Shade the lanes of `in` and write the colours of the first `count` fragments. */
