@@ -25,6 +25,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "meso/bake_minmax.h"
 #include "render_shading.h"
 
 #define RELIEF_LANES V8_LANES
@@ -227,6 +228,113 @@ static inline int relief_shadow_search8(const relief_heights *m, const relief_sh
         pending &= ~bits;
     }
     return blocked;
+}
+
+/* The maximum mip-map of a height field (Tevs et al. 2008) with per-level tables for lookups
+ * of eight lanes at once, each at its own level. */
+typedef struct relief_maxmip {
+    const meso_minmax_pyramid *pyramid;
+    int32_t offset[MESO_MINMAX_MAX_LEVELS]; /* of each level's max array in pyramid->block */
+    int32_t width[MESO_MINMAX_MAX_LEVELS], height[MESO_MINMAX_MAX_LEVELS];
+    bool power_of_two; /* both sides */
+} relief_maxmip;
+
+static inline void relief_maxmip_init(const meso_minmax_pyramid *p, relief_maxmip *out) {
+    memset(out, 0, sizeof *out);
+    out->pyramid = p;
+    for (int l = 0; l < p->num_levels; ++l) {
+        out->offset[l] = (int32_t)(p->levels[l].max - p->block);
+        out->width[l] = p->levels[l].width;
+        out->height[l] = p->levels[l].height;
+    }
+    int w = p->levels[0].width, h = p->levels[0].height;
+    out->power_of_two = (w & (w - 1)) == 0 && (h & (h - 1)) == 0;
+}
+
+/* The highest height of the bilinear surface over eight texel-centre boxes [x0, x1] x [y0, y1]
+ * (unwrapped coordinates, x0 <= x1): a box's level-0 cells (cell i spans texel centres
+ * i..i+1) lie in at most 2 x 2 cells of the first level whose cells are longer than the box.
+ * Boxes as long as the field, and on wrapped fields whose sides are not powers of two boxes
+ * that cross the tile's seam (their coarser cells do not tile the repeats), get the whole
+ * field's maximum. The boxes are widened by a margin far above the rounding of a sample's
+ * position (relief_sample8's wrap, the step's product), so every texel a sample inside reads
+ * is bounded. */
+static inline v8f relief_box_max8(const relief_maxmip *mm, const relief_heights *m, v8f x0, v8f x1,
+                                  v8f y0, v8f y1) {
+    const meso_minmax_pyramid *p = mm->pyramid;
+    int top = p->num_levels - 1, w = m->width, h = m->height;
+    float fw = (float)w, fh = (float)h;
+    v8f ex = 0.01f + 1e-5f * v8_max(v8_max(x0, -x0), v8_max(x1, -x1));
+    v8f ey = 0.01f + 1e-5f * v8_max(v8_max(y0, -y0), v8_max(y1, -y1));
+    x0 -= ex, x1 += ex, y0 -= ey, y1 += ey;
+    v8i ok = (x1 - x0 < fw) & (y1 - y0 < fh); /* NaN: not ok */
+    /* keep the unused lanes' conversions in range */
+    x0 = v8_select(ok, x0, v8_splat(0.0f)), x1 = v8_select(ok, x1, v8_splat(0.0f));
+    y0 = v8_select(ok, y0, v8_splat(0.0f)), y1 = v8_select(ok, y1, v8_splat(0.0f));
+    v8i wmax = v8i_splat(w - 1), hmax = v8i_splat(h - 1), zero = v8i_splat(0);
+    v8i i0, i1, j0, j1;
+    if (m->clamp) { /* relief_sample8 clamps positions to [0, side - 1] */
+        v8f lo = v8_splat(0.0f), wm = v8_splat(fw - 1.0f), hm = v8_splat(fh - 1.0f);
+        i0 = __builtin_convertvector(v8_min(v8_max(x0, lo), wm), v8i);
+        i1 = __builtin_convertvector(v8_min(v8_max(x1, lo), wm), v8i);
+        j0 = __builtin_convertvector(v8_min(v8_max(y0, lo), hm), v8i);
+        j1 = __builtin_convertvector(v8_min(v8_max(y1, lo), hm), v8i);
+    } else {
+        /* the first cell wrapped into the tile (exact for power-of-two sides; otherwise at
+         * worst a tile off, which the seam test below sends to the field's maximum), the
+         * last one as many cells on, unwrapped */
+        v8f fx0 = v8_floor(x0), fy0 = v8_floor(y0);
+        v8f wx = fx0 - fw * v8_floor(x0 * (1.0f / fw)), wy = fy0 - fh * v8_floor(y0 * (1.0f / fh));
+        i0 = __builtin_convertvector(wx, v8i), j0 = __builtin_convertvector(wy, v8i);
+        i1 = i0 + __builtin_convertvector(v8_floor(x1) - fx0, v8i);
+        j1 = j0 + __builtin_convertvector(v8_floor(y1) - fy0, v8i);
+        /* i0 = -1 only for a box starting within the margin of the seam: cell 0 holds it */
+        i0 = (v8i)v8_select(i0 < zero, (v8f)zero, (v8f)i0);
+        j0 = (v8i)v8_select(j0 < zero, (v8f)zero, (v8f)j0);
+        if (!mm->power_of_two) {
+            ok &= (i0 <= wmax) & (j0 <= hmax) & (i1 <= wmax) & (j1 <= hmax);
+        }
+    }
+    v8i span_x = i1 - i0, span_y = j1 - j0;
+    if (!m->clamp && mm->power_of_two) i1 &= wmax, j1 &= hmax; /* every level tiles repeats */
+    v8i span = (v8i)v8_select(span_x > span_y, (v8f)span_x, (v8f)span_y);
+    /* the first level with cells longer than span: floor(log2 span) + 1, from the exponent */
+    v8i level = ((v8i) __builtin_convertvector(span, v8f) >> 23) - 126;
+    level = (v8i)v8_select(span == zero, (v8f)zero, (v8f)level);
+    level = (v8i)v8_select(level > v8i_splat(top), (v8f)v8i_splat(top), (v8f)level);
+    level = (v8i)v8_select(ok, (v8f)level, (v8f)v8i_splat(top));
+    v8i lw = v8i_gather(mm->width, level), lh = v8i_gather(mm->height, level);
+    v8i base = v8i_gather(mm->offset, level);
+    v8i ci0 = i0 >> level, ci1 = i1 >> level, cj0 = j0 >> level, cj1 = j1 >> level;
+    v8i lwm = lw - 1, lhm = lh - 1;
+    ci0 = (v8i)v8_select(ci0 > lwm, (v8f)lwm, (v8f)ci0);
+    ci1 = (v8i)v8_select(ci1 > lwm, (v8f)lwm, (v8f)ci1);
+    cj0 = (v8i)v8_select(cj0 > lhm, (v8f)lhm, (v8f)cj0);
+    cj1 = (v8i)v8_select(cj1 > lhm, (v8f)lhm, (v8f)cj1);
+    v8i r0 = base + cj0 * lw, r1 = base + cj1 * lw;
+    v8f a = v8_max(v8_gather(p->block, r0 + ci0), v8_gather(p->block, r0 + ci1));
+    v8f b = v8_max(v8_gather(p->block, r1 + ci0), v8_gather(p->block, r1 + ci1));
+    return v8_max(a, b);
+}
+
+/* The lanes of a shadow batch in which no sample of relief_shadow_search8 can find the light
+ * blocked, proved without sampling: every sample's depth is at most the light ray's deepest
+ * point dmax (of d (1 - s) + bulge s (1 - s) over s in [0, 1]) and its height at most the
+ * maximum mip-map's bound over the ray's footprint, so f <= dmax + hmax - 1; where that stays
+ * below the bias (less a margin for the samples' float rounding) the search would find
+ * nothing. The search is skipped for these lanes, not changed: the same result. Most hits on
+ * a raised surface (a brick's top) end here after a few reads instead of `steps` bilinear
+ * samples. */
+static inline int relief_shadow_clear8(const relief_maxmip *mm, const relief_heights *m,
+                                       const relief_shadow_batch *s) {
+    v8f xe = s->x + s->xd, ye = s->y + s->yd;
+    v8f hmax = relief_box_max8(mm, m, v8_min(s->x, xe), v8_max(s->x, xe), v8_min(s->y, ye),
+                               v8_max(s->y, ye));
+    v8f d = s->d, b = s->bulge;
+    v8i vertex = b > d; /* the parabola's vertex (b - d) / 2b inside (0, 1) */
+    v8f dmax =
+        v8_select(vertex, d + (b - d) * (b - d) / (4.0f * v8_select(vertex, b, v8_splat(1.0f))), d);
+    return v8_mask_bits(dmax + hmax - 1.0f < RELIEF_SHADOW_BIAS - 1e-5f) & s->active_bits;
 }
 
 /* ---- Eight fragments as vectors ---------------------------------------------------------- */
