@@ -78,6 +78,26 @@ static inline size_t relief_heights_memory(const relief_heights *h) {
     return (size_t)(h->width + 1) * (size_t)(h->height + 1) * sizeof(float);
 }
 
+/* base[index[k]] and base[index[k] + 1] per lane: with AVX2 as two 64-bit gathers of four
+ * lanes each (a texel and its right neighbour are adjacent in a row), half the elements of
+ * two 32-bit gathers, which is what a gather costs; the same floats, so the same results. */
+static inline void relief_gather_pairs8(const float *base, v8i index, v8f *left, v8f *right) {
+#if defined(__AVX2__)
+    /* lanes 0, 1, 4, 5 in the first gather, 2, 3, 6, 7 in the second: the shuffles below
+     * then put every lane back in its place */
+    __m256i order = _mm256_permute4x64_epi64((__m256i)index, 0xd8);
+    const long long *pairs = (const long long *)(const void *)base;
+    __m256 a = _mm256_castsi256_ps(_mm256_i32gather_epi64(pairs, _mm256_castsi256_si128(order), 4));
+    __m256 b =
+        _mm256_castsi256_ps(_mm256_i32gather_epi64(pairs, _mm256_extracti128_si256(order, 1), 4));
+    *left = (v8f)_mm256_shuffle_ps(a, b, 0x88);
+    *right = (v8f)_mm256_shuffle_ps(a, b, 0xdd);
+#else
+    *left = v8_gather(base, index);
+    *right = v8_gather(base + 1, index);
+#endif
+}
+
 /* h at texel-centre coordinates (x, y), the bilinear surface of meso_heightfield_sample, eight
  * lookups at once; the hot loop of every search (4 gathers of 8 texels). */
 static inline v8f relief_sample8(const relief_heights *m, v8f x, v8f y) {
@@ -95,9 +115,9 @@ static inline v8f relief_sample8(const relief_heights *m, v8f x, v8f y) {
     j = (v8i)v8_select(j > hmax, (v8f)hmax, (v8f)j);
     v8f tx = x - __builtin_convertvector(i, v8f), ty = y - __builtin_convertvector(j, v8f);
     v8i index = j * m->stride + i;
-    v8f h00 = v8_gather(m->padded, index), h10 = v8_gather(m->padded + 1, index);
-    v8f h01 = v8_gather(m->padded + m->stride, index);
-    v8f h11 = v8_gather(m->padded + m->stride + 1, index);
+    v8f h00, h10, h01, h11;
+    relief_gather_pairs8(m->padded, index, &h00, &h10);
+    relief_gather_pairs8(m->padded + m->stride, index, &h01, &h11);
     v8f top = h00 + (h10 - h00) * tx, bottom = h01 + (h11 - h01) * tx;
     return top + (bottom - top) * ty;
 }

@@ -284,9 +284,9 @@ trace8_step(const exact_state *s, const exact_rays8 *r, trace8_state *st) {
         /* Level 0: the bilinear patch of texels (cx..cx+1, cy..cy+1) along the ray;
          * f(tau) = d(t + tau) - 1 + h(sx + xd tau, sy + yd tau) - bias = A tau^2 + B tau + C */
         v8i corner = (v8i)v8_select(solve, (v8f)(wy * m->stride + wx), (v8f)v8i_splat(0));
-        v8f h00 = v8_gather(m->padded, corner), h10 = v8_gather(m->padded + 1, corner);
-        v8f h01 = v8_gather(m->padded + m->stride, corner);
-        v8f h11 = v8_gather(m->padded + m->stride + 1, corner);
+        v8f h00, h10, h01, h11;
+        relief_gather_pairs8(m->padded, corner, &h00, &h10);
+        relief_gather_pairs8(m->padded + m->stride, corner, &h01, &h11);
         v8f hx = h10 - h00, hy = h01 - h00, hxy = h00 - h10 - h01 + h11;
         v8f sx = px - xlo, sy = py - ylo;
         v8f C = depth8(r, t) - 1.0f + h00 + hx * sx + hy * sy + hxy * sx * sy - r->bias;
