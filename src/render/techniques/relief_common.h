@@ -165,53 +165,90 @@ typedef struct relief_batch {
 /* Relief mapping's search (Policarpo et al. 2005, as in Policarpo & Oliveira 2006 §2.1 and
  * Appendix A): `linear_steps` uniform steps along the ray until the first sample below the
  * surface, then `binary_steps` halvings of that bracket, then one secant step between the
- * bracket's ends (exact where the surface is planar, e.g. h constant). Writes t of the hit per
- * lane; returns the bits of lanes that hit (the others left the shell: silhouette). */
+ * bracket's ends (exact where the surface is planar, e.g. h constant). For `count` (1 or 2)
+ * batches: writes t of the hit per lane and the bits of the lanes that hit (the others left
+ * the shell: silhouette). */
+static inline void relief_search8x2(const relief_heights *m, const relief_batch *batches, int count,
+                                    int linear_steps, int binary_steps, v8f *out_t, int *out_hit) {
+    /* Two batches are stepped in turn: a binary step's lookup depends on the one before, so
+     * one batch alone waits on each gather; interleaved, the processor overlaps the two
+     * chains. Each batch's arithmetic is unchanged, so are its results. */
+    v8i lanes[2], floor_mask[2], found[2];
+    v8f t_lo[2], t_hi[2], f_lo[2], f_hi[2], t_prev[2], f_prev[2];
+    int all[2];
+    for (int g = 0; g < count; ++g) {
+        const relief_batch *batch = &batches[g];
+        all[g] = (1 << batch->count) - 1;
+        lanes[g] = v8_mask_from_bits(all[g]);
+        floor_mask[g] = v8_mask_from_bits(batch->floor_bits);
+        /* t = 0: a texel at full height is hit where the ray enters (h = 1: exactly the
+         * mesh). */
+        v8f h = relief_sample8(m, batch->x0, batch->y0);
+        found[g] = ((h >= 1.0f) | v8_mask_from_bits(batch->flat_bits)) & lanes[g];
+        t_lo[g] = v8_splat(0.0f), t_hi[g] = v8_splat(0.0f), f_lo[g] = v8_splat(-1.0f);
+        f_hi[g] = h - 1.0f;
+        t_prev[g] = v8_splat(0.0f), f_prev[g] = h - 1.0f;
+    }
+    v8f inv_n = v8_splat(1.0f / (float)linear_steps);
+    for (int k = 1; k <= linear_steps; ++k) {
+        int busy = 0;
+        for (int g = 0; g < count; ++g) {
+            if (v8_mask_bits(found[g]) == all[g]) continue;
+            busy = 1;
+            const relief_batch *batch = &batches[g];
+            v8f t = batch->t_end * ((float)k * inv_n);
+            v8f d = t * (batch->a - batch->b * t);
+            v8f h = relief_sample8(m, batch->x0 + batch->xd * t, batch->y0 + batch->yd * t);
+            v8f f = d + h - 1.0f; /* >= 0: at or below the surface */
+            v8i below = f >= 0.0f;
+            if (k == linear_steps) below |= floor_mask[g]; /* d = 1 there, whatever rounding */
+            v8i fresh = below & ~found[g] & lanes[g];
+            t_lo[g] = v8_select(fresh, t_prev[g], t_lo[g]);
+            f_lo[g] = v8_select(fresh, f_prev[g], f_lo[g]);
+            t_hi[g] = v8_select(fresh, t, t_hi[g]);
+            f_hi[g] = v8_select(fresh, v8_max(f, v8_splat(0.0f)), f_hi[g]);
+            found[g] |= fresh;
+            t_prev[g] = t;
+            f_prev[g] = f;
+        }
+        if (!busy) break;
+    }
+    /* Binary search inside [t_lo, t_hi] (lanes hit at t = 0 have an empty bracket, which a
+     * step leaves as it is: a batch with no other lane needs none). */
+    bool bracket[2] = {false, false};
+    for (int g = 0; g < count; ++g) bracket[g] = v8_mask_bits(t_hi[g] > t_lo[g]) != 0;
+    for (int k = 0; k < binary_steps; ++k) {
+        for (int g = 0; g < count; ++g) {
+            if (!bracket[g]) continue;
+            const relief_batch *batch = &batches[g];
+            v8f t = (t_lo[g] + t_hi[g]) * 0.5f;
+            v8f d = t * (batch->a - batch->b * t);
+            v8f h = relief_sample8(m, batch->x0 + batch->xd * t, batch->y0 + batch->yd * t);
+            v8f f = d + h - 1.0f;
+            v8i below = f >= 0.0f;
+            t_hi[g] = v8_select(below, t, t_hi[g]);
+            f_hi[g] = v8_select(below, f, f_hi[g]);
+            t_lo[g] = v8_select(below, t_lo[g], t);
+            f_lo[g] = v8_select(below, f_lo[g], f);
+        }
+    }
+    for (int g = 0; g < count; ++g) {
+        /* Secant between the bracket's ends: f_lo < 0 <= f_hi. */
+        v8f span = f_hi[g] - f_lo[g];
+        v8f w = v8_select(span > 1e-12f, -f_lo[g] / v8_max(span, v8_splat(1e-12f)), v8_splat(1.0f));
+        v8f t = t_lo[g] + (t_hi[g] - t_lo[g]) * w;
+        out_t[g] = v8_select(t_hi[g] <= t_lo[g], t_hi[g], t);
+        out_hit[g] = v8_mask_bits(found[g]) & all[g];
+    }
+}
+
+/* relief_search8x2 on one batch: writes t of the hit per lane, returns the bits of the lanes
+ * that hit. */
 static inline int relief_search8(const relief_heights *m, const relief_batch *batch,
                                  int linear_steps, int binary_steps, v8f *out_t) {
-    int all = (1 << batch->count) - 1;
-    v8i lanes = v8_mask_from_bits(all), floor_mask = v8_mask_from_bits(batch->floor_bits);
-    /* t = 0: a texel at full height is hit where the ray enters (h = 1: exactly the mesh). */
-    v8f h = relief_sample8(m, batch->x0, batch->y0);
-    v8i found = ((h >= 1.0f) | v8_mask_from_bits(batch->flat_bits)) & lanes;
-    v8f t_lo = v8_splat(0.0f), t_hi = v8_splat(0.0f), f_lo = v8_splat(-1.0f), f_hi = h - 1.0f;
-    v8f inv_n = v8_splat(1.0f / (float)linear_steps);
-    v8f t_prev = v8_splat(0.0f), f_prev = h - 1.0f;
-    for (int k = 1; k <= linear_steps && v8_mask_bits(found) != all; ++k) {
-        v8f t = batch->t_end * ((float)k * inv_n);
-        v8f d = t * (batch->a - batch->b * t);
-        h = relief_sample8(m, batch->x0 + batch->xd * t, batch->y0 + batch->yd * t);
-        v8f f = d + h - 1.0f; /* >= 0: at or below the surface */
-        v8i below = f >= 0.0f;
-        if (k == linear_steps) below |= floor_mask; /* d = 1 there, whatever rounding says */
-        v8i fresh = below & ~found & lanes;
-        t_lo = v8_select(fresh, t_prev, t_lo);
-        f_lo = v8_select(fresh, f_prev, f_lo);
-        t_hi = v8_select(fresh, t, t_hi);
-        f_hi = v8_select(fresh, v8_max(f, v8_splat(0.0f)), f_hi);
-        found |= fresh;
-        t_prev = t;
-        f_prev = f;
-    }
-    /* Binary search inside [t_lo, t_hi] (lanes hit at t = 0 have an empty bracket). */
-    for (int k = 0; k < binary_steps; ++k) {
-        v8f t = (t_lo + t_hi) * 0.5f;
-        v8f d = t * (batch->a - batch->b * t);
-        h = relief_sample8(m, batch->x0 + batch->xd * t, batch->y0 + batch->yd * t);
-        v8f f = d + h - 1.0f;
-        v8i below = f >= 0.0f;
-        t_hi = v8_select(below, t, t_hi);
-        f_hi = v8_select(below, f, f_hi);
-        t_lo = v8_select(below, t_lo, t);
-        f_lo = v8_select(below, f_lo, f);
-    }
-    /* Secant between the bracket's ends: f_lo < 0 <= f_hi. */
-    v8f span = f_hi - f_lo;
-    v8f w = v8_select(span > 1e-12f, -f_lo / v8_max(span, v8_splat(1e-12f)), v8_splat(1.0f));
-    *out_t = t_lo + (t_hi - t_lo) * w;
-    v8i empty = t_hi <= t_lo;
-    *out_t = v8_select(empty, t_hi, *out_t);
-    return v8_mask_bits(found) & all;
+    int hit;
+    relief_search8x2(m, batch, 1, linear_steps, binary_steps, out_t, &hit);
+    return hit;
 }
 
 /* ---- Shadows ------------------------------------------------------------------------------ */
