@@ -168,8 +168,9 @@ typedef struct relief_batch {
  * bracket's ends (exact where the surface is planar, e.g. h constant). For `count` (1 or 2)
  * batches: writes t of the hit per lane and the bits of the lanes that hit (the others left
  * the shell: silhouette). */
-static inline void relief_search8x2(const relief_heights *m, const relief_batch *batches, int count,
-                                    int linear_steps, int binary_steps, v8f *out_t, int *out_hit) {
+__attribute__((always_inline)) static inline void
+relief_search8_body(const relief_heights *m, const relief_batch *batches, int count,
+                    int linear_steps, int binary_steps, v8f *out_t, int *out_hit) {
     /* Two batches are stepped in turn: a binary step's lookup depends on the one before, so
      * one batch alone waits on each gather; interleaved, the processor overlaps the two
      * chains. Each batch's arithmetic is unchanged, so are its results. */
@@ -240,6 +241,15 @@ static inline void relief_search8x2(const relief_heights *m, const relief_batch 
         out_t[g] = v8_select(t_hi[g] <= t_lo[g], t_hi[g], t);
         out_hit[g] = v8_mask_bits(found[g]) & all[g];
     }
+}
+
+static inline void relief_search8x2(const relief_heights *m, const relief_batch *batches, int count,
+                                    int linear_steps, int binary_steps, v8f *out_t, int *out_hit) {
+    /* a constant count unrolls the loops over the batches: their state stays in registers */
+    if (count == 2)
+        relief_search8_body(m, batches, 2, linear_steps, binary_steps, out_t, out_hit);
+    else
+        relief_search8_body(m, batches, 1, linear_steps, binary_steps, out_t, out_hit);
 }
 
 /* relief_search8x2 on one batch: writes t of the hit per lane, returns the bits of the lanes
