@@ -80,7 +80,8 @@ static void shadow(const void *user, const relief_shadow_batch *batches, int cou
     const relief_state *s = user;
     for (int g = 0; g < count; ++g) {
         relief_shadow_batch b = batches[g];
-        if (b.active_bits) b.active_bits &= ~relief_shadow_clear8(&s->maxmip, &s->heights, &b);
+        if (b.active_bits && s->pyramid)
+            b.active_bits &= ~relief_shadow_clear8(&s->maxmip, &s->heights, &b);
         out_blocked[g] =
             b.active_bits ? relief_shadow_search8(&s->heights, &b, s->options.shadow_steps) : 0;
     }
