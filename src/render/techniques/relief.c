@@ -30,6 +30,9 @@ static const meso_technique_option relief_option_table[] = {
 
 typedef struct relief_state {
     relief_heights heights;
+    /* bounds the shadow rays' footprints so lit lanes skip the search (relief_shadow_clear8) */
+    meso_minmax_pyramid *pyramid;
+    relief_maxmip maxmip;
     relief_options options;
     relief_params params;
 } relief_state;
@@ -38,6 +41,7 @@ static void release(void *state) {
     relief_state *s = state;
     if (!s) return;
     relief_heights_deinit(&s->heights);
+    meso_minmax_pyramid_destroy(s->pyramid);
     free(s);
 }
 
@@ -51,6 +55,10 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
                                          &s->options)) != MESO_OK ||
         (r = relief_heights_init(ctx, object, &s->heights)) != MESO_OK)
         goto fail;
+    if (s->options.shadows &&
+        (r = meso_bake_minmax(ctx, object->mesostructure.height_field, &s->pyramid)) != MESO_OK)
+        goto fail;
+    if (s->pyramid) relief_maxmip_init(s->pyramid, &s->maxmip);
     s->params.shadows = s->options.shadows;
     s->params.silhouettes = s->options.silhouettes;
     *out_state = s;
@@ -63,18 +71,20 @@ fail:
 static void search(const void *user, const relief_batch *batches, int count, v8f *out_t,
                    int *out_hit) {
     const relief_state *s = user;
-    for (int g = 0; g < count; ++g)
-        out_hit[g] = relief_search8(&s->heights, &batches[g], s->options.linear_steps,
-                                    s->options.binary_steps, &out_t[g]);
+    relief_search8x2(&s->heights, batches, count, s->options.linear_steps, s->options.binary_steps,
+                     out_t, out_hit);
 }
 
 static void shadow(const void *user, const relief_shadow_batch *batches, int count,
                    int *out_blocked) {
     const relief_state *s = user;
-    for (int g = 0; g < count; ++g)
-        out_blocked[g] = batches[g].active_bits ? relief_shadow_search8(&s->heights, &batches[g],
-                                                                        s->options.shadow_steps)
-                                                : 0;
+    for (int g = 0; g < count; ++g) {
+        relief_shadow_batch b = batches[g];
+        if (b.active_bits && s->pyramid)
+            b.active_bits &= ~relief_shadow_clear8(&s->maxmip, &s->heights, &b);
+        out_blocked[g] =
+            b.active_bits ? relief_shadow_search8(&s->heights, &b, s->options.shadow_steps) : 0;
+    }
 }
 
 static void shade(const void *state, const meso_frame *frame, const meso_object *object,
@@ -85,7 +95,8 @@ static void shade(const void *state, const meso_frame *frame, const meso_object 
 }
 
 static size_t memory(const void *state) {
-    return state ? relief_heights_memory(&((const relief_state *)state)->heights) : 0;
+    const relief_state *s = state;
+    return s ? relief_heights_memory(&s->heights) + meso_minmax_pyramid_memory(s->pyramid) : 0;
 }
 
 const meso_technique meso_technique_relief = {

@@ -25,6 +25,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "meso/bake_minmax.h"
 #include "render_shading.h"
 
 #define RELIEF_LANES V8_LANES
@@ -77,6 +78,26 @@ static inline size_t relief_heights_memory(const relief_heights *h) {
     return (size_t)(h->width + 1) * (size_t)(h->height + 1) * sizeof(float);
 }
 
+/* base[index[k]] and base[index[k] + 1] per lane: with AVX2 as two 64-bit gathers of four
+ * lanes each (a texel and its right neighbour are adjacent in a row), half the elements of
+ * two 32-bit gathers, which is what a gather costs; the same floats, so the same results. */
+static inline void relief_gather_pairs8(const float *base, v8i index, v8f *left, v8f *right) {
+#if defined(__AVX2__)
+    /* lanes 0, 1, 4, 5 in the first gather, 2, 3, 6, 7 in the second: the shuffles below
+     * then put every lane back in its place */
+    __m256i order = _mm256_permute4x64_epi64((__m256i)index, 0xd8);
+    const long long *pairs = (const long long *)(const void *)base;
+    __m256 a = _mm256_castsi256_ps(_mm256_i32gather_epi64(pairs, _mm256_castsi256_si128(order), 4));
+    __m256 b =
+        _mm256_castsi256_ps(_mm256_i32gather_epi64(pairs, _mm256_extracti128_si256(order, 1), 4));
+    *left = (v8f)_mm256_shuffle_ps(a, b, 0x88);
+    *right = (v8f)_mm256_shuffle_ps(a, b, 0xdd);
+#else
+    *left = v8_gather(base, index);
+    *right = v8_gather(base + 1, index);
+#endif
+}
+
 /* h at texel-centre coordinates (x, y), the bilinear surface of meso_heightfield_sample, eight
  * lookups at once; the hot loop of every search (4 gathers of 8 texels). */
 static inline v8f relief_sample8(const relief_heights *m, v8f x, v8f y) {
@@ -94,9 +115,9 @@ static inline v8f relief_sample8(const relief_heights *m, v8f x, v8f y) {
     j = (v8i)v8_select(j > hmax, (v8f)hmax, (v8f)j);
     v8f tx = x - __builtin_convertvector(i, v8f), ty = y - __builtin_convertvector(j, v8f);
     v8i index = j * m->stride + i;
-    v8f h00 = v8_gather(m->padded, index), h10 = v8_gather(m->padded + 1, index);
-    v8f h01 = v8_gather(m->padded + m->stride, index);
-    v8f h11 = v8_gather(m->padded + m->stride + 1, index);
+    v8f h00, h10, h01, h11;
+    relief_gather_pairs8(m->padded, index, &h00, &h10);
+    relief_gather_pairs8(m->padded + m->stride, index, &h01, &h11);
     v8f top = h00 + (h10 - h00) * tx, bottom = h01 + (h11 - h01) * tx;
     return top + (bottom - top) * ty;
 }
@@ -144,53 +165,100 @@ typedef struct relief_batch {
 /* Relief mapping's search (Policarpo et al. 2005, as in Policarpo & Oliveira 2006 §2.1 and
  * Appendix A): `linear_steps` uniform steps along the ray until the first sample below the
  * surface, then `binary_steps` halvings of that bracket, then one secant step between the
- * bracket's ends (exact where the surface is planar, e.g. h constant). Writes t of the hit per
- * lane; returns the bits of lanes that hit (the others left the shell: silhouette). */
+ * bracket's ends (exact where the surface is planar, e.g. h constant). For `count` (1 or 2)
+ * batches: writes t of the hit per lane and the bits of the lanes that hit (the others left
+ * the shell: silhouette). */
+__attribute__((always_inline)) static inline void
+relief_search8_body(const relief_heights *m, const relief_batch *batches, int count,
+                    int linear_steps, int binary_steps, v8f *out_t, int *out_hit) {
+    /* Two batches are stepped in turn: a binary step's lookup depends on the one before, so
+     * one batch alone waits on each gather; interleaved, the processor overlaps the two
+     * chains. Each batch's arithmetic is unchanged, so are its results. */
+    v8i lanes[2], floor_mask[2], found[2];
+    v8f t_lo[2], t_hi[2], f_lo[2], f_hi[2], t_prev[2], f_prev[2];
+    int all[2];
+    for (int g = 0; g < count; ++g) {
+        const relief_batch *batch = &batches[g];
+        all[g] = (1 << batch->count) - 1;
+        lanes[g] = v8_mask_from_bits(all[g]);
+        floor_mask[g] = v8_mask_from_bits(batch->floor_bits);
+        /* t = 0: a texel at full height is hit where the ray enters (h = 1: exactly the
+         * mesh). */
+        v8f h = relief_sample8(m, batch->x0, batch->y0);
+        found[g] = ((h >= 1.0f) | v8_mask_from_bits(batch->flat_bits)) & lanes[g];
+        t_lo[g] = v8_splat(0.0f), t_hi[g] = v8_splat(0.0f), f_lo[g] = v8_splat(-1.0f);
+        f_hi[g] = h - 1.0f;
+        t_prev[g] = v8_splat(0.0f), f_prev[g] = h - 1.0f;
+    }
+    v8f inv_n = v8_splat(1.0f / (float)linear_steps);
+    for (int k = 1; k <= linear_steps; ++k) {
+        int busy = 0;
+        for (int g = 0; g < count; ++g) {
+            if (v8_mask_bits(found[g]) == all[g]) continue;
+            busy = 1;
+            const relief_batch *batch = &batches[g];
+            v8f t = batch->t_end * ((float)k * inv_n);
+            v8f d = t * (batch->a - batch->b * t);
+            v8f h = relief_sample8(m, batch->x0 + batch->xd * t, batch->y0 + batch->yd * t);
+            v8f f = d + h - 1.0f; /* >= 0: at or below the surface */
+            v8i below = f >= 0.0f;
+            if (k == linear_steps) below |= floor_mask[g]; /* d = 1 there, whatever rounding */
+            v8i fresh = below & ~found[g] & lanes[g];
+            t_lo[g] = v8_select(fresh, t_prev[g], t_lo[g]);
+            f_lo[g] = v8_select(fresh, f_prev[g], f_lo[g]);
+            t_hi[g] = v8_select(fresh, t, t_hi[g]);
+            f_hi[g] = v8_select(fresh, v8_max(f, v8_splat(0.0f)), f_hi[g]);
+            found[g] |= fresh;
+            t_prev[g] = t;
+            f_prev[g] = f;
+        }
+        if (!busy) break;
+    }
+    /* Binary search inside [t_lo, t_hi] (lanes hit at t = 0 have an empty bracket, which a
+     * step leaves as it is: a batch with no other lane needs none). */
+    bool bracket[2] = {false, false};
+    for (int g = 0; g < count; ++g) bracket[g] = v8_mask_bits(t_hi[g] > t_lo[g]) != 0;
+    for (int k = 0; k < binary_steps; ++k) {
+        for (int g = 0; g < count; ++g) {
+            if (!bracket[g]) continue;
+            const relief_batch *batch = &batches[g];
+            v8f t = (t_lo[g] + t_hi[g]) * 0.5f;
+            v8f d = t * (batch->a - batch->b * t);
+            v8f h = relief_sample8(m, batch->x0 + batch->xd * t, batch->y0 + batch->yd * t);
+            v8f f = d + h - 1.0f;
+            v8i below = f >= 0.0f;
+            t_hi[g] = v8_select(below, t, t_hi[g]);
+            f_hi[g] = v8_select(below, f, f_hi[g]);
+            t_lo[g] = v8_select(below, t_lo[g], t);
+            f_lo[g] = v8_select(below, f_lo[g], f);
+        }
+    }
+    for (int g = 0; g < count; ++g) {
+        /* Secant between the bracket's ends: f_lo < 0 <= f_hi. */
+        v8f span = f_hi[g] - f_lo[g];
+        v8f w = v8_select(span > 1e-12f, -f_lo[g] / v8_max(span, v8_splat(1e-12f)), v8_splat(1.0f));
+        v8f t = t_lo[g] + (t_hi[g] - t_lo[g]) * w;
+        out_t[g] = v8_select(t_hi[g] <= t_lo[g], t_hi[g], t);
+        out_hit[g] = v8_mask_bits(found[g]) & all[g];
+    }
+}
+
+static inline void relief_search8x2(const relief_heights *m, const relief_batch *batches, int count,
+                                    int linear_steps, int binary_steps, v8f *out_t, int *out_hit) {
+    /* a constant count unrolls the loops over the batches: their state stays in registers */
+    if (count == 2)
+        relief_search8_body(m, batches, 2, linear_steps, binary_steps, out_t, out_hit);
+    else
+        relief_search8_body(m, batches, 1, linear_steps, binary_steps, out_t, out_hit);
+}
+
+/* relief_search8x2 on one batch: writes t of the hit per lane, returns the bits of the lanes
+ * that hit. */
 static inline int relief_search8(const relief_heights *m, const relief_batch *batch,
                                  int linear_steps, int binary_steps, v8f *out_t) {
-    int all = (1 << batch->count) - 1;
-    v8i lanes = v8_mask_from_bits(all), floor_mask = v8_mask_from_bits(batch->floor_bits);
-    /* t = 0: a texel at full height is hit where the ray enters (h = 1: exactly the mesh). */
-    v8f h = relief_sample8(m, batch->x0, batch->y0);
-    v8i found = ((h >= 1.0f) | v8_mask_from_bits(batch->flat_bits)) & lanes;
-    v8f t_lo = v8_splat(0.0f), t_hi = v8_splat(0.0f), f_lo = v8_splat(-1.0f), f_hi = h - 1.0f;
-    v8f inv_n = v8_splat(1.0f / (float)linear_steps);
-    v8f t_prev = v8_splat(0.0f), f_prev = h - 1.0f;
-    for (int k = 1; k <= linear_steps && v8_mask_bits(found) != all; ++k) {
-        v8f t = batch->t_end * ((float)k * inv_n);
-        v8f d = t * (batch->a - batch->b * t);
-        h = relief_sample8(m, batch->x0 + batch->xd * t, batch->y0 + batch->yd * t);
-        v8f f = d + h - 1.0f; /* >= 0: at or below the surface */
-        v8i below = f >= 0.0f;
-        if (k == linear_steps) below |= floor_mask; /* d = 1 there, whatever rounding says */
-        v8i fresh = below & ~found & lanes;
-        t_lo = v8_select(fresh, t_prev, t_lo);
-        f_lo = v8_select(fresh, f_prev, f_lo);
-        t_hi = v8_select(fresh, t, t_hi);
-        f_hi = v8_select(fresh, v8_max(f, v8_splat(0.0f)), f_hi);
-        found |= fresh;
-        t_prev = t;
-        f_prev = f;
-    }
-    /* Binary search inside [t_lo, t_hi] (lanes hit at t = 0 have an empty bracket). */
-    for (int k = 0; k < binary_steps; ++k) {
-        v8f t = (t_lo + t_hi) * 0.5f;
-        v8f d = t * (batch->a - batch->b * t);
-        h = relief_sample8(m, batch->x0 + batch->xd * t, batch->y0 + batch->yd * t);
-        v8f f = d + h - 1.0f;
-        v8i below = f >= 0.0f;
-        t_hi = v8_select(below, t, t_hi);
-        f_hi = v8_select(below, f, f_hi);
-        t_lo = v8_select(below, t_lo, t);
-        f_lo = v8_select(below, f_lo, f);
-    }
-    /* Secant between the bracket's ends: f_lo < 0 <= f_hi. */
-    v8f span = f_hi - f_lo;
-    v8f w = v8_select(span > 1e-12f, -f_lo / v8_max(span, v8_splat(1e-12f)), v8_splat(1.0f));
-    *out_t = t_lo + (t_hi - t_lo) * w;
-    v8i empty = t_hi <= t_lo;
-    *out_t = v8_select(empty, t_hi, *out_t);
-    return v8_mask_bits(found) & all;
+    int hit;
+    relief_search8x2(m, batch, 1, linear_steps, binary_steps, out_t, &hit);
+    return hit;
 }
 
 /* ---- Shadows ------------------------------------------------------------------------------ */
@@ -227,6 +295,113 @@ static inline int relief_shadow_search8(const relief_heights *m, const relief_sh
         pending &= ~bits;
     }
     return blocked;
+}
+
+/* The maximum mip-map of a height field (Tevs et al. 2008) with per-level tables for lookups
+ * of eight lanes at once, each at its own level. */
+typedef struct relief_maxmip {
+    const meso_minmax_pyramid *pyramid;
+    int32_t offset[MESO_MINMAX_MAX_LEVELS]; /* of each level's max array in pyramid->block */
+    int32_t width[MESO_MINMAX_MAX_LEVELS], height[MESO_MINMAX_MAX_LEVELS];
+    bool power_of_two; /* both sides */
+} relief_maxmip;
+
+static inline void relief_maxmip_init(const meso_minmax_pyramid *p, relief_maxmip *out) {
+    memset(out, 0, sizeof *out);
+    out->pyramid = p;
+    for (int l = 0; l < p->num_levels; ++l) {
+        out->offset[l] = (int32_t)(p->levels[l].max - p->block);
+        out->width[l] = p->levels[l].width;
+        out->height[l] = p->levels[l].height;
+    }
+    int w = p->levels[0].width, h = p->levels[0].height;
+    out->power_of_two = (w & (w - 1)) == 0 && (h & (h - 1)) == 0;
+}
+
+/* The highest height of the bilinear surface over eight texel-centre boxes [x0, x1] x [y0, y1]
+ * (unwrapped coordinates, x0 <= x1): a box's level-0 cells (cell i spans texel centres
+ * i..i+1) lie in at most 2 x 2 cells of the first level whose cells are longer than the box.
+ * Boxes as long as the field, and on wrapped fields whose sides are not powers of two boxes
+ * that cross the tile's seam (their coarser cells do not tile the repeats), get the whole
+ * field's maximum. The boxes are widened by a margin far above the rounding of a sample's
+ * position (relief_sample8's wrap, the step's product), so every texel a sample inside reads
+ * is bounded. */
+static inline v8f relief_box_max8(const relief_maxmip *mm, const relief_heights *m, v8f x0, v8f x1,
+                                  v8f y0, v8f y1) {
+    const meso_minmax_pyramid *p = mm->pyramid;
+    int top = p->num_levels - 1, w = m->width, h = m->height;
+    float fw = (float)w, fh = (float)h;
+    v8f ex = 0.01f + 1e-5f * v8_max(v8_max(x0, -x0), v8_max(x1, -x1));
+    v8f ey = 0.01f + 1e-5f * v8_max(v8_max(y0, -y0), v8_max(y1, -y1));
+    x0 -= ex, x1 += ex, y0 -= ey, y1 += ey;
+    v8i ok = (x1 - x0 < fw) & (y1 - y0 < fh); /* NaN: not ok */
+    /* keep the unused lanes' conversions in range */
+    x0 = v8_select(ok, x0, v8_splat(0.0f)), x1 = v8_select(ok, x1, v8_splat(0.0f));
+    y0 = v8_select(ok, y0, v8_splat(0.0f)), y1 = v8_select(ok, y1, v8_splat(0.0f));
+    v8i wmax = v8i_splat(w - 1), hmax = v8i_splat(h - 1), zero = v8i_splat(0);
+    v8i i0, i1, j0, j1;
+    if (m->clamp) { /* relief_sample8 clamps positions to [0, side - 1] */
+        v8f lo = v8_splat(0.0f), wm = v8_splat(fw - 1.0f), hm = v8_splat(fh - 1.0f);
+        i0 = __builtin_convertvector(v8_min(v8_max(x0, lo), wm), v8i);
+        i1 = __builtin_convertvector(v8_min(v8_max(x1, lo), wm), v8i);
+        j0 = __builtin_convertvector(v8_min(v8_max(y0, lo), hm), v8i);
+        j1 = __builtin_convertvector(v8_min(v8_max(y1, lo), hm), v8i);
+    } else {
+        /* the first cell wrapped into the tile (exact for power-of-two sides; otherwise at
+         * worst a tile off, which the seam test below sends to the field's maximum), the
+         * last one as many cells on, unwrapped */
+        v8f fx0 = v8_floor(x0), fy0 = v8_floor(y0);
+        v8f wx = fx0 - fw * v8_floor(x0 * (1.0f / fw)), wy = fy0 - fh * v8_floor(y0 * (1.0f / fh));
+        i0 = __builtin_convertvector(wx, v8i), j0 = __builtin_convertvector(wy, v8i);
+        i1 = i0 + __builtin_convertvector(v8_floor(x1) - fx0, v8i);
+        j1 = j0 + __builtin_convertvector(v8_floor(y1) - fy0, v8i);
+        /* i0 = -1 only for a box starting within the margin of the seam: cell 0 holds it */
+        i0 = (v8i)v8_select(i0 < zero, (v8f)zero, (v8f)i0);
+        j0 = (v8i)v8_select(j0 < zero, (v8f)zero, (v8f)j0);
+        if (!mm->power_of_two) {
+            ok &= (i0 <= wmax) & (j0 <= hmax) & (i1 <= wmax) & (j1 <= hmax);
+        }
+    }
+    v8i span_x = i1 - i0, span_y = j1 - j0;
+    if (!m->clamp && mm->power_of_two) i1 &= wmax, j1 &= hmax; /* every level tiles repeats */
+    v8i span = (v8i)v8_select(span_x > span_y, (v8f)span_x, (v8f)span_y);
+    /* the first level with cells longer than span: floor(log2 span) + 1, from the exponent */
+    v8i level = ((v8i) __builtin_convertvector(span, v8f) >> 23) - 126;
+    level = (v8i)v8_select(span == zero, (v8f)zero, (v8f)level);
+    level = (v8i)v8_select(level > v8i_splat(top), (v8f)v8i_splat(top), (v8f)level);
+    level = (v8i)v8_select(ok, (v8f)level, (v8f)v8i_splat(top));
+    v8i lw = v8i_gather(mm->width, level), lh = v8i_gather(mm->height, level);
+    v8i base = v8i_gather(mm->offset, level);
+    v8i ci0 = i0 >> level, ci1 = i1 >> level, cj0 = j0 >> level, cj1 = j1 >> level;
+    v8i lwm = lw - 1, lhm = lh - 1;
+    ci0 = (v8i)v8_select(ci0 > lwm, (v8f)lwm, (v8f)ci0);
+    ci1 = (v8i)v8_select(ci1 > lwm, (v8f)lwm, (v8f)ci1);
+    cj0 = (v8i)v8_select(cj0 > lhm, (v8f)lhm, (v8f)cj0);
+    cj1 = (v8i)v8_select(cj1 > lhm, (v8f)lhm, (v8f)cj1);
+    v8i r0 = base + cj0 * lw, r1 = base + cj1 * lw;
+    v8f a = v8_max(v8_gather(p->block, r0 + ci0), v8_gather(p->block, r0 + ci1));
+    v8f b = v8_max(v8_gather(p->block, r1 + ci0), v8_gather(p->block, r1 + ci1));
+    return v8_max(a, b);
+}
+
+/* The lanes of a shadow batch in which no sample of relief_shadow_search8 can find the light
+ * blocked, proved without sampling: every sample's depth is at most the light ray's deepest
+ * point dmax (of d (1 - s) + bulge s (1 - s) over s in [0, 1]) and its height at most the
+ * maximum mip-map's bound over the ray's footprint, so f <= dmax + hmax - 1; where that stays
+ * below the bias (less a margin for the samples' float rounding) the search would find
+ * nothing. The search is skipped for these lanes, not changed: the same result. Most hits on
+ * a raised surface (a brick's top) end here after a few reads instead of `steps` bilinear
+ * samples. */
+static inline int relief_shadow_clear8(const relief_maxmip *mm, const relief_heights *m,
+                                       const relief_shadow_batch *s) {
+    v8f xe = s->x + s->xd, ye = s->y + s->yd;
+    v8f hmax = relief_box_max8(mm, m, v8_min(s->x, xe), v8_max(s->x, xe), v8_min(s->y, ye),
+                               v8_max(s->y, ye));
+    v8f d = s->d, b = s->bulge;
+    v8i vertex = b > d; /* the parabola's vertex (b - d) / 2b inside (0, 1) */
+    v8f dmax =
+        v8_select(vertex, d + (b - d) * (b - d) / (4.0f * v8_select(vertex, b, v8_splat(1.0f))), d);
+    return v8_mask_bits(dmax + hmax - 1.0f < RELIEF_SHADOW_BIAS - 1e-5f) & s->active_bits;
 }
 
 /* ---- Eight fragments as vectors ---------------------------------------------------------- */

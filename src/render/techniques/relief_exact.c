@@ -26,6 +26,7 @@
 typedef struct exact_state {
     relief_heights heights;
     meso_minmax_pyramid *pyramid;
+    relief_maxmip maxmip; /* the pyramid's tables for relief_shadow_clear8 */
     relief_params params;
     bool power_of_two; /* both sides: the 8-wide traversal applies */
     /* per level: the offset of its max array in pyramid->block (gathered per lane) */
@@ -283,9 +284,9 @@ trace8_step(const exact_state *s, const exact_rays8 *r, trace8_state *st) {
         /* Level 0: the bilinear patch of texels (cx..cx+1, cy..cy+1) along the ray;
          * f(tau) = d(t + tau) - 1 + h(sx + xd tau, sy + yd tau) - bias = A tau^2 + B tau + C */
         v8i corner = (v8i)v8_select(solve, (v8f)(wy * m->stride + wx), (v8f)v8i_splat(0));
-        v8f h00 = v8_gather(m->padded, corner), h10 = v8_gather(m->padded + 1, corner);
-        v8f h01 = v8_gather(m->padded + m->stride, corner);
-        v8f h11 = v8_gather(m->padded + m->stride + 1, corner);
+        v8f h00, h10, h01, h11;
+        relief_gather_pairs8(m->padded, corner, &h00, &h10);
+        relief_gather_pairs8(m->padded + m->stride, corner, &h01, &h11);
         v8f hx = h10 - h00, hy = h01 - h00, hxy = h00 - h10 - h01 + h11;
         v8f sx = px - xlo, sy = py - ylo;
         v8f C = depth8(r, t) - 1.0f + h00 + hx * sx + hy * sy + hxy * sx * sy - r->bias;
@@ -433,6 +434,15 @@ static void search(const void *user, const relief_batch *batches, int count, v8f
 static void shadow(const void *user, const relief_shadow_batch *batches, int count,
                    int *out_blocked) {
     const exact_state *s = user;
+    /* Lanes the maximum mip-map proves lit need no trace (relief_shadow_clear8: no point of
+     * the light ray comes within the bias of the surface). */
+    relief_shadow_batch cleared[2];
+    for (int g = 0; g < count; ++g) {
+        cleared[g] = batches[g];
+        if (cleared[g].active_bits)
+            cleared[g].active_bits &= ~relief_shadow_clear8(&s->maxmip, &s->heights, &batches[g]);
+    }
+    batches = cleared;
     if (s->heights.clamp) {
         for (int g = 0; g < count; ++g)
             out_blocked[g] =
@@ -516,6 +526,7 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
     for (int l = 0; l < s->pyramid->num_levels; ++l) {
         s->level_offset[l] = (int32_t)(s->pyramid->levels[l].max - s->pyramid->block);
     }
+    relief_maxmip_init(s->pyramid, &s->maxmip);
     s->params.shadows = options.shadows;
     s->params.silhouettes = options.silhouettes;
     *out_state = s;
