@@ -16,6 +16,7 @@
 #include "render_internal.h"
 
 #define GDM_DEPTH_BUCKETS 1024 /* gdm_geometry's sort */
+#define GDM_WINDOW_LEVELS 7    /* height fields' window maxima: up to 64 texels a side */
 
 typedef struct gdm_state {
     meso_gdm *gdm;
@@ -32,7 +33,11 @@ typedef struct gdm_state {
     float probe_scale; /* a height field's (1 - h) - w times this bounds the distance */
     /* height fields: w below which nothing is solid, in each prism's column (prism_clear)
      * and anywhere (clear_w); -1 for solids */
-    float *prism_clear, clear_w;
+    float *prism_clear, clear_w, map_max;
+    /* height fields: level L at texel (i, j) the highest texel of the window
+     * [i, i + 2^L) x [j, j + 2^L), wrapped or clamped as the map samples (window_bound) */
+    float *window_max;
+    int window_levels;
     int num_eigen;
     bool raw, shadows, baked_normals; /* baked_normals: the "normals" option resolved */
     int refine_steps, shadow_steps;
@@ -113,6 +118,7 @@ static void gdm_release(void *state) {
     free(s->sort_counts);
     free(s->sort_keys);
     free(s->prism_clear);
+    free(s->window_max);
     free(s);
 }
 
@@ -173,6 +179,7 @@ static bool heightfield_clearances(gdm_state *s) {
     for (size_t t = 0; t < (size_t)hf->width * (size_t)hf->height; t++)
         map_max = fmaxf(map_max, hf->heights[t]);
     /* 1e-6: a bilinear blend may round a hair above its texels */
+    s->map_max = map_max;
     s->clear_w = 1.0f - map_max - 1e-6f;
     size_t n = s->layer->num_prisms;
     s->prism_clear = malloc((n ? n : 1) * sizeof(float));
@@ -188,6 +195,66 @@ static bool heightfield_clearances(gdm_state *s) {
         s->prism_clear[i] = 1.0f - h - 1e-6f;
     }
     return true;
+}
+
+/* A texel index of the map's wrapping, for the windows below. */
+static inline int window_index(meso_wrap wrap, int i, int n) {
+    if (wrap == MESO_WRAP_CLAMP) return i < 0 ? 0 : (i >= n ? n - 1 : i);
+    i %= n;
+    return i < 0 ? i + n : i;
+}
+
+/* The windows' maxima (window_max), level by level: a window of 2^(L+1) is four of 2^L. A
+ * box of texels n wide then needs one read at the level with 2^L >= n, where the prism's
+ * clearance (its whole UV triangle) is too coarse: bumps-sphere's prisms near the poles span
+ * a wide UV box. false: out of memory. */
+static bool heightfield_windows(gdm_state *s) {
+    const meso_heightfield *hf = s->heightfield;
+    int width = hf->width, height = hf->height, longest = width > height ? width : height;
+    int levels = 1;
+    while (levels < GDM_WINDOW_LEVELS && (1 << (levels - 1)) < longest) levels++;
+    size_t plane = (size_t)width * (size_t)height;
+    s->window_max = malloc((size_t)levels * plane * sizeof(float));
+    if (!s->window_max) return false;
+    s->window_levels = levels;
+    memcpy(s->window_max, hf->heights, plane * sizeof(float));
+    for (int level = 1; level < levels; level++) {
+        const float *below = s->window_max + (size_t)(level - 1) * plane;
+        float *out = s->window_max + (size_t)level * plane;
+        int step = 1 << (level - 1);
+        for (int j = 0; j < height; j++) {
+            const float *r0 = below + (size_t)j * (size_t)width;
+            const float *r1 =
+                below + (size_t)window_index(hf->wrap, j + step, height) * (size_t)width;
+            for (int i = 0; i < width; i++) {
+                int i1 = window_index(hf->wrap, i + step, width);
+                out[(size_t)j * (size_t)width + (size_t)i] =
+                    fmaxf(fmaxf(r0[i], r0[i1]), fmaxf(r1[i], r1[i1]));
+            }
+        }
+    }
+    return true;
+}
+
+/* The highest texel a bilinear sample anywhere in the (u, v) box [u0, u1] x [v0, v1] can read
+ * (a texel's margin each side for rounding, as heightfield_box_max); the whole map's when the
+ * box is wider than the largest window. One read of window_max. */
+static inline float window_bound(const gdm_state *s, float u0, float u1, float v0, float v1) {
+    const meso_heightfield *hf = s->heightfield;
+    float x0 = floorf(u0 * (float)hf->width - 0.5f) - 1.0f;
+    float x1 = floorf(u1 * (float)hf->width - 0.5f) + 2.0f;
+    float y0 = floorf((1.0f - v1) * (float)hf->height - 0.5f) - 1.0f;
+    float y1 = floorf((1.0f - v0) * (float)hf->height - 0.5f) + 2.0f;
+    float extent = fmaxf(x1 - x0, y1 - y0) + 1.0f; /* texels a side; NaN fails below */
+    if (!(extent <= (float)(1 << (s->window_levels - 1))) || !(fabsf(x0) < 1e6f) ||
+        !(fabsf(y0) < 1e6f))
+        return s->map_max;
+    int level = 0;
+    while ((float)(1 << level) < extent) level++;
+    int i = window_index(hf->wrap, (int)x0, hf->width);
+    int j = window_index(hf->wrap, (int)y0, hf->height);
+    size_t plane = (size_t)hf->width * (size_t)hf->height;
+    return s->window_max[(size_t)level * plane + (size_t)j * (size_t)hf->width + (size_t)i];
 }
 
 static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
@@ -247,7 +314,7 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
         MESO_OK)
         goto fail;
     s->clear_w = -1.0f;
-    if (s->heightfield && !heightfield_clearances(s)) {
+    if (s->heightfield && (!heightfield_clearances(s) || !heightfield_windows(s))) {
         r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: gdm", object->name);
         goto fail;
     }
@@ -445,9 +512,9 @@ static inline bool ray_probe_inside(const gdm_state *s, ray_probe *r, float x) {
  * bisection where the table is right. Otherwise (the table was wrong here) a few probes
  * from the entry find the first inside point. The segment's end on a solid floor counts as
  * inside whatever its rounding. Returns the hit's distance along V_t, negative for none. */
-static float refine_hit(const gdm_state *s, size_t prism, meso_vec3 t_in, meso_vec3 vt, float d,
+static float refine_hit(const gdm_state *s, float clear_w, meso_vec3 t_in, meso_vec3 vt, float d,
                         float dt, bool solid_floor) {
-    ray_probe probe = ray_probe_start(t_in, vt, s->prism_clear ? s->prism_clear[prism] : -1.0f);
+    ray_probe probe = ray_probe_start(t_in, vt, clear_w);
 #define INSIDE(x) ((solid_floor && (x) >= dt) || ray_probe_inside(s, &probe, (x)))
     float window = s->refine_window;
     float guess = fminf(fmaxf(d, 0.0f), dt);
@@ -565,9 +632,21 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
     float dt = meso_vec3_length(segment);
     if (!(dt > 1e-7f)) return false;
     meso_vec3 vt = meso_vec3_scale(segment, 1.0f / dt);
+    /* height fields: outside above this w on the segment (the refinement's probes) */
+    float clear_w = s->prism_clear ? s->prism_clear[prism_index] : -1.0f;
+    if (s->window_max && s->refine_steps > 0) {
+        /* Beyond the paper: every probe of refine_hit lies on the segment (to a rounding); when
+         * the segment stays above the highest texel its (u, v) box can read, all of them are
+         * outside and it misses, known without the lookup (the same answer, so the same
+         * image): most fins of a sphere's outline band are crossed above the bumps. */
+        float highest = window_bound(s, fminf(t_in.x, t_out.x), fmaxf(t_in.x, t_out.x),
+                                     fminf(t_in.y, t_out.y), fmaxf(t_in.y, t_out.y));
+        clear_w = fmaxf(clear_w, 1.0f - highest - 1e-6f);
+        if (fmaxf(t_in.z, t_out.z) + 1e-6f < clear_w) return false;
+    }
     float d = lookup(s, t_in, vt);
     if (s->refine_steps > 0) {
-        d = refine_hit(s, prism_index, t_in, vt, d, dt,
+        d = refine_hit(s, clear_w, t_in, vt, d, dt,
                        exit_slot == MESO_PRISM_BOTTOM && floor_is_solid(s, t_out));
         if (d < 0.0f) return false;
     } else if (!(d < dt - s->hit_margin)) {
