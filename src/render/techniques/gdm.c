@@ -17,6 +17,10 @@
 
 #define GDM_DEPTH_BUCKETS 1024 /* gdm_geometry's sort */
 #define GDM_WINDOW_LEVELS 7    /* height fields' window maxima: up to 64 texels a side */
+/* solids' distance grid (solid_grid): nodes a side in u and v, and in w (both slab faces), so
+ * that a probe is at most ~0.009 (u, v, w) units from a node */
+#define GDM_GRID_SIDE 128
+#define GDM_GRID_LAYERS 65
 
 typedef struct gdm_state {
     meso_gdm *gdm;
@@ -38,6 +42,9 @@ typedef struct gdm_state {
      * [i, i + 2^L) x [j, j + 2^L), wrapped or clamped as the map samples (window_bound) */
     float *window_max;
     int window_levels;
+    /* solids: meso_solid_distance at the nodes (i, j, l) / (GDM_GRID_SIDE, GDM_GRID_SIDE,
+     * GDM_GRID_LAYERS - 1), [l][j][i]; NULL for height fields */
+    float *grid;
     int num_eigen;
     bool raw, shadows, baked_normals; /* baked_normals: the "normals" option resolved */
     int refine_steps, shadow_steps;
@@ -119,6 +126,7 @@ static void gdm_release(void *state) {
     free(s->sort_keys);
     free(s->prism_clear);
     free(s->window_max);
+    free(s->grid);
     free(s);
 }
 
@@ -257,6 +265,28 @@ static inline float window_bound(const gdm_state *s, float u0, float u1, float v
     return s->window_max[(size_t)level * plane + (size_t)j * (size_t)hf->width + (size_t)i];
 }
 
+/* One layer of nodes of the solid's distance grid. */
+static void solid_grid_layer(void *user, size_t job, int thread_index) {
+    (void)thread_index;
+    gdm_state *s = user;
+    float w = (float)job / (float)(GDM_GRID_LAYERS - 1);
+    float *out = s->grid + job * GDM_GRID_SIDE * GDM_GRID_SIDE;
+    for (int j = 0; j < GDM_GRID_SIDE; j++)
+        for (int i = 0; i < GDM_GRID_SIDE; i++)
+            out[j * GDM_GRID_SIDE + i] = meso_solid_distance(
+                s->solid, (meso_vec3){(float)i / GDM_GRID_SIDE, (float)j / GDM_GRID_SIDE, w});
+}
+
+/* The solid's distance at a grid of nodes, evaluated once (about a million evaluations, on
+ * every thread): a probe near a node whose |f| exceeds the distance between them is on the
+ * node's side (ray_probe_inside). false: out of memory. */
+static bool solid_grid(meso_context *ctx, gdm_state *s) {
+    s->grid = malloc((size_t)GDM_GRID_LAYERS * GDM_GRID_SIDE * GDM_GRID_SIDE * sizeof(float));
+    if (!s->grid) return false;
+    meso_parallel_for(ctx, GDM_GRID_LAYERS, solid_grid_layer, s);
+    return true;
+}
+
 static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
                                const meso_object *object, void **out_state) {
     *out_state = NULL;
@@ -314,7 +344,8 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
         MESO_OK)
         goto fail;
     s->clear_w = -1.0f;
-    if (s->heightfield && (!heightfield_clearances(s) || !heightfield_windows(s))) {
+    if (s->heightfield ? !heightfield_clearances(s) || !heightfield_windows(s)
+                       : !solid_grid(ctx, s)) {
         r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: gdm", object->name);
         goto fail;
     }
@@ -495,6 +526,29 @@ static inline bool ray_probe_inside(const gdm_state *s, ray_probe *r, float x) {
         if (fabsf(x - r->x[side]) < 0.999f * r->radius[side] - 1e-6f) return side == 1;
     meso_vec3 p = meso_vec3_madd(r->t0, r->dir, x);
     if (p.z < r->clear_w) return false;
+    if (s->grid) {
+        /* the nearest node of the solid's distance grid: within its |f| (less the distance
+         * to it, with the margins above) the probe is on its side, and that much of the
+         * bound is remembered as a sample's would be */
+        meso_vec3 q = tile_point(p);
+        float gx = q.x * (float)GDM_GRID_SIDE, gy = q.y * (float)GDM_GRID_SIDE;
+        float gz = q.z * (float)(GDM_GRID_LAYERS - 1);
+        float nx = floorf(gx + 0.5f), ny = floorf(gy + 0.5f);
+        float nz = fminf(fmaxf(floorf(gz + 0.5f), 0.0f), (float)(GDM_GRID_LAYERS - 1));
+        if (isfinite(nx + ny + nz)) {
+            float dx = (gx - nx) / (float)GDM_GRID_SIDE, dy = (gy - ny) / (float)GDM_GRID_SIDE;
+            float dz = (gz - nz) / (float)(GDM_GRID_LAYERS - 1);
+            int i = (int)nx & (GDM_GRID_SIDE - 1), j = (int)ny & (GDM_GRID_SIDE - 1);
+            float f = s->grid[((size_t)nz * GDM_GRID_SIDE + (size_t)j) * GDM_GRID_SIDE + (size_t)i];
+            float bound = 0.999f * fabsf(f) - 1e-6f - sqrtf(dx * dx + dy * dy + dz * dz);
+            if (bound > 0.0f) {
+                int side = f <= 0.0f;
+                r->x[side] = x;
+                r->radius[side] = bound;
+                return side == 1;
+            }
+        }
+    }
     /* inside_mesostructure's test: w >= 1 - h is (1 - h) - w <= 0 in floats */
     float f = s->heightfield ? (1.0f - meso_heightfield_sample(s->heightfield, p.x, p.y)) - p.z
                              : meso_solid_distance(s->solid, tile_point(p));
@@ -738,7 +792,8 @@ static size_t gdm_memory(const void *state) {
     return (size_t)c.compressed_bytes + (v.raw ? (size_t)c.raw_bytes : 0) + normals +
            gdm_lookup_table_bytes(&s->table) + meso_prism_layer_memory(s->layer) +
            s->layer->faces->num_triangles * (4 * sizeof(uint32_t) + sizeof(float)) +
-           gdm_gi_memory(s->gi);
+           gdm_gi_memory(s->gi) +
+           (s->grid ? (size_t)GDM_GRID_LAYERS * GDM_GRID_SIDE * GDM_GRID_SIDE * sizeof(float) : 0);
 }
 
 const meso_technique meso_technique_gdm = {
