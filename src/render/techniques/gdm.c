@@ -517,6 +517,35 @@ typedef struct ray_probe {
     float clear_w;         /* outside above this w (height fields; prism_clear, clear_w) */
 } ray_probe;
 
+/* A solid's distance at p, or a value of its sign: the nearest node of the solid's distance
+ * grid proves the side when p lies within the node's |f| (less the distance to it, with
+ * ray_probe_inside's margins), and *out_radius is then that bound, remembered as a sample's
+ * |f| would be; otherwise the solid is evaluated (*out_radius = |f|). Not inline: it keeps
+ * ray_probe_inside small enough to be inlined for height fields (measured: 6 % more
+ * instructions on bumps-sphere with the grid's code inline). */
+__attribute__((noinline)) static float solid_probe(const gdm_state *s, meso_vec3 p,
+                                                   float *out_radius) {
+    meso_vec3 q = tile_point(p);
+    float gx = q.x * (float)GDM_GRID_SIDE, gy = q.y * (float)GDM_GRID_SIDE;
+    float gz = q.z * (float)(GDM_GRID_LAYERS - 1);
+    float nx = floorf(gx + 0.5f), ny = floorf(gy + 0.5f);
+    float nz = fminf(fmaxf(floorf(gz + 0.5f), 0.0f), (float)(GDM_GRID_LAYERS - 1));
+    if (isfinite(nx + ny + nz)) {
+        float dx = (gx - nx) / (float)GDM_GRID_SIDE, dy = (gy - ny) / (float)GDM_GRID_SIDE;
+        float dz = (gz - nz) / (float)(GDM_GRID_LAYERS - 1);
+        int i = (int)nx & (GDM_GRID_SIDE - 1), j = (int)ny & (GDM_GRID_SIDE - 1);
+        float f = s->grid[((size_t)nz * GDM_GRID_SIDE + (size_t)j) * GDM_GRID_SIDE + (size_t)i];
+        float bound = 0.999f * fabsf(f) - 1e-6f - sqrtf(dx * dx + dy * dy + dz * dz);
+        if (bound > 0.0f) {
+            *out_radius = bound;
+            return f;
+        }
+    }
+    float f = meso_solid_distance(s->solid, q);
+    *out_radius = fabsf(f);
+    return f;
+}
+
 static inline ray_probe ray_probe_start(meso_vec3 t0, meso_vec3 dir, float clear_w) {
     return (ray_probe){.t0 = t0, .dir = dir, .radius = {-1.0f, -1.0f}, .clear_w = clear_w};
 }
@@ -526,35 +555,16 @@ static inline bool ray_probe_inside(const gdm_state *s, ray_probe *r, float x) {
         if (fabsf(x - r->x[side]) < 0.999f * r->radius[side] - 1e-6f) return side == 1;
     meso_vec3 p = meso_vec3_madd(r->t0, r->dir, x);
     if (p.z < r->clear_w) return false;
-    if (s->grid) {
-        /* the nearest node of the solid's distance grid: within its |f| (less the distance
-         * to it, with the margins above) the probe is on its side, and that much of the
-         * bound is remembered as a sample's would be */
-        meso_vec3 q = tile_point(p);
-        float gx = q.x * (float)GDM_GRID_SIDE, gy = q.y * (float)GDM_GRID_SIDE;
-        float gz = q.z * (float)(GDM_GRID_LAYERS - 1);
-        float nx = floorf(gx + 0.5f), ny = floorf(gy + 0.5f);
-        float nz = fminf(fmaxf(floorf(gz + 0.5f), 0.0f), (float)(GDM_GRID_LAYERS - 1));
-        if (isfinite(nx + ny + nz)) {
-            float dx = (gx - nx) / (float)GDM_GRID_SIDE, dy = (gy - ny) / (float)GDM_GRID_SIDE;
-            float dz = (gz - nz) / (float)(GDM_GRID_LAYERS - 1);
-            int i = (int)nx & (GDM_GRID_SIDE - 1), j = (int)ny & (GDM_GRID_SIDE - 1);
-            float f = s->grid[((size_t)nz * GDM_GRID_SIDE + (size_t)j) * GDM_GRID_SIDE + (size_t)i];
-            float bound = 0.999f * fabsf(f) - 1e-6f - sqrtf(dx * dx + dy * dy + dz * dz);
-            if (bound > 0.0f) {
-                int side = f <= 0.0f;
-                r->x[side] = x;
-                r->radius[side] = bound;
-                return side == 1;
-            }
-        }
+    float f, radius;
+    if (s->heightfield) { /* inside_mesostructure's test: w >= 1 - h is (1 - h) - w <= 0 */
+        f = (1.0f - meso_heightfield_sample(s->heightfield, p.x, p.y)) - p.z;
+        radius = fabsf(f) * s->probe_scale;
+    } else {
+        f = solid_probe(s, p, &radius);
     }
-    /* inside_mesostructure's test: w >= 1 - h is (1 - h) - w <= 0 in floats */
-    float f = s->heightfield ? (1.0f - meso_heightfield_sample(s->heightfield, p.x, p.y)) - p.z
-                             : meso_solid_distance(s->solid, tile_point(p));
     int side = f <= 0.0f;
     r->x[side] = x;
-    r->radius[side] = fabsf(f) * s->probe_scale;
+    r->radius[side] = radius;
     return side == 1;
 }
 
