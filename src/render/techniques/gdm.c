@@ -529,7 +529,8 @@ __attribute__((noinline)) static float solid_probe(const gdm_state *s, meso_vec3
     float gx = q.x * (float)GDM_GRID_SIDE, gy = q.y * (float)GDM_GRID_SIDE;
     float gz = q.z * (float)(GDM_GRID_LAYERS - 1);
     float nx = floorf(gx + 0.5f), ny = floorf(gy + 0.5f);
-    float nz = fminf(fmaxf(floorf(gz + 0.5f), 0.0f), (float)(GDM_GRID_LAYERS - 1));
+    float nz = floorf(gz + 0.5f); /* clamped by comparisons: fminf/fmaxf are calls here */
+    nz = nz > 0.0f ? (nz < (float)(GDM_GRID_LAYERS - 1) ? nz : (float)(GDM_GRID_LAYERS - 1)) : 0.0f;
     if (isfinite(nx + ny + nz)) {
         float dx = (gx - nx) / (float)GDM_GRID_SIDE, dy = (gy - ny) / (float)GDM_GRID_SIDE;
         float dz = (gz - nz) / (float)(GDM_GRID_LAYERS - 1);
@@ -803,7 +804,10 @@ static size_t gdm_memory(const void *state) {
            gdm_lookup_table_bytes(&s->table) + meso_prism_layer_memory(s->layer) +
            s->layer->faces->num_triangles * (4 * sizeof(uint32_t) + sizeof(float)) +
            gdm_gi_memory(s->gi) +
-           (s->grid ? (size_t)GDM_GRID_LAYERS * GDM_GRID_SIDE * GDM_GRID_SIDE * sizeof(float) : 0);
+           (s->grid ? (size_t)GDM_GRID_LAYERS * GDM_GRID_SIDE * GDM_GRID_SIDE * sizeof(float) : 0) +
+           (s->window_max ? (size_t)s->window_levels * (size_t)s->heightfield->width *
+                                (size_t)s->heightfield->height * sizeof(float)
+                          : 0);
 }
 
 const meso_technique meso_technique_gdm = {
