@@ -36,6 +36,30 @@ static meso_framebuffer *render(meso_context *ctx, const meso_scene *scene, cons
     return fb;
 }
 
+/* The lookup's atan2 (without libm's call) is as close to the exact angle as atan2f: directions
+ * of every octant, near the axes and the diagonals, and the zero vector. */
+static void test_lookup_atan2_is_within_3e7_radians(void **state) {
+    (void)state;
+    unsigned seed = 5;
+    double worst = 0.0;
+    for (int i = 0; i < 200000; i++) {
+        float r[2];
+        for (int k = 0; k < 2; k++) {
+            seed = seed * 1103515245u + 12345u;
+            r[k] = (float)(seed >> 8) / 16777216.0f * 2.0f - 1.0f;
+        }
+        if (i % 4 == 1) r[0] *= 1e-3f;                       /* near the x axis */
+        if (i % 4 == 2) r[1] = r[0] * (1.0f + 1e-6f * r[1]); /* near a diagonal */
+        double error = fabs((double)gdm_atan2(r[0], r[1]) - atan2((double)r[0], (double)r[1]));
+        worst = error > worst ? error : worst;
+    }
+    print_message("largest difference from atan2: %.3g rad\n", worst);
+    assert_true(worst < 3e-7);
+    assert_true(gdm_atan2(0.0f, 0.0f) == 0.0f);
+    assert_true(fabs(gdm_atan2(1.0f, -1.0f) - 0.75 * 3.14159265358979) < 3e-7);
+    assert_true(fabs(gdm_atan2(-1.0f, 0.0f) + 0.5 * 3.14159265358979) < 3e-7);
+}
+
 /* gdm_lookup8 gives meso_gdm_lookup's d (one group of 8 eigen-maps and two). */
 static void test_lookup8_equals_the_bakes_lookup(void **state) {
     meso_context *ctx = test_context(2);
@@ -231,6 +255,7 @@ static void test_height_field_matches_relief_exact_on_a_plane(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_lookup_atan2_is_within_3e7_radians),
         cmocka_unit_test(test_lookup8_equals_the_bakes_lookup),
         cmocka_unit_test(test_closed_mesh_with_a_constant_height_field_has_no_gap),
         cmocka_unit_test(test_slab_solid_equals_the_translated_base_mesh),

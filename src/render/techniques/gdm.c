@@ -17,6 +17,11 @@
 #include "render_internal.h"
 
 #define GDM_DEPTH_BUCKETS 1024 /* gdm_geometry's sort */
+#define GDM_WINDOW_LEVELS 7    /* height fields' window maxima: up to 64 texels a side */
+/* solids' distance grid (solid_grid): nodes a side in u and v, and in w (both slab faces), so
+ * that a probe is at most ~0.009 (u, v, w) units from a node */
+#define GDM_GRID_SIDE 128
+#define GDM_GRID_LAYERS 65
 
 typedef struct gdm_state {
     meso_gdm *gdm;
@@ -33,7 +38,14 @@ typedef struct gdm_state {
     float probe_scale; /* a height field's (1 - h) - w times this bounds the distance */
     /* height fields: w below which nothing is solid, in each prism's column (prism_clear)
      * and anywhere (clear_w); -1 for solids */
-    float *prism_clear, clear_w;
+    float *prism_clear, clear_w, map_max;
+    /* height fields: level L at texel (i, j) the highest texel of the window
+     * [i, i + 2^L) x [j, j + 2^L), wrapped or clamped as the map samples (window_bound) */
+    float *window_max;
+    int window_levels;
+    /* solids: meso_solid_distance at the nodes (i, j, l) / (GDM_GRID_SIDE, GDM_GRID_SIDE,
+     * GDM_GRID_LAYERS - 1), [l][j][i]; NULL for height fields */
+    float *grid;
     int num_eigen;
     bool raw, shadows, baked_normals; /* baked_normals: the "normals" option resolved */
     int refine_steps, shadow_steps;
@@ -126,6 +138,8 @@ static void gdm_release(void *state) {
     free(s->sort_counts);
     free(s->sort_keys);
     free(s->prism_clear);
+    free(s->window_max);
+    free(s->grid);
     free(s);
 }
 
@@ -186,6 +200,7 @@ static bool heightfield_clearances(gdm_state *s) {
     for (size_t t = 0; t < (size_t)hf->width * (size_t)hf->height; t++)
         map_max = fmaxf(map_max, hf->heights[t]);
     /* 1e-6: a bilinear blend may round a hair above its texels */
+    s->map_max = map_max;
     s->clear_w = 1.0f - map_max - 1e-6f;
     size_t n = s->layer->num_prisms;
     s->prism_clear = malloc((n ? n : 1) * sizeof(float));
@@ -200,6 +215,88 @@ static bool heightfield_clearances(gdm_state *s) {
         float h = finite ? heightfield_box_max(hf, u0, u1, v0, v1, map_max) : map_max;
         s->prism_clear[i] = 1.0f - h - 1e-6f;
     }
+    return true;
+}
+
+/* A texel index of the map's wrapping, for the windows below. */
+static inline int window_index(meso_wrap wrap, int i, int n) {
+    if (wrap == MESO_WRAP_CLAMP) return i < 0 ? 0 : (i >= n ? n - 1 : i);
+    i %= n;
+    return i < 0 ? i + n : i;
+}
+
+/* The windows' maxima (window_max), level by level: a window of 2^(L+1) is four of 2^L. A
+ * box of texels n wide then needs one read at the level with 2^L >= n, where the prism's
+ * clearance (its whole UV triangle) is too coarse: bumps-sphere's prisms near the poles span
+ * a wide UV box. false: out of memory. */
+static bool heightfield_windows(gdm_state *s) {
+    const meso_heightfield *hf = s->heightfield;
+    int width = hf->width, height = hf->height, longest = width > height ? width : height;
+    int levels = 1;
+    while (levels < GDM_WINDOW_LEVELS && (1 << (levels - 1)) < longest) levels++;
+    size_t plane = (size_t)width * (size_t)height;
+    s->window_max = malloc((size_t)levels * plane * sizeof(float));
+    if (!s->window_max) return false;
+    s->window_levels = levels;
+    memcpy(s->window_max, hf->heights, plane * sizeof(float));
+    for (int level = 1; level < levels; level++) {
+        const float *below = s->window_max + (size_t)(level - 1) * plane;
+        float *out = s->window_max + (size_t)level * plane;
+        int step = 1 << (level - 1);
+        for (int j = 0; j < height; j++) {
+            const float *r0 = below + (size_t)j * (size_t)width;
+            const float *r1 =
+                below + (size_t)window_index(hf->wrap, j + step, height) * (size_t)width;
+            for (int i = 0; i < width; i++) {
+                int i1 = window_index(hf->wrap, i + step, width);
+                out[(size_t)j * (size_t)width + (size_t)i] =
+                    fmaxf(fmaxf(r0[i], r0[i1]), fmaxf(r1[i], r1[i1]));
+            }
+        }
+    }
+    return true;
+}
+
+/* The highest texel a bilinear sample anywhere in the (u, v) box [u0, u1] x [v0, v1] can read
+ * (a texel's margin each side for rounding, as heightfield_box_max); the whole map's when the
+ * box is wider than the largest window. One read of window_max. */
+static inline float window_bound(const gdm_state *s, float u0, float u1, float v0, float v1) {
+    const meso_heightfield *hf = s->heightfield;
+    float x0 = floorf(u0 * (float)hf->width - 0.5f) - 1.0f;
+    float x1 = floorf(u1 * (float)hf->width - 0.5f) + 2.0f;
+    float y0 = floorf((1.0f - v1) * (float)hf->height - 0.5f) - 1.0f;
+    float y1 = floorf((1.0f - v0) * (float)hf->height - 0.5f) + 2.0f;
+    float extent = fmaxf(x1 - x0, y1 - y0) + 1.0f; /* texels a side; NaN fails below */
+    if (!(extent <= (float)(1 << (s->window_levels - 1))) || !(fabsf(x0) < 1e6f) ||
+        !(fabsf(y0) < 1e6f))
+        return s->map_max;
+    int level = 0;
+    while ((float)(1 << level) < extent) level++;
+    int i = window_index(hf->wrap, (int)x0, hf->width);
+    int j = window_index(hf->wrap, (int)y0, hf->height);
+    size_t plane = (size_t)hf->width * (size_t)hf->height;
+    return s->window_max[(size_t)level * plane + (size_t)j * (size_t)hf->width + (size_t)i];
+}
+
+/* One layer of nodes of the solid's distance grid. */
+static void solid_grid_layer(void *user, size_t job, int thread_index) {
+    (void)thread_index;
+    gdm_state *s = user;
+    float w = (float)job / (float)(GDM_GRID_LAYERS - 1);
+    float *out = s->grid + job * GDM_GRID_SIDE * GDM_GRID_SIDE;
+    for (int j = 0; j < GDM_GRID_SIDE; j++)
+        for (int i = 0; i < GDM_GRID_SIDE; i++)
+            out[j * GDM_GRID_SIDE + i] = meso_solid_distance(
+                s->solid, (meso_vec3){(float)i / GDM_GRID_SIDE, (float)j / GDM_GRID_SIDE, w});
+}
+
+/* The solid's distance at a grid of nodes, evaluated once (about a million evaluations, on
+ * every thread): a probe near a node whose |f| exceeds the distance between them is on the
+ * node's side (ray_probe_inside). false: out of memory. */
+static bool solid_grid(meso_context *ctx, gdm_state *s) {
+    s->grid = malloc((size_t)GDM_GRID_LAYERS * GDM_GRID_SIDE * GDM_GRID_SIDE * sizeof(float));
+    if (!s->grid) return false;
+    meso_parallel_for(ctx, GDM_GRID_LAYERS, solid_grid_layer, s);
     return true;
 }
 
@@ -260,7 +357,8 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
         MESO_OK)
         goto fail;
     s->clear_w = -1.0f;
-    if (s->heightfield && !heightfield_clearances(s)) {
+    if (s->heightfield ? !heightfield_clearances(s) || !heightfield_windows(s)
+                       : !solid_grid(ctx, s)) {
         r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: gdm", object->name);
         goto fail;
     }
@@ -448,6 +546,36 @@ typedef struct ray_probe {
     float clear_w;         /* outside above this w (height fields; prism_clear, clear_w) */
 } ray_probe;
 
+/* A solid's distance at p, or a value of its sign: the nearest node of the solid's distance
+ * grid proves the side when p lies within the node's |f| (less the distance to it, with
+ * ray_probe_inside's margins), and *out_radius is then that bound, remembered as a sample's
+ * |f| would be; otherwise the solid is evaluated (*out_radius = |f|). Not inline: it keeps
+ * ray_probe_inside small enough to be inlined for height fields (measured: 9 % more
+ * instructions on bumps-sphere with the grid's code inline). */
+__attribute__((noinline)) static float solid_probe(const gdm_state *s, meso_vec3 p,
+                                                   float *out_radius) {
+    meso_vec3 q = tile_point(p);
+    float gx = q.x * (float)GDM_GRID_SIDE, gy = q.y * (float)GDM_GRID_SIDE;
+    float gz = q.z * (float)(GDM_GRID_LAYERS - 1);
+    float nx = floorf(gx + 0.5f), ny = floorf(gy + 0.5f);
+    float nz = floorf(gz + 0.5f); /* clamped by comparisons: fminf/fmaxf are calls here */
+    nz = nz > 0.0f ? (nz < (float)(GDM_GRID_LAYERS - 1) ? nz : (float)(GDM_GRID_LAYERS - 1)) : 0.0f;
+    if (isfinite(nx + ny + nz)) {
+        float dx = (gx - nx) / (float)GDM_GRID_SIDE, dy = (gy - ny) / (float)GDM_GRID_SIDE;
+        float dz = (gz - nz) / (float)(GDM_GRID_LAYERS - 1);
+        int i = (int)nx & (GDM_GRID_SIDE - 1), j = (int)ny & (GDM_GRID_SIDE - 1);
+        float f = s->grid[((size_t)nz * GDM_GRID_SIDE + (size_t)j) * GDM_GRID_SIDE + (size_t)i];
+        float bound = 0.999f * fabsf(f) - 1e-6f - sqrtf(dx * dx + dy * dy + dz * dz);
+        if (bound > 0.0f) {
+            *out_radius = bound;
+            return f;
+        }
+    }
+    float f = meso_solid_distance(s->solid, q);
+    *out_radius = fabsf(f);
+    return f;
+}
+
 static inline ray_probe ray_probe_start(meso_vec3 t0, meso_vec3 dir, float clear_w) {
     return (ray_probe){.t0 = t0, .dir = dir, .radius = {-1.0f, -1.0f}, .clear_w = clear_w};
 }
@@ -457,12 +585,16 @@ static inline bool ray_probe_inside(const gdm_state *s, ray_probe *r, float x) {
         if (fabsf(x - r->x[side]) < 0.999f * r->radius[side] - 1e-6f) return side == 1;
     meso_vec3 p = meso_vec3_madd(r->t0, r->dir, x);
     if (p.z < r->clear_w) return false;
-    /* inside_mesostructure's test: w >= 1 - h is (1 - h) - w <= 0 in floats */
-    float f = s->heightfield ? (1.0f - meso_heightfield_sample(s->heightfield, p.x, p.y)) - p.z
-                             : meso_solid_distance(s->solid, tile_point(p));
+    float f, radius;
+    if (s->heightfield) { /* inside_mesostructure's test: w >= 1 - h is (1 - h) - w <= 0 */
+        f = (1.0f - meso_heightfield_sample(s->heightfield, p.x, p.y)) - p.z;
+        radius = fabsf(f) * s->probe_scale;
+    } else {
+        f = solid_probe(s, p, &radius);
+    }
     int side = f <= 0.0f;
     r->x[side] = x;
-    r->radius[side] = fabsf(f) * s->probe_scale;
+    r->radius[side] = radius;
     return side == 1;
 }
 
@@ -474,9 +606,9 @@ static inline bool ray_probe_inside(const gdm_state *s, ray_probe *r, float x) {
  * bisection where the table is right. Otherwise (the table was wrong here) a few probes
  * from the entry find the first inside point. The segment's end on a solid floor counts as
  * inside whatever its rounding. Returns the hit's distance along V_t, negative for none. */
-static float refine_hit(const gdm_state *s, size_t prism, meso_vec3 t_in, meso_vec3 vt, float d,
+static float refine_hit(const gdm_state *s, float clear_w, meso_vec3 t_in, meso_vec3 vt, float d,
                         float dt, bool solid_floor) {
-    ray_probe probe = ray_probe_start(t_in, vt, s->prism_clear ? s->prism_clear[prism] : -1.0f);
+    ray_probe probe = ray_probe_start(t_in, vt, clear_w);
 #define INSIDE(x) ((solid_floor && (x) >= dt) || ray_probe_inside(s, &probe, (x)))
     float window = s->refine_window;
     float guess = fminf(fmaxf(d, 0.0f), dt);
@@ -594,9 +726,21 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
     float dt = meso_vec3_length(segment);
     if (!(dt > 1e-7f)) return false;
     meso_vec3 vt = meso_vec3_scale(segment, 1.0f / dt);
+    /* height fields: outside above this w on the segment (the refinement's probes) */
+    float clear_w = s->prism_clear ? s->prism_clear[prism_index] : -1.0f;
+    if (s->window_max && s->refine_steps > 0) {
+        /* Beyond the paper: every probe of refine_hit lies on the segment (to a rounding); when
+         * the segment stays above the highest texel its (u, v) box can read, all of them are
+         * outside and it misses, known without the lookup (the same answer, so the same
+         * image): most fins of a sphere's outline band are crossed above the bumps. */
+        float highest = window_bound(s, fminf(t_in.x, t_out.x), fmaxf(t_in.x, t_out.x),
+                                     fminf(t_in.y, t_out.y), fmaxf(t_in.y, t_out.y));
+        clear_w = fmaxf(clear_w, 1.0f - highest - 1e-6f);
+        if (fmaxf(t_in.z, t_out.z) + 1e-6f < clear_w) return false;
+    }
     float d = lookup(s, t_in, vt);
     if (s->refine_steps > 0) {
-        d = refine_hit(s, prism_index, t_in, vt, d, dt,
+        d = refine_hit(s, clear_w, t_in, vt, d, dt,
                        exit_slot == MESO_PRISM_BOTTOM && floor_is_solid(s, t_out));
         if (d < 0.0f) return false;
     } else if (!(d < dt - s->hit_margin)) {
@@ -696,7 +840,11 @@ static size_t gdm_memory(const void *state) {
     return (size_t)c.compressed_bytes + (v.raw ? (size_t)c.raw_bytes : 0) + normals +
            gdm_lookup_table_bytes(&s->table) + meso_prism_layer_memory(s->layer) +
            s->layer->faces->num_triangles * (4 * sizeof(uint32_t) + sizeof(float)) +
-           gdm_gi_memory(s->gi) + gdm_shell_memory(s->shell);
+           gdm_gi_memory(s->gi) + gdm_shell_memory(s->shell) +
+           (s->grid ? (size_t)GDM_GRID_LAYERS * GDM_GRID_SIDE * GDM_GRID_SIDE * sizeof(float) : 0) +
+           (s->window_max ? (size_t)s->window_levels * (size_t)s->heightfield->width *
+                                (size_t)s->heightfield->height * sizeof(float)
+                          : 0);
 }
 
 const meso_technique meso_technique_gdm = {
