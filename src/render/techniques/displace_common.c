@@ -47,6 +47,17 @@ meso_vec2 displace_gradient(const displace_surface *surface, meso_vec2 uv) {
     return meso_heightfield_gradient(surface->heightfield, t.x, t.y);
 }
 
+void displace_vertex_texel(const displace_surface *surface, displace_vertex *vertex) {
+    const meso_heightfield *hf = surface->heightfield;
+    if (!hf) {
+        vertex->texel_i = vertex->texel_j = 0;
+        return;
+    }
+    meso_vec2 uv = vertex->uv;
+    vertex->texel_i = (int64_t)floorf(meso_clampf(uv.x, -1e6f, 1e6f) * (float)hf->width);
+    vertex->texel_j = (int64_t)floorf((1.0f - meso_clampf(uv.y, -1e6f, 1e6f)) * (float)hf->height);
+}
+
 void displace_vertex_finish(const displace_surface *surface, displace_vertex *vertex) {
     vertex->texture_uv = displace_texture_uv(surface, vertex->uv);
     vertex->unit_normal = meso_vec3_normalize(vertex->normal);
@@ -324,26 +335,25 @@ static void node_store(tess_scratch *s, int32_t n, int32_t index) {
 /* The edge's decision: veto first (before displacing m when `displaced` is false), then the
  * insertion test. a and b are put in a canonical order: the neighbouring triangle walks the edge
  * the other way round. */
-static bool order_edge(const displace_vertex **a, const displace_vertex **b) {
+static void order_edge(const displace_vertex **a, const displace_vertex **b) {
     if (vertex_before(*b, *a)) {
         const displace_vertex *swap = *a;
         *a = *b;
         *b = swap;
     }
-    return true;
 }
 
+/* a and b in the canonical order (order_edge) */
 static bool vetoed(const displace_tessellator *t, const displace_vertex *a,
                    const displace_vertex *b, const displace_vertex *m, tess_job *job) {
     if (!t->tests || !t->tests->veto) return false;
-    order_edge(&a, &b);
     return t->tests->veto(t->tests->user, a, b, m, job->stats.counters);
 }
 
+/* a and b in the canonical order (order_edge) */
 static bool decide(const displace_tessellator *t, const displace_vertex *a,
                    const displace_vertex *b, const displace_vertex *m, tess_job *job) {
     if (!t->tests || !t->tests->insert) return true;
-    order_edge(&a, &b);
     return t->tests->insert(t->tests->user, a, b, m, job->stats.counters);
 }
 
@@ -379,6 +389,7 @@ static int32_t edge_midpoint(const displace_tessellator *t, tess_scratch *s, tes
     if (existing >= 0) {
         const displace_vertex *m = &s->nodes[existing];
         if (m->parent_a == lo && m->parent_b == hi) return m->inserted ? existing : -1;
+        order_edge(&a, &b);
         /* Another edge of this base triangle has the same midpoint (two crossing diagonals of
          * different refinement branches). Decide for this edge with the stored vertex: it is
          * interior to the base triangle, so no neighbour depends on it; the answer is a
@@ -390,12 +401,14 @@ static int32_t edge_midpoint(const displace_tessellator *t, tess_scratch *s, tes
     displace_vertex *m = &s->nodes[index];
     vertex_midpoint(a, b, m);
     m->texture_uv = displace_texture_uv(t->surface, m->uv);
+    displace_vertex_texel(t->surface, m);
     m->key_b = sb / 2;
     m->key_c = sc / 2;
     m->parent_a = lo;
     m->parent_b = hi;
     m->out_index = UINT32_MAX;
     m->inserted = 0;
+    order_edge(&a, &b);
     if (!vetoed(t, a, b, m, job)) {
         /* "Displace midpoint", "Transform midpoint", "Calculate surface normal" */
         displace_vertex_finish(t->surface, m);
@@ -557,6 +570,7 @@ meso_result displace_tessellator_run(meso_context *ctx, displace_tessellator *t,
             v->bitangent = base->bitangents ? base->bitangents[i] : (meso_vec3){0, 0, 0};
             v->uv = base->uvs ? base->uvs[i] : (meso_vec2){0, 0};
             displace_vertex_finish(t->surface, v);
+            displace_vertex_texel(t->surface, v);
             v->surface_normal = v->unit_normal;
             v->clip = (meso_vec4){0, 0, 0, 1};
             v->parent_a = v->parent_b = -1;
