@@ -283,9 +283,8 @@ static void setup_source_triangle(const raster_bins *bins, const raster_mesh *rm
     if (inside) {
         /* the common case: snap first, and build the clip vertices only for a triangle that
          * covers a sample (the same doubles the clipped path would hand over) */
-        const double xyw[3][3] = {{c[0].x, c[0].y, c[0].w},
-                                  {c[1].x, c[1].y, c[1].w},
-                                  {c[2].x, c[2].y, c[2].w}};
+        const double xyw[3][3] = {
+            {c[0].x, c[0].y, c[0].w}, {c[1].x, c[1].y, c[1].w}, {c[2].x, c[2].y, c[2].w}};
         snapped_triangle st;
         if (!snap_triangle(desc, cull_back, xyw, &st)) return;
         if (!reserve((void **)&chunk->triangles, &chunk->capacity, chunk->num_triangles + 1,
