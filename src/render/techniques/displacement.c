@@ -13,8 +13,10 @@
 #define DISPLACEMENT_AUTO_BUDGET (1u << 21)
 #define DISPLACEMENT_AUTO_MAX_LEVEL 9
 /* Consecutive triangles culled together. The tessellator emits each base triangle's 4^L
- * triangles depth first, so 64 consecutive ones (4^3) are one small patch of the surface. */
-#define CLUSTER_TRIANGLES 64
+ * triangles depth first, so 16 consecutive ones (4^2) are one small patch of the surface. Their
+ * cone of normals is what limits culling on a rough surface (a brick's side walls): measured
+ * on bricks-teapot, 64-triangle clusters drop 12 % of the triangles, 16-triangle ones 28 %. */
+#define CLUSTER_TRIANGLES 16
 /* A cluster is dropped as back-facing only when every triangle in it faces away by more than
  * this angle (radians) past edge-on: twice the rasterizer's own early margin
  * (RASTER_BACK_FACE_MARGIN, 0.01), so the rasterizer would have dropped each of them before
