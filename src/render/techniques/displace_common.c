@@ -47,17 +47,6 @@ meso_vec2 displace_gradient(const displace_surface *surface, meso_vec2 uv) {
     return meso_heightfield_gradient(surface->heightfield, t.x, t.y);
 }
 
-void displace_vertex_texel(const displace_surface *surface, displace_vertex *vertex) {
-    const meso_heightfield *hf = surface->heightfield;
-    if (!hf) {
-        vertex->texel_i = vertex->texel_j = 0;
-        return;
-    }
-    meso_vec2 uv = vertex->uv;
-    vertex->texel_i = (int64_t)floorf(meso_clampf(uv.x, -1e6f, 1e6f) * (float)hf->width);
-    vertex->texel_j = (int64_t)floorf((1.0f - meso_clampf(uv.y, -1e6f, 1e6f)) * (float)hf->height);
-}
-
 void displace_vertex_finish(const displace_surface *surface, displace_vertex *vertex) {
     vertex->texture_uv = displace_texture_uv(surface, vertex->uv);
     vertex->unit_normal = meso_vec3_normalize(vertex->normal);
@@ -107,12 +96,12 @@ static void vertex_midpoint(const displace_vertex *a, const displace_vertex *b,
 
 /* A total order on vertices that both triangles of an edge agree on: by base position, then
  * uv (never needed for a valid mesh: an edge's end points differ in position). */
-static bool vertex_before(const displace_vertex *a, const displace_vertex *b) {
-    const float ka[5] = {a->base.x, a->base.y, a->base.z, a->uv.x, a->uv.y};
-    const float kb[5] = {b->base.x, b->base.y, b->base.z, b->uv.x, b->uv.y};
-    for (int i = 0; i < 5; i++)
-        if (ka[i] != kb[i]) return ka[i] < kb[i];
-    return false;
+static inline bool vertex_before(const displace_vertex *a, const displace_vertex *b) {
+    if (a->base.x != b->base.x) return a->base.x < b->base.x;
+    if (a->base.y != b->base.y) return a->base.y < b->base.y;
+    if (a->base.z != b->base.z) return a->base.z < b->base.z;
+    if (a->uv.x != b->uv.x) return a->uv.x < b->uv.x;
+    return a->uv.y < b->uv.y;
 }
 
 /* ---- The tessellator ---------------------------------------------------------------------- */
@@ -335,7 +324,7 @@ static void node_store(tess_scratch *s, int32_t n, int32_t index) {
 /* The edge's decision: veto first (before displacing m when `displaced` is false), then the
  * insertion test. a and b are put in a canonical order: the neighbouring triangle walks the edge
  * the other way round. */
-static void order_edge(const displace_vertex **a, const displace_vertex **b) {
+static inline void order_edge(const displace_vertex **a, const displace_vertex **b) {
     if (vertex_before(*b, *a)) {
         const displace_vertex *swap = *a;
         *a = *b;

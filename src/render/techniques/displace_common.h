@@ -85,7 +85,16 @@ void displace_vertex_finish(const displace_surface *surface, displace_vertex *ve
 /* Set texel_i, texel_j from uv: the texel (column, row from the top) of the height field
  * holding it, uv unwrapped so that the two sides of a seam (u and u + 1) differ (0 without a
  * height field). */
-void displace_vertex_texel(const displace_surface *surface, displace_vertex *vertex);
+static inline void displace_vertex_texel(const displace_surface *surface, displace_vertex *vertex) {
+    const meso_heightfield *hf = surface->heightfield;
+    if (!hf) {
+        vertex->texel_i = vertex->texel_j = 0;
+        return;
+    }
+    meso_vec2 uv = vertex->uv;
+    vertex->texel_i = (int64_t)floorf(meso_clampf(uv.x, -1e6f, 1e6f) * (float)hf->width);
+    vertex->texel_j = (int64_t)floorf((1.0f - meso_clampf(uv.y, -1e6f, 1e6f)) * (float)hf->height);
+}
 
 /* ---- The recursive midpoint tessellator --------------------------------------------------- */
 

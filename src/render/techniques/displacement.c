@@ -35,6 +35,7 @@ typedef struct cluster_bounds {
 typedef struct displacement_state {
     displace_surface surface;
     int level;
+    bool cluster_culling;
     displace_tessellator *tessellator;
     const meso_mesh *mesh; /* made on the first frame, kept: it does not depend on the view */
     displace_shadows shadows;
@@ -49,6 +50,7 @@ typedef struct displacement_state {
 
 typedef struct displacement_options {
     int level;
+    bool cluster_culling;
     displace_shadow_options shadows;
 } displacement_options;
 
@@ -57,6 +59,10 @@ static const meso_technique_option displacement_option_table[] = {
                     "uniform subdivision level (4^level triangles a base triangle); -1: texel "
                     "density within the triangle budget",
                     displacement_options, level),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, cluster_culling, 0, 1, 1,
+                    "hand the rasterizer only the 16-triangle clusters the camera may see "
+                    "(the same image; 0: the whole mesh every frame)",
+                    displacement_options, cluster_culling),
     DISPLACE_SHADOW_OPTION_ROWS(displacement_options, shadows),
 };
 
@@ -186,7 +192,7 @@ static void clusters_select(displacement_state *s, const meso_frame *frame) {
     planes[4][3] -= frame->z_near;
     size_t triangles = s->mesh->num_triangles, kept = 0, drawn = 0;
     for (size_t c = 0; c < s->num_clusters; c++) {
-        if (cluster_hidden(&s->clusters[c], frame, planes)) continue;
+        if (s->cluster_culling && cluster_hidden(&s->clusters[c], frame, planes)) continue;
         size_t first = c * CLUSTER_TRIANGLES;
         size_t count =
             triangles - first < CLUSTER_TRIANGLES ? triangles - first : CLUSTER_TRIANGLES;
@@ -211,6 +217,7 @@ static meso_result displacement_prepare(meso_context *ctx, const meso_scene *sce
     displacement_state *s = calloc(1, sizeof(*s));
     if (!s) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: displacement", object->name);
     s->shadows.options = options.shadows;
+    s->cluster_culling = options.cluster_culling;
     if ((r = displace_surface_init(ctx, object, &s->surface)) != MESO_OK) goto fail;
     s->level = options.level < 0 ? auto_level(&s->surface) : options.level;
     double triangles = (double)object->mesh->num_triangles * pow(4.0, s->level);
