@@ -85,9 +85,12 @@ typedef struct snapped_triangle {
 /* Snap the vertices (clip x, y, w) to 1/256 sample and find the sample centres the bounding box
  * holds; false when there are none, the area is zero or a culled back face. This is the whole
  * cost of most triangles of a displaced mesh (they cover no sample centre, docs/performance.md),
- * so it runs before the clip vertices, the edge functions and the planes are built. */
-static bool snap_triangle(const raster_setup_desc *desc, bool cull_back, const double xyw[3][3],
-                          snapped_triangle *s) {
+ * so it runs before the clip vertices, the edge functions and the planes are built. Inlined: as
+ * a call (two callers) it cost the bricks-plane colour pass 3 % more instructions than before. */
+__attribute__((always_inline)) static inline bool snap_triangle(const raster_setup_desc *desc,
+                                                                bool cull_back,
+                                                                const double xyw[3][3],
+                                                                snapped_triangle *s) {
     int64_t *X = s->X, *Y = s->Y;
     double W = (double)desc->width, H = (double)desc->height;
     for (int k = 0; k < 3; k++) {
