@@ -85,19 +85,16 @@ typedef struct snapped_triangle {
 /* Snap the vertices (clip x, y, w) to 1/256 sample and find the sample centres the bounding box
  * holds; false when there are none, the area is zero or a culled back face. This is the whole
  * cost of most triangles of a displaced mesh (they cover no sample centre, docs/performance.md),
- * so it runs before the clip vertices, the edge functions and the planes are built. Inlined: as
- * a call (two callers) it cost the bricks-plane colour pass 3 % more instructions than before. */
-__attribute__((always_inline)) static inline bool snap_triangle(const raster_setup_desc *desc,
-                                                                bool cull_back,
-                                                                const double xyw[3][3],
-                                                                snapped_triangle *s) {
+ * so it runs before the edge functions and the planes are built and before the chunk grows. */
+static bool snap_triangle(const raster_setup_desc *desc, bool cull_back, const clip_vertex *v[3],
+                          snapped_triangle *s) {
     int64_t *X = s->X, *Y = s->Y;
     double W = (double)desc->width, H = (double)desc->height;
     for (int k = 0; k < 3; k++) {
-        if (!(xyw[k][2] > 0.0)) return false; /* only for projections with w <= 0 in front */
-        double inv_w = 1.0 / xyw[k][2];
-        double sx = (xyw[k][0] * inv_w * 0.5 + 0.5) * W;
-        double sy = (0.5 - 0.5 * xyw[k][1] * inv_w) * H;
+        if (!(v[k]->w > 0.0)) return false; /* only for projections with w <= 0 in front */
+        double inv_w = 1.0 / v[k]->w;
+        double sx = (v[k]->x * inv_w * 0.5 + 0.5) * W;
+        double sy = (0.5 - 0.5 * v[k]->y * inv_w) * H;
         X[k] = llrint(sx * RASTER_SUBPIXEL_ONE);
         Y[k] = llrint(sy * RASTER_SUBPIXEL_ONE);
     }
@@ -230,11 +227,8 @@ static bool faces_away(const raster_bins *bins, meso_vec3 p0, meso_vec3 p1, meso
 /* Set up one triangle (or a piece of a clipped one) into the chunk when it covers a sample. */
 static void emit_triangle(const raster_setup_desc *desc, bool cull_back, const clip_vertex *tri[3],
                           uint32_t t, raster_chunk *chunk) {
-    const double xyw[3][3] = {{tri[0]->x, tri[0]->y, tri[0]->w},
-                              {tri[1]->x, tri[1]->y, tri[1]->w},
-                              {tri[2]->x, tri[2]->y, tri[2]->w}};
     snapped_triangle st;
-    if (!snap_triangle(desc, cull_back, xyw, &st)) return;
+    if (!snap_triangle(desc, cull_back, tri, &st)) return;
     if (!reserve((void **)&chunk->triangles, &chunk->capacity, chunk->num_triangles + 1,
                  sizeof(raster_triangle))) {
         chunk->failed = true;
@@ -283,26 +277,13 @@ static void setup_source_triangle(const raster_bins *bins, const raster_mesh *rm
                   (fabsf(c[k].y) <= g * c[k].w);
     }
     clip_vertex poly[2][MAX_POLYGON];
-    if (inside) {
-        /* the common case: snap first, and build the clip vertices only for a triangle that
-         * covers a sample (the same doubles the clipped path would hand over) */
-        const double xyw[3][3] = {
-            {c[0].x, c[0].y, c[0].w}, {c[1].x, c[1].y, c[1].w}, {c[2].x, c[2].y, c[2].w}};
-        snapped_triangle st;
-        if (!snap_triangle(desc, cull_back, xyw, &st)) return;
-        if (!reserve((void **)&chunk->triangles, &chunk->capacity, chunk->num_triangles + 1,
-                     sizeof(raster_triangle))) {
-            chunk->failed = true;
-            return;
-        }
-        for (int k = 0; k < 3; k++)
-            poly[0][k] = (clip_vertex){c[k].x, c[k].y, c[k].z, c[k].w, {k == 0, k == 1, k == 2}};
-        const clip_vertex *tri[3] = {&poly[0][0], &poly[0][1], &poly[0][2]};
-        setup_triangle(desc, &st, tri, t, &chunk->triangles[chunk->num_triangles++]);
-        return;
-    }
     for (int k = 0; k < 3; k++)
         poly[0][k] = (clip_vertex){c[k].x, c[k].y, c[k].z, c[k].w, {k == 0, k == 1, k == 2}};
+    if (inside) { /* the common case */
+        const clip_vertex *tri[3] = {&poly[0][0], &poly[0][1], &poly[0][2]};
+        emit_triangle(desc, cull_back, tri, t, chunk);
+        return;
+    }
     int n = 3, cur = 0;
     for (int plane = 0; plane < 5 && n >= 3; plane++) {
         n = clip_polygon(poly[cur], n, poly[cur ^ 1], plane, zn, g);
