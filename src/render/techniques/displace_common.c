@@ -390,7 +390,7 @@ static int32_t edge_midpoint(const displace_tessellator *t, tess_scratch *s, tes
     displace_vertex *m = &s->nodes[index];
     vertex_midpoint(a, b, m);
     m->texture_uv = displace_texture_uv(t->surface, m->uv);
-    displace_vertex_texel(t->surface, m);
+    if (t->tests && t->tests->veto) displace_vertex_texel(t->surface, m); /* for the veto only */
     m->key_b = sb / 2;
     m->key_c = sc / 2;
     m->parent_a = lo;

@@ -87,14 +87,15 @@ static void displacement_release(void *state) {
 
 /* The bounds of every CLUSTER_TRIANGLES consecutive triangles of the (view-independent) mesh,
  * once. A cluster with a degenerate triangle gets no cone (its orientation is the rasterizer's
- * to decide). */
+ * to decide). One pass: the sphere is the box's (centre and half diagonal). */
 static void cluster_bounds_compute(const meso_mesh *mesh, size_t first, size_t count,
                                    cluster_bounds *out) {
     meso_vec3 lo = {INFINITY, INFINITY, INFINITY}, hi = {-INFINITY, -INFINITY, -INFINITY};
     meso_vec3 sum = {0.0f, 0.0f, 0.0f};
+    meso_vec3 normals[CLUSTER_TRIANGLES];
     bool degenerate = false;
-    for (size_t t = first; t < first + count; t++) {
-        const uint32_t *idx = mesh->indices + 3 * t;
+    for (size_t i = 0; i < count; i++) {
+        const uint32_t *idx = mesh->indices + 3 * (first + i);
         meso_vec3 p[3] = {mesh->positions[idx[0]], mesh->positions[idx[1]],
                           mesh->positions[idx[2]]};
         for (int k = 0; k < 3; k++) {
@@ -103,37 +104,46 @@ static void cluster_bounds_compute(const meso_mesh *mesh, size_t first, size_t c
         }
         meso_vec3 n = meso_vec3_cross(meso_vec3_sub(p[1], p[0]), meso_vec3_sub(p[2], p[0]));
         float len = meso_vec3_length(n);
+        normals[i] = n;
         if (!(len > 0.0f) || !isfinite(len)) {
             degenerate = true;
             continue;
         }
-        sum = meso_vec3_madd(sum, n, 1.0f / len);
+        normals[i] = meso_vec3_scale(n, 1.0f / len);
+        sum = meso_vec3_add(sum, normals[i]);
     }
     out->center = meso_vec3_scale(meso_vec3_add(lo, hi), 0.5f);
-    float r2 = 0.0f;
-    for (size_t t = first; t < first + count; t++)
-        for (int k = 0; k < 3; k++) {
-            meso_vec3 d =
-                meso_vec3_sub(mesh->positions[mesh->indices[3 * t + (size_t)k]], out->center);
-            r2 = fmaxf(r2, meso_vec3_dot(d, d));
-        }
-    /* a little more than the farthest vertex: the tests below run in float */
-    out->radius = sqrtf(r2) * 1.001f + 1e-6f;
+    /* a little more than half the diagonal: the tests below run in float */
+    out->radius = 0.5f * meso_vec3_length(meso_vec3_sub(hi, lo)) * 1.001f + 1e-6f;
     out->spread = 4.0f; /* no cone */
     float sum_len = meso_vec3_length(sum);
-    if (degenerate || !(sum_len > 0.0f) || !isfinite(sum_len)) return;
+    if (degenerate || !(sum_len > 0.0f) || !isfinite(sum_len) || !isfinite(out->radius)) return;
     out->axis = meso_vec3_scale(sum, 1.0f / sum_len);
     float min_cos = 1.0f;
-    for (size_t t = first; t < first + count; t++) {
-        const uint32_t *idx = mesh->indices + 3 * t;
-        meso_vec3 p0 = mesh->positions[idx[0]];
-        meso_vec3 n =
-            meso_vec3_normalize(meso_vec3_cross(meso_vec3_sub(mesh->positions[idx[1]], p0),
-                                                meso_vec3_sub(mesh->positions[idx[2]], p0)));
-        min_cos = fminf(min_cos, meso_vec3_dot(n, out->axis));
-    }
+    for (size_t i = 0; i < count; i++)
+        min_cos = fminf(min_cos, meso_vec3_dot(normals[i], out->axis));
     /* widened by 1e-3 radians for the rounding of the normals */
     if (min_cos > 0.0f) out->spread = acosf(fminf(min_cos, 1.0f)) + 1e-3f;
+}
+
+typedef struct bounds_job {
+    displacement_state *state;
+} bounds_job;
+
+#define CLUSTERS_PER_JOB 1024
+
+static void bounds_run(void *user, size_t job, int thread_index) {
+    (void)thread_index;
+    displacement_state *s = ((bounds_job *)user)->state;
+    size_t triangles = s->mesh->num_triangles;
+    size_t end = (job + 1) * CLUSTERS_PER_JOB;
+    end = end < s->num_clusters ? end : s->num_clusters;
+    for (size_t c = job * CLUSTERS_PER_JOB; c < end; c++) {
+        size_t first = c * CLUSTER_TRIANGLES;
+        size_t count =
+            triangles - first < CLUSTER_TRIANGLES ? triangles - first : CLUSTER_TRIANGLES;
+        cluster_bounds_compute(s->mesh, first, count, &s->clusters[c]);
+    }
 }
 
 /* Whether the camera cannot see any triangle of the cluster: the sphere lies outside one plane
@@ -168,12 +178,10 @@ static meso_result clusters_prepare(meso_context *ctx, displacement_state *s) {
     if (!s->clusters || !s->drawn_indices)
         return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: displacement clusters",
                               s->surface.object->name);
-    for (size_t c = 0; c < s->num_clusters; c++) {
-        size_t first = c * CLUSTER_TRIANGLES;
-        size_t count =
-            triangles - first < CLUSTER_TRIANGLES ? triangles - first : CLUSTER_TRIANGLES;
-        cluster_bounds_compute(s->mesh, first, count, &s->clusters[c]);
-    }
+    /* each cluster's bounds depend on its triangles only: any split gives the same bits */
+    bounds_job job = {s};
+    meso_parallel_for(ctx, (s->num_clusters + CLUSTERS_PER_JOB - 1) / CLUSTERS_PER_JOB, bounds_run,
+                      &job);
     return MESO_OK;
 }
 
