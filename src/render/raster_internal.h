@@ -27,6 +27,10 @@
 #define RASTER_SUBPIXEL_ONE (1 << RASTER_SUBPIXEL_BITS)
 #define RASTER_GUARD_SAMPLES 262144.0 /* |screen coordinate| bound after guard-band clipping */
 #define RASTER_MAX_TARGET_SIDE 65536  /* samples a side of a raster target */
+/* Back faces are dropped before their vertices are transformed when the sine of the angle past
+ * edge-on exceeds this (raster_setup.c, faces_away); nearer edge-on the snapped screen
+ * orientation decides, as for every other triangle. */
+#define RASTER_BACK_FACE_MARGIN 0.01f
 
 /* One triangle ready to rasterize (a source triangle, or a piece of one after clipping). */
 typedef struct raster_triangle {
@@ -81,7 +85,9 @@ typedef struct raster_bins {
     int num_meshes, meshes_capacity;
     raster_chunk *chunks;
     size_t num_chunks, chunks_capacity;
-    float guard; /* |x|, |y| <= guard * w keeps screen coordinates bounded */
+    float guard;   /* |x|, |y| <= guard * w keeps screen coordinates bounded */
+    meso_vec3 eye; /* of a perspective view_projection, when has_eye (back faces culled early) */
+    bool has_eye;
 } raster_bins;
 
 /* Transform, clip, set up and bin `num_meshes` meshes; both_faces (NULL: none) marks meshes

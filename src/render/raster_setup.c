@@ -75,11 +75,20 @@ static inline int32_t ceil_div_subpixel(int64_t n) {
 }
 static inline int32_t floor_div_subpixel(int64_t n) { return (int32_t)(n >> RASTER_SUBPIXEL_BITS); }
 
-/* Set up one (possibly clipped) triangle; returns false when it covers nothing. */
-static bool setup_triangle(const raster_setup_desc *desc, bool cull_back, const clip_vertex *vin[3],
-                           uint32_t triangle, raster_triangle *out) {
-    const clip_vertex *v[3] = {vin[0], vin[1], vin[2]};
-    int64_t X[3], Y[3];
+/* A triangle snapped to the fixed-point grid, before any per-triangle setup. */
+typedef struct snapped_triangle {
+    int64_t X[3], Y[3]; /* counter-clockwise on screen (vertices 1 and 2 swapped if `swap`) */
+    int32_t bx0, bx1, by0, by1;
+    bool swap;
+} snapped_triangle;
+
+/* Snap the vertices (clip x, y, w) to 1/256 sample and find the sample centres the bounding box
+ * holds; false when there are none, the area is zero or a culled back face. This is the whole
+ * cost of most triangles of a displaced mesh (they cover no sample centre, docs/performance.md),
+ * so it runs before the edge functions and the planes are built and before the chunk grows. */
+static bool snap_triangle(const raster_setup_desc *desc, bool cull_back, const clip_vertex *v[3],
+                          snapped_triangle *s) {
+    int64_t *X = s->X, *Y = s->Y;
     double W = (double)desc->width, H = (double)desc->height;
     for (int k = 0; k < 3; k++) {
         if (!(v[k]->w > 0.0)) return false; /* only for projections with w <= 0 in front */
@@ -93,17 +102,14 @@ static bool setup_triangle(const raster_setup_desc *desc, bool cull_back, const 
     if (area == 0) return false;
     /* Counter-clockwise from outside in the world is clockwise on screen (y down): area < 0. */
     if (area > 0 && cull_back) return false;
-    if (area < 0) { /* make the edge functions positive inside */
-        const clip_vertex *tv = v[1];
-        v[1] = v[2];
-        v[2] = tv;
+    s->swap = area < 0;
+    if (s->swap) { /* make the edge functions positive inside */
         int64_t t = X[1];
         X[1] = X[2];
         X[2] = t;
         t = Y[1];
         Y[1] = Y[2];
         Y[2] = t;
-        area = -area;
     }
     int64_t min_x = X[0], max_x = X[0], min_y = Y[0], max_y = Y[0];
     for (int k = 1; k < 3; k++) {
@@ -122,7 +128,16 @@ static bool setup_triangle(const raster_setup_desc *desc, bool cull_back, const 
     bx1 = bx1 > desc->width - 1 ? desc->width - 1 : bx1;
     by1 = by1 > desc->height - 1 ? desc->height - 1 : by1;
     if (bx0 > bx1 || by0 > by1) return false;
+    s->bx0 = bx0, s->bx1 = bx1, s->by0 = by0, s->by1 = by1;
+    return true;
+}
 
+/* Set up one (possibly clipped) triangle that snap_triangle kept. */
+static void setup_triangle(const raster_setup_desc *desc, const snapped_triangle *s,
+                           const clip_vertex *vin[3], uint32_t triangle, raster_triangle *out) {
+    const clip_vertex *v[3] = {vin[0], s->swap ? vin[2] : vin[1], s->swap ? vin[1] : vin[2]};
+    const int64_t *X = s->X, *Y = s->Y;
+    int32_t bx0 = s->bx0, bx1 = s->bx1, by0 = s->by0, by1 = s->by1;
     out->min_x = bx0, out->max_x = bx1, out->min_y = by0, out->max_y = by1;
     out->triangle = triangle;
     for (int k = 0; k < 3; k++) {
@@ -181,7 +196,6 @@ static bool setup_triangle(const raster_setup_desc *desc, bool cull_back, const 
     } else {
         out->za = out->zb = out->zc = 0.0f;
     }
-    return true;
 }
 
 static bool reserve(void **data, size_t *capacity, size_t needed, size_t item) {
@@ -195,19 +209,49 @@ static bool reserve(void **data, size_t *capacity, size_t needed, size_t item) {
     return true;
 }
 
+/* Whether the triangle (world positions) faces away from the eye by more than
+ * RASTER_BACK_FACE_MARGIN: the rasterizer would cull it (a triangle counter-clockwise from
+ * outside is front-facing exactly when the eye lies on its outer side, for any part of it in
+ * front of the eye), and this costs a cross and a dot product instead of three vertex transforms
+ * and the snapping. The margin leaves triangles near edge-on, where snapping to 1/256 sample
+ * could turn the screen orientation, to the exact test. NaNs compare false: not culled here. */
+static bool faces_away(const raster_bins *bins, meso_vec3 p0, meso_vec3 p1, meso_vec3 p2) {
+    meso_vec3 n = meso_vec3_cross(meso_vec3_sub(p1, p0), meso_vec3_sub(p2, p0));
+    meso_vec3 to_eye = meso_vec3_sub(bins->eye, p0);
+    float d = meso_vec3_dot(n, to_eye);
+    if (!(d < 0.0f)) return false;
+    float scale = meso_vec3_dot(n, n) * meso_vec3_dot(to_eye, to_eye);
+    return d * d > RASTER_BACK_FACE_MARGIN * RASTER_BACK_FACE_MARGIN * scale;
+}
+
+/* Set up one triangle (or a piece of a clipped one) into the chunk when it covers a sample. */
+static void emit_triangle(const raster_setup_desc *desc, bool cull_back, const clip_vertex *tri[3],
+                          uint32_t t, raster_chunk *chunk) {
+    snapped_triangle st;
+    if (!snap_triangle(desc, cull_back, tri, &st)) return;
+    if (!reserve((void **)&chunk->triangles, &chunk->capacity, chunk->num_triangles + 1,
+                 sizeof(raster_triangle))) {
+        chunk->failed = true;
+        return;
+    }
+    setup_triangle(desc, &st, tri, t, &chunk->triangles[chunk->num_triangles++]);
+}
+
 /* Clip and set up source triangle t; appends 0..6 triangles to the chunk. */
 static void setup_source_triangle(const raster_bins *bins, const raster_mesh *rm, uint32_t t,
                                   raster_chunk *chunk) {
     const raster_setup_desc *desc = &bins->desc;
     const uint32_t *idx = rm->mesh->indices + 3 * (size_t)t;
+    bool cull_back = desc->cull_back && !rm->both_faces;
+    meso_vec3 p[3] = {rm->mesh->positions[idx[0]], rm->mesh->positions[idx[1]],
+                      rm->mesh->positions[idx[2]]};
+    if (cull_back && bins->has_eye && faces_away(bins, p[0], p[1], p[2])) return;
     /* Vertices are transformed here, per triangle: a vertex shared by several triangles is
      * transformed several times (always to the same bits), which costs less than a separate
      * parallel pass and its barrier. */
     meso_vec4 c[3];
-    for (int k = 0; k < 3; k++) {
-        meso_vec3 p = rm->mesh->positions[idx[k]];
-        c[k] = meso_mat4_mul_vec4(desc->view_projection, (meso_vec4){p.x, p.y, p.z, 1.0f});
-    }
+    for (int k = 0; k < 3; k++)
+        c[k] = meso_mat4_mul_vec4(desc->view_projection, (meso_vec4){p[k].x, p[k].y, p[k].z, 1.0f});
     /* x * 0 is NaN exactly when x is infinite or NaN, and a NaN survives the sum: one
      * branch for the twelve coordinates (a million-triangle mesh runs this twice a frame) */
     float poison = 0.0f;
@@ -226,34 +270,29 @@ static void setup_source_triangle(const raster_bins *bins, const raster_mesh *rm
     for (int k = 0; k < 3; k++) nd[k] = desc->clip_z ? c[k].z + c[k].w : c[k].w - zn;
     if (nd[0] < 0.0f && nd[1] < 0.0f && nd[2] < 0.0f) return;
 
-    clip_vertex poly[2][MAX_POLYGON];
-    for (int k = 0; k < 3; k++) {
-        poly[0][k] = (clip_vertex){c[k].x, c[k].y, c[k].z, c[k].w, {k == 0, k == 1, k == 2}};
-    }
-    int n = 3, cur = 0;
     float g = bins->guard;
     bool inside = true;
     for (int k = 0; k < 3; k++) { /* without branches: almost every triangle is inside */
         inside &= (nd[k] >= 0.0f) & (c[k].w > 0.0f) & (fabsf(c[k].x) <= g * c[k].w) &
                   (fabsf(c[k].y) <= g * c[k].w);
     }
-    if (!inside) {
-        for (int plane = 0; plane < 5 && n >= 3; plane++) {
-            n = clip_polygon(poly[cur], n, poly[cur ^ 1], plane, zn, g);
-            cur ^= 1;
-        }
-        if (n < 3) return;
-    }
-    if (!reserve((void **)&chunk->triangles, &chunk->capacity, chunk->num_triangles + (size_t)n,
-                 sizeof(raster_triangle))) {
-        chunk->failed = true;
+    clip_vertex poly[2][MAX_POLYGON];
+    for (int k = 0; k < 3; k++)
+        poly[0][k] = (clip_vertex){c[k].x, c[k].y, c[k].z, c[k].w, {k == 0, k == 1, k == 2}};
+    if (inside) { /* the common case */
+        const clip_vertex *tri[3] = {&poly[0][0], &poly[0][1], &poly[0][2]};
+        emit_triangle(desc, cull_back, tri, t, chunk);
         return;
+    }
+    int n = 3, cur = 0;
+    for (int plane = 0; plane < 5 && n >= 3; plane++) {
+        n = clip_polygon(poly[cur], n, poly[cur ^ 1], plane, zn, g);
+        cur ^= 1;
     }
     for (int k = 1; k + 1 < n; k++) {
         const clip_vertex *tri[3] = {&poly[cur][0], &poly[cur][k], &poly[cur][k + 1]};
-        if (setup_triangle(desc, desc->cull_back && !rm->both_faces, tri, t,
-                           &chunk->triangles[chunk->num_triangles]))
-            chunk->num_triangles++;
+        emit_triangle(desc, cull_back, tri, t, chunk);
+        if (chunk->failed) return;
     }
 }
 
@@ -327,6 +366,34 @@ static size_t mesh_chunk_size(size_t num_triangles, size_t base) {
     return spread > base ? spread : base;
 }
 
+/* The eye of a perspective view_projection: the point whose clip x, y and w are all 0 (rows 0, 1
+ * and 3 of the matrix as planes), by Cramer's rule in double. False for an orthographic
+ * projection (w does not depend on the point) or a singular one. */
+static bool projection_eye(meso_mat4 m, meso_vec3 *out_eye) {
+    double r[3][4];
+    const int rows[3] = {0, 1, 3};
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 4; j++) r[i][j] = (double)m.m[4 * j + rows[i]];
+    double det = r[0][0] * (r[1][1] * r[2][2] - r[1][2] * r[2][1]) -
+                 r[0][1] * (r[1][0] * r[2][2] - r[1][2] * r[2][0]) +
+                 r[0][2] * (r[1][0] * r[2][1] - r[1][1] * r[2][0]);
+    double wlen = fabs(r[2][0]) + fabs(r[2][1]) + fabs(r[2][2]);
+    if (!(wlen > 0.0) || !(fabs(det) > 1e-12 * wlen) || !isfinite(det)) return false;
+    double e[3];
+    for (int c = 0; c < 3; c++) { /* replace column c by -r[.][3] */
+        double a[3][3];
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) a[i][j] = j == c ? -r[i][3] : r[i][j];
+        e[c] = (a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
+                a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+                a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0])) /
+               det;
+    }
+    if (!isfinite(e[0]) || !isfinite(e[1]) || !isfinite(e[2])) return false;
+    *out_eye = (meso_vec3){(float)e[0], (float)e[1], (float)e[2]};
+    return true;
+}
+
 meso_result raster_bins_build(meso_context *ctx, raster_bins *bins, const meso_mesh *const *meshes,
                               const bool *both_faces, int num_meshes,
                               const raster_setup_desc *desc) {
@@ -341,6 +408,7 @@ meso_result raster_bins_build(meso_context *ctx, raster_bins *bins, const meso_m
     bins->tiles_y = (desc->height + RASTER_TILE_SIZE - 1) / RASTER_TILE_SIZE;
     int side = desc->width > desc->height ? desc->width : desc->height;
     bins->guard = (float)(2.0 * RASTER_GUARD_SAMPLES / (double)side);
+    bins->has_eye = desc->cull_back && projection_eye(desc->view_projection, &bins->eye);
 
     /* Meshes. */
     if (num_meshes > bins->meshes_capacity) {

@@ -363,6 +363,79 @@ static void test_raster_depth_map_is_thread_independent_and_bounded(void **state
     meso_context_destroy(ctx);
 }
 
+/* Which source triangles the setup kept (flags indexed by triangle). */
+static void kept_triangles(const raster_bins *bins, uint8_t *kept, size_t count) {
+    memset(kept, 0, count);
+    for (size_t c = 0; c < bins->num_chunks; c++)
+        for (size_t i = 0; i < bins->chunks[c].num_triangles; i++)
+            kept[bins->chunks[c].triangles[i].triangle] = 1;
+}
+
+/* Back faces are dropped before their vertices are transformed (raster_setup.c, faces_away):
+ * the eye recovered from the view-projection is the camera's, and the triangles kept are those
+ * kept without culling whose screen orientation (in double, independent of the rasterizer) is
+ * clearly front-facing; clearly back-facing ones are gone. */
+static void test_raster_back_faces_dropped_early_are_exactly_the_back_faces(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(1);
+    meso_mesh *sphere = test_shape(ctx, MESO_SHAPE_SPHERE, 0.7f, 48, (meso_vec3){0.1f, 0, 0});
+    test_scene ts;
+    test_scene_init(&ts, 200, 200);
+    meso_frame frame;
+    meso_frame_init(&frame, &ts.scene, 200, 200);
+    raster_setup_desc desc = {.view_projection = frame.view_projection,
+                              .width = 200,
+                              .height = 200,
+                              .z_near = frame.z_near,
+                              .cull_back = true};
+    const meso_mesh *meshes[1] = {sphere};
+    raster_bins culled, both;
+    memset(&culled, 0, sizeof(culled));
+    memset(&both, 0, sizeof(both));
+    bool keep_back[1] = {true};
+    assert_int_equal(raster_bins_build(ctx, &culled, meshes, NULL, 1, &desc), MESO_OK);
+    assert_int_equal(raster_bins_build(ctx, &both, meshes, keep_back, 1, &desc), MESO_OK);
+    assert_true(culled.has_eye);
+    assert_true(fabsf(culled.eye.x - frame.eye.x) < 1e-4f &&
+                fabsf(culled.eye.y - frame.eye.y) < 1e-4f &&
+                fabsf(culled.eye.z - frame.eye.z) < 1e-4f);
+    size_t n = sphere->num_triangles;
+    uint8_t *kept = malloc(n), *kept_both = malloc(n);
+    kept_triangles(&culled, kept, n);
+    kept_triangles(&both, kept_both, n);
+    size_t front = 0, back = 0;
+    for (size_t t = 0; t < n; t++) {
+        if (!kept_both[t]) {
+            assert_false(kept[t]);
+            continue;
+        }
+        double x[3], y[3];
+        for (int k = 0; k < 3; k++)
+            project(&frame, sphere->positions[sphere->indices[3 * t + (size_t)k]], &x[k], &y[k]);
+        double area = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0]);
+        /* counter-clockwise from outside is clockwise on screen (y down): area < 0 */
+        if (area < -1e-3) {
+            assert_true(kept[t]);
+            front++;
+        } else if (area > 1e-3) {
+            assert_false(kept[t]);
+            back++;
+        }
+    }
+    assert_true(front > 500 && back > 500);
+    /* an orthographic projection has no eye: nothing is dropped early */
+    desc.view_projection = meso_mat4_identity();
+    assert_int_equal(raster_bins_build(ctx, &culled, meshes, NULL, 1, &desc), MESO_OK);
+    assert_false(culled.has_eye);
+    free(kept);
+    free(kept_both);
+    raster_bins_release(&culled);
+    raster_bins_release(&both);
+    test_scene_free(&ts);
+    meso_mesh_destroy(sphere);
+    meso_context_destroy(ctx);
+}
+
 /* ---- Renderer errors ------------------------------------------------------------------------ */
 
 /* ---- Blocks and fragments: a technique written per block sees exactly what one written per
@@ -573,6 +646,7 @@ int main(void) {
         cmocka_unit_test(test_raster_depth_map_is_thread_independent_and_bounded),
         cmocka_unit_test(test_raster_block_and_fragment_techniques_see_the_same_fragments),
         cmocka_unit_test(test_flat_block_matches_shade_point),
+        cmocka_unit_test(test_raster_back_faces_dropped_early_are_exactly_the_back_faces),
         cmocka_unit_test(test_renderer_unknown_technique_names_object_and_known_ones),
         cmocka_unit_test(test_renderer_rejects_technique_for_wrong_mesostructure),
         cmocka_unit_test(test_renderer_rejects_reference_mixed_with_others),

@@ -11,6 +11,7 @@ static void test_displacement_level_makes_four_to_the_level_triangles(void **sta
     fixture_init(&f, 2);
     fixture_torus(&f, 6, 4);
     fixture_set_option(&f, "shadows", 0);
+    fixture_set_option(&f, "cluster_culling", 0); /* the whole mesh */
     for (int level = 0; level <= 4; level++) {
         fixture_set_option(&f, "level", level);
         void *st = NULL;
@@ -31,6 +32,7 @@ static void test_displacement_sphere_has_no_cracks(void **state) {
     fixture_init(&f, 2);
     fixture_sphere(&f, 1);
     fixture_set_option(&f, "shadows", 0);
+    fixture_set_option(&f, "cluster_culling", 0); /* the whole mesh */
     for (int level = 1; level <= 3; level++) {
         fixture_set_option(&f, "level", level);
         void *st = NULL;
@@ -38,6 +40,60 @@ static void test_displacement_sphere_has_no_cracks(void **state) {
         assert_int_equal(fixture_count_open_edges(mesh), 0);
         technique->release(st);
     }
+    fixture_deinit(&f);
+}
+
+/* Cluster culling hands the rasterizer the whole mesh's triangles in order less some, and each
+ * one left out faces away from the eye by more than the rasterizer's own early margin (sine
+ * 0.01 past edge-on) or lies outside the view frustum: so the rasterizer would have dropped it,
+ * and the image is the same. On a closed sphere seen from outside about half are left out. */
+static void test_displacement_clusters_left_out_are_back_facing_or_outside(void **state) {
+    (void)state;
+    fixture f;
+    fixture_init(&f, 2);
+    fixture_sphere(&f, 2);
+    fixture_set_option(&f, "shadows", 0);
+    fixture_set_option(&f, "level", 3);
+    fixture_set_option(&f, "cluster_culling", 0);
+    void *whole_state = NULL, *culled_state = NULL;
+    const meso_mesh *whole = fixture_geometry(&f, technique, &whole_state);
+    fixture_set_option(&f, "cluster_culling", 1);
+    const meso_mesh *culled = fixture_geometry(&f, technique, &culled_state);
+    assert_int_equal(culled->num_vertices, whole->num_vertices);
+    assert_memory_equal(culled->positions, whole->positions,
+                        whole->num_vertices * sizeof(meso_vec3));
+    assert_true(culled->num_triangles < whole->num_triangles * 3 / 4);
+    assert_true(culled->num_triangles > whole->num_triangles / 4);
+    size_t next = 0, left_out = 0;
+    for (size_t t = 0; t < whole->num_triangles; t++) {
+        const uint32_t *w = whole->indices + 3 * t;
+        if (next < culled->num_triangles &&
+            memcmp(culled->indices + 3 * next, w, 3 * sizeof(uint32_t)) == 0) {
+            next++;
+            continue;
+        }
+        left_out++;
+        meso_vec3 p[3] = {whole->positions[w[0]], whole->positions[w[1]], whole->positions[w[2]]};
+        meso_vec3 n = meso_vec3_cross(meso_vec3_sub(p[1], p[0]), meso_vec3_sub(p[2], p[0]));
+        meso_vec3 to_eye = meso_vec3_sub(f.frame.eye, p[0]);
+        double facing = meso_vec3_dot(n, to_eye) / (meso_vec3_length(n) * meso_vec3_length(to_eye));
+        bool outside = false;
+        for (int axis = 0; axis < 2 && !outside; axis++)
+            for (int sign = -1; sign <= 1 && !outside; sign += 2) {
+                int beyond = 0;
+                for (int k = 0; k < 3; k++) {
+                    meso_vec4 c = meso_mat4_mul_vec4(f.frame.view_projection,
+                                                     (meso_vec4){p[k].x, p[k].y, p[k].z, 1.0f});
+                    beyond += (axis ? c.y : c.x) * (float)sign > c.w;
+                }
+                outside = beyond == 3;
+            }
+        assert_true(facing < -0.01 || outside);
+    }
+    assert_int_equal(next, culled->num_triangles); /* a subsequence, in order */
+    assert_int_equal(left_out, whole->num_triangles - culled->num_triangles);
+    technique->release(whole_state);
+    technique->release(culled_state);
     fixture_deinit(&f);
 }
 
@@ -162,6 +218,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_displacement_level_makes_four_to_the_level_triangles),
         cmocka_unit_test(test_displacement_sphere_has_no_cracks),
+        cmocka_unit_test(test_displacement_clusters_left_out_are_back_facing_or_outside),
         cmocka_unit_test(test_displacement_vertices_lie_on_the_displaced_plane),
         cmocka_unit_test(test_displacement_automatic_level_reaches_texel_density),
         cmocka_unit_test(test_displacement_refuses_levels_above_the_triangle_limit),

@@ -96,12 +96,12 @@ static void vertex_midpoint(const displace_vertex *a, const displace_vertex *b,
 
 /* A total order on vertices that both triangles of an edge agree on: by base position, then
  * uv (never needed for a valid mesh: an edge's end points differ in position). */
-static bool vertex_before(const displace_vertex *a, const displace_vertex *b) {
-    const float ka[5] = {a->base.x, a->base.y, a->base.z, a->uv.x, a->uv.y};
-    const float kb[5] = {b->base.x, b->base.y, b->base.z, b->uv.x, b->uv.y};
-    for (int i = 0; i < 5; i++)
-        if (ka[i] != kb[i]) return ka[i] < kb[i];
-    return false;
+static inline bool vertex_before(const displace_vertex *a, const displace_vertex *b) {
+    if (a->base.x != b->base.x) return a->base.x < b->base.x;
+    if (a->base.y != b->base.y) return a->base.y < b->base.y;
+    if (a->base.z != b->base.z) return a->base.z < b->base.z;
+    if (a->uv.x != b->uv.x) return a->uv.x < b->uv.x;
+    return a->uv.y < b->uv.y;
 }
 
 /* ---- The tessellator ---------------------------------------------------------------------- */
@@ -324,26 +324,25 @@ static void node_store(tess_scratch *s, int32_t n, int32_t index) {
 /* The edge's decision: veto first (before displacing m when `displaced` is false), then the
  * insertion test. a and b are put in a canonical order: the neighbouring triangle walks the edge
  * the other way round. */
-static bool order_edge(const displace_vertex **a, const displace_vertex **b) {
+static inline void order_edge(const displace_vertex **a, const displace_vertex **b) {
     if (vertex_before(*b, *a)) {
         const displace_vertex *swap = *a;
         *a = *b;
         *b = swap;
     }
-    return true;
 }
 
+/* a and b in the canonical order (order_edge) */
 static bool vetoed(const displace_tessellator *t, const displace_vertex *a,
                    const displace_vertex *b, const displace_vertex *m, tess_job *job) {
     if (!t->tests || !t->tests->veto) return false;
-    order_edge(&a, &b);
     return t->tests->veto(t->tests->user, a, b, m, job->stats.counters);
 }
 
+/* a and b in the canonical order (order_edge) */
 static bool decide(const displace_tessellator *t, const displace_vertex *a,
                    const displace_vertex *b, const displace_vertex *m, tess_job *job) {
     if (!t->tests || !t->tests->insert) return true;
-    order_edge(&a, &b);
     return t->tests->insert(t->tests->user, a, b, m, job->stats.counters);
 }
 
@@ -379,6 +378,7 @@ static int32_t edge_midpoint(const displace_tessellator *t, tess_scratch *s, tes
     if (existing >= 0) {
         const displace_vertex *m = &s->nodes[existing];
         if (m->parent_a == lo && m->parent_b == hi) return m->inserted ? existing : -1;
+        order_edge(&a, &b);
         /* Another edge of this base triangle has the same midpoint (two crossing diagonals of
          * different refinement branches). Decide for this edge with the stored vertex: it is
          * interior to the base triangle, so no neighbour depends on it; the answer is a
@@ -390,12 +390,14 @@ static int32_t edge_midpoint(const displace_tessellator *t, tess_scratch *s, tes
     displace_vertex *m = &s->nodes[index];
     vertex_midpoint(a, b, m);
     m->texture_uv = displace_texture_uv(t->surface, m->uv);
+    if (t->tests && t->tests->veto) displace_vertex_texel(t->surface, m); /* for the veto only */
     m->key_b = sb / 2;
     m->key_c = sc / 2;
     m->parent_a = lo;
     m->parent_b = hi;
     m->out_index = UINT32_MAX;
     m->inserted = 0;
+    order_edge(&a, &b);
     if (!vetoed(t, a, b, m, job)) {
         /* "Displace midpoint", "Transform midpoint", "Calculate surface normal" */
         displace_vertex_finish(t->surface, m);
@@ -557,6 +559,7 @@ meso_result displace_tessellator_run(meso_context *ctx, displace_tessellator *t,
             v->bitangent = base->bitangents ? base->bitangents[i] : (meso_vec3){0, 0, 0};
             v->uv = base->uvs ? base->uvs[i] : (meso_vec2){0, 0};
             displace_vertex_finish(t->surface, v);
+            displace_vertex_texel(t->surface, v);
             v->surface_normal = v->unit_normal;
             v->clip = (meso_vec4){0, 0, 0, 1};
             v->parent_a = v->parent_b = -1;

@@ -67,6 +67,12 @@ typedef struct displace_vertex {
     /* filled by the technique's vertex hook (tessellation: the edge tests' inputs) */
     meso_vec3 surface_normal; /* normal of the displaced surface (bump-map operation) */
     meso_vec4 clip;           /* view_projection * position */
+    meso_vec2 screen;         /* clip x, y / w in samples (the view test's, once a vertex) */
+    bool in_front;            /* clip w beyond half the near plane */
+    bool faces_away;          /* the base normal turned away from the eye */
+    /* set by the tessellator before the veto: the texel of the height field holding uv
+     * (unwrapped), for the recursion-limit test, once a vertex instead of once an edge */
+    int64_t texel_i, texel_j;
     /* bookkeeping of the tessellator */
     int32_t key_b, key_c;       /* barycentric grid coordinates of corners 1 and 2 */
     int32_t parent_a, parent_b; /* the edge this vertex halves (-1: a corner) */
@@ -76,6 +82,19 @@ typedef struct displace_vertex {
 
 /* Compute the derived fields from the interpolated ones. */
 void displace_vertex_finish(const displace_surface *surface, displace_vertex *vertex);
+/* Set texel_i, texel_j from uv: the texel (column, row from the top) of the height field
+ * holding it, uv unwrapped so that the two sides of a seam (u and u + 1) differ (0 without a
+ * height field). */
+static inline void displace_vertex_texel(const displace_surface *surface, displace_vertex *vertex) {
+    const meso_heightfield *hf = surface->heightfield;
+    if (!hf) {
+        vertex->texel_i = vertex->texel_j = 0;
+        return;
+    }
+    meso_vec2 uv = vertex->uv;
+    vertex->texel_i = (int64_t)floorf(meso_clampf(uv.x, -1e6f, 1e6f) * (float)hf->width);
+    vertex->texel_j = (int64_t)floorf((1.0f - meso_clampf(uv.y, -1e6f, 1e6f)) * (float)hf->height);
+}
 
 /* ---- The recursive midpoint tessellator --------------------------------------------------- */
 

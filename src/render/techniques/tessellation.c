@@ -112,9 +112,15 @@ static void tests_vertex_static(const void *user, displace_vertex *v) {
 static void tests_vertex(const void *user, displace_vertex *v) {
     const frame_tests *ft = user;
     const tessellation_state *s = ft->state;
-    if (s->view_test)
-        v->clip = meso_mat4_mul_vec4(ft->view_projection,
-                                     (meso_vec4){v->position.x, v->position.y, v->position.z, 1});
+    if (!s->view_test) return;
+    v->clip = meso_mat4_mul_vec4(ft->view_projection,
+                                 (meso_vec4){v->position.x, v->position.y, v->position.z, 1});
+    /* the view test's per-vertex inputs, once a vertex instead of once an edge */
+    v->in_front = v->clip.w > ft->z_near * 0.5f;
+    v->screen = (meso_vec2){v->clip.x / v->clip.w * 0.5f * ft->width,
+                            v->clip.y / v->clip.w * 0.5f * ft->height};
+    meso_vec3 to_eye = meso_vec3_normalize(meso_vec3_sub(ft->eye, v->position));
+    v->faces_away = meso_vec3_dot(v->unit_normal, to_eye) < -0.2f;
 }
 
 static bool normals_differ(meso_vec3 a, meso_vec3 b, float threshold) {
@@ -125,29 +131,18 @@ static bool normals_differ(meso_vec3 a, meso_vec3 b, float threshold) {
 /* Whether the edge is longer than the threshold on screen (Manhattan, in samples). */
 static bool view_says_long(const frame_tests *ft, const displace_vertex *a,
                            const displace_vertex *b) {
-    bool front_a = a->clip.w > ft->z_near * 0.5f, front_b = b->clip.w > ft->z_near * 0.5f;
-    if (!front_a && !front_b) return false; /* behind the camera: invisible */
-    if (!front_a || !front_b) return true;  /* crosses the eye plane: keep refining */
-    float ax = a->clip.x / a->clip.w * 0.5f * ft->width,
-          ay = a->clip.y / a->clip.w * 0.5f * ft->height;
-    float bx = b->clip.x / b->clip.w * 0.5f * ft->width,
-          by = b->clip.y / b->clip.w * 0.5f * ft->height;
-    return fabsf(bx - ax) + fabsf(by - ay) > ft->state->view_threshold;
+    if (!a->in_front && !b->in_front) return false; /* behind the camera: invisible */
+    if (!a->in_front || !b->in_front) return true;  /* crosses the eye plane: keep refining */
+    return fabsf(b->screen.x - a->screen.x) + fabsf(b->screen.y - a->screen.y) >
+           ft->state->view_threshold;
 }
 
 /* Whether the base surface faces away from the eye at both end points by more than the
- * shell's own tilt can hide (cos < -0.2, ~12 degrees past the silhouette): such an edge lies on
- * the far side of the object and is invisible. An edge-only test, so still crack-free. */
-static bool view_says_hidden(const frame_tests *ft, const displace_vertex *a,
-                             const displace_vertex *b) {
-    meso_vec3 ea = meso_vec3_normalize(meso_vec3_sub(ft->eye, a->position));
-    meso_vec3 eb = meso_vec3_normalize(meso_vec3_sub(ft->eye, b->position));
-    return meso_vec3_dot(a->unit_normal, ea) < -0.2f && meso_vec3_dot(b->unit_normal, eb) < -0.2f;
-}
-
-static void texel_of(const meso_heightfield *hf, meso_vec2 uv, int64_t *i, int64_t *j) {
-    *i = (int64_t)floorf(meso_clampf(uv.x, -1e6f, 1e6f) * (float)hf->width);
-    *j = (int64_t)floorf((1.0f - meso_clampf(uv.y, -1e6f, 1e6f)) * (float)hf->height);
+ * shell's own tilt can hide (cos < -0.2, ~12 degrees past the silhouette, tests_vertex): such an
+ * edge lies on the far side of the object and is invisible. An edge-only test, so still
+ * crack-free. */
+static bool view_says_hidden(const displace_vertex *a, const displace_vertex *b) {
+    return a->faces_away && b->faces_away;
 }
 
 /* The recursion limits, before the midpoint is displaced. */
@@ -164,16 +159,13 @@ static bool tests_veto(const void *user, const displace_vertex *a, const displac
     if (s->limit_test && hf) {
         /* "Compare rounded texture coordinate": unwrapped uvs, so a seam's two sides (u and
          * u + 1) compare alike */
-        int64_t ia, ja, ib, jb, im, jm;
-        texel_of(hf, a->uv, &ia, &ja);
-        texel_of(hf, b->uv, &ib, &jb);
-        texel_of(hf, m->uv, &im, &jm);
-        if ((im == ia && jm == ja) || (im == ib && jm == jb)) {
+        if ((m->texel_i == a->texel_i && m->texel_j == a->texel_j) ||
+            (m->texel_i == b->texel_i && m->texel_j == b->texel_j)) {
             counters[COUNT_LIMIT_VETO]++;
             return true;
         }
     }
-    if (s->view_test && (!view_says_long(ft, a, b) || view_says_hidden(ft, a, b))) {
+    if (s->view_test && (!view_says_long(ft, a, b) || view_says_hidden(a, b))) {
         counters[COUNT_VIEW_VETO]++;
         return true;
     }
