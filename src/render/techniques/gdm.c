@@ -522,15 +522,8 @@ static inline meso_vec3 texture_direction(const texture_frame *f, meso_vec3 x) {
 
 /* ---- The mesostructure itself (normals; the refinement beyond the paper) ------------------- */
 
-static inline meso_vec3 tile_point(meso_vec3 uvw) {
-    return (meso_vec3){uvw.x - floorf(uvw.x), uvw.y - floorf(uvw.y), uvw.z};
-}
-
-/* Inside the solid (height field: w >= 1 - h(u, v), DESIGN.md). */
 static inline bool inside_mesostructure(const gdm_state *s, meso_vec3 uvw) {
-    if (s->heightfield)
-        return uvw.z >= 1.0f - meso_heightfield_sample(s->heightfield, uvw.x, uvw.y);
-    return meso_solid_distance(s->solid, tile_point(uvw)) <= 0.0f;
+    return gdm_mesostructure_inside(s->heightfield, s->solid, uvw);
 }
 
 /* Samples of the mesostructure along one texture-space ray t0 + x dir (dir unit), remembering
@@ -554,7 +547,7 @@ typedef struct ray_probe {
  * instructions on bumps-sphere with the grid's code inline). */
 __attribute__((noinline)) static float solid_probe(const gdm_state *s, meso_vec3 p,
                                                    float *out_radius) {
-    meso_vec3 q = tile_point(p);
+    meso_vec3 q = gdm_tile_point(p);
     float gx = q.x * (float)GDM_GRID_SIDE, gy = q.y * (float)GDM_GRID_SIDE;
     float gz = q.z * (float)(GDM_GRID_LAYERS - 1);
     float nx = floorf(gx + 0.5f), ny = floorf(gy + 0.5f);
@@ -652,7 +645,7 @@ static meso_vec3 texture_normal(const gdm_state *s, meso_vec3 uvw) {
         meso_vec2 g = meso_heightfield_gradient(s->heightfield, uvw.x, uvw.y);
         return (meso_vec3){-g.x, -g.y, -1.0f};
     }
-    return meso_solid_gradient(s->solid, tile_point(uvw));
+    return meso_solid_gradient(s->solid, gdm_tile_point(uvw));
 }
 
 /* ---- Shading ------------------------------------------------------------------------------- */

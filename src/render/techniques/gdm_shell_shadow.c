@@ -128,15 +128,8 @@ size_t gdm_shell_memory(const gdm_shell *shell) {
 
 /* ---- The mesostructure: the same tests as gdm.c's --------------------------------------- */
 
-static inline meso_vec3 tile_point(meso_vec3 uvw) {
-    return (meso_vec3){uvw.x - floorf(uvw.x), uvw.y - floorf(uvw.y), uvw.z};
-}
-
-/* Inside the solid (height field: w >= 1 - h(u, v), DESIGN.md). */
 static inline bool inside(const gdm_shell_desc *d, meso_vec3 uvw) {
-    if (d->heightfield)
-        return uvw.z >= 1.0f - meso_heightfield_sample(d->heightfield, uvw.x, uvw.y);
-    return meso_solid_distance(d->solid, tile_point(uvw)) <= 0.0f;
+    return gdm_mesostructure_inside(d->heightfield, d->solid, uvw);
 }
 
 static inline float lookup(const gdm_shell_desc *d, meso_vec3 uvw, meso_vec3 direction) {
@@ -247,7 +240,7 @@ bool gdm_shell_light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw
          * zeros at the surface): up for a height field, along the solid's normal */
         meso_vec3 n = {0.0f, 0.0f, -1.0f};
         if (d->solid) {
-            meso_vec3 g = meso_solid_gradient(d->solid, tile_point(uvw));
+            meso_vec3 g = meso_solid_gradient(d->solid, gdm_tile_point(uvw));
             float len = meso_vec3_length(g);
             n = len > 0.0f && isfinite(len) ? meso_vec3_scale(g, 1.0f / len) : n;
         }

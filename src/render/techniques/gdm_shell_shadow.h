@@ -27,6 +27,20 @@
 #include "meso/prism.h"
 #include "render_internal.h"
 
+/* The tile's point of texture point uvw (the mesostructure repeats in u and v). */
+static inline meso_vec3 gdm_tile_point(meso_vec3 uvw) {
+    return (meso_vec3){uvw.x - floorf(uvw.x), uvw.y - floorf(uvw.y), uvw.z};
+}
+
+/* Inside the mesostructure at uvw: a height field's solid is w >= 1 - h(u, v) (DESIGN.md), a
+ * solid's is where its distance bound is <= 0. One of heightfield / solid is non-NULL. The one
+ * definition gdm's refinement and the shell walk share. */
+static inline bool gdm_mesostructure_inside(const meso_heightfield *heightfield,
+                                            const meso_solid *solid, meso_vec3 uvw) {
+    if (heightfield) return uvw.z >= 1.0f - meso_heightfield_sample(heightfield, uvw.x, uvw.y);
+    return meso_solid_distance(solid, gdm_tile_point(uvw)) <= 0.0f;
+}
+
 typedef struct gdm_shell gdm_shell;
 
 /* What the walk reads; all borrowed and read during gdm_shell_light_visible: they must
