@@ -20,7 +20,76 @@ struct gdm_shell {
     /* object-space: the Embree ray starts this far back from the point where the ray left a
      * prism, so that the neighbour's copy of the shared fin lies ahead of it (at `step`) */
     float step;
+    /* Per face of the layer, the face coincident with it and wound the other way (a fin's
+     * copy in the neighbour prism: the twins are bit-identical, geom_prism.c), NO_TWIN for
+     * tops, bottoms and fins on an open border. A ray leaving a prism through a fin enters
+     * the twin's prism right there: the walk crosses sideways without asking Embree, which
+     * was most of its cost on a convex mesh (docs/techniques/gdm.md). NULL: out of memory at
+     * create, every crossing asks Embree. */
+    uint32_t *fin_twin;
 };
+
+#define NO_TWIN UINT32_MAX
+
+/* A fin triangle's key: its three vertex positions' bits, sorted, and its face. Twins have
+ * equal keys. */
+typedef struct fin_key {
+    uint32_t bits[9];
+    uint32_t face;
+} fin_key;
+
+static int compare_fin_keys(const void *a, const void *b) {
+    const fin_key *x = a, *y = b;
+    int c = memcmp(x->bits, y->bits, sizeof x->bits);
+    if (c) return c;
+    return (x->face > y->face) - (x->face < y->face);
+}
+
+static int compare_bits3(const void *a, const void *b) {
+    return memcmp(a, b, 3 * sizeof(uint32_t));
+}
+
+/* The twin table (see fin_twin). Keys with exactly two faces whose prisms differ pair up; a key
+ * shared by more (a non-manifold edge) or by one (an open border) leaves NO_TWIN. */
+static uint32_t *build_fin_twins(const meso_prism_layer *layer) {
+    const meso_mesh *faces = layer->faces;
+    size_t num_faces = faces->num_triangles, num_fins = layer->num_prisms * 6;
+    uint32_t *twin = malloc(num_faces * sizeof *twin);
+    fin_key *keys = malloc((num_fins ? num_fins : 1) * sizeof *keys);
+    if (!twin || !keys) {
+        free(twin);
+        free(keys);
+        return NULL;
+    }
+    for (size_t f = 0; f < num_faces; f++) twin[f] = NO_TWIN;
+    size_t n = 0;
+    for (size_t prism = 0; prism < layer->num_prisms; prism++)
+        for (int slot = MESO_PRISM_FIN; slot < MESO_PRISM_NUM_FACES; slot++) {
+            size_t f = meso_prism_layer_face(layer, prism, slot);
+            uint32_t corner[3][3];
+            for (int k = 0; k < 3; k++)
+                memcpy(corner[k], &faces->positions[faces->indices[3 * f + (size_t)k]],
+                       3 * sizeof(uint32_t));
+            qsort(corner, 3, sizeof corner[0], compare_bits3);
+            memcpy(keys[n].bits, corner, sizeof keys[n].bits);
+            keys[n++].face = (uint32_t)f;
+        }
+    qsort(keys, n, sizeof *keys, compare_fin_keys);
+    for (size_t i = 0; i < n;) {
+        size_t j = i + 1;
+        while (j < n && memcmp(keys[j].bits, keys[i].bits, sizeof keys[i].bits) == 0) j++;
+        if (j - i == 2) {
+            int slot;
+            size_t a = meso_prism_layer_face_prism(layer, keys[i].face, &slot);
+            size_t b = meso_prism_layer_face_prism(layer, keys[i + 1].face, &slot);
+            if (a != b)
+                twin[keys[i].face] = keys[i + 1].face, twin[keys[i + 1].face] = keys[i].face;
+        }
+        i = j;
+    }
+    free(keys);
+    return twin;
+}
 
 /* The prism the ray is in (its faces are not entries) and the ray's direction, for the
  * filter; Embree hands the context back to it. */
@@ -105,6 +174,7 @@ meso_result gdm_shell_create(meso_context *ctx, const gdm_shell_desc *desc, cons
                            "%s: gdm shell shadows: Embree could not build", name);
         goto fail;
     }
+    shell->fin_twin = build_fin_twins(desc->layer);
     *out_shell = shell;
     return MESO_OK;
 fail:
@@ -116,13 +186,15 @@ void gdm_shell_destroy(gdm_shell *shell) {
     if (!shell) return;
     if (shell->scene) rtcReleaseScene(shell->scene);
     if (shell->device) rtcReleaseDevice(shell->device);
+    free(shell->fin_twin);
     free(shell);
 }
 
 size_t gdm_shell_memory(const gdm_shell *shell) {
     if (!shell) return 0;
     const meso_mesh *faces = shell->desc.layer->faces;
-    return sizeof *shell + faces->num_vertices * 3 * sizeof(float) +
+    return sizeof *shell + (shell->fin_twin ? faces->num_triangles * sizeof(uint32_t) : 0) +
+           faces->num_vertices * 3 * sizeof(float) +
            faces->num_triangles * (3 * sizeof(uint32_t) + 32); /* + the BVH, about */
 }
 
@@ -282,7 +354,18 @@ bool gdm_shell_light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw
         int slot;
         meso_vec3 point;
         float t;
-        if (!next_entry(shell, current, c.p_out, light, &next, &slot, &point, &t)) return true;
+        uint32_t twin = c.exit_slot >= MESO_PRISM_FIN && shell->fin_twin
+                            ? shell->fin_twin[meso_prism_layer_face(layer, current, c.exit_slot)]
+                            : NO_TWIN;
+        if (twin != NO_TWIN) {
+            /* sideways through a fin: into its twin's prism at the same point (Embree would
+             * find that face `step` ahead of its start, `step` back from here) */
+            next = meso_prism_layer_face_prism(layer, twin, &slot);
+            point = c.p_out;
+            t = shell->step;
+        } else if (!next_entry(shell, current, c.p_out, light, &next, &slot, &point, &t)) {
+            return true;
+        }
         /* through a fin into a prism that is not its neighbour (the ray left the shell at an
          * open border and met it again farther on): out of the slab */
         if (t > 3.0f * shell->step) tested = true;
