@@ -296,6 +296,10 @@ static bool next_entry(const gdm_shell *shell, size_t current, meso_vec3 origin,
     return true;
 }
 
+bool gdm_shell_face_is_seam(const gdm_shell *shell, size_t face) {
+    return shell && shell->fin_twin && shell->fin_twin[face] != NO_TWIN;
+}
+
 size_t gdm_shell_prism_index(const gdm_shell *shell, const meso_prism *prism) {
     return (size_t)(prism - shell->desc.layer->prisms);
 }

@@ -68,6 +68,10 @@ void gdm_shell_destroy(gdm_shell *shell);
 /* Bytes held (the BVH estimated). */
 size_t gdm_shell_memory(const gdm_shell *shell);
 
+/* Is layer face `face` a fin shared with a neighbour prism (a seam inside the shell), rather
+ * than a top, a bottom or a fin on an open border? false without the twin table. Pure. */
+bool gdm_shell_face_is_seam(const gdm_shell *shell, size_t face);
+
 /* The index of one of the layer's prisms (a pointer into layer->prisms). Pure. */
 size_t gdm_shell_prism_index(const gdm_shell *shell, const meso_prism *prism);
 
