@@ -92,10 +92,10 @@ static const meso_technique_option gdm_option_table[] = {
     MESO_OPTION_ROW(MESO_OPTION_FLOAT, hit_margin, 0.0, 1.0, 0.0,
                     "a hit needs d < |T_out - T_in| - hit_margin (texture units; 0: the paper)",
                     gdm_options, hit_margin),
-    MESO_OPTION_ROW(MESO_OPTION_INT, normals, 0, 2, 0,
-                    "shading normal: 0 the height field's gradient or a solid's baked normals "
-                    "(measured best for each); 1 the bake's normals; 2 the mesostructure's own "
-                    "gradient (a solid's: six distance samples)",
+    MESO_OPTION_ROW(MESO_OPTION_INT, normals, 0, 2, 2,
+                    "shading normal: 2 the mesostructure's own gradient (a height field's, as "
+                    "every technique; a solid's: six distance samples); 1 the bake's normals; "
+                    "0 the height field's gradient or a solid's baked normals",
                     gdm_options, normals),
     MESO_OPTION_ROW(MESO_OPTION_INT, refine_steps, 0, 32, 6,
                     "beyond the paper: check the hit (and a shadow) on the mesostructure and "
