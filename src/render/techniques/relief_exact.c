@@ -210,6 +210,7 @@ static inline v8f depth8(const exact_rays8 *r, v8f t) { return r->c0 + t * (r->c
 typedef struct trace8_state {
     v8f t, t_hit, inv_xd, inv_yd, nudge_x, nudge_y;
     v8i level;
+    v8i advanced; /* lanes whose t lies inside a cell (the clearance advance), not on its border */
     int active, hit;
     bool curved; /* a parabola's vertex may lie inside a cell */
 } trace8_state;
@@ -235,6 +236,7 @@ static inline void trace8_begin(const exact_state *s, const exact_rays8 *r, int 
         v8_select(r->xd > 0.0f, v8_splat(1e-5f), v8_select(r->xd < 0.0f, v8_splat(-1e-5f), zero));
     st->nudge_y =
         v8_select(r->yd > 0.0f, v8_splat(1e-5f), v8_select(r->yd < 0.0f, v8_splat(-1e-5f), zero));
+    st->advanced = v8i_splat(0);
     st->active = active;
     st->hit = 0;
     st->curved = v8_mask_bits(r->c2 < 0.0f) != 0;
@@ -288,12 +290,22 @@ trace8_step(const exact_state *s, const exact_rays8 *r, trace8_state *st) {
         relief_gather_pairs8(m->padded, corner, &h00, &h10);
         relief_gather_pairs8(m->padded + m->stride, corner, &h01, &h11);
         v8f hx = h10 - h00, hy = h01 - h00, hxy = h00 - h10 - h01 + h11;
-        v8f sx = px - xlo, sy = py - ylo;
-        v8f C = depth8(r, t) - 1.0f + h00 + hx * sx + hy * sy + hxy * sx * sy - r->bias;
-        v8f B =
-            r->c1 + 2.0f * r->c2 * t + hx * r->xd + hy * r->yd + hxy * (sx * r->yd + sy * r->xd);
+        /* The root is found from where the ray entered the cell (or its start), not from t,
+         * which the clearance advance (below) may have moved into the cell: the same
+         * arithmetic, so the same hit, as a traversal that steps from border to border. The
+         * entry is the later of the borders it crossed, computed as the exits were. */
+        v8f ex = v8_select(r->xd == 0.0f, -big,
+                           (xlo + v8_select(r->xd > 0.0f, zero, size) - r->x0) * st->inv_xd);
+        v8f ey = v8_select(r->yd == 0.0f, -big,
+                           (ylo + v8_select(r->yd > 0.0f, zero, size) - r->y0) * st->inv_yd);
+        v8f origin = v8_select(st->advanced, v8_max(r->t0, v8_min(t, v8_max(ex, ey))), t);
+        v8f ox = r->x0 + r->xd * origin, oy = r->y0 + r->yd * origin;
+        v8f sx = ox - xlo, sy = oy - ylo;
+        v8f C = depth8(r, origin) - 1.0f + h00 + hx * sx + hy * sy + hxy * sx * sy - r->bias;
+        v8f B = r->c1 + 2.0f * r->c2 * origin + hx * r->xd + hy * r->yd +
+                hxy * (sx * r->yd + sy * r->xd);
         v8f A = r->c2 + hxy * r->xd * r->yd;
-        v8f span = t_exit - t;
+        v8f span = t_exit - origin;
         /* the smallest root in [0, span]; C >= 0: at once */
         v8f tau = v8_select(B > 0.0f, -C / v8_select(B > 0.0f, B, v8_splat(1.0f)), big);
         v8f disc = B * B - 4.0f * A * C;
@@ -306,7 +318,7 @@ trace8_step(const exact_state *s, const exact_rays8 *r, trace8_state *st) {
         best = v8_select(linear, tau, v8_select(disc >= 0.0f, best, big));
         best = v8_select(C >= 0.0f, zero, best);
         found = solve & (best <= span);
-        st->t_hit = v8_select(found, t + best, st->t_hit);
+        st->t_hit = v8_select(found, origin + best, st->t_hit);
     }
     int found_bits = v8_mask_bits(found);
     st->hit |= found_bits;
@@ -321,7 +333,20 @@ trace8_step(const exact_state *s, const exact_rays8 *r, trace8_state *st) {
     v8i border = (v8i)v8_select(dir > 0.0f, (v8f)odd, (v8f)~odd);
     v8i climb = skip & border & (level < v8i_splat(s->pyramid->num_levels - 1));
     st->level = level - (descend & 1) + (climb & 1);
-    st->t = v8_select(skip, t_exit, t);
+    /* Clearance advance (beyond Tevs et al.): a descending view ray above the cell's highest
+     * point at t stays above it until its depth reaches that height, so the first hit lies
+     * past that point; the ray moves there before it descends, and so enters the finer cells
+     * near the hit instead of skipping them one by one. The depth's tangent at t bounds a
+     * ray whose depth is concave (c2 <= 0: flat or convex meshes) from above; the step is
+     * shortened a little so its rounding never passes the point, and kept inside the cell. */
+    v8f slope = r->c1 + 2.0f * r->c2 * t;
+    v8f clear = top_depth + r->bias - depth8(r, t);
+    v8i advance = descend & (clear > 0.0f) & (slope > 0.0f) & (r->c2 <= 0.0f);
+    v8f t_clear = t + 0.99f * clear / v8_select(advance, slope, v8_splat(1.0f));
+    advance &= t_clear < t_exit;
+    st->advanced |= advance;
+    st->t = v8_select(skip, t_exit, v8_select(advance, t_clear, t));
+    st->advanced &= ~skip;
     int done = v8_mask_bits(skip & (t_exit >= r->t1));
     st->active &= ~(found_bits | done);
 }
