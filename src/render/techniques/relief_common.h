@@ -158,6 +158,26 @@ static inline bool relief_quadrics8(const meso_object *object, const meso_fragme
     const meso_mesh *mesh = object->mesh;
     *qa = v8_splat(0.0f), *qb = v8_splat(0.0f);
     if (!mesh || !mesh->quadrics) return false;
+    if (block && mesh->num_triangles < (1u << 29)) {
+        /* eight lanes by gathers: meso_vec2_barycentric's products and sums in its order, so
+         * the same floats */
+        v8i triangle;
+        memcpy(&triangle, block->triangle + first, sizeof triangle);
+        v8i ok = v8_mask_from_bits((1 << count) - 1) & (triangle >= 0) &
+                 (triangle < v8i_splat((int32_t)mesh->num_triangles));
+        v8i corner = (v8i)v8_select(ok, (v8f)(triangle * 3), (v8f)v8i_splat(0));
+        const int32_t *indices = (const int32_t *)(const void *)mesh->indices;
+        const float *q = (const float *)(const void *)mesh->quadrics;
+        v8i i0 = v8i_gather(indices, corner) * 2, i1 = v8i_gather(indices, corner + 1) * 2;
+        v8i i2 = v8i_gather(indices, corner + 2) * 2;
+        v8f b0 = meso_block_load(block->b0, first), b1 = meso_block_load(block->b1, first);
+        v8f b2 = meso_block_load(block->b2, first);
+        v8f x = v8_gather(q, i0) * b0 + v8_gather(q, i1) * b1 + v8_gather(q, i2) * b2;
+        v8f y = v8_gather(q, i0 + 1) * b0 + v8_gather(q, i1 + 1) * b1 + v8_gather(q, i2 + 1) * b2;
+        *qa = v8_select(ok, x, v8_splat(0.0f));
+        *qb = v8_select(ok, y, v8_splat(0.0f));
+        return true;
+    }
     for (int k = 0; k < count; ++k) {
         meso_vec2 q;
         if (f) {
