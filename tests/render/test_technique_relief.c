@@ -330,10 +330,10 @@ static void test_batches_and_single_fragments_agree(void **state) {
     }
 }
 
-/* The rasterizer's blocks (shade_block, up to four batches of eight handed to the tracer at
- * once, relief_exact refilling the lanes of finished rays) and the per-fragment arrays (shade,
- * two batches at a time) give the same bytes: on a plane and on a curved triangle (quadrics
- * read by gathers from the block), with shadows, for counts that leave partial batches. */
+/* The rasterizer's blocks (shade_block: lanes loaded as vectors, quadrics read by gathers)
+ * and the per-fragment arrays (shade) give the same bytes: on a plane and on a curved
+ * triangle, with shadows, for counts that leave partial batches (relief_exact merges the
+ * two groups' last rays into one vector there too). */
 static void test_blocks_and_arrays_agree(void **state) {
     (void)state;
     const char *names[] = {"relief", "relief_exact"};

@@ -71,9 +71,8 @@ fail:
 static void search(const void *user, const relief_batch *batches, int count, v8f *out_t,
                    int *out_hit) {
     const relief_state *s = user;
-    for (int g = 0; g < count; g += 2)
-        relief_search8x2(&s->heights, batches + g, count - g < 2 ? count - g : 2,
-                         s->options.linear_steps, s->options.binary_steps, out_t + g, out_hit + g);
+    relief_search8x2(&s->heights, batches, count, s->options.linear_steps, s->options.binary_steps,
+                     out_t, out_hit);
 }
 
 static void shadow(const void *user, const relief_shadow_batch *batches, int count,

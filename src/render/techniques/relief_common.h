@@ -29,8 +29,6 @@
 #include "render_shading.h"
 
 #define RELIEF_LANES V8_LANES
-/* Batches of eight handed to a tracer at once by relief_shade_block. */
-#define RELIEF_GROUPS_MAX 4
 
 /* ---- The height field, padded ------------------------------------------------------------- */
 
@@ -638,10 +636,8 @@ static inline v8vec3 relief_curve_normal8(const relief_lanes *l, const relief_ba
 /* ---- The relief family's fragment loop ---------------------------------------------------- */
 
 /* The tracer of one variant: its search for the view rays and its shadow test, each given
- * `count` batches of eight rays at once (1 or 2 from relief_shade_fragments, up to
- * RELIEF_GROUPS_MAX from relief_shade_block), so a tracer whose steps are chains of dependent
- * operations can interleave two batches, and one whose rays take unequal steps can refill the
- * lanes of finished rays. */
+ * `count` (1 or 2) batches of eight rays at once, so a tracer whose steps are chains of
+ * dependent operations can interleave two batches. */
 typedef struct relief_tracer {
     const void *user;
     /* Per batch: t of the hit per lane and the bits of lanes that hit. */
@@ -722,29 +718,27 @@ static inline void relief_batch_setup(const relief_heights *m, const meso_object
     *out_dv = cv;
 }
 
-/* Shade `count` fragments with a tracer, `max_groups` batches of eight at a time (m: the map's
- * size in texels for the texel-centre coordinates, and the heights unless the tracer has its
- * own normal): view rays, hits, depth correction, the displaced normal at the hit,
+/* Shade `count` fragments with a tracer, sixteen at a time (m: the map's size in texels for
+ * the texel-centre coordinates, and the heights unless the tracer has its own normal) as two
+ * batches of eight: view rays, hits, depth correction, the displaced normal at the hit,
  * self-shadows per light, meso_shade_batch8. The fragments are an array (`fragments`) or a
  * block (`block`, the other NULL): the same lanes and arithmetic either way, so the same
  * images; a block saves the adapter's copies and reads the lanes as vectors. */
 __attribute__((always_inline)) static inline void
 relief_shade_core(const relief_heights *m, const relief_tracer *tracer, relief_params params,
                   const meso_frame *frame, const meso_object *object, meso_fragment *fragments,
-                  meso_fragment_block *block, size_t count, int max_groups) {
+                  meso_fragment_block *block, size_t count) {
     const meso_scene *scene = frame->scene;
     int num_lights =
         scene->num_lights < MESO_SCENE_MAX_LIGHTS ? scene->num_lights : MESO_SCENE_MAX_LIGHTS;
     float depth = object->mesostructure.depth;
-    for (size_t start = 0; start < count; start += (size_t)max_groups * RELIEF_LANES) {
-        relief_lanes l[RELIEF_GROUPS_MAX];
-        relief_batch batch[RELIEF_GROUPS_MAX];
-        v8f du[RELIEF_GROUPS_MAX], dv[RELIEF_GROUPS_MAX], t[RELIEF_GROUPS_MAX],
-            hx[RELIEF_GROUPS_MAX], hy[RELIEF_GROUPS_MAX], hd[RELIEF_GROUPS_MAX],
-            out_depth[RELIEF_GROUPS_MAX], hit_u[RELIEF_GROUPS_MAX], hit_v[RELIEF_GROUPS_MAX];
-        v8vec3 hit_pos[RELIEF_GROUPS_MAX], normal[RELIEF_GROUPS_MAX];
-        int hit[RELIEF_GROUPS_MAX], n[RELIEF_GROUPS_MAX], groups = 0;
-        for (int g = 0; g < max_groups; ++g) {
+    for (size_t start = 0; start < count; start += 2 * RELIEF_LANES) {
+        relief_lanes l[2];
+        relief_batch batch[2];
+        v8f du[2], dv[2], t[2], hx[2], hy[2], hd[2], out_depth[2], hit_u[2], hit_v[2];
+        v8vec3 hit_pos[2], normal[2];
+        int hit[2], n[2], groups = 0;
+        for (int g = 0; g < 2; ++g) {
             size_t first = start + (size_t)g * RELIEF_LANES;
             if (first >= count) break;
             n[g] = count - first < RELIEF_LANES ? (int)(count - first) : RELIEF_LANES;
@@ -778,10 +772,10 @@ relief_shade_core(const relief_heights *m, const relief_tracer *tracer, relief_p
             if (params.silhouettes)
                 normal[g] = relief_curve_normal8(&l[g], &batch[g], t[g], normal[g]);
         }
-        meso_shade_batch in[RELIEF_GROUPS_MAX];
+        meso_shade_batch in[2];
         for (int li = 0; li < num_lights; ++li) {
-            relief_shadow_batch sb[RELIEF_GROUPS_MAX];
-            int dark[RELIEF_GROUPS_MAX] = {0}, any = 0;
+            relief_shadow_batch sb[2];
+            int dark[2] = {0, 0}, any = 0;
             for (int g = 0; g < groups; ++g) {
                 memset(&sb[g], 0, sizeof sb[g]);
                 sb[g].count = n[g];
@@ -834,7 +828,7 @@ relief_shade_core(const relief_heights *m, const relief_tracer *tracer, relief_p
                 any |= sb[g].active_bits;
             }
             if (any) {
-                int blocked[RELIEF_GROUPS_MAX] = {0};
+                int blocked[2] = {0, 0};
                 tracer->shadow(tracer->user, sb, groups, blocked);
                 for (int g = 0; g < groups; ++g) dark[g] |= blocked[g] & sb[g].active_bits;
             }
@@ -880,15 +874,14 @@ static inline void relief_shade_fragments(const relief_heights *m, const relief_
                                           relief_params params, const meso_frame *frame,
                                           const meso_object *object, meso_fragment *fragments,
                                           size_t count) {
-    relief_shade_core(m, tracer, params, frame, object, fragments, NULL, count, 2);
+    relief_shade_core(m, tracer, params, frame, object, fragments, NULL, count);
 }
 
 /* relief_shade_fragments on a block (render_internal.h's shade_block). */
 static inline void relief_shade_block(const relief_heights *m, const relief_tracer *tracer,
                                       relief_params params, const meso_frame *frame,
                                       const meso_object *object, meso_fragment_block *block) {
-    relief_shade_core(m, tracer, params, frame, object, NULL, block, block->count,
-                      RELIEF_GROUPS_MAX);
+    relief_shade_core(m, tracer, params, frame, object, NULL, block, block->count);
 }
 
 #endif

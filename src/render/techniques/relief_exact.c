@@ -206,7 +206,7 @@ static inline v8f depth8(const exact_rays8 *r, v8f t) { return r->c0 + t * (r->c
  * grid, so cells follow from the integer texel index by shifts and masks, and the pyramid is
  * read with gathers. Lanes leave as they hit or run out. One iteration is a long chain of
  * dependent operations (position, cell, exit, gather, test), so two groups of eight rays are
- * stepped in turn (trace8xn) and the processor overlaps their chains. */
+ * stepped in turn (trace8x2) and the processor overlaps their chains. */
 typedef struct trace8_state {
     v8f t, t_hit, inv_xd, inv_yd, nudge_x, nudge_y;
     v8i level;
@@ -380,102 +380,71 @@ static inline void trace8_move_lane(exact_rays8 *a, trace8_state *p, int j, cons
     p->inv_slope[j] = q->inv_slope[k];
 }
 
-/* Lane j of a working group done: its result to lane k of group g's outputs. */
-static inline void trace8_record(const trace8_state *w, int j, int origin, v8f *out_t,
-                                 int *out_hit) {
-    int g = origin / RELIEF_LANES, k = origin % RELIEF_LANES;
-    out_t[g][k] = w->t_hit[j];
-    out_hit[g] |= (w->hit >> j & 1) << k;
-}
-
-/* Trace `count` (1 to RELIEF_GROUPS_MAX) groups of eight rays; writes t and the bits of the
- * lanes that hit per group. Two working groups are stepped in turn (their chains of dependent
- * operations overlap). The slowest ray of a group sets its pace, so lanes are kept full: a
- * lane whose ray ends takes the next ray of the groups past the first two, and once none is
- * left and the two working groups' rays fit in one vector they are moved into one. Every
- * lane's arithmetic is its own (the group-wide `curved` and `may_advance` only enable
- * computations the other lanes ignore), so the results are those of each group traced alone;
- * only the iteration cap (pathological input) counts from the start of the call. */
-static void trace8xn(const exact_state *s, const exact_rays8 *rays, const int *active, int count,
+/* Trace `count` (1 or 2) groups of eight rays; returns the bits of lanes that hit per group.
+ * Once the two groups' active lanes fit in one vector, they are moved into one group and only
+ * it steps on: the slowest rays of a group set its pace, so two half-empty groups would cost
+ * two steps for one step's work. Every lane's arithmetic is its own (the group-wide `curved`
+ * only enables a computation the other lanes ignore), so the results do not change. */
+static void trace8x2(const exact_state *s, const exact_rays8 *rays, const int *active, int count,
                      v8f *out_t, int *out_hit) {
-    trace8_state st[RELIEF_GROUPS_MAX];
+    trace8_state st[2];
     memset(st, 0, sizeof st);
-    for (int g = 0; g < count; ++g) {
-        trace8_begin(s, &rays[g], active[g], &st[g]);
-        out_t[g] = v8_splat(0.0f);
-        out_hit[g] = 0;
-    }
-    int working = count < 2 ? count : 2;
-    exact_rays8 wr[2];
-    trace8_state ws[2];
-    int origin[2][RELIEF_LANES];
-    for (int w = 0; w < working; ++w) {
-        wr[w] = rays[w];
-        ws[w] = st[w];
-        for (int j = 0; j < RELIEF_LANES; ++j) origin[w][j] = w * RELIEF_LANES + j;
-    }
-    int queue_group = working, queue_bits = 0; /* the next rays to trace */
-    for (int i = 0; i < MAX_ITERATIONS; ++i) {
-        while (!queue_bits && queue_group < count) queue_bits = st[queue_group++].active;
-        for (int w = 0; w < working; ++w) {
-            /* refill the free lanes */
-            int free_lanes = ~ws[w].active & 0xff;
-            while (free_lanes) {
-                while (!queue_bits && queue_group < count) queue_bits = st[queue_group++].active;
-                if (!queue_bits) break;
-                int g = queue_group - 1, k = __builtin_ctz((unsigned)queue_bits);
-                int j = __builtin_ctz((unsigned)free_lanes);
-                queue_bits &= queue_bits - 1;
-                free_lanes &= free_lanes - 1;
-                trace8_move_lane(&wr[w], &ws[w], j, &rays[g], &st[g], k);
-                ws[w].active |= 1 << j;
-                ws[w].hit &= ~(1 << j);
-                ws[w].curved |= st[g].curved;
-                ws[w].may_advance |= st[g].may_advance;
-                origin[w][j] = g * RELIEF_LANES + k;
-            }
+    const exact_rays8 *r = rays;
+    for (int g = 0; g < count; ++g) trace8_begin(s, &r[g], active[g], &st[g]);
+    int i = 0;
+    if (count == 2) {
+        for (; (st[0].active | st[1].active) && i < MAX_ITERATIONS; ++i) {
+            if (st[0].active && st[1].active &&
+                __builtin_popcount((unsigned)st[0].active) +
+                        __builtin_popcount((unsigned)st[1].active) <=
+                    RELIEF_LANES)
+                break;
+            if (st[0].active) trace8_step(s, &r[0], &st[0]);
+            if (st[1].active) trace8_step(s, &r[1], &st[1]);
         }
-        if (working == 2 && !queue_bits && queue_group >= count && ws[0].active && ws[1].active &&
-            __builtin_popcount((unsigned)ws[0].active) +
-                    __builtin_popcount((unsigned)ws[1].active) <=
-                RELIEF_LANES) {
-            /* the second working group's rays into the first's free lanes */
-            int free_lanes = ~ws[0].active & 0xff;
-            for (int pending = ws[1].active; pending; pending &= pending - 1) {
+        if (st[0].active && st[1].active && i < MAX_ITERATIONS) {
+            /* the finished lanes' results, then the move (into the fuller group: fewer
+             * copies) */
+            int into = __builtin_popcount((unsigned)st[0].active) >=
+                               __builtin_popcount((unsigned)st[1].active)
+                           ? 0
+                           : 1;
+            int from = 1 - into;
+            v8f t_done[2] = {st[0].t_hit, st[1].t_hit};
+            int hit_done[2] = {st[0].hit, st[1].hit};
+            exact_rays8 merged = r[into];
+            int source[RELIEF_LANES], moved = 0, free_lanes = ~st[into].active & 0xff;
+            for (int pending = st[from].active; pending; pending &= pending - 1) {
                 int k = __builtin_ctz((unsigned)pending), j = __builtin_ctz((unsigned)free_lanes);
                 free_lanes &= free_lanes - 1;
-                trace8_move_lane(&wr[0], &ws[0], j, &wr[1], &ws[1], k);
-                ws[0].active |= 1 << j;
-                ws[0].hit &= ~(1 << j);
-                origin[0][j] = origin[1][k];
+                trace8_move_lane(&merged, &st[into], j, &r[from], &st[from], k);
+                source[j] = k;
+                moved |= 1 << j;
             }
-            ws[0].curved |= ws[1].curved;
-            ws[0].may_advance |= ws[1].may_advance;
-            ws[1].active = 0;
-            working = 1;
-        }
-        int busy = 0;
-        for (int w = 0; w < working; ++w) {
-            if (!ws[w].active) continue;
-            busy = 1;
-            int before = ws[w].active;
-            trace8_step(s, &wr[w], &ws[w]);
-            for (int done = before & ~ws[w].active; done; done &= done - 1) {
-                int j = __builtin_ctz((unsigned)done);
-                trace8_record(&ws[w], j, origin[w][j], out_t, out_hit);
+            st[into].active |= moved;
+            st[into].hit &= ~moved;
+            st[into].curved |= st[from].curved;
+            st[into].may_advance |= st[from].may_advance;
+            st[from].active = 0;
+            for (; st[into].active && i < MAX_ITERATIONS; ++i) trace8_step(s, &merged, &st[into]);
+            v8f t_merged;
+            int bits = trace8_end(&st[into], &t_merged);
+            v8i own = v8_mask_from_bits(moved);
+            out_t[into] = v8_select(own, t_done[into], t_merged);
+            out_hit[into] = (bits & ~moved) | (hit_done[into] & moved);
+            out_t[from] = t_done[from];
+            out_hit[from] = hit_done[from];
+            for (int pending = moved; pending; pending &= pending - 1) {
+                int j = __builtin_ctz((unsigned)pending), k = source[j];
+                out_t[from][k] = t_merged[j];
+                out_hit[from] |= (bits >> j & 1) << k;
             }
+            return;
         }
-        if (!busy) return;
+    } else {
+        for (; st[0].active && i < MAX_ITERATIONS; ++i) trace8_step(s, &r[0], &st[0]);
     }
-    /* the iteration cap (pathological input only): take where the lanes got to */
-    for (int w = 0; w < working; ++w) {
-        ws[w].t_hit = v8_select(v8_mask_from_bits(ws[w].active), ws[w].t, ws[w].t_hit);
-        ws[w].hit |= ws[w].active;
-        for (int left = ws[w].active; left; left &= left - 1) {
-            int j = __builtin_ctz((unsigned)left);
-            trace8_record(&ws[w], j, origin[w][j], out_t, out_hit);
-        }
-    }
+    for (int g = 0; g < count; ++g) out_hit[g] = trace8_end(&st[g], &out_t[g]);
 }
 
 /* Rays of a view batch for trace8 (origins wrapped into the first tile keep floats small). */
@@ -496,7 +465,7 @@ static exact_rays8 view_rays(const exact_state *s, const relief_batch *batch) {
 static void search(const void *user, const relief_batch *batches, int count, v8f *out_t,
                    int *out_hit) {
     const exact_state *s = user;
-    int todo[RELIEF_GROUPS_MAX] = {0}, found[RELIEF_GROUPS_MAX] = {0};
+    int todo[2] = {0, 0}, found[2] = {0, 0};
     for (int g = 0; g < count; ++g) {
         const relief_batch *batch = &batches[g];
         out_t[g] = v8_splat(0.0f);
@@ -528,9 +497,9 @@ static void search(const void *user, const relief_batch *batches, int count, v8f
     }
     if (s->heights.clamp) return;
     if (s->power_of_two) {
-        exact_rays8 r[RELIEF_GROUPS_MAX];
-        v8f t[RELIEF_GROUPS_MAX];
-        int hit[RELIEF_GROUPS_MAX] = {0};
+        exact_rays8 r[2];
+        v8f t[2];
+        int hit[2] = {0, 0};
         memset(r, 0, sizeof r);
         for (int g = 0; g < count; ++g) {
             r[g] = view_rays(s, &batches[g]);
@@ -545,7 +514,7 @@ static void search(const void *user, const relief_batch *batches, int count, v8f
                 r[g].t1 = v8_select(f >= 0.0f, tp, r[g].t1);
             }
         }
-        trace8xn(s, r, todo, count, t, hit);
+        trace8x2(s, r, todo, count, t, hit);
         for (int g = 0; g < count; ++g) {
             out_t[g] = v8_select(v8_mask_from_bits(hit[g]), t[g], out_t[g]);
             out_hit[g] = hit[g];
@@ -564,7 +533,7 @@ static void shadow(const void *user, const relief_shadow_batch *batches, int cou
     const exact_state *s = user;
     /* Lanes the maximum mip-map proves lit need no trace (relief_shadow_clear8: no point of
      * the light ray comes within the bias of the surface). */
-    relief_shadow_batch cleared[RELIEF_GROUPS_MAX];
+    relief_shadow_batch cleared[2];
     for (int g = 0; g < count; ++g) {
         cleared[g] = batches[g];
         if (cleared[g].active_bits)
@@ -582,9 +551,9 @@ static void shadow(const void *user, const relief_shadow_batch *batches, int cou
     if (s->power_of_two) {
         /* From the hit (s = 0, depth d) up to the mesh (s = 1, depth 0). */
         float w = (float)s->heights.width, h = (float)s->heights.height;
-        exact_rays8 r[RELIEF_GROUPS_MAX];
-        int active[RELIEF_GROUPS_MAX] = {0}, probed[RELIEF_GROUPS_MAX] = {0};
-        v8f t[RELIEF_GROUPS_MAX];
+        exact_rays8 r[2];
+        int active[2] = {0, 0}, probed[2] = {0, 0};
+        v8f t[2];
         memset(r, 0, sizeof r);
         for (int g = 0; g < count; ++g) {
             const relief_shadow_batch *b = &batches[g];
@@ -610,7 +579,7 @@ static void shadow(const void *user, const relief_shadow_batch *batches, int cou
             probed[g] = blocked;
             active[g] = b->active_bits & ~blocked;
         }
-        trace8xn(s, r, active, count, t, out_blocked);
+        trace8x2(s, r, active, count, t, out_blocked);
         for (int g = 0; g < count; ++g) out_blocked[g] |= probed[g];
         return;
     }
