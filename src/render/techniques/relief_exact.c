@@ -501,19 +501,10 @@ static void search(const void *user, const relief_batch *batches, int count, v8f
         v8f t[2];
         int hit[2] = {0, 0};
         memset(r, 0, sizeof r);
-        for (int g = 0; g < count; ++g) {
-            r[g] = view_rays(s, &batches[g]);
-            /* Bound the end only: where a probe at 1/4, 1/16 or 1/64 of the ray is already
-             * below the surface, the first hit lies before it, so the traversal starts at a
-             * finer level over a shorter ray (the result is the same first hit). */
-            const relief_batch *b = &batches[g];
-            for (int p = 0; p < 3; ++p) {
-                v8f tp = b->t_end * (p == 0 ? 0.25f : (p == 1 ? 0.0625f : 0.015625f));
-                v8f f = tp * (b->a - b->b * tp) - 1.0f +
-                        relief_sample8(&s->heights, b->x0 + b->xd * tp, b->y0 + b->yd * tp);
-                r[g].t1 = v8_select(f >= 0.0f, tp, r[g].t1);
-            }
-        }
+        /* No probes to shorten the rays: with the start level capped at 2 and the clearance
+         * advance they no longer saved a step (4.3 M instructions on bricks-plane, same
+         * images). */
+        for (int g = 0; g < count; ++g) r[g] = view_rays(s, &batches[g]);
         trace8x2(s, r, todo, count, t, hit);
         for (int g = 0; g < count; ++g) {
             out_t[g] = v8_select(v8_mask_from_bits(hit[g]), t[g], out_t[g]);
