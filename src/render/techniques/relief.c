@@ -94,6 +94,15 @@ static void shade(const void *state, const meso_frame *frame, const meso_object 
     relief_shade_fragments(&s->heights, &tracer, s->params, frame, object, fragments, count);
 }
 
+/* The rasterizer's blocks straight to the shared loop (no adapter copies); the same images
+ * as shade. */
+static void shade_block(const void *state, const meso_frame *frame, const meso_object *object,
+                        meso_fragment_block *block) {
+    const relief_state *s = state;
+    relief_tracer tracer = {s, search, shadow, NULL};
+    relief_shade_block(&s->heights, &tracer, s->params, frame, object, block);
+}
+
 static size_t memory(const void *state) {
     const relief_state *s = state;
     return s ? relief_heights_memory(&s->heights) + meso_minmax_pyramid_memory(s->pyramid) : 0;
@@ -110,5 +119,6 @@ const meso_technique meso_technique_relief = {
     .prepare = prepare,
     .release = release,
     .shade = shade,
+    .shade_block = shade_block,
     .memory = memory,
 };

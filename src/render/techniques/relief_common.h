@@ -150,6 +150,53 @@ static inline meso_vec2 relief_fragment_quadric(const meso_object *object, const
                                  f->b0, f->b1, f->b2);
 }
 
+/* The quadrics (relief_fragment_quadric) of the first `count` fragments of an array, or of
+ * lanes first..first+count-1 of a block; the other lanes 0. False when the mesh has none. */
+static inline bool relief_quadrics8(const meso_object *object, const meso_fragment *f,
+                                    const meso_fragment_block *block, size_t first, int count,
+                                    v8f *qa, v8f *qb) {
+    const meso_mesh *mesh = object->mesh;
+    *qa = v8_splat(0.0f), *qb = v8_splat(0.0f);
+    if (!mesh || !mesh->quadrics) return false;
+    if (block && mesh->num_triangles < (1u << 29)) {
+        /* eight lanes by gathers: meso_vec2_barycentric's products and sums in its order, so
+         * the same floats */
+        v8i triangle;
+        memcpy(&triangle, block->triangle + first, sizeof triangle);
+        v8i ok = v8_mask_from_bits((1 << count) - 1) & (triangle >= 0) &
+                 (triangle < v8i_splat((int32_t)mesh->num_triangles));
+        v8i corner = (v8i)v8_select(ok, (v8f)(triangle * 3), (v8f)v8i_splat(0));
+        const int32_t *indices = (const int32_t *)(const void *)mesh->indices;
+        const float *q = (const float *)(const void *)mesh->quadrics;
+        v8i i0 = v8i_gather(indices, corner) * 2, i1 = v8i_gather(indices, corner + 1) * 2;
+        v8i i2 = v8i_gather(indices, corner + 2) * 2;
+        v8f b0 = meso_block_load(block->b0, first), b1 = meso_block_load(block->b1, first);
+        v8f b2 = meso_block_load(block->b2, first);
+        v8f x = v8_gather(q, i0) * b0 + v8_gather(q, i1) * b1 + v8_gather(q, i2) * b2;
+        v8f y = v8_gather(q, i0 + 1) * b0 + v8_gather(q, i1 + 1) * b1 + v8_gather(q, i2 + 1) * b2;
+        *qa = v8_select(ok, x, v8_splat(0.0f));
+        *qb = v8_select(ok, y, v8_splat(0.0f));
+        return true;
+    }
+    for (int k = 0; k < count; ++k) {
+        meso_vec2 q;
+        if (f) {
+            q = relief_fragment_quadric(object, &f[k]);
+        } else {
+            size_t i = first + (size_t)k;
+            uint32_t triangle = block->triangle[i];
+            if (triangle >= mesh->num_triangles) continue;
+            const uint32_t *t = mesh->indices + 3 * (size_t)triangle;
+            q = meso_vec2_barycentric(mesh->quadrics[t[0]], mesh->quadrics[t[1]],
+                                      mesh->quadrics[t[2]], block->b0[i], block->b1[i],
+                                      block->b2[i]);
+        }
+        (*qa)[k] = q.x;
+        (*qb)[k] = q.y;
+    }
+    return true;
+}
+
 /* A batch of up to 8 rays as vectors; lanes >= count are inactive (t_end = 0, found). */
 typedef struct relief_batch {
     int count;
@@ -623,9 +670,10 @@ static inline v8f relief_lateral_scale(const relief_batch *b, v8f d) {
 
 /* The view rays of eight fragments (see the top of this file). */
 static inline void relief_batch_setup(const relief_heights *m, const meso_object *object,
-                                      const meso_fragment *f, const relief_lanes *l,
-                                      bool silhouettes, bool curved_uv, relief_batch *batch,
-                                      v8f *out_du, v8f *out_dv) {
+                                      const meso_fragment *f, const meso_fragment_block *block,
+                                      size_t first, const relief_lanes *l, bool silhouettes,
+                                      bool curved_uv, relief_batch *batch, v8f *out_du,
+                                      v8f *out_dv) {
     float depth = object->mesostructure.depth;
     int all = (1 << l->count) - 1;
     v8f cu = v8_dot(l->view, l->bn), cv = v8_dot(l->view, l->nt), cn = v8_dot(l->view, l->tb);
@@ -641,13 +689,8 @@ static inline void relief_batch_setup(const relief_heights *m, const meso_object
     batch->yd = -cv * (float)m->height;
     float inv_depth = depth > 0.0f ? 1.0f / depth : 0.0f;
     batch->a = v8_select(on, -cn * inv_depth, zero);
-    if (silhouettes && object->mesh && object->mesh->quadrics) {
-        v8f qa = zero, qb = zero;
-        for (int k = 0; k < l->count; ++k) {
-            meso_vec2 q = relief_fragment_quadric(object, &f[k]);
-            qa[k] = q.x;
-            qb[k] = q.y;
-        }
+    v8f qa, qb;
+    if (silhouettes && relief_quadrics8(object, f, block, first, l->count, &qa, &qb)) {
         batch->qa = qa;
         batch->qb = qb;
         v8f tl = v8_sqrt(v8_dot(l->tangent, l->tangent));
@@ -678,11 +721,13 @@ static inline void relief_batch_setup(const relief_heights *m, const meso_object
 /* Shade `count` fragments with a tracer, sixteen at a time (m: the map's size in texels for
  * the texel-centre coordinates, and the heights unless the tracer has its own normal) as two
  * batches of eight: view rays, hits, depth correction, the displaced normal at the hit,
- * self-shadows per light, meso_shade_batch8. */
-static inline void relief_shade_fragments(const relief_heights *m, const relief_tracer *tracer,
-                                          relief_params params, const meso_frame *frame,
-                                          const meso_object *object, meso_fragment *fragments,
-                                          size_t count) {
+ * self-shadows per light, meso_shade_batch8. The fragments are an array (`fragments`) or a
+ * block (`block`, the other NULL): the same lanes and arithmetic either way, so the same
+ * images; a block saves the adapter's copies and reads the lanes as vectors. */
+__attribute__((always_inline)) static inline void
+relief_shade_core(const relief_heights *m, const relief_tracer *tracer, relief_params params,
+                  const meso_frame *frame, const meso_object *object, meso_fragment *fragments,
+                  meso_fragment_block *block, size_t count) {
     const meso_scene *scene = frame->scene;
     int num_lights =
         scene->num_lights < MESO_SCENE_MAX_LIGHTS ? scene->num_lights : MESO_SCENE_MAX_LIGHTS;
@@ -697,9 +742,12 @@ static inline void relief_shade_fragments(const relief_heights *m, const relief_
             size_t first = start + (size_t)g * RELIEF_LANES;
             if (first >= count) break;
             n[g] = count - first < RELIEF_LANES ? (int)(count - first) : RELIEF_LANES;
-            relief_lanes_load(&l[g], frame, fragments + first, n[g]);
-            relief_batch_setup(m, object, fragments + first, &l[g], params.silhouettes,
-                               params.curved_uv, &batch[g], &du[g], &dv[g]);
+            if (block)
+                relief_lanes_load_block(&l[g], frame, block, first);
+            else
+                relief_lanes_load(&l[g], frame, fragments + first, n[g]);
+            relief_batch_setup(m, object, block ? NULL : fragments + first, block, first, &l[g],
+                               params.silhouettes, params.curved_uv, &batch[g], &du[g], &dv[g]);
             groups = g + 1;
         }
         tracer->search(tracer->user, batch, groups, t, hit);
@@ -789,7 +837,7 @@ static inline void relief_shade_fragments(const relief_heights *m, const relief_
                     v8_select(v8_mask_from_bits(dark[g]), v8_splat(0.0f), v8_splat(1.0f));
         }
         for (int g = 0; g < groups; ++g) {
-            meso_fragment *f = fragments + start + (size_t)g * RELIEF_LANES;
+            size_t first = start + (size_t)g * RELIEF_LANES;
             in[g].px = hit_pos[g].x, in[g].py = hit_pos[g].y, in[g].pz = hit_pos[g].z;
             in[g].nx = normal[g].x, in[g].ny = normal[g].y, in[g].nz = normal[g].z;
             in[g].u = hit_u[g], in[g].v = hit_v[g];
@@ -799,15 +847,41 @@ static inline void relief_shade_fragments(const relief_heights *m, const relief_
             v8f r, gr, b;
             meso_shade_batch8(frame, object, &in[g], n[g], &r, &gr, &b);
             for (int k = 0; k < n[g]; ++k) {
-                if (!(hit[g] >> k & 1)) {
-                    f[k].discard = true; /* the ray left the curved shell: silhouette */
+                bool discard = !(hit[g] >> k & 1); /* the ray left the curved shell */
+                if (block) {
+                    size_t i = first + (size_t)k;
+                    if (discard) {
+                        block->discard[i] = 1;
+                        continue;
+                    }
+                    block->out_depth[i] = out_depth[g][k];
+                    block->r[i] = r[k], block->g[i] = gr[k], block->b[i] = b[k];
                     continue;
                 }
-                f[k].out_depth = out_depth[g][k];
-                f[k].color = (meso_vec3){r[k], gr[k], b[k]};
+                meso_fragment *f = fragments + first + (size_t)k;
+                if (discard) {
+                    f->discard = true;
+                    continue;
+                }
+                f->out_depth = out_depth[g][k];
+                f->color = (meso_vec3){r[k], gr[k], b[k]};
             }
         }
     }
+}
+
+static inline void relief_shade_fragments(const relief_heights *m, const relief_tracer *tracer,
+                                          relief_params params, const meso_frame *frame,
+                                          const meso_object *object, meso_fragment *fragments,
+                                          size_t count) {
+    relief_shade_core(m, tracer, params, frame, object, fragments, NULL, count);
+}
+
+/* relief_shade_fragments on a block (render_internal.h's shade_block). */
+static inline void relief_shade_block(const relief_heights *m, const relief_tracer *tracer,
+                                      relief_params params, const meso_frame *frame,
+                                      const meso_object *object, meso_fragment_block *block) {
+    relief_shade_core(m, tracer, params, frame, object, NULL, block, block->count);
 }
 
 #endif
