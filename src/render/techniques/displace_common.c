@@ -85,13 +85,20 @@ static meso_vec3 mid3(meso_vec3 a, meso_vec3 b) {
     return (meso_vec3){(a.x + b.x) * 0.5f, (a.y + b.y) * 0.5f, (a.z + b.z) * 0.5f};
 }
 
-static void vertex_midpoint(const displace_vertex *a, const displace_vertex *b,
-                            displace_vertex *out) {
+/* The midpoint's uv: all the vetoes read (through its texel). */
+static void vertex_midpoint_uv(const displace_vertex *a, const displace_vertex *b,
+                               displace_vertex *out) {
+    out->uv = (meso_vec2){(a->uv.x + b->uv.x) * 0.5f, (a->uv.y + b->uv.y) * 0.5f};
+}
+
+/* The rest of the interpolated fields, only for a midpoint that survived the vetoes (most do
+ * not: 57 % of bricks-teapot's, and nothing reads a vetoed record's other fields). */
+static void vertex_midpoint_frame(const displace_vertex *a, const displace_vertex *b,
+                                  displace_vertex *out) {
     out->base = mid3(a->base, b->base);
     out->normal = mid3(a->normal, b->normal);
     out->tangent = mid3(a->tangent, b->tangent);
     out->bitangent = mid3(a->bitangent, b->bitangent);
-    out->uv = (meso_vec2){(a->uv.x + b->uv.x) * 0.5f, (a->uv.y + b->uv.y) * 0.5f};
 }
 
 /* A total order on vertices that both triangles of an edge agree on: by base position, then
@@ -388,7 +395,7 @@ static int32_t edge_midpoint(const displace_tessellator *t, tess_scratch *s, tes
     if (s->num_nodes >= s->cap_nodes) return -1; /* cannot happen: one node per grid point */
     int32_t index = (int32_t)s->num_nodes++;
     displace_vertex *m = &s->nodes[index];
-    vertex_midpoint(a, b, m);
+    vertex_midpoint_uv(a, b, m);
     m->texture_uv = displace_texture_uv(t->surface, m->uv);
     if (t->tests && t->tests->veto) displace_vertex_texel(t->surface, m); /* for the veto only */
     m->key_b = sb / 2;
@@ -399,6 +406,7 @@ static int32_t edge_midpoint(const displace_tessellator *t, tess_scratch *s, tes
     m->inserted = 0;
     order_edge(&a, &b);
     if (!vetoed(t, a, b, m, job)) {
+        vertex_midpoint_frame(a, b, m); /* commutative sums: the order does not matter */
         /* "Displace midpoint", "Transform midpoint", "Calculate surface normal" */
         displace_vertex_finish(t->surface, m);
         m->surface_normal = m->unit_normal;

@@ -116,8 +116,8 @@ typedef struct displace_edge_tests {
      * transformed position) (may be NULL). */
     void (*vertex_hook)(const void *user, displace_vertex *vertex);
     /* Whether to reject m, the midpoint of the edge (a, b), before it is displaced: m has only
-     * its interpolated fields and texture_uv (the recursion-limit tests need no more, so the
-     * work of displacing rejected midpoints is saved). May be NULL. */
+     * its uv, texture_uv and texel (the recursion-limit tests need no more, so the work of
+     * interpolating and displacing rejected midpoints is saved). May be NULL. */
     bool (*veto)(const void *user, const displace_vertex *a, const displace_vertex *b,
                  const displace_vertex *m, uint64_t *counters);
     /* Whether to insert m (displaced, hooked) unless vetoed. a and b come in a canonical order
