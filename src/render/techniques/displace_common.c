@@ -44,7 +44,7 @@ float displace_height(const displace_surface *surface, meso_vec2 uv) {
 meso_vec2 displace_gradient(const displace_surface *surface, meso_vec2 uv) {
     if (!surface->heightfield) return (meso_vec2){0.0f, 0.0f};
     meso_vec2 t = displace_texture_uv(surface, uv);
-    return meso_heightfield_gradient(surface->heightfield, t.x, t.y);
+    return displace_heightfield_gradient(surface->heightfield, t.x, t.y);
 }
 
 void displace_vertex_finish(const displace_surface *surface, displace_vertex *vertex) {

@@ -16,6 +16,10 @@
 #include "meso/bake_sat.h"
 #include "render_internal.h"
 
+#if defined(__SSE4_1__)
+#include <immintrin.h>
+#endif
+
 /* Recursion limit of the tessellator: 2^10 segments per base edge. */
 #define DISPLACE_MAX_LEVEL 10
 /* Emitted triangles are counted per recursion depth up to this (deeper ones in the last). */
@@ -47,6 +51,47 @@ static inline meso_vec2 displace_texture_uv(const displace_surface *surface, mes
 /* The level at which the longest edge of the base mesh spans at most one texel of the height
  * field (Chebyshev length: max(|du| W, |dv| H)), at most max_level; 0 without a height field. */
 int displace_texel_level(const displace_surface *surface, int max_level);
+
+/* meso_heightfield_gradient with its four bilinear samples side by side in the lanes of one
+ * SSE vector: every lane does the scalar version's operations in its order
+ * (-ffp-contract=off), so the bits are the same. The tessellator's normal test calls it for
+ * every midpoint it displaces, the shading for every fragment. */
+static inline meso_vec2 displace_heightfield_gradient(const meso_heightfield *hf, float u,
+                                                      float v) {
+#if defined(__SSE4_1__)
+    float du = 1.0f / (float)hf->width, dv = 1.0f / (float)hf->height;
+    __m128 x = _mm_sub_ps(_mm_mul_ps(_mm_setr_ps(u + du, u - du, u, u),
+                                     _mm_set1_ps((float)hf->width)),
+                          _mm_set1_ps(0.5f));
+    __m128 y = _mm_sub_ps(
+        _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(1.0f), _mm_setr_ps(v, v, v + dv, v - dv)),
+                   _mm_set1_ps((float)hf->height)),
+        _mm_set1_ps(0.5f));
+    __m128 fx = _mm_floor_ps(x), fy = _mm_floor_ps(y);
+    __m128 tx = _mm_sub_ps(x, fx), ty = _mm_sub_ps(y, fy);
+    int32_t ix[4], iy[4];
+    _mm_storeu_si128((__m128i *)ix, _mm_cvttps_epi32(fx));
+    _mm_storeu_si128((__m128i *)iy, _mm_cvttps_epi32(fy));
+    float h00[4], h10[4], h01[4], h11[4];
+    for (int k = 0; k < 4; k++) {
+        int i0, i1, j0, j1;
+        meso_heightfield_wrap_pair(hf->wrap, ix[k], hf->width, &i0, &i1);
+        meso_heightfield_wrap_pair(hf->wrap, iy[k], hf->height, &j0, &j1);
+        const float *row0 = hf->heights + (size_t)j0 * (size_t)hf->width;
+        const float *row1 = hf->heights + (size_t)j1 * (size_t)hf->width;
+        h00[k] = row0[i0], h10[k] = row0[i1], h01[k] = row1[i0], h11[k] = row1[i1];
+    }
+    __m128 a = _mm_loadu_ps(h00), b = _mm_loadu_ps(h10);
+    __m128 c = _mm_loadu_ps(h01), d = _mm_loadu_ps(h11);
+    __m128 top = _mm_add_ps(a, _mm_mul_ps(_mm_sub_ps(b, a), tx));
+    __m128 bottom = _mm_add_ps(c, _mm_mul_ps(_mm_sub_ps(d, c), tx));
+    float h[4];
+    _mm_storeu_ps(h, _mm_add_ps(top, _mm_mul_ps(_mm_sub_ps(bottom, top), ty)));
+    return (meso_vec2){(h[0] - h[1]) / (2.0f * du), (h[2] - h[3]) / (2.0f * dv)};
+#else
+    return meso_heightfield_gradient(hf, u, v);
+#endif
+}
 
 /* Height and its gradient at a texture-space point (wrapped as above). */
 float displace_height(const displace_surface *surface, meso_vec2 uv);

@@ -100,8 +100,8 @@ static void tests_vertex_static(const void *user, displace_vertex *v) {
     const tessellation_state *s = ft->state;
     if (s->normal_test && s->surface.heightfield) {
         /* the bump-map operation: the height field's gradient in the base frame */
-        meso_vec2 g =
-            meso_heightfield_gradient(s->surface.heightfield, v->texture_uv.x, v->texture_uv.y);
+        meso_vec2 g = displace_heightfield_gradient(s->surface.heightfield, v->texture_uv.x,
+                                                    v->texture_uv.y);
         v->surface_normal =
             meso_displaced_normal(v->unit_normal, v->tangent, v->bitangent, s->surface.depth, g);
     }
