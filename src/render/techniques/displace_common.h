@@ -60,13 +60,13 @@ static inline meso_vec2 displace_heightfield_gradient(const meso_heightfield *hf
                                                       float v) {
 #if defined(__SSE4_1__)
     float du = 1.0f / (float)hf->width, dv = 1.0f / (float)hf->height;
-    __m128 x = _mm_sub_ps(_mm_mul_ps(_mm_setr_ps(u + du, u - du, u, u),
-                                     _mm_set1_ps((float)hf->width)),
-                          _mm_set1_ps(0.5f));
-    __m128 y = _mm_sub_ps(
-        _mm_mul_ps(_mm_sub_ps(_mm_set1_ps(1.0f), _mm_setr_ps(v, v, v + dv, v - dv)),
-                   _mm_set1_ps((float)hf->height)),
-        _mm_set1_ps(0.5f));
+    __m128 x =
+        _mm_sub_ps(_mm_mul_ps(_mm_setr_ps(u + du, u - du, u, u), _mm_set1_ps((float)hf->width)),
+                   _mm_set1_ps(0.5f));
+    __m128 y =
+        _mm_sub_ps(_mm_mul_ps(_mm_sub_ps(_mm_set1_ps(1.0f), _mm_setr_ps(v, v, v + dv, v - dv)),
+                              _mm_set1_ps((float)hf->height)),
+                   _mm_set1_ps(0.5f));
     __m128 fx = _mm_floor_ps(x), fy = _mm_floor_ps(y);
     __m128 tx = _mm_sub_ps(x, fx), ty = _mm_sub_ps(y, fy);
     int32_t ix[4], iy[4];
@@ -230,7 +230,32 @@ typedef struct displace_shadows {
     displace_light_map lights[MESO_SCENE_MAX_LIGHTS];
     float *depth;   /* num_lights * size * size, owned */
     double seconds; /* time of the last render */
+    /* the scene's lights the maps were drawn for (displace_shadows_current) */
+    bool drawn;
+    int drawn_num_lights;
+    meso_light drawn_lights[MESO_SCENE_MAX_LIGHTS];
 } displace_shadows;
+
+/* Whether the maps were drawn for exactly the scene's present lights: the viewer turns a light
+ * in place, without preparing the technique again, so a kept map must be checked each frame. */
+bool displace_shadows_current(const displace_shadows *shadows, const meso_scene *scene);
+
+/* The light-space projection of `light` for a mesh inside the box (lo, hi): orthographic fitted
+ * to the box for a directional light, perspective around it for a point light; *out_z_near is
+ * the clip w in front of which geometry counts as visible (0 for orthographic). False (and a
+ * warning) for a point light inside the box: it casts no shadow map. */
+bool displace_light_projection(meso_context *ctx, const displace_shadows *shadows,
+                               const meso_light *light, meso_vec3 lo, meso_vec3 hi,
+                               displace_light_map *out_map, float *out_z_near);
+/* Draw the depth map of light l (of the scene) from `mesh` with the projection in *map
+ * (displace_light_projection); allocates the maps on first use. */
+meso_result displace_shadows_draw_light(meso_context *ctx, displace_shadows *shadows,
+                                        const meso_scene *scene, int l, const meso_mesh *mesh,
+                                        const displace_light_map *map);
+/* Record that every light's map is now drawn for the scene's lights (after
+ * displace_shadows_draw_light for each). */
+void displace_shadows_mark_drawn(displace_shadows *shadows, const meso_scene *scene,
+                                 double seconds);
 
 /* Render a light-space depth map of `mesh` for every light of the scene with
  * meso_raster_depth_map: orthographic fitted to the mesh's bounds for directional lights,
