@@ -712,11 +712,13 @@ meso_result displace_shadows_draw_light(meso_context *ctx, displace_shadows *sha
                                         const meso_scene *scene, int l, const meso_mesh *mesh,
                                         const displace_light_map *map) {
     size_t size = (size_t)shadows->options.size, count = (size_t)scene->num_lights;
-    if (!shadows->depth) {
-        shadows->depth = malloc(count * size * size * sizeof(float));
-        if (!shadows->depth)
+    if (shadows->depth_lights < scene->num_lights) { /* first use, or the scene gained lights */
+        float *grown = realloc(shadows->depth, count * size * size * sizeof(float));
+        if (!grown)
             return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "shadow maps: %zu x %zu x %zu",
                                   count, size, size);
+        shadows->depth = grown;
+        shadows->depth_lights = scene->num_lights;
     }
     displace_light_map *out = &shadows->lights[l];
     *out = *map;
@@ -812,6 +814,7 @@ void displace_shadows_release(displace_shadows *shadows) {
     if (!shadows) return;
     free(shadows->depth);
     shadows->depth = NULL;
+    shadows->depth_lights = 0;
     shadows->num_lights = 0;
 }
 

@@ -228,7 +228,8 @@ typedef struct displace_shadows {
     displace_shadow_options options;
     int num_lights;
     displace_light_map lights[MESO_SCENE_MAX_LIGHTS];
-    float *depth;   /* num_lights * size * size, owned */
+    float *depth; /* depth_lights * size * size, owned */
+    int depth_lights;
     double seconds; /* time of the last render */
     /* the scene's lights the maps were drawn for (displace_shadows_current) */
     bool drawn;

@@ -294,7 +294,7 @@ static size_t displacement_memory(const void *state) {
     if (!s) return 0;
     return displace_tessellator_memory(s->tessellator) + s->num_clusters * sizeof(cluster_bounds) +
            (s->mesh ? s->mesh->num_triangles * 3 * sizeof(uint32_t) : 0) +
-           (s->shadows.depth ? (size_t)s->shadows.num_lights * (size_t)s->shadows.options.size *
+           (s->shadows.depth ? (size_t)s->shadows.depth_lights * (size_t)s->shadows.options.size *
                                    (size_t)s->shadows.options.size * sizeof(float)
                              : 0);
 }

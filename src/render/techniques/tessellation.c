@@ -57,7 +57,6 @@ typedef struct tessellation_state {
      * or the target size changes (shadow_view_projection, shadow_width, shadow_height) */
     bool shadow_tessellation;
     float shadow_view_threshold; /* the light view's view_threshold, in shadow-map texels */
-    displace_tessellator *shadow_tessellator;
     displace_tess_stats shadow_stats;
     meso_mat4 shadow_view_projection;
     int shadow_width, shadow_height;
@@ -105,7 +104,7 @@ static const meso_technique_option tessellation_option_table[] = {
                     "shadow maps from a tessellation seen from each light, kept while the "
                     "lights stay; 0: from the camera's mesh, redrawn when the camera moves",
                     tessellation_state, shadow_tessellation),
-    MESO_OPTION_ROW(MESO_OPTION_FLOAT, shadow_view_threshold, 0.0, 1e6, 4.0,
+    MESO_OPTION_ROW(MESO_OPTION_FLOAT, shadow_view_threshold, 0.0, 1e6, 2.0,
                     "view_threshold of the light's tessellation, in shadow-map texels",
                     tessellation_state, shadow_view_threshold),
 };
@@ -237,7 +236,6 @@ static void tessellation_release(void *state) {
     tessellation_state *s = state;
     if (!s) return;
     displace_tessellator_destroy(s->tessellator);
-    displace_tessellator_destroy(s->shadow_tessellator);
     displace_shadows_release(&s->shadows);
     meso_sat_destroy(s->sat);
     free(s);
@@ -260,9 +258,6 @@ static meso_result tessellation_prepare(meso_context *ctx, const meso_scene *sce
         goto fail;
     if ((r = displace_tessellator_create(ctx, &s->surface, s->max_level, &s->tessellator)))
         goto fail;
-    if (s->shadows.options.enabled && s->shadow_tessellation &&
-        (r = displace_tessellator_create(ctx, &s->surface, s->max_level, &s->shadow_tessellator)))
-        goto fail;
     *out_state = s;
     return MESO_OK;
 fail:
@@ -272,20 +267,28 @@ fail:
 
 static bool same_matrix(meso_mat4 a, meso_mat4 b) { return memcmp(&a, &b, sizeof(a)) == 0; }
 
-/* The base mesh's bounds grown by the displacement depth: every displaced point lies inside
- * (P' = P - (1 - h) depth N moves a point by at most depth), known before tessellating. */
+/* Bounds of the displaced surface known before tessellating: of every base vertex P and its
+ * deepest displacement P - depth N (P' = P - (1 - h) depth N, h in [0, 1]), grown by a hundredth
+ * of the depth for the interpolated normals between vertices. As tight as the displaced mesh's
+ * own bounds on a flat base (a looser box would coarsen the shadow-map texels). */
 static void displaced_bounds(const tessellation_state *s, meso_vec3 *lo, meso_vec3 *hi) {
     const meso_mesh *base = s->surface.base;
+    float depth = s->surface.heightfield ? s->surface.depth : 0.0f;
     *lo = (meso_vec3){INFINITY, INFINITY, INFINITY};
     *hi = (meso_vec3){-INFINITY, -INFINITY, -INFINITY};
     for (size_t i = 0; i < base->num_vertices; i++) {
-        meso_vec3 p = base->positions[i];
-        lo->x = fminf(lo->x, p.x), lo->y = fminf(lo->y, p.y), lo->z = fminf(lo->z, p.z);
-        hi->x = fmaxf(hi->x, p.x), hi->y = fmaxf(hi->y, p.y), hi->z = fmaxf(hi->z, p.z);
+        meso_vec3 n = meso_vec3_normalize(base->normals[i]);
+        meso_vec3 p[2] = {base->positions[i], meso_vec3_madd(base->positions[i], n, -depth)};
+        for (int k = 0; k < 2; k++) {
+            lo->x = fminf(lo->x, p[k].x), lo->y = fminf(lo->y, p[k].y);
+            lo->z = fminf(lo->z, p[k].z);
+            hi->x = fmaxf(hi->x, p[k].x), hi->y = fmaxf(hi->y, p[k].y);
+            hi->z = fmaxf(hi->z, p[k].z);
+        }
     }
-    float d = s->surface.heightfield ? s->surface.depth : 0.0f;
-    *lo = meso_vec3_sub(*lo, (meso_vec3){d, d, d});
-    *hi = meso_vec3_add(*hi, (meso_vec3){d, d, d});
+    float margin = 0.01f * depth;
+    *lo = meso_vec3_sub(*lo, (meso_vec3){margin, margin, margin});
+    *hi = meso_vec3_add(*hi, (meso_vec3){margin, margin, margin});
 }
 
 /* Each light's shadow map from the surface tessellated as that light sees it: the same edge
@@ -300,7 +303,11 @@ static meso_result light_view_shadows(meso_context *ctx, tessellation_state *s,
     memset(&s->shadow_stats, 0, sizeof(s->shadow_stats));
     meso_vec3 lo, hi;
     displaced_bounds(s, &lo, &hi);
-    for (int l = 0; l < scene->num_lights; l++) {
+    /* a tessellator of its own, freed after drawing: the light's mesh can be larger than the
+     * camera's and is not needed once drawn */
+    displace_tessellator *tessellator = NULL;
+    meso_result r = displace_tessellator_create(ctx, &s->surface, s->max_level, &tessellator);
+    for (int l = 0; r == MESO_OK && l < scene->num_lights; l++) {
         const meso_light *light = &scene->lights[l];
         s->shadows.lights[l].active = false;
         displace_light_map map;
@@ -320,11 +327,11 @@ static meso_result light_view_shadows(meso_context *ctx, tessellation_state *s,
         displace_edge_tests tests = {tests_vertex_static, tests_vertex, tests_veto, tests_insert,
                                      &ft};
         const meso_mesh *mesh = NULL;
-        meso_result r =
-            displace_tessellator_run(ctx, s->shadow_tessellator, &tests, &mesh, &s->shadow_stats);
+        r = displace_tessellator_run(ctx, tessellator, &tests, &mesh, &s->shadow_stats);
         if (r == MESO_OK) r = displace_shadows_draw_light(ctx, &s->shadows, scene, l, mesh, &map);
-        if (r != MESO_OK) return r;
     }
+    displace_tessellator_destroy(tessellator);
+    if (r != MESO_OK) return r;
     displace_shadows_mark_drawn(&s->shadows, scene, meso_time_seconds() - start);
     meso_log_info(ctx,
                   "%s: tessellation: shadow maps from the lights' view, %llu triangles (the "
@@ -351,7 +358,7 @@ static meso_result tessellation_geometry(meso_context *ctx, void *state, const m
     meso_result r = displace_tessellator_run(ctx, s->tessellator, &tests, &s->mesh, &s->stats);
     if (r != MESO_OK) return r;
     double tessellated = meso_time_seconds();
-    if (s->shadow_tessellator) {
+    if (s->shadows.options.enabled && s->shadow_tessellation) {
         if (!displace_shadows_current(&s->shadows, frame->scene)) {
             r = light_view_shadows(ctx, s, frame->scene);
             if (r != MESO_OK) return r;
@@ -402,12 +409,11 @@ static void tessellation_shade(const void *state, const meso_frame *frame,
 static size_t tessellation_memory(const void *state) {
     const tessellation_state *s = state;
     if (!s) return 0;
-    size_t bytes = displace_tessellator_memory(s->tessellator) +
-                   (s->shadow_tessellator ? displace_tessellator_memory(s->shadow_tessellator) : 0);
+    size_t bytes = displace_tessellator_memory(s->tessellator);
     if (s->sat)
         bytes += ((size_t)s->sat->width + 1) * ((size_t)s->sat->height + 1) * sizeof(double);
     if (s->shadows.depth)
-        bytes += (size_t)s->shadows.num_lights * (size_t)s->shadows.options.size *
+        bytes += (size_t)s->shadows.depth_lights * (size_t)s->shadows.options.size *
                  (size_t)s->shadows.options.size * sizeof(float);
     return bytes;
 }
