@@ -100,7 +100,7 @@ static const meso_technique_option tessellation_option_table[] = {
                     "texels an edge may span before it splits whatever the tests say",
                     tessellation_state, span_texels),
     DISPLACE_SHADOW_OPTION_ROWS(tessellation_state, shadows.options),
-    MESO_OPTION_ROW(MESO_OPTION_BOOL, shadow_tessellation, 0, 1, 1,
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, shadow_tessellation, 0, 1, 0,
                     "shadow maps from a tessellation seen from each light, kept while the "
                     "lights stay; 0: from the camera's mesh, redrawn when the camera moves",
                     tessellation_state, shadow_tessellation),
