@@ -12,6 +12,10 @@
 
 #include "raster_internal.h"
 
+#if defined(__SSE2__) && defined(__x86_64__)
+#include <emmintrin.h>
+#endif
+
 #define MAX_POLYGON 9          /* 3 vertices + one per clip plane (5) + 1 */
 #define RESERVE_FIRST_ITEMS 64 /* first capacity of a chunk's growing arrays */
 
@@ -75,6 +79,17 @@ static inline int32_t ceil_div_subpixel(int64_t n) {
 }
 static inline int32_t floor_div_subpixel(int64_t n) { return (int32_t)(n >> RASTER_SUBPIXEL_BITS); }
 
+/* llrint without the library call it compiles to (errno rules keep GCC from inlining it):
+ * cvtsd2si rounds in the current mode as llrint does, and gives the same INT64_MIN for what is
+ * out of range. Six a snapped triangle, a million triangles a frame. */
+static inline int64_t round_to_int64(double x) {
+#if defined(__SSE2__) && defined(__x86_64__)
+    return _mm_cvtsd_si64(_mm_set_sd(x));
+#else
+    return llrint(x);
+#endif
+}
+
 /* A triangle snapped to the fixed-point grid, before any per-triangle setup. */
 typedef struct snapped_triangle {
     int64_t X[3], Y[3]; /* counter-clockwise on screen (vertices 1 and 2 swapped if `swap`) */
@@ -95,8 +110,8 @@ static bool snap_triangle(const raster_setup_desc *desc, bool cull_back, const c
         double inv_w = 1.0 / v[k]->w;
         double sx = (v[k]->x * inv_w * 0.5 + 0.5) * W;
         double sy = (0.5 - 0.5 * v[k]->y * inv_w) * H;
-        X[k] = llrint(sx * RASTER_SUBPIXEL_ONE);
-        Y[k] = llrint(sy * RASTER_SUBPIXEL_ONE);
+        X[k] = round_to_int64(sx * RASTER_SUBPIXEL_ONE);
+        Y[k] = round_to_int64(sy * RASTER_SUBPIXEL_ONE);
     }
     int64_t area = (X[1] - X[0]) * (Y[2] - Y[0]) - (Y[1] - Y[0]) * (X[2] - X[0]);
     if (area == 0) return false;

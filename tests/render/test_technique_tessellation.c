@@ -1,6 +1,7 @@
 /* `tessellation` (Doggett & Hirche 2000): crack-free for every combination of the four edge
  * tests on closed meshes, the base mesh when every test is off, fewer triangles when the camera
- * moves away (view test), nothing inserted on a constant height field, deterministic. */
+ * moves away (view test), nothing inserted on a constant height field, deterministic; shadow
+ * maps that follow a turned light and, drawn from the lights' view, not the camera. */
 #include "displace_fixture.h"
 
 extern const meso_technique meso_technique_tessellation;
@@ -236,6 +237,92 @@ static void test_tessellation_shades_a_lit_flat_surface_unshadowed(void **state)
     fixture_deinit(&f);
 }
 
+/* Shade a fixed grid of fragments on the displaced plane (no source triangle: the face normal
+ * is the fragment's) with `frame`: what the shadow maps say there. */
+#define PROBES 64
+static void shade_probes(const fixture *f, void *st, const meso_frame *frame,
+                         meso_vec3 colors[PROBES]) {
+    for (int k = 0; k < PROBES; k++) {
+        float x = -0.9f + 1.8f * (float)(k % 8) / 7.0f, z = -0.9f + 1.8f * (float)(k / 8) / 7.0f;
+        meso_fragment frag = {0};
+        frag.triangle = UINT32_MAX;
+        frag.b0 = 1.0f;
+        frag.uv = (meso_vec2){0.5f * (x + 1.0f), 0.5f * (1.0f - z)};
+        float h = meso_heightfield_sample(&f->heightfield, frag.uv.x, frag.uv.y);
+        frag.position = (meso_vec3){x, -(1.0f - h) * f->object.mesostructure.depth, z};
+        frag.normal = (meso_vec3){0, 1, 0};
+        frag.tangent = (meso_vec3){1, 0, 0};
+        frag.bitangent = (meso_vec3){0, 0, -1};
+        technique->shade(st, frame, &f->object, &frag, 1);
+        colors[k] = frag.color;
+    }
+}
+
+/* Probes darker than half the brightest: in shadow. */
+static int shadowed_probes(const meso_vec3 colors[PROBES]) {
+    float brightest = 0.0f;
+    for (int k = 0; k < PROBES; k++) brightest = fmaxf(brightest, colors[k].x);
+    int count = 0;
+    for (int k = 0; k < PROBES; k++) count += colors[k].x < 0.5f * brightest;
+    return count;
+}
+
+static void prepare_shadowed_bumps(fixture *f, int shadow_tessellation) {
+    fixture_init(f, 1);
+    fixture_plane(f, 2);
+    fixture_set_option(f, "max_level", 5);
+    fixture_set_option(f, "shadow_map_size", 256);
+    fixture_set_option(f, "shadow_tessellation", shadow_tessellation);
+    f->object.mesostructure.depth = 0.3f; /* deep: the bumps shadow each other */
+}
+
+/* The viewer turns a light in place, without preparing again: the shadow maps must follow,
+ * exactly as a state prepared with the new light draws them (both shadow sources). */
+static void test_tessellation_shadows_follow_a_turned_light(void **state) {
+    (void)state;
+    for (int mode = 0; mode <= 1; mode++) {
+        fixture f;
+        prepare_shadowed_bumps(&f, mode);
+        void *st = NULL;
+        fixture_geometry(&f, technique, &st);
+        meso_vec3 before[PROBES], turned[PROBES], fresh[PROBES];
+        shade_probes(&f, st, &f.frame, before);
+        f.scene.lights[0].direction = meso_vec3_normalize((meso_vec3){-0.8f, 0.35f, -0.2f});
+        const meso_mesh *mesh = NULL;
+        assert_int_equal(technique->geometry(f.ctx, st, &f.frame, &mesh), MESO_OK);
+        shade_probes(&f, st, &f.frame, turned);
+        void *st2 = NULL;
+        fixture_geometry(&f, technique, &st2);
+        shade_probes(&f, st2, &f.frame, fresh);
+        assert_memory_equal(turned, fresh, sizeof(turned));
+        assert_true(shadowed_probes(fresh) > 0);
+        assert_memory_not_equal(before, turned, sizeof(turned));
+        technique->release(st);
+        technique->release(st2);
+        fixture_deinit(&f);
+    }
+}
+
+/* shadow_tessellation 1: the maps come from the lights' view, so a camera elsewhere leaves
+ * them as they are (they are kept while the camera moves). */
+static void test_tessellation_light_view_shadows_do_not_depend_on_the_camera(void **state) {
+    (void)state;
+    fixture f;
+    prepare_shadowed_bumps(&f, 1);
+    void *near = NULL, *far = NULL;
+    fixture_geometry(&f, technique, &near);
+    f.scene.camera.eye = (meso_vec3){2.0f, 4.0f, 9.0f};
+    fixture_geometry(&f, technique, &far);
+    meso_vec3 a[PROBES], b[PROBES];
+    shade_probes(&f, near, &f.frame, a);
+    shade_probes(&f, far, &f.frame, b);
+    assert_memory_equal(a, b, sizeof(a));
+    assert_true(shadowed_probes(a) > 0); /* the test sees the maps */
+    technique->release(near);
+    technique->release(far);
+    fixture_deinit(&f);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_tessellation_sphere_has_no_cracks_for_every_test_combination),
@@ -247,6 +334,8 @@ int main(void) {
         cmocka_unit_test(test_tessellation_output_does_not_depend_on_thread_count),
         cmocka_unit_test(test_tessellation_rejects_bad_options_naming_them),
         cmocka_unit_test(test_tessellation_shades_a_lit_flat_surface_unshadowed),
+        cmocka_unit_test(test_tessellation_shadows_follow_a_turned_light),
+        cmocka_unit_test(test_tessellation_light_view_shadows_do_not_depend_on_the_camera),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -16,6 +16,10 @@
 #include "meso/bake_sat.h"
 #include "render_internal.h"
 
+#if defined(__SSE4_1__)
+#include <immintrin.h>
+#endif
+
 /* Recursion limit of the tessellator: 2^10 segments per base edge. */
 #define DISPLACE_MAX_LEVEL 10
 /* Emitted triangles are counted per recursion depth up to this (deeper ones in the last). */
@@ -47,6 +51,47 @@ static inline meso_vec2 displace_texture_uv(const displace_surface *surface, mes
 /* The level at which the longest edge of the base mesh spans at most one texel of the height
  * field (Chebyshev length: max(|du| W, |dv| H)), at most max_level; 0 without a height field. */
 int displace_texel_level(const displace_surface *surface, int max_level);
+
+/* meso_heightfield_gradient with its four bilinear samples side by side in the lanes of one
+ * SSE vector: every lane does the scalar version's operations in its order
+ * (-ffp-contract=off), so the bits are the same. The tessellator's normal test calls it for
+ * every midpoint it displaces, the shading for every fragment. */
+static inline meso_vec2 displace_heightfield_gradient(const meso_heightfield *hf, float u,
+                                                      float v) {
+#if defined(__SSE4_1__)
+    float du = 1.0f / (float)hf->width, dv = 1.0f / (float)hf->height;
+    __m128 x =
+        _mm_sub_ps(_mm_mul_ps(_mm_setr_ps(u + du, u - du, u, u), _mm_set1_ps((float)hf->width)),
+                   _mm_set1_ps(0.5f));
+    __m128 y =
+        _mm_sub_ps(_mm_mul_ps(_mm_sub_ps(_mm_set1_ps(1.0f), _mm_setr_ps(v, v, v + dv, v - dv)),
+                              _mm_set1_ps((float)hf->height)),
+                   _mm_set1_ps(0.5f));
+    __m128 fx = _mm_floor_ps(x), fy = _mm_floor_ps(y);
+    __m128 tx = _mm_sub_ps(x, fx), ty = _mm_sub_ps(y, fy);
+    int32_t ix[4], iy[4];
+    _mm_storeu_si128((__m128i *)ix, _mm_cvttps_epi32(fx));
+    _mm_storeu_si128((__m128i *)iy, _mm_cvttps_epi32(fy));
+    float h00[4], h10[4], h01[4], h11[4];
+    for (int k = 0; k < 4; k++) {
+        int i0, i1, j0, j1;
+        meso_heightfield_wrap_pair(hf->wrap, ix[k], hf->width, &i0, &i1);
+        meso_heightfield_wrap_pair(hf->wrap, iy[k], hf->height, &j0, &j1);
+        const float *row0 = hf->heights + (size_t)j0 * (size_t)hf->width;
+        const float *row1 = hf->heights + (size_t)j1 * (size_t)hf->width;
+        h00[k] = row0[i0], h10[k] = row0[i1], h01[k] = row1[i0], h11[k] = row1[i1];
+    }
+    __m128 a = _mm_loadu_ps(h00), b = _mm_loadu_ps(h10);
+    __m128 c = _mm_loadu_ps(h01), d = _mm_loadu_ps(h11);
+    __m128 top = _mm_add_ps(a, _mm_mul_ps(_mm_sub_ps(b, a), tx));
+    __m128 bottom = _mm_add_ps(c, _mm_mul_ps(_mm_sub_ps(d, c), tx));
+    float h[4];
+    _mm_storeu_ps(h, _mm_add_ps(top, _mm_mul_ps(_mm_sub_ps(bottom, top), ty)));
+    return (meso_vec2){(h[0] - h[1]) / (2.0f * du), (h[2] - h[3]) / (2.0f * dv)};
+#else
+    return meso_heightfield_gradient(hf, u, v);
+#endif
+}
 
 /* Height and its gradient at a texture-space point (wrapped as above). */
 float displace_height(const displace_surface *surface, meso_vec2 uv);
@@ -116,8 +161,8 @@ typedef struct displace_edge_tests {
      * transformed position) (may be NULL). */
     void (*vertex_hook)(const void *user, displace_vertex *vertex);
     /* Whether to reject m, the midpoint of the edge (a, b), before it is displaced: m has only
-     * its interpolated fields and texture_uv (the recursion-limit tests need no more, so the
-     * work of displacing rejected midpoints is saved). May be NULL. */
+     * its uv, texture_uv and texel (the recursion-limit tests need no more, so the work of
+     * interpolating and displacing rejected midpoints is saved). May be NULL. */
     bool (*veto)(const void *user, const displace_vertex *a, const displace_vertex *b,
                  const displace_vertex *m, uint64_t *counters);
     /* Whether to insert m (displaced, hooked) unless vetoed. a and b come in a canonical order
@@ -183,9 +228,35 @@ typedef struct displace_shadows {
     displace_shadow_options options;
     int num_lights;
     displace_light_map lights[MESO_SCENE_MAX_LIGHTS];
-    float *depth;   /* num_lights * size * size, owned */
+    float *depth; /* depth_lights * size * size, owned */
+    int depth_lights;
     double seconds; /* time of the last render */
+    /* the scene's lights the maps were drawn for (displace_shadows_current) */
+    bool drawn;
+    int drawn_num_lights;
+    meso_light drawn_lights[MESO_SCENE_MAX_LIGHTS];
 } displace_shadows;
+
+/* Whether the maps were drawn for exactly the scene's present lights: the viewer turns a light
+ * in place, without preparing the technique again, so a kept map must be checked each frame. */
+bool displace_shadows_current(const displace_shadows *shadows, const meso_scene *scene);
+
+/* The light-space projection of `light` for a mesh inside the box (lo, hi): orthographic fitted
+ * to the box for a directional light, perspective around it for a point light; *out_z_near is
+ * the clip w in front of which geometry counts as visible (0 for orthographic). False (and a
+ * warning) for a point light inside the box: it casts no shadow map. */
+bool displace_light_projection(meso_context *ctx, const displace_shadows *shadows,
+                               const meso_light *light, meso_vec3 lo, meso_vec3 hi,
+                               displace_light_map *out_map, float *out_z_near);
+/* Draw the depth map of light l (of the scene) from `mesh` with the projection in *map
+ * (displace_light_projection); allocates the maps on first use. */
+meso_result displace_shadows_draw_light(meso_context *ctx, displace_shadows *shadows,
+                                        const meso_scene *scene, int l, const meso_mesh *mesh,
+                                        const displace_light_map *map);
+/* Record that every light's map is now drawn for the scene's lights (after
+ * displace_shadows_draw_light for each). */
+void displace_shadows_mark_drawn(displace_shadows *shadows, const meso_scene *scene,
+                                 double seconds);
 
 /* Render a light-space depth map of `mesh` for every light of the scene with
  * meso_raster_depth_map: orthographic fitted to the mesh's bounds for directional lights,

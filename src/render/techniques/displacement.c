@@ -254,7 +254,7 @@ static meso_result displacement_geometry(meso_context *ctx, void *state, const m
         meso_result r = displace_tessellator_run(ctx, s->tessellator, NULL, &s->mesh, &s->stats);
         if (r != MESO_OK) return r;
         double tessellated = meso_time_seconds();
-        /* lights are static and so is the mesh: one shadow map for every frame */
+        /* the mesh is static: one shadow map for every frame while the lights stay */
         r = displace_shadows_render(ctx, &s->shadows, frame->scene, s->mesh);
         if (r == MESO_OK) r = clusters_prepare(ctx, s);
         if (r != MESO_OK) {
@@ -267,6 +267,10 @@ static meso_result displacement_geometry(meso_context *ctx, void *state, const m
                       s->surface.object->name, s->level, (unsigned long long)s->stats.triangles,
                       (unsigned long long)s->stats.vertices, 1e3 * (tessellated - start),
                       s->shadows.options.size, s->shadows.options.size, 1e3 * s->shadows.seconds);
+    } else if (!displace_shadows_current(&s->shadows, frame->scene)) {
+        /* the viewer turned a light (in place, without preparing again) */
+        meso_result r = displace_shadows_render(ctx, &s->shadows, frame->scene, s->mesh);
+        if (r != MESO_OK) return r;
     }
     /* The mesh and the shadow maps stay; per frame only the clusters the camera may see are
      * handed to the rasterizer (the back half of a closed object costs no setup). */
@@ -290,7 +294,7 @@ static size_t displacement_memory(const void *state) {
     if (!s) return 0;
     return displace_tessellator_memory(s->tessellator) + s->num_clusters * sizeof(cluster_bounds) +
            (s->mesh ? s->mesh->num_triangles * 3 * sizeof(uint32_t) : 0) +
-           (s->shadows.depth ? (size_t)s->shadows.num_lights * (size_t)s->shadows.options.size *
+           (s->shadows.depth ? (size_t)s->shadows.depth_lights * (size_t)s->shadows.options.size *
                                    (size_t)s->shadows.options.size * sizeof(float)
                              : 0);
 }

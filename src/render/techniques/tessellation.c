@@ -52,18 +52,26 @@ typedef struct tessellation_state {
     displace_tessellator *tessellator;
     const meso_mesh *mesh;
     displace_shadows shadows;
-    bool shadows_valid; /* for shadow_view_projection and the target size below */
+    /* shadow_tessellation 1: each light's map drawn from a tessellation seen from the light,
+     * kept while the lights are unchanged; 0: from the camera's mesh, redrawn when the camera
+     * or the target size changes (shadow_view_projection, shadow_width, shadow_height) */
+    bool shadow_tessellation;
+    float shadow_view_threshold; /* the light view's view_threshold, in shadow-map texels */
+    displace_tess_stats shadow_stats;
     meso_mat4 shadow_view_projection;
     int shadow_width, shadow_height;
     displace_tess_stats stats;
 } tessellation_state;
 
-/* What the edge tests read during one frame. */
+/* What the edge tests read during one frame, or while tessellating for a light's shadow map. */
 typedef struct frame_tests {
     const tessellation_state *state;
     meso_mat4 view_projection;
     meso_vec3 eye;
     float width, height, z_near;
+    float view_threshold;
+    bool directional; /* an orthographic light view: `toward` instead of the eye */
+    meso_vec3 toward; /* unit direction toward a directional light */
 } frame_tests;
 
 /* Read straight into the state. */
@@ -92,6 +100,13 @@ static const meso_technique_option tessellation_option_table[] = {
                     "texels an edge may span before it splits whatever the tests say",
                     tessellation_state, span_texels),
     DISPLACE_SHADOW_OPTION_ROWS(tessellation_state, shadows.options),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, shadow_tessellation, 0, 1, 0,
+                    "shadow maps from a tessellation seen from each light, kept while the "
+                    "lights stay; 0: from the camera's mesh, redrawn when the camera moves",
+                    tessellation_state, shadow_tessellation),
+    MESO_OPTION_ROW(MESO_OPTION_FLOAT, shadow_view_threshold, 0.0, 1e6, 2.0,
+                    "view_threshold of the light's tessellation, in shadow-map texels",
+                    tessellation_state, shadow_view_threshold),
 };
 
 /* "Calculate surface normal": once per vertex, kept for the base mesh's vertices. */
@@ -101,7 +116,7 @@ static void tests_vertex_static(const void *user, displace_vertex *v) {
     if (s->normal_test && s->surface.heightfield) {
         /* the bump-map operation: the height field's gradient in the base frame */
         meso_vec2 g =
-            meso_heightfield_gradient(s->surface.heightfield, v->texture_uv.x, v->texture_uv.y);
+            displace_heightfield_gradient(s->surface.heightfield, v->texture_uv.x, v->texture_uv.y);
         v->surface_normal =
             meso_displaced_normal(v->unit_normal, v->tangent, v->bitangent, s->surface.depth, g);
     }
@@ -119,7 +134,8 @@ static void tests_vertex(const void *user, displace_vertex *v) {
     v->in_front = v->clip.w > ft->z_near * 0.5f;
     v->screen = (meso_vec2){v->clip.x / v->clip.w * 0.5f * ft->width,
                             v->clip.y / v->clip.w * 0.5f * ft->height};
-    meso_vec3 to_eye = meso_vec3_normalize(meso_vec3_sub(ft->eye, v->position));
+    meso_vec3 to_eye =
+        ft->directional ? ft->toward : meso_vec3_normalize(meso_vec3_sub(ft->eye, v->position));
     v->faces_away = meso_vec3_dot(v->unit_normal, to_eye) < -0.2f;
 }
 
@@ -133,8 +149,7 @@ static bool view_says_long(const frame_tests *ft, const displace_vertex *a,
                            const displace_vertex *b) {
     if (!a->in_front && !b->in_front) return false; /* behind the camera: invisible */
     if (!a->in_front || !b->in_front) return true;  /* crosses the eye plane: keep refining */
-    return fabsf(b->screen.x - a->screen.x) + fabsf(b->screen.y - a->screen.y) >
-           ft->state->view_threshold;
+    return fabsf(b->screen.x - a->screen.x) + fabsf(b->screen.y - a->screen.y) > ft->view_threshold;
 }
 
 /* Whether the base surface faces away from the eye at both end points by more than the
@@ -252,30 +267,109 @@ fail:
 
 static bool same_matrix(meso_mat4 a, meso_mat4 b) { return memcmp(&a, &b, sizeof(a)) == 0; }
 
+/* Bounds of the displaced surface known before tessellating: of every base vertex P and its
+ * deepest displacement P - depth N (P' = P - (1 - h) depth N, h in [0, 1]), grown by a hundredth
+ * of the depth for the interpolated normals between vertices. As tight as the displaced mesh's
+ * own bounds on a flat base (a looser box would coarsen the shadow-map texels). */
+static void displaced_bounds(const tessellation_state *s, meso_vec3 *lo, meso_vec3 *hi) {
+    const meso_mesh *base = s->surface.base;
+    float depth = s->surface.heightfield ? s->surface.depth : 0.0f;
+    *lo = (meso_vec3){INFINITY, INFINITY, INFINITY};
+    *hi = (meso_vec3){-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < base->num_vertices; i++) {
+        meso_vec3 n = meso_vec3_normalize(base->normals[i]);
+        meso_vec3 p[2] = {base->positions[i], meso_vec3_madd(base->positions[i], n, -depth)};
+        for (int k = 0; k < 2; k++) {
+            lo->x = fminf(lo->x, p[k].x), lo->y = fminf(lo->y, p[k].y);
+            lo->z = fminf(lo->z, p[k].z);
+            hi->x = fmaxf(hi->x, p[k].x), hi->y = fmaxf(hi->y, p[k].y);
+            hi->z = fmaxf(hi->z, p[k].z);
+        }
+    }
+    float margin = 0.01f * depth;
+    *lo = meso_vec3_sub(*lo, (meso_vec3){margin, margin, margin});
+    *hi = meso_vec3_add(*hi, (meso_vec3){margin, margin, margin});
+}
+
+/* Each light's shadow map from the surface tessellated as that light sees it: the same edge
+ * tests with the light's projection as the camera and shadow_view_threshold texels of its map
+ * as the view test's threshold. Independent of the camera, so made once and kept while the
+ * lights are unchanged (static lights, as engines keep them). */
+static meso_result light_view_shadows(meso_context *ctx, tessellation_state *s,
+                                      const meso_scene *scene) {
+    double start = meso_time_seconds();
+    s->shadows.drawn = false;
+    s->shadows.num_lights = 0;
+    memset(&s->shadow_stats, 0, sizeof(s->shadow_stats));
+    meso_vec3 lo, hi;
+    displaced_bounds(s, &lo, &hi);
+    /* a tessellator of its own, freed after drawing: the light's mesh can be larger than the
+     * camera's and is not needed once drawn */
+    displace_tessellator *tessellator = NULL;
+    meso_result r = displace_tessellator_create(ctx, &s->surface, s->max_level, &tessellator);
+    for (int l = 0; r == MESO_OK && l < scene->num_lights; l++) {
+        const meso_light *light = &scene->lights[l];
+        s->shadows.lights[l].active = false;
+        displace_light_map map;
+        float z_near;
+        if (!displace_light_projection(ctx, &s->shadows, light, lo, hi, &map, &z_near)) continue;
+        bool directional = light->type == MESO_LIGHT_DIRECTIONAL;
+        frame_tests ft = {.state = s,
+                          .view_projection = map.view_projection,
+                          .eye = light->position,
+                          .width = (float)s->shadows.options.size,
+                          .height = (float)s->shadows.options.size,
+                          .z_near = z_near,
+                          .view_threshold = s->shadow_view_threshold,
+                          .directional = directional,
+                          .toward = directional ? meso_vec3_normalize(light->direction)
+                                                : (meso_vec3){0, 0, 0}};
+        displace_edge_tests tests = {tests_vertex_static, tests_vertex, tests_veto, tests_insert,
+                                     &ft};
+        const meso_mesh *mesh = NULL;
+        r = displace_tessellator_run(ctx, tessellator, &tests, &mesh, &s->shadow_stats);
+        if (r == MESO_OK) r = displace_shadows_draw_light(ctx, &s->shadows, scene, l, mesh, &map);
+    }
+    displace_tessellator_destroy(tessellator);
+    if (r != MESO_OK) return r;
+    displace_shadows_mark_drawn(&s->shadows, scene, meso_time_seconds() - start);
+    meso_log_info(ctx,
+                  "%s: tessellation: shadow maps from the lights' view, %llu triangles (the "
+                  "last light's), %d x %d, in %.1f ms",
+                  s->surface.object->name, (unsigned long long)s->shadow_stats.triangles,
+                  s->shadows.options.size, s->shadows.options.size, 1e3 * s->shadows.seconds);
+    return MESO_OK;
+}
+
 static meso_result tessellation_geometry(meso_context *ctx, void *state, const meso_frame *frame,
                                          const meso_mesh **out_mesh) {
     tessellation_state *s = state;
     *out_mesh = NULL;
-    frame_tests ft = {s,
-                      frame->view_projection,
-                      frame->eye,
-                      (float)frame->width,
-                      (float)frame->height,
-                      frame->z_near};
+    frame_tests ft = {.state = s,
+                      .view_projection = frame->view_projection,
+                      .eye = frame->eye,
+                      .width = (float)frame->width,
+                      .height = (float)frame->height,
+                      .z_near = frame->z_near,
+                      .view_threshold = s->view_threshold};
     displace_edge_tests tests = {tests_vertex_static, tests_vertex, tests_veto, tests_insert, &ft};
     double start = meso_time_seconds();
     s->mesh = NULL;
     meso_result r = displace_tessellator_run(ctx, s->tessellator, &tests, &s->mesh, &s->stats);
     if (r != MESO_OK) return r;
     double tessellated = meso_time_seconds();
-    /* The mesh is a function of the camera (view test) and the target size only, and lights
-     * are static: the shadow maps are redrawn when either changes. */
-    if (!s->shadows_valid || !same_matrix(s->shadow_view_projection, frame->view_projection) ||
-        s->shadow_width != frame->width || s->shadow_height != frame->height) {
-        s->shadows_valid = false;
+    if (s->shadows.options.enabled && s->shadow_tessellation) {
+        if (!displace_shadows_current(&s->shadows, frame->scene)) {
+            r = light_view_shadows(ctx, s, frame->scene);
+            if (r != MESO_OK) return r;
+        }
+    } else if (!displace_shadows_current(&s->shadows, frame->scene) ||
+               !same_matrix(s->shadow_view_projection, frame->view_projection) ||
+               s->shadow_width != frame->width || s->shadow_height != frame->height) {
+        /* the camera's mesh depends on the camera (view test) and the target size */
+        s->shadows.drawn = false;
         r = displace_shadows_render(ctx, &s->shadows, frame->scene, s->mesh);
         if (r != MESO_OK) return r;
-        s->shadows_valid = true;
         s->shadow_view_projection = frame->view_projection;
         s->shadow_width = frame->width;
         s->shadow_height = frame->height;
@@ -319,7 +413,7 @@ static size_t tessellation_memory(const void *state) {
     if (s->sat)
         bytes += ((size_t)s->sat->width + 1) * ((size_t)s->sat->height + 1) * sizeof(double);
     if (s->shadows.depth)
-        bytes += (size_t)s->shadows.num_lights * (size_t)s->shadows.options.size *
+        bytes += (size_t)s->shadows.depth_lights * (size_t)s->shadows.options.size *
                  (size_t)s->shadows.options.size * sizeof(float);
     return bytes;
 }
