@@ -532,14 +532,11 @@ static inline void relief_bump_loaded_lanes(const relief_heights *m, const meso_
     relief_lanes_texel(m, l, x, y);
     relief_gradient8(m, *x, *y, &gu, &gv);
     v8vec3 normal = relief_normal8(l, depth, gu, gv);
-    *in = (meso_shade_batch){.px = l->position.x,
-                             .py = l->position.y,
-                             .pz = l->position.z,
-                             .nx = normal.x,
-                             .ny = normal.y,
-                             .nz = normal.z,
-                             .u = l->u,
-                             .v = l->v};
+    /* field by field: a compound literal would also zero the 16 lights' visibility (a
+     * 512-byte memset a group) that meso_shade_batch_all_visible sets for the scene's lights */
+    in->px = l->position.x, in->py = l->position.y, in->pz = l->position.z;
+    in->nx = normal.x, in->ny = normal.y, in->nz = normal.z;
+    in->u = l->u, in->v = l->v;
     in->tx = l->tangent.x, in->ty = l->tangent.y, in->tz = l->tangent.z;
     in->bx = l->bitangent.x, in->by = l->bitangent.y, in->bz = l->bitangent.z;
     meso_shade_batch_all_visible(in, frame);
