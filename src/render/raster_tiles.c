@@ -345,6 +345,17 @@ static inline void copy_floats(float *dst, const float *src, size_t n) {
     memcpy(dst, src, n * sizeof(float));
 }
 
+/* r0 g0 b0 r1 g1 b1 ... r7 g7 b7 in out[0..2]. */
+static inline void interleave3(v8f r, v8f g, v8f b, v8f out[3]) {
+    typedef float v16f __attribute__((vector_size(64)));
+    v16f rg = __builtin_shufflevector(r, g, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    v16f bb = __builtin_shufflevector(b, b, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    /* indices 0-7: r, 8-15: g, 16-23: b */
+    out[0] = __builtin_shufflevector(rg, bb, 0, 8, 16, 1, 9, 17, 2, 10);
+    out[1] = __builtin_shufflevector(rg, bb, 18, 3, 11, 19, 4, 12, 20, 5);
+    out[2] = __builtin_shufflevector(rg, bb, 13, 21, 6, 14, 22, 7, 15, 23);
+}
+
 /* Fragments of one object in one tile waiting to be shaded; no two share a sample. */
 typedef struct tile_batch {
     const raster_object *object;
@@ -371,6 +382,8 @@ static void flush_batch(tile_batch *b) {
     float *depth = b->depth, *coverage = b->coverage, *color = b->color;
     const uint32_t *pixels = b->pixels;
     size_t count = b->count;
+    const v8i consecutive = {0, 1, 2, 3, 4, 5, 6, 7};
+    const v8f one = splat(1.0f);
     /* The batch never repeats a sample, so the depths it tests against can be read eight at a
      * time before any is written. */
     for (size_t first = 0; first < count; first += LANES) {
@@ -381,6 +394,24 @@ static void flush_batch(tile_batch *b) {
         pix = pix & (v8i)v8_mask_from_bits(live); /* the entries past count are stale */
         v8f z, old = v8_gather(depth, pix);
         memcpy(&z, block->out_depth + first, sizeof z);
+        uint64_t discards;
+        memcpy(&discards, block->discard + first, sizeof discards);
+        /* Eight fragments on consecutive samples of a row (inside large triangles), all in
+         * front and none discarded: written with vector stores, the colours interleaved by
+         * shuffles; the same values as the loop below. */
+        if (live == 0xff && !discards && v8_mask_bits(z < old) == 0xff &&
+            v8_mask_bits(pix == v8i_splat(pix[0]) + consecutive) == 0xff) {
+            uint32_t p = (uint32_t)pix[0];
+            v8f r, g, bl, rgb[3];
+            memcpy(&r, block->r + first, sizeof r);
+            memcpy(&g, block->g + first, sizeof g);
+            memcpy(&bl, block->b + first, sizeof bl);
+            interleave3(r, g, bl, rgb);
+            memcpy(depth + p, &z, sizeof z);
+            memcpy(coverage + p, &one, sizeof one);
+            memcpy(color + 3 * p, rgb, sizeof rgb);
+            continue;
+        }
         /* behind, or NaN: nothing drawn */
         for (int keep = v8_mask_bits(z < old) & live; keep; keep &= keep - 1) {
             int k = __builtin_ctz((unsigned)keep);
