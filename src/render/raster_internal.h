@@ -119,7 +119,7 @@ typedef struct covered_samples covered_samples;
 typedef struct raster_thread_scratch {
     meso_fragment_block *block;      /* the batch: a batch never repeats a sample */
     meso_fragment *fragments;        /* RASTER_TILE_SIZE^2, for techniques without shade_block */
-    uint32_t *pixels;                /* tile-buffer index of each fragment (2 x tile + 1) */
+    uint32_t *pixels;                /* tile-buffer index of each fragment (2 x tile + 8) */
     uint8_t *pending;                /* RASTER_TILE_SIZE^2: samples held by the batch (zeroed) */
     covered_samples *covered;        /* one triangle's samples before their attributes */
     uint8_t *wire;                   /* RASTER_TILE_SIZE^2 wireframe mask */

@@ -135,28 +135,115 @@ typedef struct covered_samples {
     float depth[TILE_SAMPLES + LANES];
 } covered_samples;
 
+/* Four 64-bit edge-function values. */
+typedef int64_t v4l __attribute__((vector_size(32)));
+
+/* Bit k set when lane k of lo (k < 4) or hi (k >= 4) is negative. */
+static inline int negative_bits(v4l lo, v4l hi) {
+#if defined(__AVX__)
+    return _mm256_movemask_pd((__m256d)lo) | _mm256_movemask_pd((__m256d)hi) << 4;
+#else
+    int bits = 0;
+    for (int k = 0; k < 4; k++) bits |= (lo[k] < 0) << k | (hi[k] < 0) << (k + 4);
+    return bits;
+#endif
+}
+
+#if defined(__AVX2__)
+/* For each 8-bit lane mask, the indices of its set lanes in order, 4 bits each from the low
+ * end (the rest 0): the permutation that packs the kept lanes of a group to its front. */
+static const uint32_t kept_lanes[256] = {
+    0x00000000, 0x00000000, 0x00000001, 0x00000010, 0x00000002, 0x00000020, 0x00000021, 0x00000210,
+    0x00000003, 0x00000030, 0x00000031, 0x00000310, 0x00000032, 0x00000320, 0x00000321, 0x00003210,
+    0x00000004, 0x00000040, 0x00000041, 0x00000410, 0x00000042, 0x00000420, 0x00000421, 0x00004210,
+    0x00000043, 0x00000430, 0x00000431, 0x00004310, 0x00000432, 0x00004320, 0x00004321, 0x00043210,
+    0x00000005, 0x00000050, 0x00000051, 0x00000510, 0x00000052, 0x00000520, 0x00000521, 0x00005210,
+    0x00000053, 0x00000530, 0x00000531, 0x00005310, 0x00000532, 0x00005320, 0x00005321, 0x00053210,
+    0x00000054, 0x00000540, 0x00000541, 0x00005410, 0x00000542, 0x00005420, 0x00005421, 0x00054210,
+    0x00000543, 0x00005430, 0x00005431, 0x00054310, 0x00005432, 0x00054320, 0x00054321, 0x00543210,
+    0x00000006, 0x00000060, 0x00000061, 0x00000610, 0x00000062, 0x00000620, 0x00000621, 0x00006210,
+    0x00000063, 0x00000630, 0x00000631, 0x00006310, 0x00000632, 0x00006320, 0x00006321, 0x00063210,
+    0x00000064, 0x00000640, 0x00000641, 0x00006410, 0x00000642, 0x00006420, 0x00006421, 0x00064210,
+    0x00000643, 0x00006430, 0x00006431, 0x00064310, 0x00006432, 0x00064320, 0x00064321, 0x00643210,
+    0x00000065, 0x00000650, 0x00000651, 0x00006510, 0x00000652, 0x00006520, 0x00006521, 0x00065210,
+    0x00000653, 0x00006530, 0x00006531, 0x00065310, 0x00006532, 0x00065320, 0x00065321, 0x00653210,
+    0x00000654, 0x00006540, 0x00006541, 0x00065410, 0x00006542, 0x00065420, 0x00065421, 0x00654210,
+    0x00006543, 0x00065430, 0x00065431, 0x00654310, 0x00065432, 0x00654320, 0x00654321, 0x06543210,
+    0x00000007, 0x00000070, 0x00000071, 0x00000710, 0x00000072, 0x00000720, 0x00000721, 0x00007210,
+    0x00000073, 0x00000730, 0x00000731, 0x00007310, 0x00000732, 0x00007320, 0x00007321, 0x00073210,
+    0x00000074, 0x00000740, 0x00000741, 0x00007410, 0x00000742, 0x00007420, 0x00007421, 0x00074210,
+    0x00000743, 0x00007430, 0x00007431, 0x00074310, 0x00007432, 0x00074320, 0x00074321, 0x00743210,
+    0x00000075, 0x00000750, 0x00000751, 0x00007510, 0x00000752, 0x00007520, 0x00007521, 0x00075210,
+    0x00000753, 0x00007530, 0x00007531, 0x00075310, 0x00007532, 0x00075320, 0x00075321, 0x00753210,
+    0x00000754, 0x00007540, 0x00007541, 0x00075410, 0x00007542, 0x00075420, 0x00075421, 0x00754210,
+    0x00007543, 0x00075430, 0x00075431, 0x00754310, 0x00075432, 0x00754320, 0x00754321, 0x07543210,
+    0x00000076, 0x00000760, 0x00000761, 0x00007610, 0x00000762, 0x00007620, 0x00007621, 0x00076210,
+    0x00000763, 0x00007630, 0x00007631, 0x00076310, 0x00007632, 0x00076320, 0x00076321, 0x00763210,
+    0x00000764, 0x00007640, 0x00007641, 0x00076410, 0x00007642, 0x00076420, 0x00076421, 0x00764210,
+    0x00007643, 0x00076430, 0x00076431, 0x00764310, 0x00076432, 0x00764320, 0x00764321, 0x07643210,
+    0x00000765, 0x00007650, 0x00007651, 0x00076510, 0x00007652, 0x00076520, 0x00076521, 0x00765210,
+    0x00007653, 0x00076530, 0x00076531, 0x00765310, 0x00076532, 0x00765320, 0x00765321, 0x07653210,
+    0x00007654, 0x00076540, 0x00076541, 0x00765410, 0x00076542, 0x00765420, 0x00765421, 0x07654210,
+    0x00076543, 0x00765430, 0x00765431, 0x07654310, 0x00765432, 0x07654320, 0x07654321, 0x76543210,
+};
+#endif
+
+/* Append the lanes of (pixel, depth, x) set in `keep` to pixels and out from index n, row y,
+ * in lane order; returns the new count. Writes 8 entries from n whatever `keep` is (the arrays
+ * are padded by a group). */
+static inline size_t append_kept(int keep, v8i pixel, v8f d, v8i x, int y, uint32_t *pixels,
+                                 covered_samples *out, size_t n) {
+    v8i row_y = v8i_splat(y);
+#if defined(__AVX2__)
+    const v8i nibble = {0, 4, 8, 12, 16, 20, 24, 28};
+    v8i order = (v8i_splat((int32_t)kept_lanes[keep]) >> nibble) & v8i_splat(7);
+    pixel = (v8i)_mm256_permutevar8x32_epi32((__m256i)pixel, (__m256i)order);
+    d = (v8f)_mm256_permutevar8x32_ps((__m256)d, (__m256i)order);
+    x = (v8i)_mm256_permutevar8x32_epi32((__m256i)x, (__m256i)order);
+    memcpy(pixels + n, &pixel, sizeof pixel);
+    memcpy(out->depth + n, &d, sizeof d);
+    memcpy(out->x + n, &x, sizeof x);
+    memcpy(out->y + n, &row_y, sizeof row_y);
+    return n + (size_t)__builtin_popcount((unsigned)keep);
+#else
+    for (int k = 0; k < LANES; k++) { /* compacted without branches */
+        pixels[n] = (uint32_t)pixel[k];
+        out->depth[n] = d[k];
+        out->x[n] = x[k];
+        out->y[n] = row_y[k];
+        n += (size_t)(keep >> k & 1);
+    }
+    return n;
+#endif
+}
+
 /* Covered samples of `tri` inside [x0, x1] x [y0, y1] that pass the depth test go to `out` and
- * their tile-buffer indices to `pixels`; returns how many. Coverage and the depth test compact
- * their survivors without branches (small triangles make those branches unpredictable). */
+ * their tile-buffer indices to `pixels`; returns how many. Coverage and the depth test run on
+ * eight samples of a row at a time and compact their survivors without branches (small
+ * triangles make those branches unpredictable). */
 static size_t cover_triangle(const raster_triangle *tri, int x0, int y0, int x1, int y1, int tx0,
                              int ty0, const float *depth, covered_samples *out, uint32_t *pixels) {
     const int64_t half = RASTER_SUBPIXEL_ONE / 2;
     int64_t px = ((int64_t)x0 << RASTER_SUBPIXEL_BITS) + half;
     int64_t py = ((int64_t)y0 << RASTER_SUBPIXEL_BITS) + half;
     int64_t row[3], step_x[3], step_y[3];
+    /* the edge functions of samples x .. x + 7 of a row: E(x) + offsets, exact in 64 bits */
+    v4l offset_lo[3], offset_hi[3];
+    int64_t step_group[3];
     for (int k = 0; k < 3; k++) {
         int a = (k + 1) % 3;
         row[k] = (int64_t)tri->edge_a[k] * (px - tri->x[a]) +
                  (int64_t)tri->edge_b[k] * (py - tri->y[a]) + tri->bias[k];
         step_x[k] = (int64_t)tri->edge_a[k] * RASTER_SUBPIXEL_ONE;
         step_y[k] = (int64_t)tri->edge_b[k] * RASTER_SUBPIXEL_ONE;
+        int64_t s = step_x[k];
+        offset_lo[k] = (v4l){0, s, 2 * s, 3 * s};
+        offset_hi[k] = (v4l){4 * s, 5 * s, 6 * s, 7 * s};
+        step_group[k] = 8 * s;
     }
     const v8f ga0 = splat(tri->ga[0]), ga1 = splat(tri->ga[1]), ga2 = splat(tri->ga[2]);
     const v8f ref_x = splat(tri->ref_x);
-    /* padded by one group of 8, and every entry a sample of the row, so that whole groups of
-     * candidates read valid depths */
-    int candidates[RASTER_TILE_SIZE + LANES];
-    for (int i = 0; i < RASTER_TILE_SIZE + LANES; i++) candidates[i] = x0;
+    const v8i lane = {0, 1, 2, 3, 4, 5, 6, 7};
     size_t n = 0;
     for (int y = y0; y <= y1; y++) {
         int64_t e0 = row[0], e1 = row[1], e2 = row[2];
@@ -166,50 +253,39 @@ static size_t cover_triangle(const raster_triangle *tri, int x0, int y0, int x1,
         int64_t f0 = e0 + step_x[0] * span, f1 = e1 + step_x[1] * span, f2 = e2 + step_x[2] * span;
         row[0] += step_y[0], row[1] += step_y[1], row[2] += step_y[2];
         if ((e0 & f0) < 0 || (e1 & f1) < 0 || (e2 & f2) < 0) continue; /* outside one edge */
-        int m = 0;
-        if ((e0 | e1 | e2 | f0 | f1 | f2) >= 0) { /* inside all three */
-            for (int x = x0; x <= x1; x++) candidates[m++] = x;
-        } else {
-            for (int x = x0; x <= x1; x++, e0 += step_x[0], e1 += step_x[1], e2 += step_x[2]) {
-                candidates[m] = x;
-                m += (e0 | e1 | e2) >= 0;
-            }
-            if (!m) continue;
-        }
+        bool inside = (e0 | e1 | e2 | f0 | f1 | f2) >= 0;              /* inside all three */
         float fy = (float)y + 0.5f - tri->ref_y;
         v8f cy0 = splat(tri->gc[0] + tri->gb[0] * fy), cy1 = splat(tri->gc[1] + tri->gb[1] * fy);
         v8f cy2 = splat(tri->gc[2] + tri->gb[2] * fy);
         /* depth: the tile's own buffer, RASTER_TILE_SIZE a row, origin (tx0, ty0) */
         const float *zrow = depth + (y - ty0) * RASTER_TILE_SIZE;
         uint32_t base = (uint32_t)((y - ty0) * RASTER_TILE_SIZE);
-        /* The depths of eight candidates at a time: one vector division instead of eight. */
-        for (int first = 0; first < m; first += LANES) {
-            v8i x, column;
-            memcpy(&x, candidates + first, sizeof(x));
-            column = x - v8i_splat(tx0);
+        for (int first = x0; first <= x1; first += LANES) {
+            int lanes = x1 - first + 1 < LANES ? x1 - first + 1 : LANES;
+            int covered = (1 << lanes) - 1;
+            if (!inside) {
+                v4l lo0 = (v4l){e0, e0, e0, e0} + offset_lo[0];
+                v4l hi0 = (v4l){e0, e0, e0, e0} + offset_hi[0];
+                v4l lo1 = (v4l){e1, e1, e1, e1} + offset_lo[1];
+                v4l hi1 = (v4l){e1, e1, e1, e1} + offset_hi[1];
+                v4l lo2 = (v4l){e2, e2, e2, e2} + offset_lo[2];
+                v4l hi2 = (v4l){e2, e2, e2, e2} + offset_hi[2];
+                covered &= ~negative_bits(lo0 | lo1 | lo2, hi0 | hi1 | hi2);
+                e0 += step_group[0], e1 += step_group[1], e2 += step_group[2];
+                if (!covered) continue;
+            }
+            /* lanes past x1 repeat x1: a sample of the row, so the depth read stays inside */
+            v8i x = v8i_splat(first) + lane;
+            x = (v8i)v8_select(x > v8i_splat(x1), (v8f)v8i_splat(x1), (v8f)x);
+            v8i column = x - v8i_splat(tx0);
             v8f fx = (__builtin_convertvector(x, v8f) + splat(0.5f)) - ref_x;
+            /* The depths of eight samples at a time: one vector division instead of eight. */
             v8f inv_depth = (cy0 + ga0 * fx) + (cy1 + ga1 * fx) + (cy2 + ga2 * fx);
             v8f d = splat(1.0f) / inv_depth;
             /* kept when in front of the camera and nearer than the buffer; a NaN fails both */
-            int keep = v8_mask_bits((inv_depth > splat(0.0f)) & (d < v8_gather(zrow, column)));
-            int lanes = m - first < LANES ? m - first : LANES;
-            if (lanes == LANES && keep == 0xff) { /* all eight kept (inside large triangles) */
-                v8i pixel = v8i_splat((int32_t)base) + column;
-                memcpy(pixels + n, &pixel, sizeof pixel);
-                memcpy(out->depth + n, &d, sizeof d);
-                memcpy(out->x + n, &x, sizeof x);
-                v8i row_y = v8i_splat(y);
-                memcpy(out->y + n, &row_y, sizeof row_y);
-                n += LANES;
-                continue;
-            }
-            for (int k = 0; k < lanes; k++) { /* compacted without branches */
-                pixels[n] = base + (uint32_t)column[k];
-                out->depth[n] = d[k];
-                out->x[n] = x[k];
-                out->y[n] = y;
-                n += (size_t)(keep >> k & 1);
-            }
+            int keep =
+                v8_mask_bits((inv_depth > splat(0.0f)) & (d < v8_gather(zrow, column))) & covered;
+            n = append_kept(keep, v8i_splat((int32_t)base) + column, d, x, y, pixels, out, n);
         }
     }
     if (!n) return 0;
@@ -266,7 +342,26 @@ static void mark_edges(const raster_triangle *tri, int tx0, int ty0, int tx1, in
  * 0.15-0.24 ms for memcpy (meso bench, 5 interleaved runs, issue 16; docs/performance.md): the
  * next frame and the image conversion read the target back from the cache. */
 static inline void copy_floats(float *dst, const float *src, size_t n) {
+#if defined(__AVX__)
+    /* Inline 32-byte moves: rows of a tile are 128-384 bytes, where the library call's
+     * dispatch and the PLT cost as much as the copy (2-3% of a flat frame, perf, issue 16). */
+    size_t i = 0;
+    for (; i + 8 <= n; i += 8) _mm256_storeu_ps(dst + i, _mm256_loadu_ps(src + i));
+    for (; i < n; i++) dst[i] = src[i];
+#else
     memcpy(dst, src, n * sizeof(float));
+#endif
+}
+
+/* r0 g0 b0 r1 g1 b1 ... r7 g7 b7 in out[0..2]. */
+static inline void interleave3(v8f r, v8f g, v8f b, v8f out[3]) {
+    typedef float v16f __attribute__((vector_size(64)));
+    v16f rg = __builtin_shufflevector(r, g, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    v16f bb = __builtin_shufflevector(b, b, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    /* indices 0-7: r, 8-15: g, 16-23: b */
+    out[0] = __builtin_shufflevector(rg, bb, 0, 8, 16, 1, 9, 17, 2, 10);
+    out[1] = __builtin_shufflevector(rg, bb, 18, 3, 11, 19, 4, 12, 20, 5);
+    out[2] = __builtin_shufflevector(rg, bb, 13, 21, 6, 14, 22, 7, 15, 23);
 }
 
 /* Fragments of one object in one tile waiting to be shaded; no two share a sample. */
@@ -295,6 +390,8 @@ static void flush_batch(tile_batch *b) {
     float *depth = b->depth, *coverage = b->coverage, *color = b->color;
     const uint32_t *pixels = b->pixels;
     size_t count = b->count;
+    const v8i consecutive = {0, 1, 2, 3, 4, 5, 6, 7};
+    const v8f one = splat(1.0f);
     /* The batch never repeats a sample, so the depths it tests against can be read eight at a
      * time before any is written. */
     for (size_t first = 0; first < count; first += LANES) {
@@ -305,6 +402,24 @@ static void flush_batch(tile_batch *b) {
         pix = pix & (v8i)v8_mask_from_bits(live); /* the entries past count are stale */
         v8f z, old = v8_gather(depth, pix);
         memcpy(&z, block->out_depth + first, sizeof z);
+        uint64_t discards;
+        memcpy(&discards, block->discard + first, sizeof discards);
+        /* Eight fragments on consecutive samples of a row (inside large triangles), all in
+         * front and none discarded: written with vector stores, the colours interleaved by
+         * shuffles; the same values as the loop below. */
+        if (live == 0xff && !discards && v8_mask_bits(z < old) == 0xff &&
+            v8_mask_bits(pix == v8i_splat(pix[0]) + consecutive) == 0xff) {
+            uint32_t p = (uint32_t)pix[0];
+            v8f r, g, bl, rgb[3];
+            memcpy(&r, block->r + first, sizeof r);
+            memcpy(&g, block->g + first, sizeof g);
+            memcpy(&bl, block->b + first, sizeof bl);
+            interleave3(r, g, bl, rgb);
+            memcpy(depth + p, &z, sizeof z);
+            memcpy(coverage + p, &one, sizeof one);
+            memcpy(color + 3 * p, rgb, sizeof rgb);
+            continue;
+        }
         /* behind, or NaN: nothing drawn */
         for (int keep = v8_mask_bits(z < old) & live; keep; keep &= keep - 1) {
             int k = __builtin_ctz((unsigned)keep);
@@ -461,8 +576,8 @@ static meso_result reserve_threads(meso_context *ctx, raster_pass *pass) {
         t[i].block = aligned_alloc(32, sizeof(meso_fragment_block));
         t[i].fragments = malloc(TILE_SAMPLES * sizeof(meso_fragment));
         /* a triangle's samples are tested before the check for repeats: up to a tile's
-         * worth past a full batch, plus the branch-free compaction's one extra write */
-        t[i].pixels = malloc((2 * TILE_SAMPLES + 1) * sizeof(uint32_t));
+         * worth past a full batch, plus the compaction's writes of a whole group */
+        t[i].pixels = malloc((2 * TILE_SAMPLES + LANES) * sizeof(uint32_t));
         t[i].wire = malloc(TILE_SAMPLES);
         t[i].pending = calloc(TILE_SAMPLES, 1);
         t[i].covered = malloc(sizeof(covered_samples));

@@ -6,6 +6,27 @@
 
 static inline v8i sel_i(v8i mask, v8i a, v8i b) { return (a & mask) | (b & ~mask); }
 
+/* base[index[k]] and base[index[k] + 1] per lane: with AVX2 two 64-bit gathers of four lanes
+ * each, half the elements of two 32-bit gathers (relief_gather_pairs8 does the same for
+ * heights); the same codes. */
+static inline void gather_code_pairs(const int32_t *base, v8i index, v8i *left, v8i *right) {
+#if defined(__AVX2__)
+    /* lanes 0, 1, 4, 5 in the first gather, 2, 3, 6, 7 in the second: the shuffles below put
+     * every lane back in its place */
+    __m256i order = _mm256_permute4x64_epi64((__m256i)index, 0xd8);
+    const long long *pairs = (const long long *)(const void *)base;
+    __m256 lo =
+        _mm256_castsi256_ps(_mm256_i32gather_epi64(pairs, _mm256_castsi256_si128(order), 4));
+    __m256 hi =
+        _mm256_castsi256_ps(_mm256_i32gather_epi64(pairs, _mm256_extracti128_si256(order, 1), 4));
+    *left = (v8i)_mm256_shuffle_ps(lo, hi, 0x88);
+    *right = (v8i)_mm256_shuffle_ps(lo, hi, 0xdd);
+#else
+    *left = v8i_gather(base, index);
+    *right = v8i_gather(base + 1, index);
+#endif
+}
+
 /* The colour map at eight uvs: bilinear between texel centres at level 0 with the texture's
  * wrap (the arithmetic of meso_texture_sample(t, uv, 0, MESO_FILTER_BILINEAR): uv reduced to
  * [0, 1) for repeat, x = u W - 0.5, y = (1 - v) H - 0.5), 0 for a non-finite uv. */
@@ -49,8 +70,16 @@ static void sample_color_map(const meso_texture *t, v8f u, v8f v, v8f *out_r, v8
          * float level's bytes, then 12 from the 1 KB decode table (stays in L1) */
         const int32_t *codes = (const int32_t *)t->srgb8;
         const float *table = meso_srgb8_table();
-        v8i a = v8i_gather(codes, row0 + i0), b = v8i_gather(codes, row0 + i1);
-        v8i c = v8i_gather(codes, row1 + i0), d = v8i_gather(codes, row1 + i1);
+        v8i a, b, c, d;
+        if (v8_mask_bits(i1 == i0 + 1) == 0xff) {
+            /* each texel's right neighbour is the next code of its row (every lane but at a
+             * wrap or clamp column): both from one 64-bit gather */
+            gather_code_pairs(codes, row0 + i0, &a, &b);
+            gather_code_pairs(codes, row1 + i0, &c, &d);
+        } else {
+            a = v8i_gather(codes, row0 + i0), b = v8i_gather(codes, row0 + i1);
+            c = v8i_gather(codes, row1 + i0), d = v8i_gather(codes, row1 + i1);
+        }
         v8i byte = v8i_splat(255);
 #define DECODE(code, shift) v8_gather(table, ((code) >> (shift)) & byte)
         ar = DECODE(a, 0), ag = DECODE(a, 8), ab = DECODE(a, 16);

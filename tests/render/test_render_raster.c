@@ -119,6 +119,23 @@ static void test_raster_plane_of_many_triangles_covers_each_sample_once(void **s
     meso_context_destroy(ctx);
 }
 
+/* Triangles of a sample or less, at a size that is no multiple of the tile or of the eight
+ * samples coverage tests at once: every group of a row is partly covered, and the compaction
+ * of the survivors keeps each sample once. */
+static void test_raster_tiny_triangles_cover_each_sample_once(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    test_scene ts;
+    test_scene_init(&ts, 131, 77);
+    test_scene_add(&ts, test_shape(ctx, MESO_SHAPE_PLANE, 1.6f, 120, (meso_vec3){0}), "flat");
+    meso_vec3 outline[4] = {{-0.8f, 0, -0.8f}, {0.8f, 0, -0.8f}, {0.8f, 0, 0.8f}, {-0.8f, 0, 0.8f}};
+    check_exact_coverage(ctx, &ts.scene, 131, 77, outline, 4);
+    ts.scene.camera = (meso_camera){{0, 2, 0}, {0, 0, 0}, {0, 0, -1}, 40.0f};
+    check_exact_coverage(ctx, &ts.scene, 131, 77, outline, 4);
+    test_scene_free(&ts);
+    meso_context_destroy(ctx);
+}
+
 /* A disc of thin triangles around a centre that projects exactly onto a sample centre. */
 static meso_mesh *fan_mesh(meso_context *ctx, int n, float radius) {
     meso_mesh *mesh = NULL;
@@ -638,6 +655,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_raster_plane_of_many_triangles_covers_each_sample_once),
         cmocka_unit_test(test_raster_fan_of_thin_triangles_covers_each_sample_once),
+        cmocka_unit_test(test_raster_tiny_triangles_cover_each_sample_once),
         cmocka_unit_test(test_raster_camera_close_to_large_plane_clips_at_near_plane),
         cmocka_unit_test(test_raster_nearer_surface_wins_in_any_order),
         cmocka_unit_test(test_raster_supersampling_averages_the_fine_grid),

@@ -72,14 +72,12 @@ static void shade_block(const void *state, const meso_frame *frame, const meso_o
         v8f gu, gv;
         relief_gradient8(m, x + uo * (float)m->width, y - vo * (float)m->height, &gu, &gv);
         v8vec3 normal = relief_normal8(&l, depth, gu, gv);
-        meso_shade_batch in = {.px = l.position.x,
-                               .py = l.position.y,
-                               .pz = l.position.z,
-                               .nx = normal.x,
-                               .ny = normal.y,
-                               .nz = normal.z,
-                               .u = l.u + uo,
-                               .v = l.v + vo};
+        /* field by field: an initializer would also zero every light's visibility (a
+         * 512-byte memset a group) */
+        meso_shade_batch in;
+        in.px = l.position.x, in.py = l.position.y, in.pz = l.position.z;
+        in.nx = normal.x, in.ny = normal.y, in.nz = normal.z;
+        in.u = l.u + uo, in.v = l.v + vo;
         in.tx = l.tangent.x, in.ty = l.tangent.y, in.tz = l.tangent.z;
         in.bx = l.bitangent.x, in.by = l.bitangent.y, in.bz = l.bitangent.z;
         meso_shade_batch_all_visible(&in, frame);

@@ -98,9 +98,10 @@ static inline void relief_gather_pairs8(const float *base, v8i index, v8f *left,
 #endif
 }
 
-/* h at texel-centre coordinates (x, y), the bilinear surface of meso_heightfield_sample, eight
- * lookups at once; the hot loop of every search (4 gathers of 8 texels). */
-static inline v8f relief_sample8(const relief_heights *m, v8f x, v8f y) {
+/* The texel (i, j) below texel-centre coordinates (x, y) and the fractions (tx, ty) inside it,
+ * with the height field's wrap: what relief_sample8 interpolates between. */
+static inline void relief_texel8(const relief_heights *m, v8f x, v8f y, v8i *out_i, v8i *out_j,
+                                 v8f *out_tx, v8f *out_ty) {
     float fw = (float)m->width, fh = (float)m->height;
     if (m->clamp) {
         x = v8_min(v8_max(x, v8_splat(0.0f)), v8_splat(fw - 1.0f));
@@ -113,13 +114,70 @@ static inline v8f relief_sample8(const relief_heights *m, v8f x, v8f y) {
     v8i wmax = v8i_splat(m->width - 1), hmax = v8i_splat(m->height - 1);
     i = (v8i)v8_select(i > wmax, (v8f)wmax, (v8f)i);
     j = (v8i)v8_select(j > hmax, (v8f)hmax, (v8f)j);
-    v8f tx = x - __builtin_convertvector(i, v8f), ty = y - __builtin_convertvector(j, v8f);
+    *out_tx = x - __builtin_convertvector(i, v8f), *out_ty = y - __builtin_convertvector(j, v8f);
+    *out_i = i, *out_j = j;
+}
+
+/* The bilinear blend of relief_sample8: h00, h10 on row j, h01, h11 on row j + 1. */
+static inline v8f relief_bilinear8(v8f h00, v8f h10, v8f h01, v8f h11, v8f tx, v8f ty) {
+    v8f top = h00 + (h10 - h00) * tx, bottom = h01 + (h11 - h01) * tx;
+    return top + (bottom - top) * ty;
+}
+
+/* h at texel-centre coordinates (x, y), the bilinear surface of meso_heightfield_sample, eight
+ * lookups at once; the hot loop of every search (4 gathers of 8 texels). */
+static inline v8f relief_sample8(const relief_heights *m, v8f x, v8f y) {
+    v8i i, j;
+    v8f tx, ty;
+    relief_texel8(m, x, y, &i, &j, &tx, &ty);
     v8i index = j * m->stride + i;
     v8f h00, h10, h01, h11;
     relief_gather_pairs8(m->padded, index, &h00, &h10);
     relief_gather_pairs8(m->padded + m->stride, index, &h01, &h11);
-    v8f top = h00 + (h10 - h00) * tx, bottom = h01 + (h11 - h01) * tx;
-    return top + (bottom - top) * ty;
+    return relief_bilinear8(h00, h10, h01, h11, tx, ty);
+}
+
+#if defined(__AVX2__)
+/* base[index[k] + c] for c = 0..3 in out[c], per lane: one 16-byte load a lane and a
+ * transpose, no gather. */
+static inline void relief_load_quads8(const float *base, v8i index, v8f out[4]) {
+    __m256 q[4];
+    for (int k = 0; k < 4; k++) {
+        __m128 lo = _mm_loadu_ps(base + index[k]), hi = _mm_loadu_ps(base + index[k + 4]);
+        q[k] = _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
+    }
+    /* q[k]: lane k's four texels, then lane k + 4's */
+    __m256 t0 = _mm256_unpacklo_ps(q[0], q[1]), t1 = _mm256_unpackhi_ps(q[0], q[1]);
+    __m256 t2 = _mm256_unpacklo_ps(q[2], q[3]), t3 = _mm256_unpackhi_ps(q[2], q[3]);
+    out[0] = (v8f)_mm256_shuffle_ps(t0, t2, 0x44), out[1] = (v8f)_mm256_shuffle_ps(t0, t2, 0xee);
+    out[2] = (v8f)_mm256_shuffle_ps(t1, t3, 0x44), out[3] = (v8f)_mm256_shuffle_ps(t1, t3, 0xee);
+}
+#endif
+
+/* relief_sample8 at (x + 1, y) in *right and (x - 1, y) in *left, with the same bits. Both read
+ * rows j and j + 1; where every lane's two texel pairs are the four texels from i - 1 on (no
+ * wrap between them), AVX2 reads them with one 16-byte load a lane and row instead of two
+ * gathers a sample and row (the gathers were most of bump's frame, issue 16). */
+static inline void relief_sample8_beside(const relief_heights *m, v8f x, v8f y, v8f *right,
+                                         v8f *left) {
+#if defined(__AVX2__)
+    v8i ir, jr, il, jl;
+    v8f txr, tyr, txl, tyl;
+    relief_texel8(m, x + 1.0f, y, &ir, &jr, &txr, &tyr);
+    relief_texel8(m, x - 1.0f, y, &il, &jl, &txl, &tyl);
+    /* the padded rows hold columns 0..width: il + 3 <= width */
+    if (v8_mask_bits((ir == il + 2) & (il <= v8i_splat(m->width - 3)) & (jr == jl)) == 0xff) {
+        v8i index = jl * m->stride + il;
+        v8f row0[4], row1[4];
+        relief_load_quads8(m->padded, index, row0);
+        relief_load_quads8(m->padded + m->stride, index, row1);
+        *right = relief_bilinear8(row0[2], row0[3], row1[2], row1[3], txr, tyr);
+        *left = relief_bilinear8(row0[0], row0[1], row1[0], row1[1], txl, tyl);
+        return;
+    }
+#endif
+    *right = relief_sample8(m, x + 1.0f, y);
+    *left = relief_sample8(m, x - 1.0f, y);
 }
 
 /* ---- The view ray in texture space -------------------------------------------------------- */
@@ -548,8 +606,9 @@ static inline void relief_lanes_texel(const relief_heights *m, const relief_lane
 /* The gradient (dh/du, dh/dv) at texel-centre coordinates: meso_heightfield_gradient's
  * central differences one texel apart, eight at once. */
 static inline void relief_gradient8(const relief_heights *m, v8f x, v8f y, v8f *gu, v8f *gv) {
-    *gu = (relief_sample8(m, x + 1.0f, y) - relief_sample8(m, x - 1.0f, y)) *
-          (0.5f * (float)m->width);
+    v8f right, left;
+    relief_sample8_beside(m, x, y, &right, &left);
+    *gu = (right - left) * (0.5f * (float)m->width);
     *gv = (relief_sample8(m, x, y - 1.0f) - relief_sample8(m, x, y + 1.0f)) *
           (0.5f * (float)m->height);
 }
@@ -579,14 +638,11 @@ static inline void relief_bump_loaded_lanes(const relief_heights *m, const meso_
     relief_lanes_texel(m, l, x, y);
     relief_gradient8(m, *x, *y, &gu, &gv);
     v8vec3 normal = relief_normal8(l, depth, gu, gv);
-    *in = (meso_shade_batch){.px = l->position.x,
-                             .py = l->position.y,
-                             .pz = l->position.z,
-                             .nx = normal.x,
-                             .ny = normal.y,
-                             .nz = normal.z,
-                             .u = l->u,
-                             .v = l->v};
+    /* field by field: a compound literal would also zero the 16 lights' visibility (a
+     * 512-byte memset a group) that meso_shade_batch_all_visible sets for the scene's lights */
+    in->px = l->position.x, in->py = l->position.y, in->pz = l->position.z;
+    in->nx = normal.x, in->ny = normal.y, in->nz = normal.z;
+    in->u = l->u, in->v = l->v;
     in->tx = l->tangent.x, in->ty = l->tangent.y, in->tz = l->tangent.z;
     in->bx = l->bitangent.x, in->by = l->bitangent.y, in->bz = l->bitangent.z;
     meso_shade_batch_all_visible(in, frame);
