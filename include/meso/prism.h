@@ -122,6 +122,9 @@ typedef struct meso_prism_layer {
     meso_vec3 *uvws;          /* per vertex of `faces`: (u, v, 0) top, (u, v, 1) bottom */
     meso_prism *prisms;       /* per base triangle */
     meso_prism_plane *planes; /* MESO_PRISM_NUM_FACES per prism, in the face slots' order */
+    /* the same planes by component, 32 floats a prism (normal x of the 8 slots, then y, z,
+     * offset), 32-byte aligned: meso_prism_layer_exit tests the 8 planes at once */
+    float *plane_lanes;
     uint8_t *fin_convex;      /* 3 per prism: the fin's two triangles bound a convex side */
     size_t num_prisms;
     float depth;
