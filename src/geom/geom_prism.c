@@ -148,6 +148,8 @@ static void extrude_fin(meso_prism_layer *layer, size_t prism, int e, uint32_t a
     layer->fin_convex[3 * prism + (size_t)e] = s <= 0.0f;
 }
 
+static meso_prism_face_frame face_frame_of(const meso_prism_layer *layer, size_t face);
+
 meso_result meso_prism_layer_create(meso_context *ctx, const meso_mesh *mesh, float depth,
                                     const char *name, meso_prism_layer **out_layer) {
     *out_layer = NULL;
@@ -172,11 +174,12 @@ meso_result meso_prism_layer_create(meso_context *ctx, const meso_mesh *mesh, fl
     layer->prisms = calloc(n, sizeof *layer->prisms);
     layer->planes = calloc(n * MESO_PRISM_NUM_FACES, sizeof *layer->planes);
     layer->fin_convex = calloc(3 * n, 1);
+    layer->face_frames = malloc((size_t)(nt ? nt : 1) * sizeof *layer->face_frames);
     size_t lanes_bytes = n * 4 * MESO_PRISM_NUM_FACES * sizeof(float); /* a multiple of 32 */
     layer->plane_lanes = aligned_alloc(32, lanes_bytes);
     if (layer->plane_lanes) memset(layer->plane_lanes, 0, lanes_bytes);
     if (!layer->uvws || !layer->prisms || !layer->planes || !layer->fin_convex ||
-        !layer->plane_lanes) {
+        !layer->plane_lanes || !layer->face_frames) {
         r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: prisms", name);
         goto fail;
     }
@@ -199,6 +202,7 @@ meso_result meso_prism_layer_create(meso_context *ctx, const meso_mesh *mesh, fl
         set_face(layer, t, MESO_PRISM_BOTTOM, b + v[0], b + v[2], b + v[1]);
         for (int e = 0; e < 3; e++) extrude_fin(layer, t, e, v[e], v[(e + 1) % 3]);
     }
+    for (size_t f = 0; f < (size_t)nt; f++) layer->face_frames[f] = face_frame_of(layer, f);
     *out_layer = layer;
     return MESO_OK;
 fail:
@@ -213,6 +217,7 @@ void meso_prism_layer_destroy(meso_prism_layer *layer) {
     free(layer->prisms);
     free(layer->planes);
     free(layer->plane_lanes);
+    free(layer->face_frames);
     free(layer->fin_convex);
     free(layer);
 }
@@ -221,27 +226,37 @@ size_t meso_prism_layer_memory(const meso_prism_layer *layer) {
     if (!layer) return 0;
     size_t nv = layer->faces->num_vertices, nt = layer->faces->num_triangles;
     return nv * (2 * sizeof(meso_vec3) + sizeof(meso_vec2) + sizeof(meso_vec3)) +
-           nt * 3 * sizeof(uint32_t) +
+           nt * (3 * sizeof(uint32_t) + sizeof(meso_prism_face_frame)) +
            layer->num_prisms *
                (sizeof(meso_prism) + MESO_PRISM_NUM_FACES * sizeof(meso_prism_plane) +
                 4 * MESO_PRISM_NUM_FACES * sizeof(float) + 3);
 }
 
-meso_vec3 meso_prism_layer_face_uvw(const meso_prism_layer *layer, size_t face, meso_vec3 x) {
+/* The face's constants of meso_prism_layer_face_uvw (once a face, at creation). */
+static meso_prism_face_frame face_frame_of(const meso_prism_layer *layer, size_t face) {
     const uint32_t *idx = layer->faces->indices + 3 * face;
     const meso_vec3 *p = layer->faces->positions;
-    meso_vec3 e1 = meso_vec3_sub(p[idx[1]], p[idx[0]]), e2 = meso_vec3_sub(p[idx[2]], p[idx[0]]);
-    meso_vec3 d = meso_vec3_sub(x, p[idx[0]]);
-    float d00 = meso_vec3_dot(e1, e1), d01 = meso_vec3_dot(e1, e2), d11 = meso_vec3_dot(e2, e2);
-    float d20 = meso_vec3_dot(d, e1), d21 = meso_vec3_dot(d, e2);
-    float det = d00 * d11 - d01 * d01;
+    meso_prism_face_frame f;
+    f.p0 = p[idx[0]];
+    f.e1 = meso_vec3_sub(p[idx[1]], p[idx[0]]);
+    f.e2 = meso_vec3_sub(p[idx[2]], p[idx[0]]);
+    f.d00 = meso_vec3_dot(f.e1, f.e1), f.d01 = meso_vec3_dot(f.e1, f.e2);
+    f.d11 = meso_vec3_dot(f.e2, f.e2);
+    f.det = f.d00 * f.d11 - f.d01 * f.d01;
+    for (int k = 0; k < 3; k++) f.uvw[k] = layer->uvws[idx[k]];
+    return f;
+}
+
+meso_vec3 meso_prism_layer_face_uvw(const meso_prism_layer *layer, size_t face, meso_vec3 x) {
+    const meso_prism_face_frame *f = &layer->face_frames[face];
+    meso_vec3 d = meso_vec3_sub(x, f->p0);
+    float d20 = meso_vec3_dot(d, f->e1), d21 = meso_vec3_dot(d, f->e2);
     float b1 = 0.0f, b2 = 0.0f;
-    if (det > 0.0f) {
-        b1 = (d11 * d20 - d01 * d21) / det;
-        b2 = (d00 * d21 - d01 * d20) / det;
+    if (f->det > 0.0f) {
+        b1 = (f->d11 * d20 - f->d01 * d21) / f->det;
+        b2 = (f->d00 * d21 - f->d01 * d20) / f->det;
     }
-    return meso_vec3_barycentric(layer->uvws[idx[0]], layer->uvws[idx[1]], layer->uvws[idx[2]],
-                                 1.0f - b1 - b2, b1, b2);
+    return meso_vec3_barycentric(f->uvw[0], f->uvw[1], f->uvw[2], 1.0f - b1 - b2, b1, b2);
 }
 
 /* Eight float lanes (GCC vector extensions: AVX with -march=native, SSE pairs otherwise). */
