@@ -692,7 +692,18 @@ static bool shadowed(const gdm_state *s, meso_vec3 t, meso_vec3 normal_t, meso_v
          * table's error, 0.1 of the shell for a weave at k = 7, is larger than the gaps a
          * light ray threads through) */
         if (d >= boundary - margin) return false;
-        ray_probe probe = ray_probe_start(t, lt, s->clear_w);
+        float clear_w = s->clear_w;
+        if (s->window_max) {
+            /* every probe below lies on t + x lt, x in [0, reach]: above the highest texel
+             * that stretch's (u, v) box can read, a probe is outside without a sample (the
+             * answer the sample gives, so the same image) */
+            float reach = fmaxf(boundary, d + 0.5f * s->refine_window);
+            meso_vec3 end = meso_vec3_madd(t, lt, reach);
+            float highest = window_bound(s, fminf(t.x, end.x), fmaxf(t.x, end.x),
+                                         fminf(t.y, end.y), fmaxf(t.y, end.y));
+            clear_w = fmaxf(clear_w, 1.0f - highest - 1e-6f);
+        }
+        ray_probe probe = ray_probe_start(t, lt, clear_w);
         if (ray_probe_inside(s, &probe, d + 0.5f * s->refine_window)) return true;
         for (int k = 0; k < s->shadow_steps; k++) {
             float x = boundary * ((float)k + 0.5f) / (float)s->shadow_steps;
