@@ -220,6 +220,7 @@ static bool heightfield_clearances(gdm_state *s) {
 
 /* A texel index of the map's wrapping, for the windows below. */
 static inline int window_index(meso_wrap wrap, int i, int n) {
+    if ((unsigned)i < (unsigned)n) return i; /* most: no division */
     if (wrap == MESO_WRAP_CLAMP) return i < 0 ? 0 : (i >= n ? n - 1 : i);
     i %= n;
     return i < 0 ? i + n : i;
@@ -270,8 +271,8 @@ static inline float window_bound(const gdm_state *s, float u0, float u1, float v
     if (!(extent <= (float)(1 << (s->window_levels - 1))) || !(fabsf(x0) < 1e6f) ||
         !(fabsf(y0) < 1e6f))
         return s->map_max;
-    int level = 0;
-    while ((float)(1 << level) < extent) level++;
+    /* the least level with 2^level >= extent (an integer, at least 4): no loop */
+    int level = 32 - __builtin_clz((unsigned)extent - 1u);
     int i = window_index(hf->wrap, (int)x0, hf->width);
     int j = window_index(hf->wrap, (int)y0, hf->height);
     size_t plane = (size_t)hf->width * (size_t)hf->height;
