@@ -135,7 +135,7 @@ typedef struct meso_prism_layer {
      * offset), 32-byte aligned: meso_prism_layer_exit tests the 8 planes at once */
     float *plane_lanes;
     meso_prism_face_frame *face_frames; /* per face of `faces`: meso_prism_layer_face_uvw's */
-    uint8_t *fin_convex;      /* 3 per prism: the fin's two triangles bound a convex side */
+    uint8_t *fin_convex; /* 3 per prism: the fin's two triangles bound a convex side */
     size_t num_prisms;
     float depth;
 } meso_prism_layer;

@@ -283,8 +283,7 @@ static inline void leave_times(const float *lanes, meso_vec3 o, meso_vec3 d, flo
     memcpy(&nz, lanes + 2 * MESO_PRISM_NUM_FACES, sizeof nz);
     memcpy(&offset, lanes + 3 * MESO_PRISM_NUM_FACES, sizeof offset);
     prism_v8f dn = nx * prism_splat(d.x) + ny * prism_splat(d.y) + nz * prism_splat(d.z);
-    prism_v8f s0 =
-        (nx * prism_splat(o.x) + ny * prism_splat(o.y) + nz * prism_splat(o.z)) - offset;
+    prism_v8f s0 = (nx * prism_splat(o.x) + ny * prism_splat(o.y) + nz * prism_splat(o.z)) - offset;
     const prism_v8i slot = {0, 1, 2, 3, 4, 5, 6, 7};
     prism_v8i entry = (prism_v8i){0, 0, 0, 0, 0, 0, 0, 0} + entry_slot;
     prism_v8i partner = (slot >= 2) & ((slot ^ 1) == entry);
@@ -304,8 +303,8 @@ bool meso_prism_layer_exit(const meso_prism_layer *layer, size_t prism, meso_vec
      * may round to either side of it; beyond this it is really outside (a concave fin) */
     float tolerance = 1e-5f * (fabsf(origin.x) + fabsf(origin.y) + fabsf(origin.z) + layer->depth);
     float times[MESO_PRISM_NUM_FACES];
-    leave_times(layer->plane_lanes + prism * 4 * MESO_PRISM_NUM_FACES, origin, direction,
-                tolerance, entry_slot, times);
+    leave_times(layer->plane_lanes + prism * 4 * MESO_PRISM_NUM_FACES, origin, direction, tolerance,
+                entry_slot, times);
     float best = INFINITY;
     int best_slot = -1;
     for (int slot = 0; slot < MESO_PRISM_NUM_FACES; slot += slot < MESO_PRISM_FIN ? 1 : 2) {

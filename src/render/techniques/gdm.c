@@ -267,7 +267,7 @@ static inline float window_bound(const gdm_state *s, float u0, float u1, float v
     float x1 = floorf(u1 * (float)hf->width - 0.5f) + 2.0f;
     float y0 = floorf((1.0f - v1) * (float)hf->height - 0.5f) - 1.0f;
     float y1 = floorf((1.0f - v0) * (float)hf->height - 0.5f) + 2.0f;
-    float extent = fmaxf(x1 - x0, y1 - y0) + 1.0f; /* texels a side; NaN fails below */
+    float extent = gdm_fmaxf(x1 - x0, y1 - y0) + 1.0f; /* texels a side; NaN fails below */
     if (!(extent <= (float)(1 << (s->window_levels - 1))) || !(fabsf(x0) < 1e6f) ||
         !(fabsf(y0) < 1e6f))
         return s->map_max;
@@ -605,8 +605,8 @@ static float refine_hit(const gdm_state *s, float clear_w, meso_vec3 t_in, meso_
     ray_probe probe = ray_probe_start(t_in, vt, clear_w);
 #define INSIDE(x) ((solid_floor && (x) >= dt) || ray_probe_inside(s, &probe, (x)))
     float window = s->refine_window;
-    float guess = fminf(fmaxf(d, 0.0f), dt);
-    float before = fmaxf(guess - window, 0.0f), after = fminf(guess + 0.5f * window, dt);
+    float guess = gdm_fminf(gdm_fmaxf(d, 0.0f), dt);
+    float before = gdm_fmaxf(guess - window, 0.0f), after = gdm_fminf(guess + 0.5f * window, dt);
     float lo = 0.0f, hi = -1.0f;
     if (!INSIDE(before) && INSIDE(after)) {
         lo = before;
@@ -671,7 +671,7 @@ static bool shadowed(const gdm_state *s, meso_vec3 t, meso_vec3 normal_t, meso_v
     meso_vec3 offset = s->heightfield ? (meso_vec3){0.0f, 0.0f, -1.0f} : normal_t;
     meso_vec3 step = meso_vec3_mul(offset, meso_vec3_scale(s->voxel, bias));
     t = meso_vec3_add(t, step);
-    t.z = fminf(fmaxf(t.z, 0.0f), 1.0f);
+    t.z = gdm_fminf(gdm_fmaxf(t.z, 0.0f), 1.0f);
     /* A hit at the entry through a seam fin (the neighbour prism's segment just missed the
      * thread, this one starts inside it) has its surface somewhere near, not at the point: a
      * start `bias` off along the normal can still be inside, and its probes then report the
@@ -680,9 +680,9 @@ static bool shadowed(const gdm_state *s, meso_vec3 t, meso_vec3 normal_t, meso_v
      * nothing of the cut face, and pushing lets light in (weave-plane -1.4 dB, measured). */
     for (int k = 0; k < 8 && at_seam && inside_mesostructure(s, t); k++) {
         t = meso_vec3_add(t, step);
-        t.z = fminf(fmaxf(t.z, 0.0f), 1.0f);
+        t.z = gdm_fminf(gdm_fmaxf(t.z, 0.0f), 1.0f);
     }
-    float boundary = fminf(t.z / -lt.z, MESO_GDM_MAX_RAY_LENGTH); /* to the top (lt.z < 0) */
+    float boundary = gdm_fminf(t.z / -lt.z, MESO_GDM_MAX_RAY_LENGTH); /* to the top (lt.z < 0) */
     float margin = bias * s->voxel.z;
     if (boundary <= margin) return false;
     float d = lookup(s, t, lt);
@@ -698,11 +698,11 @@ static bool shadowed(const gdm_state *s, meso_vec3 t, meso_vec3 normal_t, meso_v
             /* every probe below lies on t + x lt, x in [0, reach]: above the highest texel
              * that stretch's (u, v) box can read, a probe is outside without a sample (the
              * answer the sample gives, so the same image) */
-            float reach = fmaxf(boundary, d + 0.5f * s->refine_window);
+            float reach = gdm_fmaxf(boundary, d + 0.5f * s->refine_window);
             meso_vec3 end = meso_vec3_madd(t, lt, reach);
-            float highest = window_bound(s, fminf(t.x, end.x), fmaxf(t.x, end.x),
-                                         fminf(t.y, end.y), fmaxf(t.y, end.y));
-            clear_w = fmaxf(clear_w, 1.0f - highest - 1e-6f);
+            float highest = window_bound(s, gdm_fminf(t.x, end.x), gdm_fmaxf(t.x, end.x),
+                                         gdm_fminf(t.y, end.y), gdm_fmaxf(t.y, end.y));
+            clear_w = gdm_fmaxf(clear_w, 1.0f - highest - 1e-6f);
         }
         ray_probe probe = ray_probe_start(t, lt, clear_w);
         if (ray_probe_inside(s, &probe, d + 0.5f * s->refine_window)) return true;
@@ -750,10 +750,10 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
          * the segment stays above the highest texel its (u, v) box can read, all of them are
          * outside and it misses, known without the lookup (the same answer, so the same
          * image): most fins of a sphere's outline band are crossed above the bumps. */
-        float highest = window_bound(s, fminf(t_in.x, t_out.x), fmaxf(t_in.x, t_out.x),
-                                     fminf(t_in.y, t_out.y), fmaxf(t_in.y, t_out.y));
-        clear_w = fmaxf(clear_w, 1.0f - highest - 1e-6f);
-        if (fmaxf(t_in.z, t_out.z) + 1e-6f < clear_w) return false;
+        float highest = window_bound(s, gdm_fminf(t_in.x, t_out.x), gdm_fmaxf(t_in.x, t_out.x),
+                                     gdm_fminf(t_in.y, t_out.y), gdm_fmaxf(t_in.y, t_out.y));
+        clear_w = gdm_fmaxf(clear_w, 1.0f - highest - 1e-6f);
+        if (gdm_fmaxf(t_in.z, t_out.z) + 1e-6f < clear_w) return false;
     }
     float d = lookup(s, t_in, vt);
     if (s->refine_steps > 0) {
