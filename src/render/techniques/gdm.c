@@ -301,6 +301,8 @@ static bool solid_grid(meso_context *ctx, gdm_state *s) {
     return true;
 }
 
+static bool state_inside(const void *state, meso_vec3 uvw);
+
 static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
                                const meso_object *object, void **out_state) {
     *out_state = NULL;
@@ -395,7 +397,9 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
                                                 .shadow_bias = s->shadow_bias,
                                                 .refine_window = s->refine_window,
                                                 .refine_steps = s->refine_steps,
-                                                .shadow_steps = s->shadow_steps},
+                                                .shadow_steps = s->shadow_steps,
+                                                .inside = state_inside,
+                                                .inside_user = s},
                               object->name, &s->shell)) != MESO_OK)
         goto fail;
     if (options.gi && scene->environment &&
@@ -568,6 +572,16 @@ __attribute__((noinline)) static float solid_probe(const gdm_state *s, meso_vec3
     float f = meso_solid_distance(s->solid, q);
     *out_radius = fabsf(f);
     return f;
+}
+
+/* gdm_mesostructure_inside's answer (gdm_shell_desc.inside: the shell walk's probes), by the
+ * grid's proof for a solid where it has one and above the whole map's highest texel for a
+ * height field, else by the evaluation: the same answer for every point. */
+static bool state_inside(const void *state, meso_vec3 uvw) {
+    const gdm_state *s = state;
+    if (s->heightfield) return !(uvw.z < s->clear_w) && inside_mesostructure(s, uvw);
+    float radius;
+    return solid_probe(s, uvw, &radius) <= 0.0f;
 }
 
 static inline ray_probe ray_probe_start(meso_vec3 t0, meso_vec3 dir, float clear_w) {
