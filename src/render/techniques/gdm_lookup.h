@@ -63,9 +63,9 @@ static inline size_t gdm_lookup_table_bytes(const gdm_lookup_table *t) {
 }
 
 /* fminf and fmaxf with libm's results, NaNs included (glibc's x86-64 minss/maxss: the second
- * operand when equal, the other operand when one is a NaN), inline: without
- * -ffinite-math-only the compiler calls libm for them, 5 instructions and a call each, and the
- * hot paths call them millions of times a frame. */
+ * operand when equal, the other operand when one is a NaN; of two zeros C allows either),
+ * inline: without -ffinite-math-only the compiler calls libm for them, 5 instructions and a
+ * call each, and the hot paths call them millions of times a frame. */
 static inline float gdm_fminf(float a, float b) { return a < b || b != b ? a : b; }
 static inline float gdm_fmaxf(float a, float b) { return a > b || b != b ? a : b; }
 
