@@ -668,8 +668,8 @@ static meso_vec3 texture_normal(const gdm_state *s, meso_vec3 uvw) {
 /* Is the light, seen from T along the unit texture direction lt, blocked before the slab's
  * boundary? §3.2: "if d_GDM(T, L) is not equal to d_max" -- d_max being the distance to the
  * boundary since §4.1 replaced it. */
-static bool shadowed(const gdm_state *s, meso_vec3 t, meso_vec3 normal_t, meso_vec3 lt,
-                     bool at_seam) {
+__attribute__((flatten)) static bool shadowed(const gdm_state *s, meso_vec3 t, meso_vec3 normal_t,
+                                              meso_vec3 lt, bool at_seam) {
     /* A light toward the slab's bottom lies under the base surface: the object's own body is
      * between (the far wall of a torus seen through the holes of the near one). §3.2's local
      * test cannot see that; this much of the base geometry's shadow it can. Measured on an
