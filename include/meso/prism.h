@@ -112,6 +112,15 @@ typedef struct meso_prism_plane {
     float offset;
 } meso_prism_plane;
 
+/* What meso_prism_layer_face_uvw needs of a face, computed once: its first vertex, edges and
+ * their Gram matrix (the values the per-point computation made, so the same bits), and its
+ * vertices' (u, v, w). */
+typedef struct meso_prism_face_frame {
+    meso_vec3 p0, e1, e2;
+    float d00, d01, d11, det;
+    meso_vec3 uvw[3];
+} meso_prism_face_frame;
+
 typedef struct meso_prism_layer {
     /* 8 triangles a prism. Face order: every prism's top first, then their fins, then their
      * bottoms, so that a renderer drawing in order meets the nearest layer first (early depth
@@ -122,7 +131,11 @@ typedef struct meso_prism_layer {
     meso_vec3 *uvws;          /* per vertex of `faces`: (u, v, 0) top, (u, v, 1) bottom */
     meso_prism *prisms;       /* per base triangle */
     meso_prism_plane *planes; /* MESO_PRISM_NUM_FACES per prism, in the face slots' order */
-    uint8_t *fin_convex;      /* 3 per prism: the fin's two triangles bound a convex side */
+    /* the same planes by component, 32 floats a prism (normal x of the 8 slots, then y, z,
+     * offset), 32-byte aligned: meso_prism_layer_exit tests the 8 planes at once */
+    float *plane_lanes;
+    meso_prism_face_frame *face_frames; /* per face of `faces`: meso_prism_layer_face_uvw's */
+    uint8_t *fin_convex; /* 3 per prism: the fin's two triangles bound a convex side */
     size_t num_prisms;
     float depth;
 } meso_prism_layer;

@@ -3,6 +3,7 @@
  * (GDM §3.1 Fig. 3, §3.2 Fig. 5). */
 #include <float.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -110,7 +111,13 @@ static void set_face(meso_prism_layer *layer, size_t prism, int slot, uint32_t a
     uint32_t *idx = layer->faces->indices + 3 * face;
     idx[0] = a, idx[1] = b, idx[2] = c;
     const meso_vec3 *p = layer->faces->positions;
-    layer->planes[prism * MESO_PRISM_NUM_FACES + (size_t)slot] = plane_of(p[a], p[b], p[c]);
+    meso_prism_plane pl = plane_of(p[a], p[b], p[c]);
+    layer->planes[prism * MESO_PRISM_NUM_FACES + (size_t)slot] = pl;
+    float *lanes = layer->plane_lanes + prism * 4 * MESO_PRISM_NUM_FACES + (size_t)slot;
+    lanes[0] = pl.normal.x;
+    lanes[MESO_PRISM_NUM_FACES] = pl.normal.y;
+    lanes[2 * MESO_PRISM_NUM_FACES] = pl.normal.z;
+    lanes[3 * MESO_PRISM_NUM_FACES] = pl.offset;
 }
 
 /* Fin e of prism t over the edge (a, b) of its counter-clockwise base triangle: outward it is
@@ -141,6 +148,8 @@ static void extrude_fin(meso_prism_layer *layer, size_t prism, int e, uint32_t a
     layer->fin_convex[3 * prism + (size_t)e] = s <= 0.0f;
 }
 
+static meso_prism_face_frame face_frame_of(const meso_prism_layer *layer, size_t face);
+
 meso_result meso_prism_layer_create(meso_context *ctx, const meso_mesh *mesh, float depth,
                                     const char *name, meso_prism_layer **out_layer) {
     *out_layer = NULL;
@@ -165,7 +174,12 @@ meso_result meso_prism_layer_create(meso_context *ctx, const meso_mesh *mesh, fl
     layer->prisms = calloc(n, sizeof *layer->prisms);
     layer->planes = calloc(n * MESO_PRISM_NUM_FACES, sizeof *layer->planes);
     layer->fin_convex = calloc(3 * n, 1);
-    if (!layer->uvws || !layer->prisms || !layer->planes || !layer->fin_convex) {
+    layer->face_frames = malloc((size_t)(nt ? nt : 1) * sizeof *layer->face_frames);
+    size_t lanes_bytes = n * 4 * MESO_PRISM_NUM_FACES * sizeof(float); /* a multiple of 32 */
+    layer->plane_lanes = aligned_alloc(32, lanes_bytes);
+    if (layer->plane_lanes) memset(layer->plane_lanes, 0, lanes_bytes);
+    if (!layer->uvws || !layer->prisms || !layer->planes || !layer->fin_convex ||
+        !layer->plane_lanes || !layer->face_frames) {
         r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: prisms", name);
         goto fail;
     }
@@ -188,6 +202,7 @@ meso_result meso_prism_layer_create(meso_context *ctx, const meso_mesh *mesh, fl
         set_face(layer, t, MESO_PRISM_BOTTOM, b + v[0], b + v[2], b + v[1]);
         for (int e = 0; e < 3; e++) extrude_fin(layer, t, e, v[e], v[(e + 1) % 3]);
     }
+    for (size_t f = 0; f < (size_t)nt; f++) layer->face_frames[f] = face_frame_of(layer, f);
     *out_layer = layer;
     return MESO_OK;
 fail:
@@ -201,6 +216,8 @@ void meso_prism_layer_destroy(meso_prism_layer *layer) {
     free(layer->uvws);
     free(layer->prisms);
     free(layer->planes);
+    free(layer->plane_lanes);
+    free(layer->face_frames);
     free(layer->fin_convex);
     free(layer);
 }
@@ -209,69 +226,97 @@ size_t meso_prism_layer_memory(const meso_prism_layer *layer) {
     if (!layer) return 0;
     size_t nv = layer->faces->num_vertices, nt = layer->faces->num_triangles;
     return nv * (2 * sizeof(meso_vec3) + sizeof(meso_vec2) + sizeof(meso_vec3)) +
-           nt * 3 * sizeof(uint32_t) +
+           nt * (3 * sizeof(uint32_t) + sizeof(meso_prism_face_frame)) +
            layer->num_prisms *
-               (sizeof(meso_prism) + MESO_PRISM_NUM_FACES * sizeof(meso_prism_plane) + 3);
+               (sizeof(meso_prism) + MESO_PRISM_NUM_FACES * sizeof(meso_prism_plane) +
+                4 * MESO_PRISM_NUM_FACES * sizeof(float) + 3);
+}
+
+/* The face's constants of meso_prism_layer_face_uvw (once a face, at creation). */
+static meso_prism_face_frame face_frame_of(const meso_prism_layer *layer, size_t face) {
+    const uint32_t *idx = layer->faces->indices + 3 * face;
+    const meso_vec3 *p = layer->faces->positions;
+    meso_prism_face_frame f;
+    f.p0 = p[idx[0]];
+    f.e1 = meso_vec3_sub(p[idx[1]], p[idx[0]]);
+    f.e2 = meso_vec3_sub(p[idx[2]], p[idx[0]]);
+    f.d00 = meso_vec3_dot(f.e1, f.e1), f.d01 = meso_vec3_dot(f.e1, f.e2);
+    f.d11 = meso_vec3_dot(f.e2, f.e2);
+    f.det = f.d00 * f.d11 - f.d01 * f.d01;
+    for (int k = 0; k < 3; k++) f.uvw[k] = layer->uvws[idx[k]];
+    return f;
 }
 
 meso_vec3 meso_prism_layer_face_uvw(const meso_prism_layer *layer, size_t face, meso_vec3 x) {
-    const uint32_t *idx = layer->faces->indices + 3 * face;
-    const meso_vec3 *p = layer->faces->positions;
-    meso_vec3 e1 = meso_vec3_sub(p[idx[1]], p[idx[0]]), e2 = meso_vec3_sub(p[idx[2]], p[idx[0]]);
-    meso_vec3 d = meso_vec3_sub(x, p[idx[0]]);
-    float d00 = meso_vec3_dot(e1, e1), d01 = meso_vec3_dot(e1, e2), d11 = meso_vec3_dot(e2, e2);
-    float d20 = meso_vec3_dot(d, e1), d21 = meso_vec3_dot(d, e2);
-    float det = d00 * d11 - d01 * d01;
+    const meso_prism_face_frame *f = &layer->face_frames[face];
+    meso_vec3 d = meso_vec3_sub(x, f->p0);
+    float d20 = meso_vec3_dot(d, f->e1), d21 = meso_vec3_dot(d, f->e2);
     float b1 = 0.0f, b2 = 0.0f;
-    if (det > 0.0f) {
-        b1 = (d11 * d20 - d01 * d21) / det;
-        b2 = (d00 * d21 - d01 * d20) / det;
+    if (f->det > 0.0f) {
+        b1 = (f->d11 * d20 - f->d01 * d21) / f->det;
+        b2 = (f->d00 * d21 - f->d01 * d20) / f->det;
     }
-    return meso_vec3_barycentric(layer->uvws[idx[0]], layer->uvws[idx[1]], layer->uvws[idx[2]],
-                                 1.0f - b1 - b2, b1, b2);
+    return meso_vec3_barycentric(f->uvw[0], f->uvw[1], f->uvw[2], 1.0f - b1 - b2, b1, b2);
 }
 
-/* The ray parameter from which the ray stays outside the plane's half-space for good: 0 when
- * it starts outside (beyond `tolerance`) and does not come back, INFINITY when it never
- * leaves. A line meets a half-space's outside in one interval [t, inf) or not at all, so the
- * exit of an intersection of half-spaces is the least such t, of a union the largest.
- * `partner`: the plane is the other triangle of the fin the ray entered through; the origin is
- * on that fin, so "outside" there is the fin's own rounding (a flat fin's two planes differ in
- * their last bits), not a concave fold the ray starts beyond. */
-static inline float leave_time(const meso_prism_plane *pl, meso_vec3 o, meso_vec3 d,
-                               float tolerance, bool partner) {
-    float dn = meso_vec3_dot(pl->normal, d);
-    float s0 = meso_vec3_dot(pl->normal, o) - pl->offset;
-    if (dn > 0.0f) return s0 >= 0.0f ? 0.0f : -s0 / dn;
-    return s0 > tolerance && !partner ? 0.0f : INFINITY; /* a zero normal never bounds */
+/* Eight float lanes (GCC vector extensions: AVX with -march=native, SSE pairs otherwise). */
+typedef float prism_v8f __attribute__((vector_size(32)));
+typedef int32_t prism_v8i __attribute__((vector_size(32)));
+
+static inline prism_v8f prism_splat(float x) { return (prism_v8f){x, x, x, x, x, x, x, x}; }
+
+/* For every face plane of the prism at once, the ray parameter from which the ray stays
+ * outside the plane's half-space for good: 0 when it starts outside (beyond `tolerance`) and
+ * does not come back, INFINITY when it never leaves. A line meets a half-space's outside in one
+ * interval [t, inf) or not at all, so the exit of an intersection of half-spaces is the least
+ * such t, of a union the largest. The entry face's own plane never bounds (INFINITY); the other
+ * triangle of the fin the ray entered through (its "partner") is not outside by its start: the
+ * origin is on that fin, so "outside" there is the fin's own rounding (a flat fin's two planes
+ * differ in their last bits), not a concave fold the ray starts beyond. Each lane computes what
+ * the scalar test did, operation for operation (dot products left to right, -s0 / dn), so the
+ * times are the same bits. */
+static inline void leave_times(const float *lanes, meso_vec3 o, meso_vec3 d, float tolerance,
+                               int entry_slot, float out[MESO_PRISM_NUM_FACES]) {
+    prism_v8f nx, ny, nz, offset;
+    memcpy(&nx, lanes, sizeof nx);
+    memcpy(&ny, lanes + MESO_PRISM_NUM_FACES, sizeof ny);
+    memcpy(&nz, lanes + 2 * MESO_PRISM_NUM_FACES, sizeof nz);
+    memcpy(&offset, lanes + 3 * MESO_PRISM_NUM_FACES, sizeof offset);
+    prism_v8f dn = nx * prism_splat(d.x) + ny * prism_splat(d.y) + nz * prism_splat(d.z);
+    prism_v8f s0 = (nx * prism_splat(o.x) + ny * prism_splat(o.y) + nz * prism_splat(o.z)) - offset;
+    const prism_v8i slot = {0, 1, 2, 3, 4, 5, 6, 7};
+    prism_v8i entry = (prism_v8i){0, 0, 0, 0, 0, 0, 0, 0} + entry_slot;
+    prism_v8i partner = (slot >= 2) & ((slot ^ 1) == entry);
+    const prism_v8f zero = prism_splat(0.0f), infinity = prism_splat(INFINITY);
+    prism_v8f leaving = -s0 / dn; /* only where dn > 0 */
+    prism_v8i forward = dn > zero, started = s0 >= zero;
+    prism_v8i away = (s0 > prism_splat(tolerance)) & ~partner;
+    prism_v8i t = (forward & ((started & (prism_v8i)zero) | (~started & (prism_v8i)leaving))) |
+                  (~forward & ((away & (prism_v8i)zero) | (~away & (prism_v8i)infinity)));
+    t = (t & ~(slot == entry)) | ((prism_v8i)infinity & (slot == entry));
+    memcpy(out, &t, sizeof t);
 }
 
 bool meso_prism_layer_exit(const meso_prism_layer *layer, size_t prism, meso_vec3 origin,
                            meso_vec3 direction, int entry_slot, float *out_t, int *out_slot) {
-    const meso_prism_plane *pl = layer->planes + prism * MESO_PRISM_NUM_FACES;
     /* the origin lies on the entry face: a point of another face's plane through the same edge
      * may round to either side of it; beyond this it is really outside (a concave fin) */
     float tolerance = 1e-5f * (fabsf(origin.x) + fabsf(origin.y) + fabsf(origin.z) + layer->depth);
+    float times[MESO_PRISM_NUM_FACES];
+    leave_times(layer->plane_lanes + prism * 4 * MESO_PRISM_NUM_FACES, origin, direction, tolerance,
+                entry_slot, times);
     float best = INFINITY;
     int best_slot = -1;
     for (int slot = 0; slot < MESO_PRISM_NUM_FACES; slot += slot < MESO_PRISM_FIN ? 1 : 2) {
-        float t;
+        float t = times[slot];
         int which = slot;
-        if (slot < MESO_PRISM_FIN) {
-            t = slot == entry_slot ? INFINITY
-                                   : leave_time(&pl[slot], origin, direction, tolerance, false);
-        } else {
-            float t1 = slot == entry_slot ? INFINITY
-                                          : leave_time(&pl[slot], origin, direction, tolerance,
-                                                       slot + 1 == entry_slot);
-            float t2 = slot + 1 == entry_slot ? INFINITY
-                                              : leave_time(&pl[slot + 1], origin, direction,
-                                                           tolerance, slot == entry_slot);
+        if (slot >= MESO_PRISM_FIN) {
+            float t2 = times[slot + 1];
             bool convex = layer->fin_convex[3 * prism + (size_t)(slot - MESO_PRISM_FIN) / 2];
             /* Fig. 5: a convex fin bounds the intersection of its two half-spaces (the nearer
              * plane), a concave one their union (the farther) */
-            bool first = convex ? t1 <= t2 : t1 >= t2;
-            t = first ? t1 : t2;
+            bool first = convex ? t <= t2 : t >= t2;
+            t = first ? t : t2;
             which = first ? slot : slot + 1;
         }
         if (t < best) {

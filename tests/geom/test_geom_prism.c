@@ -222,6 +222,120 @@ static void test_rays_along_fins_stay_in_their_prism(void **state) {
     meso_context_destroy(ctx);
 }
 
+/* The exit and face_uvw as they were computed one plane and one point at a time, before the
+ * 8-wide plane test and the per-face constants: the library must give these bits. */
+static float scalar_leave_time(const meso_prism_plane *pl, meso_vec3 o, meso_vec3 d,
+                               float tolerance, bool partner) {
+    float dn = meso_vec3_dot(pl->normal, d);
+    float s0 = meso_vec3_dot(pl->normal, o) - pl->offset;
+    if (dn > 0.0f) return s0 >= 0.0f ? 0.0f : -s0 / dn;
+    return s0 > tolerance && !partner ? 0.0f : INFINITY;
+}
+
+static bool scalar_exit(const meso_prism_layer *layer, size_t prism, meso_vec3 origin,
+                        meso_vec3 direction, int entry_slot, float *out_t, int *out_slot) {
+    const meso_prism_plane *pl = layer->planes + prism * MESO_PRISM_NUM_FACES;
+    float tolerance = 1e-5f * (fabsf(origin.x) + fabsf(origin.y) + fabsf(origin.z) + layer->depth);
+    float best = INFINITY;
+    int best_slot = -1;
+    for (int slot = 0; slot < MESO_PRISM_NUM_FACES; slot += slot < MESO_PRISM_FIN ? 1 : 2) {
+        float t;
+        int which = slot;
+        if (slot < MESO_PRISM_FIN) {
+            t = slot == entry_slot
+                    ? INFINITY
+                    : scalar_leave_time(&pl[slot], origin, direction, tolerance, false);
+        } else {
+            float t1 = slot == entry_slot ? INFINITY
+                                          : scalar_leave_time(&pl[slot], origin, direction,
+                                                              tolerance, slot + 1 == entry_slot);
+            float t2 = slot + 1 == entry_slot ? INFINITY
+                                              : scalar_leave_time(&pl[slot + 1], origin, direction,
+                                                                  tolerance, slot == entry_slot);
+            bool convex = layer->fin_convex[3 * prism + (size_t)(slot - MESO_PRISM_FIN) / 2];
+            bool first = convex ? t1 <= t2 : t1 >= t2;
+            t = first ? t1 : t2;
+            which = first ? slot : slot + 1;
+        }
+        if (t < best) {
+            best = t;
+            best_slot = which;
+        }
+    }
+    *out_t = best;
+    *out_slot = best_slot;
+    return best_slot >= 0;
+}
+
+static meso_vec3 scalar_face_uvw(const meso_prism_layer *layer, size_t face, meso_vec3 x) {
+    const uint32_t *idx = layer->faces->indices + 3 * face;
+    const meso_vec3 *p = layer->faces->positions;
+    meso_vec3 e1 = meso_vec3_sub(p[idx[1]], p[idx[0]]), e2 = meso_vec3_sub(p[idx[2]], p[idx[0]]);
+    meso_vec3 d = meso_vec3_sub(x, p[idx[0]]);
+    float d00 = meso_vec3_dot(e1, e1), d01 = meso_vec3_dot(e1, e2), d11 = meso_vec3_dot(e2, e2);
+    float d20 = meso_vec3_dot(d, e1), d21 = meso_vec3_dot(d, e2);
+    float det = d00 * d11 - d01 * d01;
+    float b1 = 0.0f, b2 = 0.0f;
+    if (det > 0.0f) {
+        b1 = (d11 * d20 - d01 * d21) / det;
+        b2 = (d00 * d21 - d01 * d20) / det;
+    }
+    return meso_vec3_barycentric(layer->uvws[idx[0]], layer->uvws[idx[1]], layer->uvws[idx[2]],
+                                 1.0f - b1 - b2, b1, b2);
+}
+
+static bool same_bits(float a, float b) { return memcmp(&a, &b, sizeof a) == 0; }
+
+/* meso_prism_layer_exit tests the 8 planes at once and face_uvw reads per-face constants: the
+ * same bits as the one-at-a-time computation, for rays from every face slot (and from inside)
+ * in every direction, on a torus (convex and concave fins). */
+static void test_exit_and_face_uvw_match_the_scalar_computation(void **state) {
+    meso_context *ctx = test_context(1);
+    meso_mesh *mesh = make_shape(ctx, MESO_SHAPE_TORUS, 10);
+    meso_prism_layer *layer = NULL;
+    assert_int_equal(meso_prism_layer_create(ctx, mesh, 0.1f, "torus", &layer), MESO_OK);
+    unsigned seed = 11;
+    size_t checked = 0;
+    for (size_t p = 0; p < layer->num_prisms; p++) {
+        for (int k = 0; k < 40; k++) {
+            float r[6];
+            for (int i = 0; i < 6; i++) {
+                seed = seed * 1103515245u + 12345u;
+                r[i] = (float)(seed >> 8) / 16777216.0f;
+            }
+            float a = r[0], b = r[1] * (1.0f - a);
+            meso_vec3 uvw = {0, 0, r[2]};
+            const meso_prism *prism = &layer->prisms[p];
+            uvw.x = prism->uv[0].x * (1.0f - a - b) + prism->uv[1].x * a + prism->uv[2].x * b;
+            uvw.y = prism->uv[0].y * (1.0f - a - b) + prism->uv[1].y * a + prism->uv[2].y * b;
+            int entry = k % 9 - 1; /* -1 (inside) and every slot */
+            if (entry == MESO_PRISM_TOP) uvw.z = 0.0f;
+            if (entry == MESO_PRISM_BOTTOM) uvw.z = 1.0f;
+            meso_vec3 origin = meso_prism_map(prism, mesh, 0.1f, uvw, -1);
+            meso_vec3 dir = meso_vec3_normalize((meso_vec3){r[3] - 0.5f, r[4] - 0.5f, r[5] - 0.5f});
+            float t0, t1;
+            int s0, s1;
+            bool ok0 = scalar_exit(layer, p, origin, dir, entry, &t0, &s0);
+            bool ok1 = meso_prism_layer_exit(layer, p, origin, dir, entry, &t1, &s1);
+            assert_true(ok0 == ok1);
+            assert_int_equal(s0, s1);
+            assert_true(same_bits(t0, t1));
+            if (!ok0 || !isfinite(t0)) continue;
+            size_t face = meso_prism_layer_face(layer, p, s0);
+            meso_vec3 x = meso_vec3_madd(origin, dir, t0);
+            meso_vec3 u0 = scalar_face_uvw(layer, face, x);
+            meso_vec3 u1 = meso_prism_layer_face_uvw(layer, face, x);
+            assert_true(same_bits(u0.x, u1.x) && same_bits(u0.y, u1.y) && same_bits(u0.z, u1.z));
+            checked++;
+        }
+    }
+    print_message("exits compared bit for bit: %zu\n", checked);
+    assert_true(checked > 1000);
+    meso_prism_layer_destroy(layer);
+    meso_mesh_destroy(mesh);
+    meso_context_destroy(ctx);
+}
+
 static void test_layer_refuses_bad_input_naming_it(void **state) {
     meso_context *ctx = test_context(1);
     meso_mesh *mesh = make_shape(ctx, MESO_SHAPE_PLANE, 1);
@@ -250,6 +364,7 @@ int main(void) {
         cmocka_unit_test(test_map_reaches_the_extruded_vertices),
         cmocka_unit_test(test_exit_on_a_plane_is_exact),
         cmocka_unit_test(test_rays_along_fins_stay_in_their_prism),
+        cmocka_unit_test(test_exit_and_face_uvw_match_the_scalar_computation),
         cmocka_unit_test(test_layer_refuses_bad_input_naming_it),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

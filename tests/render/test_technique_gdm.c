@@ -60,6 +60,33 @@ static void test_lookup_atan2_is_within_3e7_radians(void **state) {
     assert_true(fabs(gdm_atan2(-1.0f, 0.0f) + 0.5 * 3.14159265358979) < 3e-7);
 }
 
+/* gdm_fminf and gdm_fmaxf give libm's fminf and fmaxf bits, infinities, subnormals and NaNs
+ * included (a NaN result only as a NaN). Of two zeros either may come back: C allows both and
+ * GCC, taking fminf as commutative, may swap the call's operands, so libm's own pick varies
+ * with the call site. */
+static void test_inline_fmin_fmax_equal_libm(void **state) {
+    (void)state;
+    const float values[] = {0.0f,    -0.0f, 1.0f,     -1.0f,     0.5f, 1e-40f,
+                            -1e-40f, 3e38f, INFINITY, -INFINITY, NAN};
+    const size_t n = sizeof values / sizeof values[0];
+    for (size_t i = 0; i < n; i++)
+        for (size_t j = 0; j < n; j++) {
+            float a = values[i], b = values[j];
+            /* volatile: libm's call, not a folded constant */
+            volatile float va = a, vb = b;
+            float lo = fminf(va, vb), hi = fmaxf(va, vb);
+            float my_lo = gdm_fminf(a, b), my_hi = gdm_fmaxf(a, b);
+            if (isnan(lo) || lo == 0.0f)
+                assert_true(isnan(lo) ? isnan(my_lo) : my_lo == 0.0f);
+            else
+                assert_memory_equal(&lo, &my_lo, sizeof lo);
+            if (isnan(hi) || hi == 0.0f)
+                assert_true(isnan(hi) ? isnan(my_hi) : my_hi == 0.0f);
+            else
+                assert_memory_equal(&hi, &my_hi, sizeof hi);
+        }
+}
+
 /* gdm_lookup8 gives meso_gdm_lookup's d (one group of 8 eigen-maps and two). */
 static void test_lookup8_equals_the_bakes_lookup(void **state) {
     meso_context *ctx = test_context(2);
@@ -256,6 +283,7 @@ static void test_height_field_matches_relief_exact_on_a_plane(void **state) {
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_lookup_atan2_is_within_3e7_radians),
+        cmocka_unit_test(test_inline_fmin_fmax_equal_libm),
         cmocka_unit_test(test_lookup8_equals_the_bakes_lookup),
         cmocka_unit_test(test_closed_mesh_with_a_constant_height_field_has_no_gap),
         cmocka_unit_test(test_slab_solid_equals_the_translated_base_mesh),

@@ -220,6 +220,7 @@ static bool heightfield_clearances(gdm_state *s) {
 
 /* A texel index of the map's wrapping, for the windows below. */
 static inline int window_index(meso_wrap wrap, int i, int n) {
+    if ((unsigned)i < (unsigned)n) return i; /* most: no division */
     if (wrap == MESO_WRAP_CLAMP) return i < 0 ? 0 : (i >= n ? n - 1 : i);
     i %= n;
     return i < 0 ? i + n : i;
@@ -266,12 +267,12 @@ static inline float window_bound(const gdm_state *s, float u0, float u1, float v
     float x1 = floorf(u1 * (float)hf->width - 0.5f) + 2.0f;
     float y0 = floorf((1.0f - v1) * (float)hf->height - 0.5f) - 1.0f;
     float y1 = floorf((1.0f - v0) * (float)hf->height - 0.5f) + 2.0f;
-    float extent = fmaxf(x1 - x0, y1 - y0) + 1.0f; /* texels a side; NaN fails below */
+    float extent = gdm_fmaxf(x1 - x0, y1 - y0) + 1.0f; /* texels a side; NaN fails below */
     if (!(extent <= (float)(1 << (s->window_levels - 1))) || !(fabsf(x0) < 1e6f) ||
         !(fabsf(y0) < 1e6f))
         return s->map_max;
-    int level = 0;
-    while ((float)(1 << level) < extent) level++;
+    /* the least level with 2^level >= extent (an integer, at least 4): no loop */
+    int level = 32 - __builtin_clz((unsigned)extent - 1u);
     int i = window_index(hf->wrap, (int)x0, hf->width);
     int j = window_index(hf->wrap, (int)y0, hf->height);
     size_t plane = (size_t)hf->width * (size_t)hf->height;
@@ -299,6 +300,8 @@ static bool solid_grid(meso_context *ctx, gdm_state *s) {
     meso_parallel_for(ctx, GDM_GRID_LAYERS, solid_grid_layer, s);
     return true;
 }
+
+static bool state_inside(const void *state, meso_vec3 uvw);
 
 static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
                                const meso_object *object, void **out_state) {
@@ -394,7 +397,9 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
                                                 .shadow_bias = s->shadow_bias,
                                                 .refine_window = s->refine_window,
                                                 .refine_steps = s->refine_steps,
-                                                .shadow_steps = s->shadow_steps},
+                                                .shadow_steps = s->shadow_steps,
+                                                .inside = state_inside,
+                                                .inside_user = s},
                               object->name, &s->shell)) != MESO_OK)
         goto fail;
     if (options.gi && scene->environment &&
@@ -569,6 +574,16 @@ __attribute__((noinline)) static float solid_probe(const gdm_state *s, meso_vec3
     return f;
 }
 
+/* gdm_mesostructure_inside's answer (gdm_shell_desc.inside: the shell walk's probes), by the
+ * grid's proof for a solid where it has one and above the whole map's highest texel for a
+ * height field, else by the evaluation: the same answer for every point. */
+static bool state_inside(const void *state, meso_vec3 uvw) {
+    const gdm_state *s = state;
+    if (s->heightfield) return !(uvw.z < s->clear_w) && inside_mesostructure(s, uvw);
+    float radius;
+    return solid_probe(s, uvw, &radius) <= 0.0f;
+}
+
 static inline ray_probe ray_probe_start(meso_vec3 t0, meso_vec3 dir, float clear_w) {
     return (ray_probe){.t0 = t0, .dir = dir, .radius = {-1.0f, -1.0f}, .clear_w = clear_w};
 }
@@ -604,8 +619,8 @@ static float refine_hit(const gdm_state *s, float clear_w, meso_vec3 t_in, meso_
     ray_probe probe = ray_probe_start(t_in, vt, clear_w);
 #define INSIDE(x) ((solid_floor && (x) >= dt) || ray_probe_inside(s, &probe, (x)))
     float window = s->refine_window;
-    float guess = fminf(fmaxf(d, 0.0f), dt);
-    float before = fmaxf(guess - window, 0.0f), after = fminf(guess + 0.5f * window, dt);
+    float guess = gdm_fminf(gdm_fmaxf(d, 0.0f), dt);
+    float before = gdm_fmaxf(guess - window, 0.0f), after = gdm_fminf(guess + 0.5f * window, dt);
     float lo = 0.0f, hi = -1.0f;
     if (!INSIDE(before) && INSIDE(after)) {
         lo = before;
@@ -653,8 +668,8 @@ static meso_vec3 texture_normal(const gdm_state *s, meso_vec3 uvw) {
 /* Is the light, seen from T along the unit texture direction lt, blocked before the slab's
  * boundary? §3.2: "if d_GDM(T, L) is not equal to d_max" -- d_max being the distance to the
  * boundary since §4.1 replaced it. */
-static bool shadowed(const gdm_state *s, meso_vec3 t, meso_vec3 normal_t, meso_vec3 lt,
-                     bool at_seam) {
+__attribute__((flatten)) static bool shadowed(const gdm_state *s, meso_vec3 t, meso_vec3 normal_t,
+                                              meso_vec3 lt, bool at_seam) {
     /* A light toward the slab's bottom lies under the base surface: the object's own body is
      * between (the far wall of a torus seen through the holes of the near one). §3.2's local
      * test cannot see that; this much of the base geometry's shadow it can. Measured on an
@@ -670,7 +685,7 @@ static bool shadowed(const gdm_state *s, meso_vec3 t, meso_vec3 normal_t, meso_v
     meso_vec3 offset = s->heightfield ? (meso_vec3){0.0f, 0.0f, -1.0f} : normal_t;
     meso_vec3 step = meso_vec3_mul(offset, meso_vec3_scale(s->voxel, bias));
     t = meso_vec3_add(t, step);
-    t.z = fminf(fmaxf(t.z, 0.0f), 1.0f);
+    t.z = gdm_fminf(gdm_fmaxf(t.z, 0.0f), 1.0f);
     /* A hit at the entry through a seam fin (the neighbour prism's segment just missed the
      * thread, this one starts inside it) has its surface somewhere near, not at the point: a
      * start `bias` off along the normal can still be inside, and its probes then report the
@@ -679,9 +694,9 @@ static bool shadowed(const gdm_state *s, meso_vec3 t, meso_vec3 normal_t, meso_v
      * nothing of the cut face, and pushing lets light in (weave-plane -1.4 dB, measured). */
     for (int k = 0; k < 8 && at_seam && inside_mesostructure(s, t); k++) {
         t = meso_vec3_add(t, step);
-        t.z = fminf(fmaxf(t.z, 0.0f), 1.0f);
+        t.z = gdm_fminf(gdm_fmaxf(t.z, 0.0f), 1.0f);
     }
-    float boundary = fminf(t.z / -lt.z, MESO_GDM_MAX_RAY_LENGTH); /* to the top (lt.z < 0) */
+    float boundary = gdm_fminf(t.z / -lt.z, MESO_GDM_MAX_RAY_LENGTH); /* to the top (lt.z < 0) */
     float margin = bias * s->voxel.z;
     if (boundary <= margin) return false;
     float d = lookup(s, t, lt);
@@ -692,7 +707,18 @@ static bool shadowed(const gdm_state *s, meso_vec3 t, meso_vec3 normal_t, meso_v
          * table's error, 0.1 of the shell for a weave at k = 7, is larger than the gaps a
          * light ray threads through) */
         if (d >= boundary - margin) return false;
-        ray_probe probe = ray_probe_start(t, lt, s->clear_w);
+        float clear_w = s->clear_w;
+        if (s->window_max) {
+            /* every probe below lies on t + x lt, x in [0, reach]: above the highest texel
+             * that stretch's (u, v) box can read, a probe is outside without a sample (the
+             * answer the sample gives, so the same image) */
+            float reach = gdm_fmaxf(boundary, d + 0.5f * s->refine_window);
+            meso_vec3 end = meso_vec3_madd(t, lt, reach);
+            float highest = window_bound(s, gdm_fminf(t.x, end.x), gdm_fmaxf(t.x, end.x),
+                                         gdm_fminf(t.y, end.y), gdm_fmaxf(t.y, end.y));
+            clear_w = gdm_fmaxf(clear_w, 1.0f - highest - 1e-6f);
+        }
+        ray_probe probe = ray_probe_start(t, lt, clear_w);
         if (ray_probe_inside(s, &probe, d + 0.5f * s->refine_window)) return true;
         for (int k = 0; k < s->shadow_steps; k++) {
             float x = boundary * ((float)k + 0.5f) / (float)s->shadow_steps;
@@ -738,10 +764,10 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
          * the segment stays above the highest texel its (u, v) box can read, all of them are
          * outside and it misses, known without the lookup (the same answer, so the same
          * image): most fins of a sphere's outline band are crossed above the bumps. */
-        float highest = window_bound(s, fminf(t_in.x, t_out.x), fmaxf(t_in.x, t_out.x),
-                                     fminf(t_in.y, t_out.y), fmaxf(t_in.y, t_out.y));
-        clear_w = fmaxf(clear_w, 1.0f - highest - 1e-6f);
-        if (fmaxf(t_in.z, t_out.z) + 1e-6f < clear_w) return false;
+        float highest = window_bound(s, gdm_fminf(t_in.x, t_out.x), gdm_fmaxf(t_in.x, t_out.x),
+                                     gdm_fminf(t_in.y, t_out.y), gdm_fmaxf(t_in.y, t_out.y));
+        clear_w = gdm_fmaxf(clear_w, 1.0f - highest - 1e-6f);
+        if (gdm_fmaxf(t_in.z, t_out.z) + 1e-6f < clear_w) return false;
     }
     float d = lookup(s, t_in, vt);
     if (s->refine_steps > 0) {

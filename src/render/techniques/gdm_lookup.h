@@ -62,6 +62,13 @@ static inline size_t gdm_lookup_table_bytes(const gdm_lookup_table *t) {
            sizeof(float);
 }
 
+/* fminf and fmaxf with libm's results, NaNs included (glibc's x86-64 minss/maxss: the second
+ * operand when equal, the other operand when one is a NaN; of two zeros C allows either),
+ * inline: without -ffinite-math-only the compiler calls libm for them, 5 instructions and a
+ * call each, and the hot paths call them millions of times a frame. */
+static inline float gdm_fminf(float a, float b) { return a < b || b != b ? a : b; }
+static inline float gdm_fmaxf(float a, float b) { return a > b || b != b ? a : b; }
+
 static inline float gdm_tile_fraction(float x) {
     if (!isfinite(x)) return 0.0f;
     float f = x - floorf(x);
@@ -104,7 +111,7 @@ static inline float gdm_atan2(float y, float x) {
 static inline float gdm_lookup8(const gdm_lookup_table *t, meso_vec3 uvw, meso_vec3 direction) {
     const float two_pi = 6.28318530717958647692f, pi = 3.14159265358979323846f;
     float u = gdm_tile_fraction(uvw.x), v = gdm_tile_fraction(uvw.y);
-    float w = isfinite(uvw.z) ? fminf(fmaxf(uvw.z, 0.0f), 1.0f) : 0.0f;
+    float w = isfinite(uvw.z) ? gdm_fminf(gdm_fmaxf(uvw.z, 0.0f), 1.0f) : 0.0f;
     meso_axis ax = meso_axis_wrap(u * (float)t->width - 0.5f, t->width);
     meso_axis ay = meso_axis_wrap((1.0f - v) * (float)t->height - 0.5f, t->height);
     meso_axis az = meso_axis_clamp(w * (float)(t->layers - 1), t->layers);
@@ -128,20 +135,27 @@ static inline float gdm_lookup8(const gdm_lookup_table *t, meso_vec3 uvw, meso_v
     /* W(x, y, phi), trilinear */
     int ix[2] = {ax.i0, ax.i1}, iy[2] = {ay.i0, ay.i1}, ip[2] = {ap.i0, ap.i1};
     float wx[2] = {1.0f - ax.w, ax.w}, wy[2] = {1.0f - ay.w, ay.w}, wp[2] = {1.0f - ap.w, ap.w};
+    /* corner c = (x bit 0, y bit 1, phi bit 2): its weight (wx wy) wp and its row, with the
+     * (x, y) parts made once for the two phi corners */
+    float cw[8];
+    const float *rows[8];
+    for (int xy = 0; xy < 4; xy++) {
+        float wxy = wx[xy & 1] * wy[xy >> 1];
+        size_t cell =
+            ((size_t)iy[xy >> 1] * (size_t)t->width + (size_t)ix[xy & 1]) * (size_t)t->num_phi;
+        for (int p = 0; p < 2; p++) {
+            cw[xy + 4 * p] = wxy * wp[p];
+            rows[xy + 4 * p] = t->weights + (cell + (size_t)ip[p]) * (size_t)lanes;
+        }
+    }
     float d = 0.0f;
     for (int chunk = 0; chunk < t->chunks; chunk++) {
         size_t o = 8 * (size_t)chunk;
         v8f e = v8_splat(c00) * gdm_load8(e00 + o) + v8_splat(c01) * gdm_load8(e01 + o) +
                 v8_splat(c10) * gdm_load8(e10 + o) + v8_splat(c11) * gdm_load8(e11 + o);
         v8f wsum = v8_splat(0.0f);
-        for (int corner = 0; corner < 8; corner++) {
-            float cw = wx[corner & 1] * wy[(corner >> 1) & 1] * wp[corner >> 2];
-            size_t row =
-                ((size_t)iy[(corner >> 1) & 1] * (size_t)t->width + (size_t)ix[corner & 1]) *
-                    (size_t)t->num_phi +
-                (size_t)ip[corner >> 2];
-            wsum += v8_splat(cw) * gdm_load8(t->weights + row * (size_t)lanes + o);
-        }
+        for (int corner = 0; corner < 8; corner++)
+            wsum += v8_splat(cw[corner]) * gdm_load8(rows[corner] + o);
         v8f p = wsum * e;
         d += ((p[0] + p[1]) + (p[2] + p[3])) + ((p[4] + p[5]) + (p[6] + p[7]));
     }

@@ -201,6 +201,7 @@ size_t gdm_shell_memory(const gdm_shell *shell) {
 /* ---- The mesostructure: the same tests as gdm.c's --------------------------------------- */
 
 static inline bool inside(const gdm_shell_desc *d, meso_vec3 uvw) {
+    if (d->inside) return d->inside(d->inside_user, uvw);
     return gdm_mesostructure_inside(d->heightfield, d->solid, uvw);
 }
 

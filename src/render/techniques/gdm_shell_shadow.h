@@ -57,6 +57,11 @@ typedef struct gdm_shell_desc {
     float refine_window; /* texture units: the confirming probe lies this far past d / 2 */
     int refine_steps;    /* > 0: a blocker the table reports is confirmed by probes; 0: not */
     int shadow_steps;    /* the probes along a blocked segment */
+    /* NULL, or gdm_mesostructure_inside's answer for uvw by a cheaper route (gdm.c: a solid's
+     * distance grid, a height field's clearance), called with inside_user; it must give the
+     * same answer for every point */
+    bool (*inside)(const void *inside_user, meso_vec3 uvw);
+    const void *inside_user;
 } gdm_shell_desc;
 
 /* Build the Embree scene of desc->layer's faces. *out_shell NULL on failure:
