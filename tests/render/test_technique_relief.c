@@ -233,6 +233,29 @@ static void test_shadow_dark_behind_the_wall_lit_in_front(void **state) {
 /* A sphere of radius 1 seen from z = 5: near the rim the view ray leaves the curved shell
  * before it reaches a mid-height surface, so the fragment is discarded with silhouettes on and
  * kept with them off; facing the camera it is kept either way. */
+/* One triangle whose vertices carry the given curvature quadrics (relief reads a mesh only for
+ * them), all at one position. */
+typedef struct curved_triangle {
+    meso_vec3 positions[3];
+    meso_vec2 quadrics[3];
+    uint32_t indices[3];
+    meso_mesh mesh;
+} curved_triangle;
+
+static void curved_triangle_init(curved_triangle *t, meso_vec3 position,
+                                 const meso_vec2 quadrics[3]) {
+    for (int i = 0; i < 3; i++) {
+        t->positions[i] = position;
+        t->quadrics[i] = quadrics[i];
+        t->indices[i] = (uint32_t)i;
+    }
+    t->mesh = (meso_mesh){.num_vertices = 3,
+                          .num_triangles = 1,
+                          .positions = t->positions,
+                          .indices = t->indices,
+                          .quadrics = t->quadrics};
+}
+
 static void test_silhouettes_discard_near_the_rim_of_a_sphere(void **state) {
     (void)state;
     const char *names[] = {"relief", "relief_exact"};
@@ -245,15 +268,10 @@ static void test_silhouettes_discard_near_the_rim_of_a_sphere(void **state) {
             meso_context_destroy(c);
             fixture_init(&fx, hf, 0.1f, (meso_vec3){0.0f, 0.0f, 5.0f}, (meso_vec3){0, 0, 0},
                          (meso_vec3){0.0f, 0.0f, 1.0f});
-            meso_vec3 positions[3] = {{0, 0, 1}, {0, 0, 1}, {0, 0, 1}};
-            meso_vec2 quadrics[3] = {{0.5f, 0.5f}, {0.5f, 0.5f}, {0.5f, 0.5f}};
-            uint32_t indices[3] = {0, 1, 2};
-            meso_mesh mesh = {.num_vertices = 3,
-                              .num_triangles = 1,
-                              .positions = positions,
-                              .indices = indices,
-                              .quadrics = quadrics};
-            fx.object.mesh = &mesh;
+            curved_triangle tri;
+            curved_triangle_init(&tri, (meso_vec3){0, 0, 1},
+                                 (meso_vec2[3]){{0.5f, 0.5f}, {0.5f, 0.5f}, {0.5f, 0.5f}});
+            fx.object.mesh = &tri.mesh;
             set_option(&fx, "silhouettes", on);
             set_option(&fx, "shadows", 0);
             float angles[2] = {0.2f, 1.33f}; /* from the axis toward +x: facing, near the rim */
@@ -344,15 +362,10 @@ static void test_blocks_and_arrays_agree(void **state) {
         fixture fx;
         fixture_init(&fx, field(NULL, 64, 64, h_bumpy), 0.15f, (meso_vec3){0.3f, 1.0f, 2.2f},
                      (meso_vec3){0, 0, 0}, (meso_vec3){0.5f, 0.7f, 0.3f});
-        meso_vec3 positions[3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
-        meso_vec2 quadrics[3] = {{0.4f, 0.1f}, {0.2f, 0.3f}, {0.05f, 0.25f}};
-        uint32_t indices[3] = {0, 1, 2};
-        meso_mesh mesh = {.num_vertices = 3,
-                          .num_triangles = 1,
-                          .positions = positions,
-                          .indices = indices,
-                          .quadrics = quadrics};
-        if (curved) fx.object.mesh = &mesh;
+        curved_triangle tri;
+        curved_triangle_init(&tri, (meso_vec3){0, 0, 0},
+                             (meso_vec2[3]){{0.4f, 0.1f}, {0.2f, 0.3f}, {0.05f, 0.25f}});
+        if (curved) fx.object.mesh = &tri.mesh;
         size_t n = 0;
         for (int j = 0; j < SIDE; ++j)
             for (int i = 0; i < SIDE; ++i) {
