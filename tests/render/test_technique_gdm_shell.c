@@ -137,6 +137,36 @@ static void test_light_through_a_hole_of_another_prism_lights_the_point(void **s
     meso_context_destroy(ctx);
 }
 
+/* The walk's shortcut: a convex or flat base mesh's prism tops bound the whole layer (a ray
+ * out through a top meets no prism again), a torus's, a vase's and two stacked planes' do
+ * not (the walk must look: the test above needs the upper plane found). */
+static void test_tops_bound_only_a_convex_layer(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    const struct {
+        meso_shape_kind kind;
+        bool bound;
+    } cases[] = {{MESO_SHAPE_PLANE, true},  {MESO_SHAPE_SPHERE, true}, {MESO_SHAPE_CYLINDER, true},
+                 {MESO_SHAPE_TORUS, false}, {MESO_SHAPE_VASE, false},  {MESO_SHAPE_TEAPOT, false}};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        meso_mesh *mesh = test_shape(ctx, cases[i].kind, 2.0f, 0, (meso_vec3){0, 0, 0});
+        meso_prism_layer *layer = NULL;
+        assert_int_equal(meso_prism_layer_create(ctx, mesh, 0.05f, "shape", &layer), MESO_OK);
+        if (gdm_prism_tops_bound_the_layer(ctx, layer) != cases[i].bound)
+            fail_msg("shape %d: the tops %s the layer", (int)cases[i].kind,
+                     cases[i].bound ? "do not bound" : "bound");
+        meso_prism_layer_destroy(layer);
+        meso_mesh_destroy(mesh);
+    }
+    meso_mesh *planes = two_planes(ctx, 0.5f);
+    meso_prism_layer *layer = NULL;
+    assert_int_equal(meso_prism_layer_create(ctx, planes, 0.1f, "planes", &layer), MESO_OK);
+    assert_false(gdm_prism_tops_bound_the_layer(ctx, layer));
+    meso_prism_layer_destroy(layer);
+    meso_mesh_destroy(planes);
+    meso_context_destroy(ctx);
+}
+
 static meso_framebuffer *render(meso_context *ctx, const meso_scene *scene, int macro) {
     meso_option options[NUM_SMALL_BAKE + 1];
     memcpy(options, small_bake, sizeof small_bake);
@@ -270,6 +300,7 @@ static void test_inside_sky_is_shadowed_by_the_shell(void **state) {
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_light_through_a_hole_of_another_prism_lights_the_point),
+        cmocka_unit_test(test_tops_bound_only_a_convex_layer),
         cmocka_unit_test(test_height_field_on_a_plane_is_unchanged),
         cmocka_unit_test(test_shell_shadows_darken_and_are_deterministic),
         cmocka_unit_test(test_inside_sky_is_shadowed_by_the_shell),

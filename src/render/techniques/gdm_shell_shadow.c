@@ -5,6 +5,7 @@
 
 #include <embree3/rtcore.h>
 #include <math.h>
+#include <stdatomic.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -27,6 +28,11 @@ struct gdm_shell {
      * was most of its cost on a convex mesh (docs/techniques/gdm.md). NULL: out of memory at
      * create, every crossing asks Embree. */
     uint32_t *fin_twin;
+    /* Every vertex of the layer lies behind (or on) every prism's top plane: the layer is
+     * inside the convex body those planes bound, so a ray that leaves a prism through its top
+     * is outside that body from then on and meets no prism again. The walk then ends there
+     * without asking Embree (a convex or flat base mesh: a sphere, a plane, a cylinder). */
+    bool tops_bound_the_layer;
 };
 
 #define NO_TWIN UINT32_MAX
@@ -89,6 +95,144 @@ static uint32_t *build_fin_twins(const meso_prism_layer *layer) {
     }
     free(keys);
     return twin;
+}
+
+/* The proof of tops_bound_the_layer: each job tests a run of prisms' top planes against every
+ * vertex of the layer, a cell of a coarse grid over the layer at a time by the cell's
+ * bounding sphere (most cells lie far behind any one top), the vertices only of a cell the
+ * plane cuts. Skipped above a cost cap. A plain AND of yes/no answers: the same for any number
+ * of threads. */
+enum { TOPS_PER_JOB = 64, VERTICES_PER_CELL = 16, MAX_CELLS_A_SIDE = 32 };
+#define TOPS_PROOF_MAX_TESTS ((uint64_t)1 << 28)
+
+typedef struct proof_cell {
+    meso_vec3 centre;
+    float radius;
+    uint32_t first, end; /* into tops_proof.order */
+} proof_cell;
+
+typedef struct tops_proof {
+    const meso_prism_layer *layer;
+    const proof_cell *cells;
+    const uint32_t *order; /* the layer's vertices, cell by cell */
+    size_t num_cells;
+    float tolerance;
+    atomic_bool failed;
+} tops_proof;
+
+static bool behind(const meso_prism_plane *plane, meso_vec3 p, float margin) {
+    /* NaN fails: nothing is proven about a broken layer */
+    return meso_vec3_dot(plane->normal, p) - plane->offset <= margin;
+}
+
+static void prove_tops(void *user, size_t job, int thread_index) {
+    (void)thread_index;
+    tops_proof *proof = user;
+    const meso_prism_layer *layer = proof->layer;
+    const meso_vec3 *positions = layer->faces->positions;
+    size_t end = (job + 1) * TOPS_PER_JOB;
+    if (end > layer->num_prisms) end = layer->num_prisms;
+    for (size_t prism = job * TOPS_PER_JOB; prism < end; prism++) {
+        if (atomic_load_explicit(&proof->failed, memory_order_relaxed)) return;
+        if (!layer->prisms[prism].valid) continue; /* draws nothing, is never left */
+        const meso_prism_plane *top = &layer->planes[prism * MESO_PRISM_NUM_FACES + MESO_PRISM_TOP];
+        for (size_t k = 0; k < proof->num_cells; k++) {
+            const proof_cell *cell = &proof->cells[k];
+            if (behind(top, cell->centre, proof->tolerance - cell->radius)) continue;
+            for (uint32_t i = cell->first; i < cell->end; i++) {
+                if (!behind(top, positions[proof->order[i]], proof->tolerance)) {
+                    atomic_store_explicit(&proof->failed, true, memory_order_relaxed);
+                    return;
+                }
+            }
+        }
+    }
+}
+
+/* The grid cell of p, `side` cells a side over [lo, lo + extent]. */
+static uint32_t cell_of(meso_vec3 p, meso_vec3 lo, meso_vec3 extent, int side) {
+    float q[3] = {(p.x - lo.x) / extent.x, (p.y - lo.y) / extent.y, (p.z - lo.z) / extent.z};
+    int c[3];
+    for (int a = 0; a < 3; a++) {
+        float f = q[a] * (float)side;
+        c[a] = f >= 0.0f && f < (float)side ? (int)f : (f >= (float)side ? side - 1 : 0);
+    }
+    return (uint32_t)((c[2] * side + c[1]) * side + c[0]);
+}
+
+bool gdm_prism_tops_bound_the_layer(meso_context *ctx, const meso_prism_layer *layer) {
+    const meso_mesh *faces = layer->faces;
+    size_t nv = faces->num_vertices;
+    if (layer->num_prisms == 0 || nv == 0 || nv >= UINT32_MAX ||
+        (uint64_t)layer->num_prisms * (uint64_t)nv > TOPS_PROOF_MAX_TESTS)
+        return false;
+    meso_vec3 lo = faces->positions[0], hi = lo;
+    for (size_t v = 1; v < nv; v++) {
+        meso_vec3 p = faces->positions[v];
+        lo = (meso_vec3){fminf(lo.x, p.x), fminf(lo.y, p.y), fminf(lo.z, p.z)};
+        hi = (meso_vec3){fmaxf(hi.x, p.x), fmaxf(hi.y, p.y), fmaxf(hi.z, p.z)};
+    }
+    meso_vec3 extent = meso_vec3_sub(hi, lo);
+    float diagonal = meso_vec3_length(extent);
+    if (!isfinite(diagonal)) return false;
+    extent = (meso_vec3){fmaxf(extent.x, 1e-30f), fmaxf(extent.y, 1e-30f), fmaxf(extent.z, 1e-30f)};
+    int side = (int)cbrt((double)nv / VERTICES_PER_CELL);
+    side = side < 1 ? 1 : (side > MAX_CELLS_A_SIDE ? MAX_CELLS_A_SIDE : side);
+    size_t num_grid = (size_t)side * (size_t)side * (size_t)side;
+    uint32_t *count = calloc(num_grid + 1, sizeof *count);
+    uint32_t *order = malloc(nv * sizeof *order);
+    proof_cell *cells = malloc(num_grid * sizeof *cells);
+    if (!count || !order || !cells) {
+        free(count), free(order), free(cells);
+        return false; /* unproven: the walk asks Embree as before */
+    }
+    for (size_t v = 0; v < nv; v++) count[cell_of(faces->positions[v], lo, extent, side) + 1]++;
+    for (size_t g = 0; g < num_grid; g++) count[g + 1] += count[g];
+    size_t num_cells = 0;
+    for (size_t g = 0; g < num_grid; g++)
+        if (count[g + 1] > count[g])
+            cells[num_cells++] = (proof_cell){.first = count[g], .end = count[g + 1]};
+    uint32_t *fill = calloc(num_grid, sizeof *fill);
+    if (!fill) {
+        free(count), free(order), free(cells);
+        return false;
+    }
+    for (size_t v = 0; v < nv; v++) {
+        uint32_t g = cell_of(faces->positions[v], lo, extent, side);
+        order[count[g] + fill[g]++] = (uint32_t)v;
+    }
+    free(fill);
+    free(count);
+    for (size_t k = 0; k < num_cells; k++) {
+        proof_cell *cell = &cells[k];
+        meso_vec3 a = faces->positions[order[cell->first]], b = a;
+        for (uint32_t i = cell->first + 1; i < cell->end; i++) {
+            meso_vec3 p = faces->positions[order[i]];
+            a = (meso_vec3){fminf(a.x, p.x), fminf(a.y, p.y), fminf(a.z, p.z)};
+            b = (meso_vec3){fmaxf(b.x, p.x), fmaxf(b.y, p.y), fmaxf(b.z, p.z)};
+        }
+        cell->centre = meso_vec3_scale(meso_vec3_add(a, b), 0.5f);
+        float radius = 0.0f;
+        for (uint32_t i = cell->first; i < cell->end; i++)
+            radius = fmaxf(
+                radius, meso_vec3_length(meso_vec3_sub(faces->positions[order[i]], cell->centre)));
+        /* a little more than the farthest vertex: the sphere's test must not pass a vertex
+         * its own test would fail by rounding */
+        cell->radius = radius * (1.0f + 1e-5f) + 1e-6f * diagonal;
+    }
+    /* a vertex on a top's plane (a flat mesh: all of them) may sit above it by rounding: a
+     * hundred-thousandth of the layer's extent, far below the Embree walk's own `step` */
+    tops_proof proof = {.layer = layer,
+                        .cells = cells,
+                        .order = order,
+                        .num_cells = num_cells,
+                        .tolerance = 1e-5f * diagonal};
+    atomic_init(&proof.failed, false);
+    meso_parallel_for(ctx, (layer->num_prisms + TOPS_PER_JOB - 1) / TOPS_PER_JOB, prove_tops,
+                      &proof);
+    free(cells);
+    free(order);
+    return !atomic_load(&proof.failed);
 }
 
 /* The prism the ray is in (its faces are not entries) and the ray's direction, for the
@@ -175,6 +319,7 @@ meso_result gdm_shell_create(meso_context *ctx, const gdm_shell_desc *desc, cons
         goto fail;
     }
     shell->fin_twin = build_fin_twins(desc->layer);
+    shell->tops_bound_the_layer = gdm_prism_tops_bound_the_layer(ctx, desc->layer);
     *out_shell = shell;
     return MESO_OK;
 fail:
@@ -353,6 +498,7 @@ bool gdm_shell_light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw
             if (floor_blocks(d, &c)) return false;
             tested = true; /* out of the slab into the object's open inside */
         } else if (c.exit_slot == MESO_PRISM_TOP) {
+            if (shell->tops_bound_the_layer) return true; /* nothing of the layer ahead */
             tested = true;
         }
         size_t next;
