@@ -5,7 +5,6 @@
 
 #include <embree3/rtcore.h>
 #include <math.h>
-#include <stdatomic.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -28,11 +27,12 @@ struct gdm_shell {
      * was most of its cost on a convex mesh (docs/techniques/gdm.md). NULL: out of memory at
      * create, every crossing asks Embree. */
     uint32_t *fin_twin;
-    /* Every vertex of the layer lies behind (or on) every prism's top plane: the layer is
-     * inside the convex body those planes bound, so a ray that leaves a prism through its top
-     * is outside that body from then on and meets no prism again. The walk then ends there
-     * without asking Embree (a convex or flat base mesh: a sphere, a plane, a cylinder). */
-    bool tops_bound_the_layer;
+    /* Per prism, 1 where every vertex of the layer lies behind (or on) the prism's top plane:
+     * the whole layer is in that half-space, so a ray that leaves the prism through its top
+     * is outside it from then on and meets no prism again. The walk then ends there without
+     * asking Embree (every prism of a convex or flat base mesh; the outer side of a torus).
+     * NULL: not proven (cost cap, out of memory). */
+    uint8_t *top_clear;
 };
 
 #define NO_TWIN UINT32_MAX
@@ -97,18 +97,17 @@ static uint32_t *build_fin_twins(const meso_prism_layer *layer) {
     return twin;
 }
 
-/* The proof of tops_bound_the_layer: each job tests a run of prisms' top planes against every
- * vertex of the layer, a cell of a coarse grid over the layer at a time by the cell's
- * bounding sphere (most cells lie far behind any one top), the vertices only of a cell the
- * plane cuts. Skipped above a cost cap. A plain AND of yes/no answers: the same for any number
- * of threads. */
+/* The proof of top_clear: each job tests a run of prisms' top planes against every vertex of
+ * the layer, a cell of a coarse grid over the layer at a time by the cell's bounding box
+ * (most cells lie far behind any one top), the vertices only of a cell the plane cuts, until
+ * the first vertex in front. Skipped above a cost cap. Each prism's answer is its own: the
+ * same for any number of threads. */
 enum { TOPS_PER_JOB = 64, VERTICES_PER_CELL = 16, MAX_CELLS_A_SIDE = 32 };
-#define TOPS_PROOF_MAX_TESTS ((uint64_t)1 << 28)
+#define TOPS_PROOF_MAX_TESTS ((uint64_t)1 << 29)
 
 typedef struct proof_cell {
-    meso_vec3 centre;
-    float radius;
-    uint32_t first, end; /* into tops_proof.order */
+    meso_vec3 centre, half; /* the cell's vertices' bounding box */
+    uint32_t first, end;    /* into tops_proof.order */
 } proof_cell;
 
 typedef struct tops_proof {
@@ -117,7 +116,7 @@ typedef struct tops_proof {
     const uint32_t *order; /* the layer's vertices, cell by cell */
     size_t num_cells;
     float tolerance;
-    atomic_bool failed;
+    uint8_t *clear; /* out: per prism */
 } tops_proof;
 
 static bool behind(const meso_prism_plane *plane, meso_vec3 p, float margin) {
@@ -133,19 +132,21 @@ static void prove_tops(void *user, size_t job, int thread_index) {
     size_t end = (job + 1) * TOPS_PER_JOB;
     if (end > layer->num_prisms) end = layer->num_prisms;
     for (size_t prism = job * TOPS_PER_JOB; prism < end; prism++) {
-        if (atomic_load_explicit(&proof->failed, memory_order_relaxed)) return;
+        proof->clear[prism] = 0;
         if (!layer->prisms[prism].valid) continue; /* draws nothing, is never left */
         const meso_prism_plane *top = &layer->planes[prism * MESO_PRISM_NUM_FACES + MESO_PRISM_TOP];
-        for (size_t k = 0; k < proof->num_cells; k++) {
+        bool clear = true;
+        for (size_t k = 0; clear && k < proof->num_cells; k++) {
             const proof_cell *cell = &proof->cells[k];
-            if (behind(top, cell->centre, proof->tolerance - cell->radius)) continue;
-            for (uint32_t i = cell->first; i < cell->end; i++) {
-                if (!behind(top, positions[proof->order[i]], proof->tolerance)) {
-                    atomic_store_explicit(&proof->failed, true, memory_order_relaxed);
-                    return;
-                }
-            }
+            /* the box's farthest corner along the plane's normal */
+            meso_vec3 n = top->normal;
+            float reach =
+                fabsf(n.x) * cell->half.x + fabsf(n.y) * cell->half.y + fabsf(n.z) * cell->half.z;
+            if (behind(top, cell->centre, proof->tolerance - reach)) continue;
+            for (uint32_t i = cell->first; clear && i < cell->end; i++)
+                clear = behind(top, positions[proof->order[i]], proof->tolerance);
         }
+        proof->clear[prism] = clear;
     }
 }
 
@@ -160,12 +161,13 @@ static uint32_t cell_of(meso_vec3 p, meso_vec3 lo, meso_vec3 extent, int side) {
     return (uint32_t)((c[2] * side + c[1]) * side + c[0]);
 }
 
-bool gdm_prism_tops_bound_the_layer(meso_context *ctx, const meso_prism_layer *layer) {
+size_t gdm_prism_tops_clear(meso_context *ctx, const meso_prism_layer *layer, uint8_t *clear) {
     const meso_mesh *faces = layer->faces;
     size_t nv = faces->num_vertices;
+    memset(clear, 0, layer->num_prisms);
     if (layer->num_prisms == 0 || nv == 0 || nv >= UINT32_MAX ||
         (uint64_t)layer->num_prisms * (uint64_t)nv > TOPS_PROOF_MAX_TESTS)
-        return false;
+        return 0;
     meso_vec3 lo = faces->positions[0], hi = lo;
     for (size_t v = 1; v < nv; v++) {
         meso_vec3 p = faces->positions[v];
@@ -174,7 +176,7 @@ bool gdm_prism_tops_bound_the_layer(meso_context *ctx, const meso_prism_layer *l
     }
     meso_vec3 extent = meso_vec3_sub(hi, lo);
     float diagonal = meso_vec3_length(extent);
-    if (!isfinite(diagonal)) return false;
+    if (!isfinite(diagonal)) return 0;
     extent = (meso_vec3){fmaxf(extent.x, 1e-30f), fmaxf(extent.y, 1e-30f), fmaxf(extent.z, 1e-30f)};
     int side = (int)cbrt((double)nv / VERTICES_PER_CELL);
     side = side < 1 ? 1 : (side > MAX_CELLS_A_SIDE ? MAX_CELLS_A_SIDE : side);
@@ -184,7 +186,7 @@ bool gdm_prism_tops_bound_the_layer(meso_context *ctx, const meso_prism_layer *l
     proof_cell *cells = malloc(num_grid * sizeof *cells);
     if (!count || !order || !cells) {
         free(count), free(order), free(cells);
-        return false; /* unproven: the walk asks Embree as before */
+        return 0; /* unproven: the walk asks Embree as before */
     }
     for (size_t v = 0; v < nv; v++) count[cell_of(faces->positions[v], lo, extent, side) + 1]++;
     for (size_t g = 0; g < num_grid; g++) count[g + 1] += count[g];
@@ -195,7 +197,7 @@ bool gdm_prism_tops_bound_the_layer(meso_context *ctx, const meso_prism_layer *l
     uint32_t *fill = calloc(num_grid, sizeof *fill);
     if (!fill) {
         free(count), free(order), free(cells);
-        return false;
+        return 0;
     }
     for (size_t v = 0; v < nv; v++) {
         uint32_t g = cell_of(faces->positions[v], lo, extent, side);
@@ -212,13 +214,11 @@ bool gdm_prism_tops_bound_the_layer(meso_context *ctx, const meso_prism_layer *l
             b = (meso_vec3){fmaxf(b.x, p.x), fmaxf(b.y, p.y), fmaxf(b.z, p.z)};
         }
         cell->centre = meso_vec3_scale(meso_vec3_add(a, b), 0.5f);
-        float radius = 0.0f;
-        for (uint32_t i = cell->first; i < cell->end; i++)
-            radius = fmaxf(
-                radius, meso_vec3_length(meso_vec3_sub(faces->positions[order[i]], cell->centre)));
-        /* a little more than the farthest vertex: the sphere's test must not pass a vertex
-         * its own test would fail by rounding */
-        cell->radius = radius * (1.0f + 1e-5f) + 1e-6f * diagonal;
+        /* a little more than the box: the box's test must not pass a vertex its own test
+         * would fail by rounding */
+        meso_vec3 half = meso_vec3_scale(meso_vec3_sub(b, a), 0.5f * (1.0f + 1e-5f));
+        cell->half =
+            meso_vec3_add(half, (meso_vec3){1e-6f * diagonal, 1e-6f * diagonal, 1e-6f * diagonal});
     }
     /* a vertex on a top's plane (a flat mesh: all of them) may sit above it by rounding: a
      * hundred-thousandth of the layer's extent, far below the Embree walk's own `step` */
@@ -226,13 +226,15 @@ bool gdm_prism_tops_bound_the_layer(meso_context *ctx, const meso_prism_layer *l
                         .cells = cells,
                         .order = order,
                         .num_cells = num_cells,
-                        .tolerance = 1e-5f * diagonal};
-    atomic_init(&proof.failed, false);
+                        .tolerance = 1e-5f * diagonal,
+                        .clear = clear};
     meso_parallel_for(ctx, (layer->num_prisms + TOPS_PER_JOB - 1) / TOPS_PER_JOB, prove_tops,
                       &proof);
     free(cells);
     free(order);
-    return !atomic_load(&proof.failed);
+    size_t proven = 0;
+    for (size_t prism = 0; prism < layer->num_prisms; prism++) proven += clear[prism];
+    return proven;
 }
 
 /* The prism the ray is in (its faces are not entries) and the ray's direction, for the
@@ -319,7 +321,11 @@ meso_result gdm_shell_create(meso_context *ctx, const gdm_shell_desc *desc, cons
         goto fail;
     }
     shell->fin_twin = build_fin_twins(desc->layer);
-    shell->tops_bound_the_layer = gdm_prism_tops_bound_the_layer(ctx, desc->layer);
+    shell->top_clear = malloc(desc->layer->num_prisms ? desc->layer->num_prisms : 1);
+    if (shell->top_clear && gdm_prism_tops_clear(ctx, desc->layer, shell->top_clear) == 0) {
+        free(shell->top_clear); /* nothing proven: every top exit asks Embree */
+        shell->top_clear = NULL;
+    }
     *out_shell = shell;
     return MESO_OK;
 fail:
@@ -332,6 +338,7 @@ void gdm_shell_destroy(gdm_shell *shell) {
     if (shell->scene) rtcReleaseScene(shell->scene);
     if (shell->device) rtcReleaseDevice(shell->device);
     free(shell->fin_twin);
+    free(shell->top_clear);
     free(shell);
 }
 
@@ -339,6 +346,7 @@ size_t gdm_shell_memory(const gdm_shell *shell) {
     if (!shell) return 0;
     const meso_mesh *faces = shell->desc.layer->faces;
     return sizeof *shell + (shell->fin_twin ? faces->num_triangles * sizeof(uint32_t) : 0) +
+           (shell->top_clear ? shell->desc.layer->num_prisms : 0) +
            faces->num_vertices * 3 * sizeof(float) +
            faces->num_triangles * (3 * sizeof(uint32_t) + 32); /* + the BVH, about */
 }
@@ -498,7 +506,7 @@ bool gdm_shell_light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw
             if (floor_blocks(d, &c)) return false;
             tested = true; /* out of the slab into the object's open inside */
         } else if (c.exit_slot == MESO_PRISM_TOP) {
-            if (shell->tops_bound_the_layer) return true; /* nothing of the layer ahead */
+            if (shell->top_clear && shell->top_clear[current]) return true; /* nothing ahead */
             tested = true;
         }
         size_t next;

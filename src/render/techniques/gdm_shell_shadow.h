@@ -73,11 +73,12 @@ void gdm_shell_destroy(gdm_shell *shell);
 /* Bytes held (the BVH estimated). */
 size_t gdm_shell_memory(const gdm_shell *shell);
 
-/* Does every vertex of the layer lie behind (or on) every valid prism's top plane? Then a ray
- * leaving a prism through its top meets no prism again, and the walk ends there without a ray
- * query (a convex or flat base mesh). false where unproven: above 2^28 vertex-plane tests,
- * out of memory, non-finite positions. The same answer for any number of threads. */
-bool gdm_prism_tops_bound_the_layer(meso_context *ctx, const meso_prism_layer *layer);
+/* Per prism, clear[prism] = 1 where every vertex of the layer lies behind (or on) the prism's
+ * top plane: a ray leaving that prism through its top meets no prism again, and the walk ends
+ * there without a ray query (every prism of a convex or flat base mesh; a torus's outer side).
+ * Returns how many are proven; 0 with every entry 0 above 2^29 vertex-plane tests, out of
+ * memory or with non-finite positions. The same answers for any number of threads. */
+size_t gdm_prism_tops_clear(meso_context *ctx, const meso_prism_layer *layer, uint8_t *clear);
 
 /* Is layer face `face` a fin shared with a neighbour prism (a seam inside the shell), rather
  * than a top, a bottom or a fin on an open border? false without the twin table. Pure. */
