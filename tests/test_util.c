@@ -122,3 +122,8 @@ void test_write_png_header(const char *path, uint32_t width, uint32_t height) {
     put_u32(chunk + 21, crc32_of(chunk + 4, 17));
     test_write_file(path, bytes, sizeof(bytes));
 }
+
+float test_uniform(unsigned *seed) {
+    *seed = *seed * 1103515245u + 12345u;
+    return (float)(*seed >> 8) / 16777216.0f;
+}

@@ -26,6 +26,9 @@ char *test_read_file(const char *path, size_t *out_size);
 /* Write a PNG that is only a signature and an IHDR (valid CRC) declaring width x height RGB:
  * for testing that declared sizes are checked before allocating. */
 void test_write_png_header(const char *path, uint32_t width, uint32_t height);
+/* A repeatable uniform number in [0, 1): the next draw of a 32-bit linear congruential
+ * generator whose state is *seed (its top 24 bits), the same sequence on every platform. */
+float test_uniform(unsigned *seed);
 /* Run the meso program with arguments (a shell command line after "meso"), capturing stderr to
  * *out_stderr (static buffer); returns the exit status. */
 int test_run_meso(const char *arguments, const char **out_stderr);

@@ -192,8 +192,7 @@ static void test_rays_along_fins_stay_in_their_prism(void **state) {
             /* start a hair inside edge e on the top, heading down along the fin's plane */
             meso_vec2 a = prism->uv[e], b = prism->uv[(e + 1) % 3], c = prism->uv[(e + 2) % 3];
             for (int k = 0; k < 8; k++) {
-                seed = seed * 1103515245u + 12345u;
-                float s = 0.1f + 0.8f * (float)(seed >> 8) / 16777216.0f;
+                float s = 0.1f + 0.8f * test_uniform(&seed);
                 meso_vec2 on = {a.x + (b.x - a.x) * s, a.y + (b.y - a.y) * s};
                 meso_vec2 in = {on.x + 1e-4f * (c.x - on.x), on.y + 1e-4f * (c.y - on.y)};
                 meso_vec3 top = meso_prism_map(prism, mesh, depth, (meso_vec3){in.x, in.y, 0}, -1);
@@ -299,10 +298,7 @@ static void test_exit_and_face_uvw_match_the_scalar_computation(void **state) {
     for (size_t p = 0; p < layer->num_prisms; p++) {
         for (int k = 0; k < 40; k++) {
             float r[6];
-            for (int i = 0; i < 6; i++) {
-                seed = seed * 1103515245u + 12345u;
-                r[i] = (float)(seed >> 8) / 16777216.0f;
-            }
+            for (int i = 0; i < 6; i++) r[i] = test_uniform(&seed);
             float a = r[0], b = r[1] * (1.0f - a);
             meso_vec3 uvw = {0, 0, r[2]};
             const meso_prism *prism = &layer->prisms[p];

@@ -44,10 +44,7 @@ static void test_lookup_atan2_is_within_3e7_radians(void **state) {
     double worst = 0.0;
     for (int i = 0; i < 200000; i++) {
         float r[2];
-        for (int k = 0; k < 2; k++) {
-            seed = seed * 1103515245u + 12345u;
-            r[k] = (float)(seed >> 8) / 16777216.0f * 2.0f - 1.0f;
-        }
+        for (int k = 0; k < 2; k++) r[k] = test_uniform(&seed) * 2.0f - 1.0f;
         if (i % 4 == 1) r[0] *= 1e-3f;                       /* near the x axis */
         if (i % 4 == 2) r[1] = r[0] * (1.0f + 1e-6f * r[1]); /* near a diagonal */
         double error = fabs((double)gdm_atan2(r[0], r[1]) - atan2((double)r[0], (double)r[1]));
@@ -105,10 +102,7 @@ static void test_lookup8_equals_the_bakes_lookup(void **state) {
         double worst = 0.0;
         for (int i = 0; i < 4000; i++) {
             float r[6];
-            for (int k = 0; k < 6; k++) {
-                seed = seed * 1103515245u + 12345u;
-                r[k] = (float)(seed >> 8) / 16777216.0f;
-            }
+            for (int k = 0; k < 6; k++) r[k] = test_uniform(&seed);
             /* u, v beyond one tile and negative too; w past both faces (clamped) */
             meso_vec3 uvw = {4.0f * r[0] - 2.0f, 4.0f * r[1] - 2.0f, 1.2f * r[2] - 0.1f};
             meso_vec3 dir = meso_vec3_normalize(
