@@ -818,12 +818,23 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
         /* beyond the paper (gdm_shell_shadow.h): past the slab the light is followed through
          * the rest of the shell; a solid's light toward the slab's bottom from the point on */
         bool through_floor = s->shell && s->solid && lt.z >= 0.0f;
-        bool blocked =
-            through_floor
-                ? !gdm_shell_light_visible(s->shell, prism_index, hit, l, false)
-                : shadowed(s, hit, normal_t, lt,
-                           s->solid && d == 0.0f && gdm_shell_face_is_seam(s->shell, face)) ||
-                      (s->shell && !gdm_shell_light_visible(s->shell, prism_index, hit, l, true));
+        bool seam_entry = d == 0.0f && gdm_shell_face_is_seam(s->shell, face);
+        bool blocked = !through_floor && shadowed(s, hit, normal_t, lt, s->solid && seam_entry);
+        if (s->shell) {
+            /* §3.2's slab is the point's tangent frame extended flat: where the shell curves
+             * away (a sphere's terminator, a vase's neck at its outline) the flat slab holds
+             * mesostructure the curved shell does not, and its blockers are false. A blocker
+             * it reports is checked by the walk from the point on, each prism testing its
+             * own segment (docs/techniques/gdm.md, "the slab's blockers checked on the
+             * curved shell"). Not at an open border's cut face (an entry through a fin no
+             * neighbour shares): there the slab answers, as measured before. */
+            bool border_entry =
+                d == 0.0f && slot != MESO_PRISM_TOP && slot != MESO_PRISM_BOTTOM && !seam_entry;
+            if (through_floor || (blocked && !border_entry))
+                blocked = !gdm_shell_light_visible(s->shell, prism_index, hit, l, false);
+            else if (!blocked)
+                blocked = !gdm_shell_light_visible(s->shell, prism_index, hit, l, true);
+        }
         if (blocked) visibility[li] = 0.0f;
     }
     return true;
