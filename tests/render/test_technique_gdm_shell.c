@@ -269,6 +269,49 @@ static void test_shell_shadows_darken_and_are_deterministic(void **state) {
     meso_framebuffer_destroy(images[1]);
 }
 
+/* Seen from far away along the light (the camera's rays and the light's nearly parallel),
+ * every point the camera sees is lit: the way back to the light is the way the view ray came.
+ * A brick-covered sphere then has (almost) no shadow. §3.2's flat slab alone shadowed the
+ * outline band, where the sphere curves away under the slab's flat continuation: here 20 of
+ * 2,245 pixels before the walk checked its blockers, 4 after (the bumps-sphere example at
+ * 128², from afar: 259 and 1). */
+static void test_a_sphere_seen_along_the_light_has_no_shadow(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    test_scene ts;
+    test_scene_init(&ts, 64, 64);
+    meso_vec3 eye = {0.0f, 15.0f, 43.0f};
+    ts.scene.camera = (meso_camera){eye, {0, 0, 0}, {0, 1, 0}, 3.0f};
+    ts.scene.lights[0].direction = meso_vec3_normalize(eye);
+    meso_object *o = test_scene_add(
+        &ts, test_shape(ctx, MESO_SHAPE_SPHERE, 1.0f, 48, (meso_vec3){0, 0, 0}), "gdm");
+    meso_mesh_scale_uvs(o->mesh, (meso_vec2){6.0f, 3.0f});
+    assert_int_equal(meso_mesh_compute_tangents(ctx, o->mesh), MESO_OK);
+    test_object_bricks(ctx, o);
+    meso_option options[NUM_SMALL_BAKE + 1];
+    memcpy(options, small_bake, sizeof small_bake);
+    options[NUM_SMALL_BAKE] = (meso_option){"gdm", "shadows", 0};
+    meso_render_desc desc = {
+        .technique = "gdm", .options = options, .num_options = NUM_SMALL_BAKE + 1};
+    meso_framebuffer *unshadowed = NULL;
+    assert_int_equal(meso_render_scene(ctx, &ts.scene, &desc, &unshadowed), MESO_OK);
+    meso_framebuffer *shadowed = render(ctx, &ts.scene, 1);
+    size_t covered = 0, darker = 0, pixels = 64 * 64;
+    for (size_t i = 0; i < pixels; i++) {
+        if (unshadowed->coverage[i] <= 0.0f) continue;
+        covered++;
+        float a = unshadowed->color[3 * i], b = shadowed->color[3 * i];
+        if (b < a - 0.01f) darker++;
+    }
+    print_message("%zu of %zu covered pixels in shadow\n", darker, covered);
+    assert_true(covered > 1000);
+    assert_true(darker <= covered / 200);
+    meso_framebuffer_destroy(unshadowed);
+    meso_framebuffer_destroy(shadowed);
+    test_scene_free(&ts);
+    meso_context_destroy(ctx);
+}
+
 /* GDM-GI's hits seen from inside the base mesh (a grid plane seen from below, under a uniform
  * sky of radiance 1, no lights): gi_inside_sky 0 gives them the unshadowed sky, E / pi = 1
  * times the albedo; 1 the sky through the shell, which the grid's bars block in part (the
@@ -324,6 +367,7 @@ int main(void) {
         cmocka_unit_test(test_tops_clear_where_the_layer_is_behind),
         cmocka_unit_test(test_height_field_on_a_plane_is_unchanged),
         cmocka_unit_test(test_shell_shadows_darken_and_are_deterministic),
+        cmocka_unit_test(test_a_sphere_seen_along_the_light_has_no_shadow),
         cmocka_unit_test(test_inside_sky_is_shadowed_by_the_shell),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
