@@ -315,6 +315,7 @@ void meso_reference_destroy(meso_reference *reference) {
         free(reference->objects[o].uvws);
         free(reference->objects[o].grids);
         free(reference->objects[o].base_offsets);
+        free(reference->objects[o].caps);
     }
     free(reference->objects);
     if (reference->scene) rtcReleaseScene(reference->scene);
@@ -333,6 +334,17 @@ uint64_t meso_reference_triangle_count(const meso_reference *reference) {
 }
 
 /* ---- Shading at a hit --------------------------------------------------------------------- */
+
+meso_vec3 reference_quad_uvw(const reference_object *ref, unsigned primitive, float hu, float hv) {
+    /* an Embree quad (q0, q1, q2, q3): (q0, q1, q3) with weights (1-u-v, u, v) below the
+     * diagonal, (q2, q3, q1) with (u+v-1, 1-u, 1-v) above it */
+    const uint32_t *q = ref->indices + 4 * (size_t)primitive;
+    return hu + hv <= 1.0f
+               ? meso_vec3_barycentric(ref->uvws[q[0]], ref->uvws[q[1]], ref->uvws[q[3]],
+                                       1.0f - hu - hv, hu, hv)
+               : meso_vec3_barycentric(ref->uvws[q[2]], ref->uvws[q[3]], ref->uvws[q[1]],
+                                       hu + hv - 1.0f, 1.0f - hu, 1.0f - hv);
+}
 
 void reference_surface_at(const reference_object *ref, unsigned primitive, float hu, float hv,
                           meso_vec3 *out_normal, meso_vec2 *out_uv, reference_base *out_base) {
@@ -356,14 +368,7 @@ void reference_surface_at(const reference_object *ref, unsigned primitive, float
         /* the grid's (u, v) are barycentrics of one of its (one or two) base triangles */
         base = reference_grid_weights(&ref->grids[primitive], hu, hv, b);
     } else {
-        /* an Embree quad (q0, q1, q2, q3): (q0, q1, q3) with weights (1-u-v, u, v) below the
-         * diagonal, (q2, q3, q1) with (u+v-1, 1-u, 1-v) above it */
-        const uint32_t *q = ref->indices + 4 * (size_t)primitive;
-        meso_vec3 x = hu + hv <= 1.0f
-                          ? meso_vec3_barycentric(ref->uvws[q[0]], ref->uvws[q[1]], ref->uvws[q[3]],
-                                                  1.0f - hu - hv, hu, hv)
-                          : meso_vec3_barycentric(ref->uvws[q[2]], ref->uvws[q[3]], ref->uvws[q[1]],
-                                                  hu + hv - 1.0f, 1.0f - hu, 1.0f - hv);
+        meso_vec3 x = reference_quad_uvw(ref, primitive, hu, hv);
         uv = (meso_vec2){x.x, x.y};
         w = x.z;
         base = reference_base_triangle(ref, primitive);
@@ -397,6 +402,24 @@ void reference_surface_at(const reference_object *ref, unsigned primitive, float
         const meso_mesostructure *ms = &ref->object->mesostructure;
         *out_normal = meso_displaced_normal(
             n, t, bt_vec, ms->depth, meso_heightfield_gradient(ms->height_field, uv.x, uv.y));
+        return;
+    }
+    if (ref->caps && ref->caps[primitive]) {
+        /* a cap at an open border (reference_solid.c): the fin's own normal, turned out of
+         * the prism (away from the base triangle's centroid) */
+        const uint32_t *q = ref->indices + 4 * (size_t)primitive;
+        meso_vec3 p[4];
+        for (int k = 0; k < 4; k++)
+            p[k] = (meso_vec3){ref->vertices[3 * (size_t)q[k]], ref->vertices[3 * (size_t)q[k] + 1],
+                               ref->vertices[3 * (size_t)q[k] + 2]};
+        meso_vec3 m = meso_vec3_cross(meso_vec3_sub(p[2], p[0]), meso_vec3_sub(p[3], p[1]));
+        meso_vec3 centroid =
+            meso_vec3_scale(meso_vec3_add(meso_vec3_add(bp[0], bp[1]), bp[2]), 1.0f / 3.0f);
+        meso_vec3 middle = meso_vec3_scale(
+            meso_vec3_add(meso_vec3_add(p[0], p[1]), meso_vec3_add(p[2], p[3])), 0.25f);
+        if (meso_vec3_dot(m, meso_vec3_sub(middle, centroid)) < 0.0f) m = meso_vec3_negate(m);
+        float len = meso_vec3_length(m);
+        *out_normal = len > 0.0f && isfinite(len) ? meso_vec3_scale(m, 1.0f / len) : n;
         return;
     }
     /* solid: the field's gradient through the Jacobian of the prism map

@@ -88,6 +88,8 @@ typedef struct reference_object {
     meso_vec3 *uvws;         /* solid: per vertex (u, v, w), uv_scale applied */
     reference_grid *grids;   /* height field: one per Embree grid primitive */
     uint64_t *base_offsets;  /* solid: first quad of each base triangle, num_base + 1 */
+    uint8_t *caps;         /* solid with open borders: per quad, 1 for a cap (reference_solid.c) */
+    const float *vertices; /* solid: the Embree vertex buffer, 3 floats a vertex */
     size_t num_base;
     meso_scalar_field_fn field; /* solid */
     void *field_user;
@@ -160,6 +162,8 @@ typedef struct reference_base {
 
 /* The mesostructure's shading normal and the shading uv at a hit of `ref`, and (out_base not
  * NULL) where it lies on the base mesh. */
+/* A solid's hit (u, v) in Embree quad `primitive` to its texture point (u, v, w). */
+meso_vec3 reference_quad_uvw(const reference_object *ref, unsigned primitive, float hu, float hv);
 void reference_surface_at(const reference_object *ref, unsigned primitive, float hu, float hv,
                           meso_vec3 *out_normal, meso_vec2 *out_uv, reference_base *out_base);
 

@@ -15,6 +15,15 @@
  * test is the same cross product, a cut through a part of an original iso-edge is computed from
  * that edge's end points in a canonical order, and points on an edge are mapped with the edge's two
  * vertices only (the third weight exactly 0).
+ *
+ * Caps at open borders: a base edge no other triangle shares (a plane's border, a vase's rim)
+ * cuts the solid, and the clipped isosurface is open there -- a ray would look into a hollow
+ * bar. The cut face is closed by the edge's fin (the shell's side over the edge, w 0..1, in
+ * strips one extraction cell wide, mapped with the edge's two vertices as the cuts are), and
+ * an Embree filter keeps a hit on it only where the solid's own field is inside: the cap is
+ * the solid's cross-section in the fin, exact to the field, shaded with the fin's normal
+ * (reference_surface_at). Seams (an edge two triangles share, found by its end points'
+ * positions, so that a UV seam's duplicated vertices pair up) get no cap.
  */
 #include <stdlib.h>
 #include <string.h>
@@ -39,6 +48,8 @@ typedef struct solid_build {
     meso_vec3 *uvws;
     /* per thread: iso-vertex remap with stamps */
     uint32_t *remap, *stamp, *stamp_counter;
+    uint8_t *border; /* per base triangle: bit e set when edge e is an open border */
+    uint8_t *caps;   /* per Embree quad, pass 2: 1 for a cap's strip */
 } solid_build;
 
 typedef struct emitter {
@@ -49,6 +60,8 @@ typedef struct emitter {
     uint64_t real_triangles;
     uint64_t triangle_base, vertex_base;
     uint32_t *remap, *stamp, current;
+    size_t triangle; /* the base triangle */
+    bool cap;        /* the quads emitted now close an open border */
 } emitter;
 
 static inline float side(const meso_prism_edge *e, meso_vec2 x) {
@@ -89,6 +102,7 @@ static void emit_quad(emitter *em, uint32_t a, uint32_t b, uint32_t c, uint32_t 
         out[1] = b;
         out[2] = c;
         out[3] = d;
+        if (em->cap) em->b->caps[index] = 1;
     }
 }
 
@@ -182,6 +196,107 @@ static void clip_triangle(emitter *em, const uint32_t iso_tri[3], meso_vec3 tile
     if (i + 1 < count) emit_quad(em, index[0], index[i], index[i + 1], index[i + 1]);
 }
 
+/* ---- Caps at open borders ---------------------------------------------------------------- */
+
+/* The fins of the current triangle's open-border edges, in strips about one extraction cell
+ * wide along the edge (a fin is a ruled surface, straight across w at every point of the edge,
+ * so a narrow strip is all but planar), from w = 0 to 1. Marked as caps: the filter keeps
+ * only their hits inside the solid; reference_surface_at turns their normal out of the prism. */
+static void emit_caps(emitter *em) {
+    uint8_t border = em->b->border[em->triangle];
+    if (!border) return;
+    const meso_prism *st = em->st;
+    const meso_isosurface *iso = em->b->iso;
+    em->cap = true;
+    for (int e = 0; e < 3; e++) {
+        if (!(border & (1u << e))) continue;
+        meso_vec2 from = st->uv[e], to = st->uv[(e + 1) % 3];
+        float du = fabsf(to.x - from.x) * (float)iso->resolution_u;
+        float dv = fabsf(to.y - from.y) * (float)iso->resolution_v;
+        float cells = ceilf(fmaxf(du, dv));
+        int strips = cells < 1.0f ? 1 : cells > 4096.0f ? 4096 : (int)cells;
+        uint32_t top_prev = 0, bottom_prev = 0;
+        for (int k = 0; k <= strips; k++) {
+            float t = (float)k / (float)strips;
+            meso_vec3 x = {from.x + (to.x - from.x) * t, from.y + (to.y - from.y) * t, 0.0f};
+            uint32_t top = new_vertex(em, x, e);
+            x.z = 1.0f;
+            uint32_t bottom = new_vertex(em, x, e);
+            if (k > 0) emit_quad(em, top_prev, bottom_prev, bottom, top);
+            top_prev = top;
+            bottom_prev = bottom;
+        }
+    }
+    em->cap = false;
+}
+
+/* An edge of the mesh by its end points' positions (their bits), the lower point first, and
+ * its slot (triangle * 3 + e). */
+typedef struct edge_record {
+    uint32_t key[6];
+    size_t slot;
+} edge_record;
+
+static int edge_record_cmp(const void *pa, const void *pb) {
+    const edge_record *a = pa, *b = pb;
+    int c = memcmp(a->key, b->key, sizeof a->key);
+    if (c) return c;
+    return a->slot < b->slot ? -1 : a->slot > b->slot;
+}
+
+/* border[t] bit e: edge e of triangle t (vertex e to e + 1) belongs to no other triangle. NULL
+ * when out of memory. */
+static uint8_t *open_border_edges(const meso_mesh *mesh) {
+    size_t nt = mesh->num_triangles, ne = 3 * nt;
+    uint8_t *border = calloc(nt ? nt : 1, 1);
+    edge_record *records = malloc((ne ? ne : 1) * sizeof *records);
+    if (!border || !records) {
+        free(border);
+        free(records);
+        return NULL;
+    }
+    for (size_t t = 0; t < nt; t++)
+        for (size_t e = 0; e < 3; e++) {
+            meso_vec3 p = mesh->positions[mesh->indices[3 * t + e]];
+            meso_vec3 q = mesh->positions[mesh->indices[3 * t + (e + 1) % 3]];
+            uint32_t a[3], b[3];
+            memcpy(a, &p, sizeof a);
+            memcpy(b, &q, sizeof b);
+            bool swap = memcmp(b, a, sizeof a) < 0;
+            edge_record *r = &records[3 * t + e];
+            memcpy(r->key, swap ? b : a, sizeof a);
+            memcpy(r->key + 3, swap ? a : b, sizeof a);
+            r->slot = 3 * t + e;
+        }
+    qsort(records, ne, sizeof *records, edge_record_cmp);
+    for (size_t i = 0; i < ne;) {
+        size_t j = i + 1;
+        while (j < ne && !memcmp(records[j].key, records[i].key, sizeof records[i].key)) j++;
+        if (j == i + 1) border[records[i].slot / 3] |= (uint8_t)(1u << (records[i].slot % 3));
+        i = j;
+    }
+    free(records);
+    return border;
+}
+
+/* Embree's filter on a solid's quads: a cap's hit counts only where the solid is inside. */
+static void keep_cap_hits_inside(const struct RTCFilterFunctionNArguments *args) {
+    const reference_object *ref = args->geometryUserPtr;
+    /* RTCHitN's layout (rtcore_ray.h: Ng x, y, z, u, v, primID, each N wide); its accessors
+     * are C++ only */
+    const float *hit = (const float *)args->hit;
+    const unsigned *prim = (const unsigned *)args->hit + 5 * args->N;
+    for (unsigned i = 0; i < args->N; i++) {
+        if (args->valid[i] != -1) continue;
+        unsigned primitive = prim[i];
+        if (!ref->caps[primitive]) continue;
+        meso_vec3 x =
+            reference_quad_uvw(ref, primitive, hit[3 * args->N + i], hit[4 * args->N + i]);
+        meso_vec3 local = {x.x - floorf(x.x), x.y - floorf(x.y), x.z};
+        if (!(ref->field(ref->field_user, local) <= 0.0f)) args->valid[i] = 0;
+    }
+}
+
 /* ---- Per base triangle -------------------------------------------------------------------- */
 
 static long floor_div(long a, long b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
@@ -248,6 +363,7 @@ static void process_triangle(emitter *em) {
                     }
                 }
         }
+    emit_caps(em);
 }
 
 typedef struct solid_pass {
@@ -274,6 +390,7 @@ static void triangle_job(void *user, size_t job, int thread_index) {
             continue;
         }
         em.st = &st;
+        em.triangle = t;
         em.num_triangles = em.num_vertices = em.real_triangles = 0;
         em.triangle_base = pass->write ? b->triangle_offsets[t] : 0;
         em.vertex_base = pass->write ? b->vertex_offsets[t] : 0;
@@ -345,8 +462,9 @@ meso_result reference_build_solid(meso_context *ctx, const meso_reference_desc *
     b.remap = calloc(threads * nv_iso, sizeof *b.remap);
     b.stamp = calloc(threads * nv_iso, sizeof *b.stamp);
     b.stamp_counter = calloc(threads, sizeof *b.stamp_counter);
+    b.border = open_border_edges(mesh);
     if (!b.triangle_counts || !b.vertex_counts || !b.real_counts || !triangle_offsets ||
-        !vertex_offsets || !b.remap || !b.stamp || !b.stamp_counter) {
+        !vertex_offsets || !b.remap || !b.stamp || !b.stamp_counter || !b.border) {
         result =
             meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: reference: solid", object->name);
         goto fail;
@@ -374,13 +492,17 @@ meso_result reference_build_solid(meso_context *ctx, const meso_reference_desc *
     }
     size_t alloc_v = vertices ? (size_t)vertices : 1;
     size_t alloc_t = primitives ? (size_t)primitives : 1;
+    bool any_border = false;
+    for (size_t t = 0; t < nt && !any_border; t++) any_border = b.border[t] != 0;
     b.uvws = malloc(alloc_v * sizeof *b.uvws);
+    b.caps = any_border ? calloc(alloc_t, 1) : NULL;
     b.vertices = rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                          3 * sizeof(float), alloc_v);
     b.indices = rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4,
                                         4 * sizeof(uint32_t), alloc_t);
-    if (!b.uvws || !b.vertices || !b.indices) {
+    if (!b.uvws || !b.vertices || !b.indices || (any_border && !b.caps)) {
         free(b.uvws);
+        free(b.caps);
         result = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: reference: %llu triangles",
                                 object->name, (unsigned long long)triangles);
         goto fail;
@@ -405,6 +527,17 @@ meso_result reference_build_solid(meso_context *ctx, const meso_reference_desc *
     ref->base_offsets = triangle_offsets;
     ref->num_base = nt;
     ref->side_bytes = alloc_v * sizeof *b.uvws + (nt + 1) * sizeof *triangle_offsets;
+    ref->caps = b.caps;
+    ref->vertices = b.vertices;
+    if (b.caps) { /* the open border's caps count only inside the solid */
+        size_t caps = 0;
+        for (size_t q = 0; q < alloc_t; q++) caps += b.caps[q];
+        meso_log_info(ctx, "%s: reference: %zu quads close the open border", object->name, caps);
+        ref->side_bytes += alloc_t;
+        rtcSetGeometryUserData(geometry, ref);
+        rtcSetGeometryIntersectFilterFunction(geometry, keep_cap_hits_inside);
+        rtcSetGeometryOccludedFilterFunction(geometry, keep_cap_hits_inside);
+    }
     *total += triangles;
     meso_log_info(ctx, "%s: reference: %llu triangles in %llu Embree quads", object->name,
                   (unsigned long long)triangles, (unsigned long long)primitives);
@@ -419,6 +552,7 @@ fail:
     free(b.remap);
     free(b.stamp);
     free(b.stamp_counter);
+    free(b.border);
     meso_isosurface_destroy(iso);
     return result;
 }

@@ -239,6 +239,65 @@ static void test_slab_solid_equals_the_translated_base_mesh(void **state) {
     meso_context_destroy(ctx);
 }
 
+/* An open border cuts the solid: the cut face is closed by the border's fin, in the truth
+ * (reference_solid.c's caps; before them a ray looked into the hollow slab and hit nothing)
+ * and in gdm (an entry through a border fin inside the solid, shaded with the fin's normal and
+ * lit past the border by the shell walk). Seen head-on, the slab's cut band on the plane's
+ * front edge (z = 1, between the slab's top and the shell's floor) is drawn by both at the
+ * same depth and in the same colour: a face of normal +z under the light. */
+static void test_open_border_cut_is_closed_in_gdm_and_the_reference(void **state) {
+    meso_context *ctx = test_context(2);
+    const float depth = 0.2f, thickness = 0.4f;
+    test_scene ts;
+    test_scene_init(&ts, 64, 64);
+    ts.scene.camera = (meso_camera){{0.3f, -0.05f, 3.0f}, {0, -0.16f, 0.9f}, {0, 1, 0}, 20.0f};
+    ts.scene.lights[0].direction = meso_vec3_normalize((meso_vec3){0.2f, 0.5f, 0.8f});
+    meso_object *o = test_scene_add(
+        &ts, test_shape(ctx, MESO_SHAPE_PLANE, 2.0f, 1, (meso_vec3){0, 0, 0}), "gdm");
+    meso_solid *solid = slab(ctx, thickness);
+    o->mesostructure.kind = MESO_MESOSTRUCTURE_SOLID;
+    o->mesostructure.solid = solid;
+    o->mesostructure.depth = depth;
+    meso_framebuffer *a = render(ctx, &ts.scene, "gdm", small_bake, NUM_SMALL_BAKE);
+    meso_framebuffer *b = render(ctx, &ts.scene, "reference", NULL, 0);
+    meso_frame frame;
+    meso_frame_init(&frame, &ts.scene, a->width, a->height);
+    int band = 0;
+    double worst_depth = 0.0, worst_colour = 0.0;
+    for (int y = 0; y < a->height; y++)
+        for (int x = 0; x < a->width; x++) {
+            /* the ray's point on the plane z = 1, inside the band with a margin */
+            meso_vec3 dir = meso_frame_ray_direction(&frame, x + 0.5f, y + 0.5f);
+            float t = (1.0f - frame.eye.z) / dir.z;
+            meso_vec3 q = meso_vec3_madd(frame.eye, dir, t);
+            float top = -depth * (1.0f - thickness), bottom = -depth;
+            if (fabsf(q.x) > 0.9f || q.y > top - 0.01f || q.y < bottom + 0.01f) continue;
+            size_t p = (size_t)y * a->width + x;
+            if (!(b->coverage[p] > 0.0f))
+                fail_msg("reference: (%d, %d) in the cut not drawn", x, y);
+            if (!(a->coverage[p] > 0.0f)) fail_msg("gdm: (%d, %d) in the cut not drawn", x, y);
+            float depth_expected = t * meso_vec3_dot(dir, frame.forward);
+            double dd = fmax(fabs((double)a->depth[p] - depth_expected),
+                             fabs((double)b->depth[p] - depth_expected));
+            worst_depth = dd > worst_depth ? dd : worst_depth;
+            for (int c = 0; c < 3; c++) {
+                double dc = fabs((double)a->color[3 * p + c] - b->color[3 * p + c]);
+                worst_colour = dc > worst_colour ? dc : worst_colour;
+            }
+            band++;
+        }
+    print_message("%d pixels of the cut: largest depth difference %.2g, colour %.2g\n", band,
+                  worst_depth, worst_colour);
+    assert_true(band > 100);
+    assert_true(worst_depth < 2e-3);
+    assert_true(worst_colour < 2e-3);
+    meso_framebuffer_destroy(a);
+    meso_framebuffer_destroy(b);
+    test_scene_free(&ts);
+    meso_solid_destroy(solid);
+    meso_context_destroy(ctx);
+}
+
 /* Issue 10: the GDM of a height field draws what relief_exact draws on a plane's interior
  * (both checked against the truth elsewhere; here against each other, shadows included). */
 static void test_height_field_matches_relief_exact_on_a_plane(void **state) {
@@ -281,6 +340,7 @@ int main(void) {
         cmocka_unit_test(test_lookup8_equals_the_bakes_lookup),
         cmocka_unit_test(test_closed_mesh_with_a_constant_height_field_has_no_gap),
         cmocka_unit_test(test_slab_solid_equals_the_translated_base_mesh),
+        cmocka_unit_test(test_open_border_cut_is_closed_in_gdm_and_the_reference),
         cmocka_unit_test(test_height_field_matches_relief_exact_on_a_plane),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

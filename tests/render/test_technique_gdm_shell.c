@@ -108,15 +108,17 @@ static void test_light_through_a_hole_of_another_prism_lights_the_point(void **s
             bool expected = column > 0.0f;
             size_t prism = v <= u ? 0 : 1; /* the lower plane's triangle holding (u, v) */
             meso_vec3 top = {u, v, 0.0f};
-            bool got = gdm_shell_light_visible(shell, prism, top, up, true);
+            bool got = gdm_shell_light_visible(shell, prism, top, up, true, false);
             if (got != expected)
                 fail_msg("(%g, %g): the light %s, the upper grid's column %s (distance %g)", u, v,
                          got ? "visible" : "blocked", expected ? "a hole" : "solid", column);
             /* from the point itself, where its own slab's top is clear */
             if (meso_solid_distance(solid, (meso_vec3){u - floorf(u), v - floorf(v), 0.0f}) >
                 0.05f) {
-                if (gdm_shell_light_visible(shell, prism, top, up, false) != expected)
-                    fail_msg("(%g, %g), walked from the point: not the slab's answer", u, v);
+                for (int thorough = 0; thorough <= 1; thorough++)
+                    if (gdm_shell_light_visible(shell, prism, top, up, false, thorough) != expected)
+                        fail_msg("(%g, %g), walked from the point%s: not the slab's answer", u, v,
+                                 thorough ? ", probed every voxel" : "");
                 from_point++;
             }
             lit += expected;
@@ -127,7 +129,7 @@ static void test_light_through_a_hole_of_another_prism_lights_the_point(void **s
     assert_true(lit > 100 && blocked > 100 && from_point > 50);
     /* a light sideways, parallel to the planes, meets nothing */
     assert_true(gdm_shell_light_visible(shell, 0, (meso_vec3){0.5f, 0.3f, 0.0f},
-                                        (meso_vec3){1.0f, 0.0f, 0.0f}, true));
+                                        (meso_vec3){1.0f, 0.0f, 0.0f}, true, false));
     gdm_shell_destroy(shell);
     gdm_lookup_table_deinit(&table);
     meso_gdm_destroy(gdm);

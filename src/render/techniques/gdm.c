@@ -800,6 +800,23 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
                                        (meso_vec2){-normal_t.x, -normal_t.y}); /* = gradient */
     else
         normal = world_normal(&tf, normal_t);
+    /* An entry through an open border's fin with the mesostructure there (d = 0: the border
+     * cuts it) lies on the cut face, whose normal is the fin's: the mesostructure's gradient
+     * belongs to its own surfaces (a ring cut across at a vase's rim lit as its side). The
+     * reference closes the cut with the same fin (reference_solid.c, "caps"). The shell's
+     * twin table tells a border's fin from a seam's (macro_shadows). A height field's border
+     * keeps the surface's normal: the reference draws no wall under its displaced surface
+     * (docs/techniques/gdm.md, "open borders"). */
+    bool border_entry =
+        d == 0.0f && slot >= MESO_PRISM_FIN && s->shell && !gdm_shell_face_is_seam(s->shell, face);
+    bool border_cut = border_entry && s->solid;
+    if (border_cut) {
+        normal = layer->planes[prism_index * MESO_PRISM_NUM_FACES + (size_t)slot].normal;
+        /* in texture space: J^T n (normals are covectors), for the shadow test's offset */
+        normal_t =
+            (meso_vec3){meso_vec3_dot(tf.tangent, normal), meso_vec3_dot(tf.bitangent, normal),
+                        -s->depth * meso_vec3_dot(tf.normal, normal)};
+    }
     float length_t = meso_vec3_length(normal_t);
     normal_t = length_t > 0.0f ? meso_vec3_scale(normal_t, 1.0f / length_t) : (meso_vec3){0, 0, -1};
     f->position = position;
@@ -818,22 +835,27 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
         /* beyond the paper (gdm_shell_shadow.h): past the slab the light is followed through
          * the rest of the shell; a solid's light toward the slab's bottom from the point on */
         bool through_floor = s->shell && s->solid && lt.z >= 0.0f;
-        bool seam_entry = d == 0.0f && gdm_shell_face_is_seam(s->shell, face);
-        bool blocked = !through_floor && shadowed(s, hit, normal_t, lt, s->solid && seam_entry);
-        if (s->shell) {
+        bool blocked;
+        if (border_cut) {
+            /* on an open border's cut face: past the border the flat slab holds the periodic
+             * mesostructure's continuation, which the shell does not have. The walk leaves
+             * through the border's fin and tests whatever part of the shell it meets after. */
+            blocked = !gdm_shell_light_visible(s->shell, prism_index, hit, l, true, false);
+        } else {
+            bool seam_entry = d == 0.0f && gdm_shell_face_is_seam(s->shell, face);
+            blocked = !through_floor && shadowed(s, hit, normal_t, lt, s->solid && seam_entry);
             /* §3.2's slab is the point's tangent frame extended flat: where the shell curves
              * away (a sphere's terminator, a vase's neck at its outline) the flat slab holds
              * mesostructure the curved shell does not, and its blockers are false. A blocker
-             * it reports is checked by the walk from the point on, each prism testing its
-             * own segment (docs/techniques/gdm.md, "the slab's blockers checked on the
-             * curved shell"). Not at an open border's cut face (an entry through a fin no
-             * neighbour shares): there the slab answers, as measured before. */
-            bool border_entry =
-                d == 0.0f && slot != MESO_PRISM_TOP && slot != MESO_PRISM_BOTTOM && !seam_entry;
-            if (through_floor || (blocked && !border_entry))
-                blocked = !gdm_shell_light_visible(s->shell, prism_index, hit, l, false);
-            else if (!blocked)
-                blocked = !gdm_shell_light_visible(s->shell, prism_index, hit, l, true);
+             * it reports is checked by the walk from the point on, each prism's segment
+             * probed every voxel (docs/techniques/gdm.md, "the slab's blockers checked on
+             * the curved shell"); so is a solid's light toward the bottom, which the slab
+             * cannot test. Not at a height field's open border, whose side the slab answers
+             * as the reference (no wall) has it. */
+            if (s->shell && (through_floor || (blocked && !border_entry)))
+                blocked = !gdm_shell_light_visible(s->shell, prism_index, hit, l, false, true);
+            else if (s->shell && !blocked)
+                blocked = !gdm_shell_light_visible(s->shell, prism_index, hit, l, true, false);
         }
         if (blocked) visibility[li] = 0.0f;
     }

@@ -195,7 +195,8 @@ static void inside_sky(const gdm_gi *gi, const meso_fragment *f, const gdm_gi_hi
         float cosine = meso_vec3_dot(f->normal, gi->inside_direction[k]);
         if (cosine <= 0.0f) continue;
         all = meso_vec3_madd(all, gi->inside_radiance[k], cosine);
-        if (gdm_shell_light_visible(gi->shell, prism, hit->uvw, gi->inside_direction[k], false))
+        if (gdm_shell_light_visible(gi->shell, prism, hit->uvw, gi->inside_direction[k], false,
+                                    false))
             seen = meso_vec3_madd(seen, gi->inside_radiance[k], cosine);
     }
     const float *a = &albedo.x, *s = &seen.x, *u = &all.x;

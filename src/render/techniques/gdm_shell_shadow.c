@@ -368,17 +368,28 @@ static inline float lookup(const gdm_shell_desc *d, meso_vec3 uvw, meso_vec3 dir
  * (the table's error near a boundary, as gdm's local test allows it). With refine_steps the
  * table's blocker is confirmed on the mesostructure as gdm's shadows confirm it: just past d,
  * else by shadow_steps probes along the segment (the compressed table errs by more than the
- * gaps of a weave; the answers then are the mesostructure's). */
-static bool segment_blocked(const gdm_shell_desc *d, meso_vec3 t0, meso_vec3 dir, float length) {
+ * gaps of a weave; the answers then are the mesostructure's). `thorough`: the table's "lit"
+ * is not trusted either -- the segment is probed every voxel (at most shadow_steps times)
+ * whatever the table says. */
+static bool segment_blocked(const gdm_shell_desc *d, meso_vec3 t0, meso_vec3 dir, float length,
+                            bool thorough) {
     float margin = d->shadow_bias * d->voxel.z;
     if (!(length > margin)) return false;
     float hit = lookup(d, t0, dir);
     if (d->refine_steps <= 0) return hit < length - margin;
-    if (!(hit < length - margin)) return false;
-    float past = fminf(fmaxf(hit, 0.0f) + 0.5f * d->refine_window, length);
-    if (inside(d, meso_vec3_madd(t0, dir, past))) return true;
-    for (int k = 0; k < d->shadow_steps; k++) {
-        float x = length * ((float)k + 0.5f) / (float)d->shadow_steps;
+    int steps = d->shadow_steps;
+    if (thorough) {
+        float voxels = ceilf(length / fminf(d->voxel.x, fminf(d->voxel.y, d->voxel.z)));
+        steps = voxels < 2.0f ? 2 : voxels < (float)steps ? (int)voxels : steps;
+    } else if (!(hit < length - margin)) {
+        return false;
+    }
+    if (hit < length - margin) {
+        float past = fminf(fmaxf(hit, 0.0f) + 0.5f * d->refine_window, length);
+        if (inside(d, meso_vec3_madd(t0, dir, past))) return true;
+    }
+    for (int k = 0; k < steps; k++) {
+        float x = length * ((float)k + 0.5f) / (float)steps;
         if (inside(d, meso_vec3_madd(t0, dir, x))) return true;
     }
     return false;
@@ -406,11 +417,11 @@ static bool cross_prism(const meso_prism_layer *layer, size_t prism, meso_vec3 o
     return true;
 }
 
-static bool crossing_blocked(const gdm_shell_desc *d, const crossing *c) {
+static bool crossing_blocked(const gdm_shell_desc *d, const crossing *c, bool thorough) {
     meso_vec3 segment = meso_vec3_sub(c->t_out, c->t_in);
     float length = meso_vec3_length(segment);
     if (!(length > 1e-7f) || !isfinite(length)) return false;
-    return segment_blocked(d, c->t_in, meso_vec3_scale(segment, 1.0f / length), length);
+    return segment_blocked(d, c->t_in, meso_vec3_scale(segment, 1.0f / length), length, thorough);
 }
 
 /* A ray leaving the slab's bottom: into the object's body for a height field; for a solid,
@@ -459,7 +470,7 @@ size_t gdm_shell_prism_index(const gdm_shell *shell, const meso_prism *prism) {
 }
 
 bool gdm_shell_light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw, meso_vec3 light,
-                             bool slab_clear) {
+                             bool slab_clear, bool thorough) {
     const gdm_shell_desc *d = &shell->desc;
     const meso_prism_layer *layer = d->layer;
     const meso_prism *first = &layer->prisms[prism];
@@ -500,7 +511,7 @@ bool gdm_shell_light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw
     size_t current = prism;
     if (!cross_prism(layer, prism, origin, t0, light, -1, &c)) return true;
     for (int n = 0; n < WALK_MAX_PRISMS; n++) {
-        if (tested && crossing_blocked(d, &c)) return false;
+        if (tested && crossing_blocked(d, &c, thorough)) return false;
         if (meso_vec3_length(meso_vec3_sub(c.p_out, origin)) > reach) tested = true;
         if (c.exit_slot == MESO_PRISM_BOTTOM) {
             if (floor_blocks(d, &c)) return false;

@@ -14,7 +14,7 @@
  *
  * Usage (gdm.c):
  *   gdm_shell_create(ctx, &(gdm_shell_desc){...}, name, &shell);       prepare, once
- *   gdm_shell_light_visible(shell, prism, uvw, light, slab_clear)     per fragment and light
+ *   gdm_shell_light_visible(shell, prism, uvw, light, slab_clear, thorough)   per fragment, light
  *   gdm_shell_destroy(shell);
  *
  * Threads: creation builds the Embree scene on the calling thread (so its BVH, and every
@@ -94,8 +94,11 @@ size_t gdm_shell_prism_index(const gdm_shell *shell, const meso_prism *prism);
  *   enters afterwards are.
  * slab_clear false: every prism from the point on is tested, the first from `shadow_bias`
  *   voxels off the surface (a solid's light toward the slab's bottom, which §3.2 cannot see).
+ * thorough: a prism's segment is probed on the mesostructure every voxel even where the
+ *   table says it is clear (the table trusted only where it reports a blocker otherwise): for
+ *   a light the caller's own test found blocked in a flat slab, checked on the curved shell.
  * Pure; thread-safe. */
 bool gdm_shell_light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw, meso_vec3 light,
-                             bool slab_clear);
+                             bool slab_clear, bool thorough);
 
 #endif
