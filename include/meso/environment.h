@@ -1,7 +1,8 @@
 /* meso environments: distant light from every direction (GDM paper §3.2, issue 17).
  *
  * An environment is an equirectangular map of linear RGB radiance, from a Radiance .hdr file
- * (read with stb_image) or made from a procedural sky, times an intensity. It is held as a
+ * (read with stb_image) or an OpenEXR file (the OpenEXR library), or made from a procedural
+ * sky, times an intensity. It is held as a
  * piecewise-constant function: the radiance toward d is that of the texel d falls in (no
  * filtering), so the projection onto spherical harmonics, the importance sampling and the
  * lookups of the path tracer all see the same function.
@@ -72,11 +73,11 @@ typedef struct meso_environment {
     uint64_t hash; /* of the map's texels and size: caches of what is baked from it */
 } meso_environment;
 
-/* Load a Radiance .hdr (RGBE) equirectangular map, radiance times `intensity` (finite, >= 0,
- * at most MESO_ENVIRONMENT_MAX_INTENSITY). Any aspect ratio is mapped onto the whole sphere.
- * Errors name the file: MESO_ERROR_IO (missing, unreadable), MESO_ERROR_FORMAT (not a Radiance
- * file, corrupt), MESO_ERROR_LIMIT (too large), MESO_ERROR_INVALID_ARGUMENT (intensity).
- * Thread-safe. */
+/* Load a Radiance .hdr (RGBE) or OpenEXR (told by its magic number) equirectangular map,
+ * radiance times `intensity` (finite, >= 0, at most MESO_ENVIRONMENT_MAX_INTENSITY). Any aspect
+ * ratio is mapped onto the whole sphere. Errors name the file: MESO_ERROR_IO (missing,
+ * unreadable), MESO_ERROR_FORMAT (neither format, corrupt), MESO_ERROR_LIMIT (too large),
+ * MESO_ERROR_INVALID_ARGUMENT (intensity). Thread-safe. */
 meso_result meso_environment_load(meso_context *ctx, const char *path, float intensity,
                                   meso_environment **out_environment);
 /* A procedural sky (desc may be NULL: the defaults) times `intensity`. Errors:

@@ -95,6 +95,15 @@ meso_result meso_image_write_exr(meso_context *ctx, const meso_image *image, FIL
 meso_result meso_exr_write(meso_context *ctx, const char *path, int width, int height,
                            int num_channels, const char *const *names, const float *pixels,
                            bool half);
+/* Whether `data` starts with OpenEXR's magic number. */
+bool meso_file_is_exr(const void *data, size_t size);
+/* Read an OpenEXR file's RGB (scanline or tiled, any compression; luminance files as grey RGB;
+ * a missing channel is 0) into a new linear float image of 3 channels. The data window's size
+ * is checked against max_side, max_pixels and the context's memory budget before anything is
+ * allocated. MESO_OK, MESO_ERROR_FORMAT (unreadable, corrupt), MESO_ERROR_LIMIT,
+ * MESO_ERROR_OUT_OF_MEMORY; logged naming the path. *out_image NULL on failure. */
+meso_result meso_image_read_exr_rgb(meso_context *ctx, const char *path, int max_side,
+                                    uint64_t max_pixels, meso_image **out_image);
 /* The same PNG written to an open stream (e.g. a meso_atomic_file's, so that several outputs
  * can be committed together); `path` only names the file in messages. Not flushed or closed. */
 meso_result meso_image_write_png(meso_context *ctx, const meso_image *image, FILE *file,

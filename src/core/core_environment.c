@@ -1,5 +1,6 @@
-/* Environments (include/meso/environment.h): Radiance .hdr maps read with stb_image, a
- * procedural sky, the spherical-harmonic projection and luminance importance sampling. */
+/* Environments (include/meso/environment.h): Radiance .hdr maps read with stb_image, OpenEXR
+ * maps with the OpenEXR library (core_exr.c), a procedural sky, the spherical-harmonic projection
+ * and luminance importance sampling. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -9,6 +10,7 @@
 #include <stb_image_write.h>
 
 #include "meso/environment.h"
+#include "meso/image.h"
 
 #define TWO_PI 6.283185307179586
 
@@ -307,8 +309,18 @@ meso_result meso_environment_load(meso_context *ctx, const char *path, float int
     float *pixels = NULL;
     meso_image view = {0};
     int width = 0, height = 0, channels = 0;
+    if (meso_file_is_exr(data, size)) {
+        free(data);
+        meso_image *image = NULL;
+        r = meso_image_read_exr_rgb(ctx, path, MESO_ENVIRONMENT_MAX_SIDE,
+                                    MESO_ENVIRONMENT_MAX_PIXELS, &image);
+        if (r == MESO_OK)
+            r = meso_environment_create_from_image(ctx, image, intensity, path, out_environment);
+        meso_image_destroy(image);
+        return r;
+    }
     if (size > INT32_MAX || !stbi_is_hdr_from_memory((const unsigned char *)data, (int)size)) {
-        r = meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: not a Radiance .hdr file", path);
+        r = meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: not a Radiance .hdr or OpenEXR file", path);
         goto done;
     }
     /* the header's size first: nothing is decoded past the limits */

@@ -1,7 +1,11 @@
 /* OpenEXR files through the library's C API (OpenEXRCore): linear half-float scanline images,
  * ZIP-compressed, written through a stream callback into a meso_atomic_file so they commit
- * all-or-nothing like the PNGs. */
+ * all-or-nothing like the PNGs. Read (environment maps) through the library's RGBA C
+ * interface (ImfCRgbaFile.h), which takes scanline and tiled files, any compression, and
+ * turns luminance/chroma files into RGB. */
+#include <ImfCRgbaFile.h>
 #include <openexr.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -151,4 +155,62 @@ meso_result meso_exr_write(meso_context *ctx, const char *path, int width, int h
 bool meso_image_path_is_exr(const char *path) {
     size_t n = path ? strlen(path) : 0;
     return n >= 4 && strcasecmp(path + n - 4, ".exr") == 0;
+}
+
+bool meso_file_is_exr(const void *data, size_t size) {
+    static const unsigned char magic[4] = {0x76, 0x2f, 0x31, 0x01};
+    return data && size >= 4 && memcmp(data, magic, 4) == 0;
+}
+
+meso_result meso_image_read_exr_rgb(meso_context *ctx, const char *path, int max_side,
+                                    uint64_t max_pixels, meso_image **out_image) {
+    *out_image = NULL;
+    ImfInputFile *in = ImfOpenInputFile(path);
+    if (!in)
+        return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: not a readable OpenEXR file (%s)", path,
+                              ImfErrorMessage());
+    int xmin, ymin, xmax, ymax;
+    ImfHeaderDataWindow(ImfInputHeader(in), &xmin, &ymin, &xmax, &ymax);
+    int64_t width = (int64_t)xmax - xmin + 1, height = (int64_t)ymax - ymin + 1;
+    meso_result r = MESO_OK;
+    ImfRgba *rgba = NULL;
+    if (width < 1 || height < 1) {
+        r = meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: empty data window", path);
+        goto done;
+    }
+    if (width > max_side || height > max_side || (uint64_t)(width * height) > max_pixels) {
+        r = meso_log_error(
+            ctx, MESO_ERROR_LIMIT, "%s: %lldx%lld exceeds the limit of %d a side and %llu texels",
+            path, (long long)width, (long long)height, max_side, (unsigned long long)max_pixels);
+        goto done;
+    }
+    size_t pixels = (size_t)(width * height);
+    if ((r = meso_memory_check(ctx, path, (uint64_t)pixels * (sizeof *rgba + 3 * sizeof(float)))))
+        goto done;
+    rgba = malloc(pixels * sizeof *rgba);
+    if (!rgba) {
+        r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: %zu texels", path, pixels);
+        goto done;
+    }
+    /* the library addresses pixel (x, y) at base + x + y * width: the base is the buffer moved
+     * back by the window's origin (as an address, so that no out-of-range pointer is formed) */
+    uintptr_t base = (uintptr_t)rgba - (uintptr_t)(((intptr_t)xmin + (intptr_t)ymin * width) *
+                                                   (intptr_t)sizeof *rgba);
+    if (!ImfInputSetFrameBuffer(in, (ImfRgba *)base, 1, (size_t)width) ||
+        !ImfInputReadPixels(in, ymin, ymax)) {
+        r = meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: corrupt OpenEXR data (%s)", path,
+                           ImfErrorMessage());
+        goto done;
+    }
+    if ((r = meso_image_create(ctx, (int)width, (int)height, 3, out_image))) goto done;
+    float *rgb = (*out_image)->pixels;
+    for (size_t i = 0; i < pixels; i++) {
+        rgb[3 * i + 0] = ImfHalfToFloat(rgba[i].r);
+        rgb[3 * i + 1] = ImfHalfToFloat(rgba[i].g);
+        rgb[3 * i + 2] = ImfHalfToFloat(rgba[i].b);
+    }
+done:
+    free(rgba);
+    ImfCloseInputFile(in);
+    return r;
 }

@@ -48,6 +48,50 @@ static void test_environment_hdr_round_trip(void **state) {
     meso_context_destroy(ctx);
 }
 
+/* An OpenEXR map (written as half floats by meso's own writer) loads as the same radiance to
+ * half precision, through the same path as a .hdr; a cut one and an EXR whose data window is
+ * over the limits are refused naming the file, the second before any texel is read. */
+static void test_environment_exr_loads_and_bad_exr_is_refused(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    meso_environment *sky = NULL, *loaded = NULL;
+    assert_int_equal(meso_environment_create_sky(ctx, &(meso_sky_desc){.width = 64}, 1.0f, &sky),
+                     MESO_OK);
+    const char *dir = test_temp_dir();
+    const char *path = test_path(dir, "sky.exr");
+    static const char *const names[3] = {"R", "G", "B"};
+    assert_int_equal(meso_exr_write(ctx, path, 64, 32, 3, names, sky->map->pixels, true), MESO_OK);
+    assert_int_equal(meso_environment_load(ctx, path, 1.0f, &loaded), MESO_OK);
+    assert_int_equal(loaded->map->width, 64);
+    assert_int_equal(loaded->map->height, 32);
+    /* half floats: 11 bits of mantissa */
+    for (size_t t = 0; t < 64 * 32 * 3; t++)
+        assert_float_equal(loaded->map->pixels[t], sky->map->pixels[t],
+                           1e-3f * sky->map->pixels[t] + 1e-6f);
+    meso_environment_destroy(loaded);
+
+    size_t size = 0;
+    char *bytes = test_read_file(path, &size);
+    const char *cut = test_path(dir, "cut.exr");
+    test_write_file(cut, bytes, size / 2);
+    meso_environment *env = (meso_environment *)1;
+    assert_int_equal(meso_environment_load(ctx, cut, 1.0f, &env), MESO_ERROR_FORMAT);
+    assert_null(env);
+    assert_starts_with(meso_context_last_error(ctx), cut);
+    free(bytes);
+
+    const char *wide = test_path(dir, "wide.exr");
+    float *row = calloc((size_t)(MESO_ENVIRONMENT_MAX_SIDE + 1) * 3, sizeof(float));
+    assert_non_null(row);
+    assert_int_equal(
+        meso_exr_write(ctx, wide, MESO_ENVIRONMENT_MAX_SIDE + 1, 1, 3, names, row, true), MESO_OK);
+    free(row);
+    assert_int_equal(meso_environment_load(ctx, wide, 1.0f, &env), MESO_ERROR_LIMIT);
+    assert_starts_with(meso_context_last_error(ctx), wide);
+    meso_environment_destroy(sky);
+    meso_context_destroy(ctx);
+}
+
 static void test_environment_example_map_loads(void **state) {
     (void)state;
     meso_context *ctx = test_context(1);
@@ -170,6 +214,7 @@ static void test_environment_sampling_density_matches_the_map(void **state) {
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_environment_hdr_round_trip),
+        cmocka_unit_test(test_environment_exr_loads_and_bad_exr_is_refused),
         cmocka_unit_test(test_environment_example_map_loads),
         cmocka_unit_test(test_environment_bad_files_are_refused),
         cmocka_unit_test(test_environment_sampling_density_matches_the_map),
