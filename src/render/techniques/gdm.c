@@ -795,6 +795,8 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
     f->out_depth = depth > f->depth ? depth : f->depth;
     texture_frame tf = frame_at(mesh, prism, (meso_vec2){hit.x, hit.y}, s->depth);
     meso_vec3 normal, normal_t = texture_normal(s, hit);
+    /* for the walk (gdm_shell_shadow.h): the point as mapped here, and a solid's gradient */
+    gdm_shell_point point = {position, tf.normal, normal_t, s->solid && !s->baked_normals};
     if (s->heightfield && !s->baked_normals) /* as the reference and the other techniques; */
         normal = meso_displaced_normal(tf.normal, tf.tangent, tf.bitangent, s->depth,
                                        (meso_vec2){-normal_t.x, -normal_t.y}); /* = gradient */
@@ -840,7 +842,8 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
             /* on an open border's cut face: past the border the flat slab holds the periodic
              * mesostructure's continuation, which the shell does not have. The walk leaves
              * through the border's fin and tests whatever part of the shell it meets after. */
-            blocked = !gdm_shell_light_visible(s->shell, prism_index, hit, l, true, false);
+            blocked =
+                !gdm_shell_light_visible_at(s->shell, prism_index, hit, &point, l, true, false);
         } else {
             bool seam_entry = d == 0.0f && gdm_shell_face_is_seam(s->shell, face);
             blocked = !through_floor && shadowed(s, hit, normal_t, lt, s->solid && seam_entry);
@@ -853,9 +856,11 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
              * cannot test. Not at a height field's open border, whose side the slab answers
              * as the reference (no wall) has it. */
             if (s->shell && (through_floor || (blocked && !border_entry)))
-                blocked = !gdm_shell_light_visible(s->shell, prism_index, hit, l, false, true);
+                blocked =
+                    !gdm_shell_light_visible_at(s->shell, prism_index, hit, &point, l, false, true);
             else if (s->shell && !blocked)
-                blocked = !gdm_shell_light_visible(s->shell, prism_index, hit, l, true, false);
+                blocked =
+                    !gdm_shell_light_visible_at(s->shell, prism_index, hit, &point, l, true, false);
         }
         if (blocked) visibility[li] = 0.0f;
     }

@@ -490,8 +490,10 @@ size_t gdm_shell_prism_index(const gdm_shell *shell, const meso_prism *prism) {
     return (size_t)(prism - shell->desc.layer->prisms);
 }
 
-bool gdm_shell_light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw, meso_vec3 light,
-                             bool slab_clear, bool thorough) {
+/* gdm_shell_light_visible; `at` NULL, or what the caller knows of the point
+ * (gdm_shell_light_visible_at). */
+static bool light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw, meso_vec3 light,
+                          bool slab_clear, bool thorough, const gdm_shell_point *at) {
     const gdm_shell_desc *d = &shell->desc;
     const meso_prism_layer *layer = d->layer;
     const meso_prism *first = &layer->prisms[prism];
@@ -502,14 +504,17 @@ bool gdm_shell_light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw
          * zeros at the surface): up for a height field, along the solid's normal */
         meso_vec3 n = {0.0f, 0.0f, -1.0f};
         if (d->solid) {
-            meso_vec3 g = meso_solid_gradient(d->solid, gdm_tile_point(uvw));
+            meso_vec3 g = at && at->has_gradient
+                              ? at->gradient
+                              : meso_solid_gradient(d->solid, gdm_tile_point(uvw));
             float len = meso_vec3_length(g);
             n = len > 0.0f && isfinite(len) ? meso_vec3_scale(g, 1.0f / len) : n;
         }
         t0 = meso_vec3_add(uvw, meso_vec3_mul(n, meso_vec3_scale(d->voxel, d->shadow_bias)));
         t0.z = fminf(fmaxf(t0.z, 0.0f), 1.0f);
     }
-    meso_vec3 origin = meso_prism_map(first, d->mesh, layer->depth, t0, -1);
+    meso_vec3 origin =
+        at && slab_clear ? at->position : meso_prism_map(first, d->mesh, layer->depth, t0, -1);
     /* tested: the prisms of this stretch are tested (after the ray left the slab the caller's
      * test covered). That test ran in one flat slab along the point's own frame: it covered
      * the ray up to where a flat shell's top would be, w depth / (N . L) away (5 % more for
@@ -519,12 +524,17 @@ bool gdm_shell_light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw
     bool tested = !slab_clear;
     float reach = INFINITY;
     if (slab_clear) {
-        float b[3];
-        meso_prism_weights(first, (meso_vec2){uvw.x, uvw.y}, b);
-        const uint32_t *v = first->vertices;
-        meso_vec3 n = meso_vec3_normalize(
-            meso_vec3_barycentric(d->mesh->normals[v[0]], d->mesh->normals[v[1]],
-                                  d->mesh->normals[v[2]], b[0], b[1], b[2]));
+        meso_vec3 n;
+        if (at) {
+            n = at->normal;
+        } else {
+            float b[3];
+            meso_prism_weights(first, (meso_vec2){uvw.x, uvw.y}, b);
+            const uint32_t *v = first->vertices;
+            n = meso_vec3_normalize(
+                meso_vec3_barycentric(d->mesh->normals[v[0]], d->mesh->normals[v[1]],
+                                      d->mesh->normals[v[2]], b[0], b[1], b[2]));
+        }
         reach = 1.05f * uvw.z * layer->depth / fmaxf(meso_vec3_dot(n, light), 1e-3f) +
                 2.0f * shell->step;
     }
@@ -575,4 +585,15 @@ bool gdm_shell_light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw
         }
     }
     return true;
+}
+
+bool gdm_shell_light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw, meso_vec3 light,
+                             bool slab_clear, bool thorough) {
+    return light_visible(shell, prism, uvw, light, slab_clear, thorough, NULL);
+}
+
+bool gdm_shell_light_visible_at(const gdm_shell *shell, size_t prism, meso_vec3 uvw,
+                                const gdm_shell_point *point, meso_vec3 light, bool slab_clear,
+                                bool thorough) {
+    return light_visible(shell, prism, uvw, light, slab_clear, thorough, point);
 }
