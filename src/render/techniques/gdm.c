@@ -648,9 +648,10 @@ static float refine_hit(const gdm_state *s, float clear_w, meso_vec3 t_in, meso_
     return 0.5f * (lo + hi); /* the bracket's middle: half its width off, either way */
 }
 
-/* Solid where a ray leaves the slab's bottom at T (height fields: always). */
+/* Solid where a ray leaves the slab's bottom at T (height fields: always); a solid's answer
+ * through its distance grid where that proves it (state_inside: the same answer). */
 static inline bool floor_is_solid(const gdm_state *s, meso_vec3 t) {
-    return s->heightfield || inside_mesostructure(s, (meso_vec3){t.x, t.y, 1.0f - 1e-3f});
+    return s->heightfield || state_inside(s, (meso_vec3){t.x, t.y, 1.0f - 1e-3f});
 }
 
 static meso_vec3 texture_normal(const gdm_state *s, meso_vec3 uvw) {
