@@ -302,6 +302,7 @@ static bool solid_grid(meso_context *ctx, gdm_state *s) {
 }
 
 static bool state_inside(const void *state, meso_vec3 uvw);
+static bool state_segment_outside(const void *state, meso_vec3 a, meso_vec3 b);
 
 static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
                                const meso_object *object, void **out_state) {
@@ -399,7 +400,8 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
                                                 .refine_steps = s->refine_steps,
                                                 .shadow_steps = s->shadow_steps,
                                                 .inside = state_inside,
-                                                .inside_user = s},
+                                                .inside_user = s,
+                                                .segment_outside = state_segment_outside},
                               object->name, &s->shell)) != MESO_OK)
         goto fail;
     if (options.gi && scene->environment &&
@@ -582,6 +584,16 @@ static bool state_inside(const void *state, meso_vec3 uvw) {
     if (s->heightfield) return !(uvw.z < s->clear_w) && inside_mesostructure(s, uvw);
     float radius;
     return solid_probe(s, uvw, &radius) <= 0.0f;
+}
+
+/* gdm_shell_desc.segment_outside: a height field's window proof (shade_one's, on the segment
+ * a -> b): above the highest texel its (u, v) box can read, every point of it is outside. */
+static bool state_segment_outside(const void *state, meso_vec3 a, meso_vec3 b) {
+    const gdm_state *s = state;
+    if (!s->window_max) return false;
+    float highest = window_bound(s, gdm_fminf(a.x, b.x), gdm_fmaxf(a.x, b.x), gdm_fminf(a.y, b.y),
+                                 gdm_fmaxf(a.y, b.y));
+    return gdm_fmaxf(a.z, b.z) + 1e-6f < 1.0f - highest - 1e-6f;
 }
 
 static inline ray_probe ray_probe_start(meso_vec3 t0, meso_vec3 dir, float clear_w) {

@@ -375,6 +375,11 @@ static bool segment_blocked(const gdm_shell_desc *d, meso_vec3 t0, meso_vec3 dir
                             bool thorough) {
     float margin = d->shadow_bias * d->voxel.z;
     if (!(length > margin)) return false;
+    /* every probe below lies on t0 + x dir, x in [0, length]: where that stretch is proven
+     * outside they all answer outside, whatever the table says (the same answer) */
+    if (d->refine_steps > 0 && d->segment_outside &&
+        d->segment_outside(d->inside_user, t0, meso_vec3_madd(t0, dir, length)))
+        return false;
     float hit = lookup(d, t0, dir);
     if (d->refine_steps <= 0) return hit < length - margin;
     int steps = d->shadow_steps;

@@ -64,6 +64,11 @@ typedef struct gdm_shell_desc {
      * same answer for every point */
     bool (*inside)(const void *inside_user, meso_vec3 uvw);
     const void *inside_user;
+    /* NULL, or true where every point t0 + x dir with x between 0 and the end's x (b =
+     * meso_vec3_madd(t0, dir, x_end), so each coordinate lies between a's and b's) is proven
+     * outside without evaluating the mesostructure (gdm.c: a height field's window maxima);
+     * false where not proven. Called with inside_user. */
+    bool (*segment_outside)(const void *inside_user, meso_vec3 a, meso_vec3 b);
 } gdm_shell_desc;
 
 /* Build the Embree scene of desc->layer's faces. *out_shell NULL on failure:
