@@ -387,22 +387,23 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
         }
     }
     if (options.shadows && options.macro_shadows &&
-        (r = gdm_shell_create(ctx,
-                              &(gdm_shell_desc){.layer = s->layer,
-                                                .mesh = object->mesh,
-                                                .gdm = s->gdm,
-                                                .table = s->raw ? NULL : &s->table,
-                                                .heightfield = s->heightfield,
-                                                .solid = s->solid,
-                                                .voxel = s->voxel,
-                                                .shadow_bias = s->shadow_bias,
-                                                .refine_window = s->refine_window,
-                                                .refine_steps = s->refine_steps,
-                                                .shadow_steps = s->shadow_steps,
-                                                .inside = state_inside,
-                                                .inside_user = s,
-                                                .segment_outside = state_segment_outside},
-                              object->name, &s->shell)) != MESO_OK)
+        (r = gdm_shell_create(
+             ctx,
+             &(gdm_shell_desc){.layer = s->layer,
+                               .mesh = object->mesh,
+                               .gdm = s->gdm,
+                               .table = s->raw ? NULL : &s->table,
+                               .heightfield = s->heightfield,
+                               .solid = s->solid,
+                               .voxel = s->voxel,
+                               .shadow_bias = s->shadow_bias,
+                               .refine_window = s->refine_window,
+                               .refine_steps = s->refine_steps,
+                               .shadow_steps = s->shadow_steps,
+                               .inside = state_inside,
+                               .inside_user = s,
+                               .segment_outside = s->heightfield ? state_segment_outside : NULL},
+             object->name, &s->shell)) != MESO_OK)
         goto fail;
     if (options.gi && scene->environment &&
         (r = gdm_gi_create(ctx, scene, object,
