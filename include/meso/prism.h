@@ -150,9 +150,30 @@ void meso_prism_layer_destroy(meso_prism_layer *layer);
 /* Bytes held by the layer. */
 size_t meso_prism_layer_memory(const meso_prism_layer *layer);
 
-/* Face index (a triangle of layer->faces) of a prism's face slot, and back. Pure. */
-size_t meso_prism_layer_face(const meso_prism_layer *layer, size_t prism, int slot);
-size_t meso_prism_layer_face_prism(const meso_prism_layer *layer, size_t face, int *out_slot);
+/* Face index (a triangle of layer->faces) of a prism's face slot, and back: tops, then each
+ * prism's six fin triangles, then bottoms. Pure; inline (gdm calls them for every fragment and
+ * every crossing of its shadow walk). */
+static inline size_t meso_prism_layer_face(const meso_prism_layer *layer, size_t prism, int slot) {
+    size_t n = layer->num_prisms;
+    if (slot == MESO_PRISM_TOP) return prism;
+    if (slot == MESO_PRISM_BOTTOM) return 7 * n + prism;
+    return n + 6 * prism + (size_t)(slot - MESO_PRISM_FIN);
+}
+
+static inline size_t meso_prism_layer_face_prism(const meso_prism_layer *layer, size_t face,
+                                                 int *out_slot) {
+    size_t n = layer->num_prisms;
+    if (face < n) {
+        *out_slot = MESO_PRISM_TOP;
+        return face;
+    }
+    if (face >= 7 * n) {
+        *out_slot = MESO_PRISM_BOTTOM;
+        return face - 7 * n;
+    }
+    *out_slot = MESO_PRISM_FIN + (int)((face - n) % 6);
+    return (face - n) / 6;
+}
 
 /* The (u, v, w) of point x of face `face`'s plane: the face's vertex attributes interpolated
  * linearly (exact on the face; extended over its plane). Pure. */

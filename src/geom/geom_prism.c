@@ -70,27 +70,6 @@ meso_vec3 meso_prism_map(const meso_prism *prism, const meso_mesh *mesh, float d
 
 /* ---- The layer ----------------------------------------------------------------------------- */
 
-size_t meso_prism_layer_face(const meso_prism_layer *layer, size_t prism, int slot) {
-    size_t n = layer->num_prisms;
-    if (slot == MESO_PRISM_TOP) return prism;
-    if (slot == MESO_PRISM_BOTTOM) return 7 * n + prism;
-    return n + 6 * prism + (size_t)(slot - MESO_PRISM_FIN);
-}
-
-size_t meso_prism_layer_face_prism(const meso_prism_layer *layer, size_t face, int *out_slot) {
-    size_t n = layer->num_prisms;
-    if (face < n) {
-        *out_slot = MESO_PRISM_TOP;
-        return face;
-    }
-    if (face >= 7 * n) {
-        *out_slot = MESO_PRISM_BOTTOM;
-        return face - 7 * n;
-    }
-    *out_slot = MESO_PRISM_FIN + (int)((face - n) % 6);
-    return (face - n) / 6;
-}
-
 static bool lex_less(meso_vec3 a, meso_vec3 b) {
     if (a.x != b.x) return a.x < b.x;
     if (a.y != b.y) return a.y < b.y;

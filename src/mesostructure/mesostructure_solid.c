@@ -65,6 +65,14 @@ meso_solid_desc meso_solid_desc_defaults(const meso_solid_desc *desc) {
 
 /* ---- Shapes in cell space ----------------------------------------------------------------- */
 
+/* fminf and fmaxf with libm's results, NaNs included (glibc's x86-64 minss/maxss: the second
+ * operand when equal, the other one when one is a NaN), inline: without -ffinite-math-only
+ * each is a call into libm, and meso_solid_distance takes several an evaluation (a tenth of
+ * the weave's; gdm evaluates millions a frame, docs/techniques/gdm.md). gdm_lookup.h has the
+ * same pair, tested against libm. */
+static inline float solid_fminf(float a, float b) { return a < b || b != b ? a : b; }
+static inline float solid_fmaxf(float a, float b) { return a > b || b != b ? a : b; }
+
 static float length2(float x, float y) { return sqrtf(x * x + y * y); }
 static float length3(float x, float y, float z) { return sqrtf(x * x + y * y + z * z); }
 
@@ -83,9 +91,9 @@ static float weave_distance(const meso_solid *s, float x, float y, float z) {
     for (int k = 0; k < 2; k++) {
         /* Thread along x in row k is over (small z) at columns where column - row is even. */
         float centre = zc - a * cosf(MESO_PI * (x - 0.5f - rows[k]));
-        best = fminf(best, length2(y - (rows[k] + 0.5f), z - centre) - r);
+        best = solid_fminf(best, length2(y - (rows[k] + 0.5f), z - centre) - r);
         float centre_v = zc + a * cosf(MESO_PI * (y - 0.5f - columns[k]));
-        best = fminf(best, length2(x - (columns[k] + 0.5f), z - centre_v) - r);
+        best = solid_fminf(best, length2(x - (columns[k] + 0.5f), z - centre_v) - r);
     }
     return best;
 }
@@ -95,7 +103,7 @@ static float weave_distance(const meso_solid *s, float x, float y, float z) {
  * spanned by a (along the chain) and b. Exact distance. */
 static float link_distance(float along, float across, float normal, float half_length, float major,
                            float r) {
-    float q = fmaxf(fabsf(along) - half_length, 0.0f);
+    float q = solid_fmaxf(fabsf(along) - half_length, 0.0f);
     return length2(length2(q, across) - major, normal) - r;
 }
 
@@ -114,7 +122,7 @@ static float chain_distance(const meso_solid *s, float x, float y, float z) {
             bool flat = (wrap_index((int)i, 2) == 0);
             float d = flat ? link_distance(along, across, normal, s->half_length, s->major, r)
                            : link_distance(along, normal, across, s->half_length, s->major, r);
-            best = fminf(best, d);
+            best = solid_fminf(best, d);
         }
     return best;
 }
@@ -122,8 +130,8 @@ static float chain_distance(const meso_solid *s, float x, float y, float z) {
 /* Exact distance to an axis-aligned box of half-extents (hx, hy, hz) centred at the origin. */
 static float box_distance(float x, float y, float z, float hx, float hy, float hz) {
     float qx = fabsf(x) - hx, qy = fabsf(y) - hy, qz = fabsf(z) - hz;
-    float outside = length3(fmaxf(qx, 0.0f), fmaxf(qy, 0.0f), fmaxf(qz, 0.0f));
-    return outside + fminf(fmaxf(qx, fmaxf(qy, qz)), 0.0f);
+    float outside = length3(solid_fmaxf(qx, 0.0f), solid_fmaxf(qy, 0.0f), solid_fmaxf(qz, 0.0f));
+    return outside + solid_fminf(solid_fmaxf(qx, solid_fmaxf(qy, qz)), 0.0f);
 }
 
 /* A two-level lattice (GDM Fig. 9a's grid): bars along x on the cell borders in the upper
@@ -134,7 +142,7 @@ static float grid_distance(const meso_solid *s, float x, float y, float z) {
     float dy = y - floorf(y + 0.5f), dx = x - floorf(x + 0.5f); /* to the nearest border line */
     float upper = box_distance(0.0f, dy, z - 0.275f * depth, 1e30f, t, 0.275f * depth);
     float lower = box_distance(dx, 0.0f, z - 0.725f * depth, t, 1e30f, 0.275f * depth);
-    return fminf(upper, lower);
+    return solid_fminf(upper, lower);
 }
 
 /* Fish scales: rows of discs (rounded flat cylinders) offset by half a cell on odd rows, each
@@ -158,9 +166,9 @@ static float squama_distance(const meso_solid *s, float x, float y, float z) {
             float lz = s->tilt_cos * pz - s->tilt_sin * py;
             float radial = length2(px, ly) - radius + round;
             float axial = fabsf(lz) - half_thickness + round;
-            float d = fminf(fmaxf(radial, axial), 0.0f) +
-                      length2(fmaxf(radial, 0.0f), fmaxf(axial, 0.0f)) - round;
-            best = fminf(best, d);
+            float d = solid_fminf(solid_fmaxf(radial, axial), 0.0f) +
+                      length2(solid_fmaxf(radial, 0.0f), solid_fmaxf(axial, 0.0f)) - round;
+            best = solid_fminf(best, d);
         }
     }
     return best;
@@ -178,8 +186,8 @@ static float helix_distance(const meso_solid *s, float x, float y, float z) {
     float c = cosf(angle), sn = sinf(angle);
     for (int k = 0; k < 2; k++) {
         float py = y - (rows[k] + 0.5f), pz = z - zc;
-        best = fminf(best, length2(py - major * c, pz - major * sn) - r);
-        best = fminf(best, length2(py + major * c, pz + major * sn) - r);
+        best = solid_fminf(best, length2(py - major * c, pz - major * sn) - r);
+        best = solid_fminf(best, length2(py + major * c, pz + major * sn) - r);
     }
     return best;
 }
@@ -223,10 +231,10 @@ meso_result meso_solid_create_procedural(meso_context *ctx, const meso_solid_des
          * passes through the hole of the flat one before it with 0.1 cells between the tubes'
          * surfaces; major > 2r keeps each hole wider than the tube through it. */
         s->major = 0.46f - r;
-        s->half_length = fmaxf(0.5f + r + 0.05f - s->major, 0.0f);
+        s->half_length = solid_fmaxf(0.5f + r + 0.05f - s->major, 0.0f);
         s->depth_cells = 2.0f * (s->major + r) + 0.04f;
         /* Omitted links: one row away (>= 1 - 0.46) or two links away (>= 1.5 - reach). */
-        s->cap = fminf(0.54f, 1.5f - (s->half_length + s->major + r));
+        s->cap = solid_fminf(0.54f, 1.5f - (s->half_length + s->major + r));
         break;
     case MESO_SOLID_GRID:
         s->depth_cells = 0.5f;
@@ -255,7 +263,7 @@ meso_result meso_solid_create_procedural(meso_context *ctx, const meso_solid_des
     default:
         break;
     }
-    s->scale = 1.0f / (lipschitz * fmaxf((float)d.count, s->depth_cells));
+    s->scale = 1.0f / (lipschitz * solid_fmaxf((float)d.count, s->depth_cells));
     *out_solid = s;
     return MESO_OK;
 }
@@ -327,8 +335,8 @@ float meso_solid_distance(const meso_solid *solid, meso_vec3 uvw) {
         break;
     }
     /* Intersect with the slab 0 <= w <= 1: empty above the mesh and below -depth. */
-    float slab = fmaxf(-z, z - solid->depth_cells);
-    return fmaxf(f, slab) * solid->scale;
+    float slab = solid_fmaxf(-z, z - solid->depth_cells);
+    return solid_fmaxf(f, slab) * solid->scale;
 }
 
 meso_vec3 meso_solid_gradient(const meso_solid *solid, meso_vec3 uvw) {

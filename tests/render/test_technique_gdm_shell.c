@@ -98,6 +98,7 @@ static void test_light_through_a_hole_of_another_prism_lights_the_point(void **s
                            .shadow_steps = 24};
     assert_int_equal(gdm_shell_create(ctx, &desc, "planes", &shell), MESO_OK);
     const meso_vec3 up = {0.0f, 1.0f, 0.0f};
+    const meso_vec3 slanted = meso_vec3_normalize((meso_vec3){0.3f, 1.0f, 0.2f});
     int lit = 0, blocked = 0, from_point = 0;
     for (int j = 0; j < 40; j++)
         for (int i = 0; i < 40; i++) {
@@ -109,6 +110,27 @@ static void test_light_through_a_hole_of_another_prism_lights_the_point(void **s
             size_t prism = v <= u ? 0 : 1; /* the lower plane's triangle holding (u, v) */
             meso_vec3 top = {u, v, 0.0f};
             bool got = gdm_shell_light_visible(shell, prism, top, up, true, false);
+            /* the caller's mapped point, normal and gradient: the same answers, from the lit and
+             * the unlit side, up and slanted */
+            const meso_prism *pr = &layer->prisms[prism];
+            float b[3];
+            meso_prism_weights(pr, (meso_vec2){u, v}, b);
+            gdm_shell_point point = {
+                meso_prism_map(pr, mesh, layer->depth, top, -1),
+                meso_vec3_normalize(meso_vec3_barycentric(
+                    mesh->normals[pr->vertices[0]], mesh->normals[pr->vertices[1]],
+                    mesh->normals[pr->vertices[2]], b[0], b[1], b[2])),
+                meso_solid_gradient(solid, gdm_tile_point(top)), true};
+            assert_true(gdm_shell_light_visible_at(shell, prism, top, &point, up, true, false) ==
+                        got);
+            for (int k = 0; k < 4; k++) {
+                meso_vec3 light = k & 1 ? meso_vec3_negate(slanted) : slanted;
+                bool slab_clear = k < 2;
+                assert_true(
+                    gdm_shell_light_visible_at(shell, prism, top, &point, light, slab_clear,
+                                               !slab_clear) ==
+                    gdm_shell_light_visible(shell, prism, top, light, slab_clear, !slab_clear));
+            }
             if (got != expected)
                 fail_msg("(%g, %g): the light %s, the upper grid's column %s (distance %g)", u, v,
                          got ? "visible" : "blocked", expected ? "a hole" : "solid", column);

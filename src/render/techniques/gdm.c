@@ -302,6 +302,7 @@ static bool solid_grid(meso_context *ctx, gdm_state *s) {
 }
 
 static bool state_inside(const void *state, meso_vec3 uvw);
+static bool state_segment_outside(const void *state, meso_vec3 a, meso_vec3 b);
 
 static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
                                const meso_object *object, void **out_state) {
@@ -386,21 +387,23 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
         }
     }
     if (options.shadows && options.macro_shadows &&
-        (r = gdm_shell_create(ctx,
-                              &(gdm_shell_desc){.layer = s->layer,
-                                                .mesh = object->mesh,
-                                                .gdm = s->gdm,
-                                                .table = s->raw ? NULL : &s->table,
-                                                .heightfield = s->heightfield,
-                                                .solid = s->solid,
-                                                .voxel = s->voxel,
-                                                .shadow_bias = s->shadow_bias,
-                                                .refine_window = s->refine_window,
-                                                .refine_steps = s->refine_steps,
-                                                .shadow_steps = s->shadow_steps,
-                                                .inside = state_inside,
-                                                .inside_user = s},
-                              object->name, &s->shell)) != MESO_OK)
+        (r = gdm_shell_create(
+             ctx,
+             &(gdm_shell_desc){.layer = s->layer,
+                               .mesh = object->mesh,
+                               .gdm = s->gdm,
+                               .table = s->raw ? NULL : &s->table,
+                               .heightfield = s->heightfield,
+                               .solid = s->solid,
+                               .voxel = s->voxel,
+                               .shadow_bias = s->shadow_bias,
+                               .refine_window = s->refine_window,
+                               .refine_steps = s->refine_steps,
+                               .shadow_steps = s->shadow_steps,
+                               .inside = state_inside,
+                               .inside_user = s,
+                               .segment_outside = s->heightfield ? state_segment_outside : NULL},
+             object->name, &s->shell)) != MESO_OK)
         goto fail;
     if (options.gi && scene->environment &&
         (r = gdm_gi_create(ctx, scene, object,
@@ -584,6 +587,16 @@ static bool state_inside(const void *state, meso_vec3 uvw) {
     return solid_probe(s, uvw, &radius) <= 0.0f;
 }
 
+/* gdm_shell_desc.segment_outside: a height field's window proof (shade_one's, on the segment
+ * a -> b): above the highest texel its (u, v) box can read, every point of it is outside. */
+static bool state_segment_outside(const void *state, meso_vec3 a, meso_vec3 b) {
+    const gdm_state *s = state;
+    if (!s->window_max) return false;
+    float highest = window_bound(s, gdm_fminf(a.x, b.x), gdm_fmaxf(a.x, b.x), gdm_fminf(a.y, b.y),
+                                 gdm_fmaxf(a.y, b.y));
+    return gdm_fmaxf(a.z, b.z) + 1e-6f < 1.0f - highest - 1e-6f;
+}
+
 static inline ray_probe ray_probe_start(meso_vec3 t0, meso_vec3 dir, float clear_w) {
     return (ray_probe){.t0 = t0, .dir = dir, .radius = {-1.0f, -1.0f}, .clear_w = clear_w};
 }
@@ -648,9 +661,10 @@ static float refine_hit(const gdm_state *s, float clear_w, meso_vec3 t_in, meso_
     return 0.5f * (lo + hi); /* the bracket's middle: half its width off, either way */
 }
 
-/* Solid where a ray leaves the slab's bottom at T (height fields: always). */
+/* Solid where a ray leaves the slab's bottom at T (height fields: always); a solid's answer
+ * through its distance grid where that proves it (state_inside: the same answer). */
 static inline bool floor_is_solid(const gdm_state *s, meso_vec3 t) {
-    return s->heightfield || inside_mesostructure(s, (meso_vec3){t.x, t.y, 1.0f - 1e-3f});
+    return s->heightfield || state_inside(s, (meso_vec3){t.x, t.y, 1.0f - 1e-3f});
 }
 
 static meso_vec3 texture_normal(const gdm_state *s, meso_vec3 uvw) {
@@ -795,6 +809,8 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
     f->out_depth = depth > f->depth ? depth : f->depth;
     texture_frame tf = frame_at(mesh, prism, (meso_vec2){hit.x, hit.y}, s->depth);
     meso_vec3 normal, normal_t = texture_normal(s, hit);
+    /* for the walk (gdm_shell_shadow.h): the point as mapped here, and a solid's gradient */
+    gdm_shell_point point = {position, tf.normal, normal_t, s->solid && !s->baked_normals};
     if (s->heightfield && !s->baked_normals) /* as the reference and the other techniques; */
         normal = meso_displaced_normal(tf.normal, tf.tangent, tf.bitangent, s->depth,
                                        (meso_vec2){-normal_t.x, -normal_t.y}); /* = gradient */
@@ -840,7 +856,8 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
             /* on an open border's cut face: past the border the flat slab holds the periodic
              * mesostructure's continuation, which the shell does not have. The walk leaves
              * through the border's fin and tests whatever part of the shell it meets after. */
-            blocked = !gdm_shell_light_visible(s->shell, prism_index, hit, l, true, false);
+            blocked =
+                !gdm_shell_light_visible_at(s->shell, prism_index, hit, &point, l, true, false);
         } else {
             bool seam_entry = d == 0.0f && gdm_shell_face_is_seam(s->shell, face);
             blocked = !through_floor && shadowed(s, hit, normal_t, lt, s->solid && seam_entry);
@@ -853,9 +870,11 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
              * cannot test. Not at a height field's open border, whose side the slab answers
              * as the reference (no wall) has it. */
             if (s->shell && (through_floor || (blocked && !border_entry)))
-                blocked = !gdm_shell_light_visible(s->shell, prism_index, hit, l, false, true);
+                blocked =
+                    !gdm_shell_light_visible_at(s->shell, prism_index, hit, &point, l, false, true);
             else if (s->shell && !blocked)
-                blocked = !gdm_shell_light_visible(s->shell, prism_index, hit, l, true, false);
+                blocked =
+                    !gdm_shell_light_visible_at(s->shell, prism_index, hit, &point, l, true, false);
         }
         if (blocked) visibility[li] = 0.0f;
     }

@@ -375,6 +375,11 @@ static bool segment_blocked(const gdm_shell_desc *d, meso_vec3 t0, meso_vec3 dir
                             bool thorough) {
     float margin = d->shadow_bias * d->voxel.z;
     if (!(length > margin)) return false;
+    /* every probe below lies on t0 + x dir, x in [0, length]: where that stretch is proven
+     * outside they all answer outside, whatever the table says (the same answer) */
+    if (d->refine_steps > 0 && d->segment_outside &&
+        d->segment_outside(d->inside_user, t0, meso_vec3_madd(t0, dir, length)))
+        return false;
     float hit = lookup(d, t0, dir);
     if (d->refine_steps <= 0) return hit < length - margin;
     int steps = d->shadow_steps;
@@ -398,11 +403,18 @@ static bool segment_blocked(const gdm_shell_desc *d, meso_vec3 t0, meso_vec3 dir
 /* ---- The walk -------------------------------------------------------------------------- */
 
 /* A prism's stretch of the ray: from `origin` (texture point t_in, entering through face slot
- * entry_slot; -1 inside) to where it leaves. false: the prism bounds nothing (degenerate). */
+ * entry_slot; -1 inside) to where it leaves. false: the prism bounds nothing (degenerate).
+ * Its (u, v, w) at both ends are made only when a test reads them (crossing_uvw): most
+ * crossings of a convex mesh's walk are neither tested nor floors (bumps-sphere: 352 k
+ * face_uvw calls a frame for none read). */
 typedef struct crossing {
-    meso_vec3 t_in, t_out, p_out;
+    meso_vec3 t_in, t_out, p_in, p_out;
+    size_t prism, entry_face; /* t_in is entry_face's (u, v, w) at p_in; NO_FACE: given */
     int exit_slot;
+    bool uvw; /* t_in, t_out made */
 } crossing;
+
+#define NO_FACE SIZE_MAX
 
 static bool cross_prism(const meso_prism_layer *layer, size_t prism, meso_vec3 origin,
                         meso_vec3 t_in, meso_vec3 light, int entry_slot, crossing *out) {
@@ -411,13 +423,26 @@ static bool cross_prism(const meso_prism_layer *layer, size_t prism, meso_vec3 o
         !isfinite(t))
         return false;
     out->t_in = t_in;
+    out->p_in = origin;
     out->p_out = meso_vec3_madd(origin, light, t);
-    out->t_out = meso_prism_layer_face_uvw(
-        layer, meso_prism_layer_face(layer, prism, out->exit_slot), out->p_out);
+    out->prism = prism;
+    out->entry_face = NO_FACE;
+    out->uvw = false;
     return true;
 }
 
-static bool crossing_blocked(const gdm_shell_desc *d, const crossing *c, bool thorough) {
+/* The crossing's (u, v, w) at both ends, made once. */
+static void crossing_uvw(const meso_prism_layer *layer, crossing *c) {
+    if (c->uvw) return;
+    if (c->entry_face != NO_FACE)
+        c->t_in = meso_prism_layer_face_uvw(layer, c->entry_face, c->p_in);
+    c->t_out = meso_prism_layer_face_uvw(
+        layer, meso_prism_layer_face(layer, c->prism, c->exit_slot), c->p_out);
+    c->uvw = true;
+}
+
+static bool crossing_blocked(const gdm_shell_desc *d, crossing *c, bool thorough) {
+    crossing_uvw(d->layer, c);
     meso_vec3 segment = meso_vec3_sub(c->t_out, c->t_in);
     float length = meso_vec3_length(segment);
     if (!(length > 1e-7f) || !isfinite(length)) return false;
@@ -428,8 +453,9 @@ static bool crossing_blocked(const gdm_shell_desc *d, const crossing *c, bool th
  * through solid where the solid's floor is (gdm.c's floor_is_solid; its hits count the same
  * floor) -- unless the ray starts on that floor (a point on a bar's underside, its light
  * below: the stretch is shorter than the margin), which it leaves instead of crossing. */
-static bool floor_blocks(const gdm_shell_desc *d, const crossing *c) {
+static bool floor_blocks(const gdm_shell_desc *d, crossing *c) {
     if (d->heightfield) return true;
+    crossing_uvw(d->layer, c);
     if (!(meso_vec3_length(meso_vec3_sub(c->t_out, c->t_in)) > d->shadow_bias * d->voxel.z))
         return false;
     return inside(d, (meso_vec3){c->t_out.x, c->t_out.y, 1.0f - 1e-3f});
@@ -469,8 +495,10 @@ size_t gdm_shell_prism_index(const gdm_shell *shell, const meso_prism *prism) {
     return (size_t)(prism - shell->desc.layer->prisms);
 }
 
-bool gdm_shell_light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw, meso_vec3 light,
-                             bool slab_clear, bool thorough) {
+/* gdm_shell_light_visible; `at` NULL, or what the caller knows of the point
+ * (gdm_shell_light_visible_at). */
+static bool light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw, meso_vec3 light,
+                          bool slab_clear, bool thorough, const gdm_shell_point *at) {
     const gdm_shell_desc *d = &shell->desc;
     const meso_prism_layer *layer = d->layer;
     const meso_prism *first = &layer->prisms[prism];
@@ -481,14 +509,17 @@ bool gdm_shell_light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw
          * zeros at the surface): up for a height field, along the solid's normal */
         meso_vec3 n = {0.0f, 0.0f, -1.0f};
         if (d->solid) {
-            meso_vec3 g = meso_solid_gradient(d->solid, gdm_tile_point(uvw));
+            meso_vec3 g = at && at->has_gradient
+                              ? at->gradient
+                              : meso_solid_gradient(d->solid, gdm_tile_point(uvw));
             float len = meso_vec3_length(g);
             n = len > 0.0f && isfinite(len) ? meso_vec3_scale(g, 1.0f / len) : n;
         }
         t0 = meso_vec3_add(uvw, meso_vec3_mul(n, meso_vec3_scale(d->voxel, d->shadow_bias)));
         t0.z = fminf(fmaxf(t0.z, 0.0f), 1.0f);
     }
-    meso_vec3 origin = meso_prism_map(first, d->mesh, layer->depth, t0, -1);
+    meso_vec3 origin =
+        at && slab_clear ? at->position : meso_prism_map(first, d->mesh, layer->depth, t0, -1);
     /* tested: the prisms of this stretch are tested (after the ray left the slab the caller's
      * test covered). That test ran in one flat slab along the point's own frame: it covered
      * the ray up to where a flat shell's top would be, w depth / (N . L) away (5 % more for
@@ -498,12 +529,17 @@ bool gdm_shell_light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw
     bool tested = !slab_clear;
     float reach = INFINITY;
     if (slab_clear) {
-        float b[3];
-        meso_prism_weights(first, (meso_vec2){uvw.x, uvw.y}, b);
-        const uint32_t *v = first->vertices;
-        meso_vec3 n = meso_vec3_normalize(
-            meso_vec3_barycentric(d->mesh->normals[v[0]], d->mesh->normals[v[1]],
-                                  d->mesh->normals[v[2]], b[0], b[1], b[2]));
+        meso_vec3 n;
+        if (at) {
+            n = at->normal;
+        } else {
+            float b[3];
+            meso_prism_weights(first, (meso_vec2){uvw.x, uvw.y}, b);
+            const uint32_t *v = first->vertices;
+            n = meso_vec3_normalize(
+                meso_vec3_barycentric(d->mesh->normals[v[0]], d->mesh->normals[v[1]],
+                                      d->mesh->normals[v[2]], b[0], b[1], b[2]));
+        }
         reach = 1.05f * uvw.z * layer->depth / fmaxf(meso_vec3_dot(n, light), 1e-3f) +
                 2.0f * shell->step;
     }
@@ -541,15 +577,28 @@ bool gdm_shell_light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw
         if (t > 3.0f * shell->step) tested = true;
         /* a height field's body fills every prism below its floor */
         if (tested && slot == MESO_PRISM_BOTTOM && d->heightfield) return false;
-        meso_vec3 t_in =
-            meso_prism_layer_face_uvw(layer, meso_prism_layer_face(layer, next, slot), point);
+        size_t entry_face = meso_prism_layer_face(layer, next, slot);
         current = next;
-        if (!cross_prism(layer, next, point, t_in, light, slot, &c)) {
+        if (cross_prism(layer, next, point, (meso_vec3){0.0f, 0.0f, 0.0f}, light, slot, &c)) {
+            c.entry_face = entry_face;
+        } else {
             /* a degenerate prism: step past it */
-            c.t_in = c.t_out = t_in;
+            c.t_in = c.t_out = meso_prism_layer_face_uvw(layer, entry_face, point);
+            c.uvw = true;
             c.p_out = point;
             c.exit_slot = MESO_PRISM_FIN;
         }
     }
     return true;
+}
+
+bool gdm_shell_light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw, meso_vec3 light,
+                             bool slab_clear, bool thorough) {
+    return light_visible(shell, prism, uvw, light, slab_clear, thorough, NULL);
+}
+
+bool gdm_shell_light_visible_at(const gdm_shell *shell, size_t prism, meso_vec3 uvw,
+                                const gdm_shell_point *point, meso_vec3 light, bool slab_clear,
+                                bool thorough) {
+    return light_visible(shell, prism, uvw, light, slab_clear, thorough, point);
 }

@@ -15,6 +15,8 @@
  * Usage (gdm.c):
  *   gdm_shell_create(ctx, &(gdm_shell_desc){...}, name, &shell);       prepare, once
  *   gdm_shell_light_visible(shell, prism, uvw, light, slab_clear, thorough)   per fragment, light
+ *   gdm_shell_light_visible_at(shell, prism, uvw, &point, light, slab_clear, thorough)  the
+ *                                                  same, with what the caller knows of the point
  *   gdm_shell_destroy(shell);
  *
  * Threads: creation builds the Embree scene on the calling thread (so its BVH, and every
@@ -62,6 +64,11 @@ typedef struct gdm_shell_desc {
      * same answer for every point */
     bool (*inside)(const void *inside_user, meso_vec3 uvw);
     const void *inside_user;
+    /* NULL, or true where every point t0 + x dir with x between 0 and the end's x (b =
+     * meso_vec3_madd(t0, dir, x_end), so each coordinate lies between a's and b's) is proven
+     * outside without evaluating the mesostructure (gdm.c: a height field's window maxima);
+     * false where not proven. Called with inside_user. */
+    bool (*segment_outside)(const void *inside_user, meso_vec3 a, meso_vec3 b);
 } gdm_shell_desc;
 
 /* Build the Embree scene of desc->layer's faces. *out_shell NULL on failure:
@@ -100,5 +107,23 @@ size_t gdm_shell_prism_index(const gdm_shell *shell, const meso_prism *prism);
  * Pure; thread-safe. */
 bool gdm_shell_light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw, meso_vec3 light,
                              bool slab_clear, bool thorough);
+
+/* What a caller may know of the point already (gdm.c has each at its hit), so that the walk
+ * need not work it out again: the same answers. */
+typedef struct gdm_shell_point {
+    /* meso_prism_map(&layer->prisms[prism], mesh, layer->depth, uvw, -1) */
+    meso_vec3 position;
+    /* the mesh's vertex normals interpolated at uvw's (u, v) by meso_prism_weights, normalised */
+    meso_vec3 normal;
+    /* with has_gradient: a solid's meso_solid_gradient at gdm_tile_point(uvw) */
+    meso_vec3 gradient;
+    bool has_gradient;
+} gdm_shell_point;
+
+/* gdm_shell_light_visible for a caller that knows `point` of the point (position and normal are
+ * read with slab_clear, the gradient without it). Pure; thread-safe. */
+bool gdm_shell_light_visible_at(const gdm_shell *shell, size_t prism, meso_vec3 uvw,
+                                const gdm_shell_point *point, meso_vec3 light, bool slab_clear,
+                                bool thorough);
 
 #endif
