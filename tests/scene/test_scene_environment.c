@@ -60,7 +60,7 @@ static void test_scene_environment_errors_name_the_key(void **state) {
                  "scene.json: environment: needs either");
     expect_error(ctx, "{\"map\": \"missing.hdr\"}", MESO_ERROR_IO, "scene.json: environment.map: ");
     expect_error(ctx, "{\"map\": \"bricks-plane.json\"}", MESO_ERROR_FORMAT,
-                 "bricks-plane.json: not a Radiance .hdr file");
+                 "bricks-plane.json: not a Radiance .hdr or OpenEXR file");
     expect_error(ctx, "{\"map\": \"sky.hdr\", \"intensity\": -1}", MESO_ERROR_FORMAT,
                  "scene.json: environment.intensity: must be in [0, 1e+06], not -1");
     expect_error(ctx, "{\"sky\": {\"sunn\": false}}", MESO_ERROR_FORMAT,
