@@ -38,9 +38,10 @@ typedef struct vertex_attributes {
     bool has_tangents, has_uvs;
 } vertex_attributes;
 
-static void load_attributes(const meso_mesh *mesh, uint32_t triangle, vertex_attributes *a) {
+static void load_attributes(const meso_mesh *mesh, uint32_t triangle, bool tangents,
+                            vertex_attributes *a) {
     const uint32_t *idx = mesh->indices + 3 * (size_t)triangle;
-    a->has_tangents = mesh->tangents && mesh->bitangents;
+    a->has_tangents = tangents && mesh->tangents && mesh->bitangents;
     a->has_uvs = mesh->uvs != NULL;
     for (int k = 0; k < 3; k++) {
         a->n[k] = mesh->normals ? mesh->normals[idx[k]] : (meso_vec3){0.0f, 0.0f, 0.0f};
@@ -56,13 +57,15 @@ static void load_attributes(const meso_mesh *mesh, uint32_t triangle, vertex_att
 #define splat v8_splat
 
 /* Fill the inputs and preset the outputs of n fragments from their sample positions and view
- * depths, 8 at a time (GCC vector extensions), into lanes first..first+n-1 of the block. The
+ * depths, 8 at a time (GCC vector extensions), into lanes first..first+n-1 of the block, but for
+ * the fields in `skip` (MESO_FRAGMENT_SKIP_*: the technique never reads them). The
  * inputs are padded to whole groups of 8 (cover_triangle), so up to 7 lanes past first+n are
  * written too; the next triangle's fill or flush_batch's padding writes over them. */
-static void fill_fragments(const raster_triangle *tri, const meso_frame *frame,
-                           const vertex_attributes *va, size_t n, const int32_t *xs,
-                           const int32_t *ys, const float *depths, meso_fragment_block *block,
-                           size_t first) {
+static inline __attribute__((always_inline)) void
+fill_fragments_skipping(const raster_triangle *tri, const meso_frame *frame,
+                        const vertex_attributes *va, unsigned skip, size_t n, const int32_t *xs,
+                        const int32_t *ys, const float *depths, meso_fragment_block *block,
+                        size_t first) {
     const v8f ga0 = splat(tri->ga[0]), ga1 = splat(tri->ga[1]), ga2 = splat(tri->ga[2]);
     const v8f gb0 = splat(tri->gb[0]), gb1 = splat(tri->gb[1]), gb2 = splat(tri->gb[2]);
     const v8f gc0 = splat(tri->gc[0]), gc1 = splat(tri->gc[1]), gc2 = splat(tri->gc[2]);
@@ -85,8 +88,9 @@ static void fill_fragments(const raster_triangle *tri, const meso_frame *frame,
         v8f b0 = (gc0 + gb0 * fy + ga0 * fx) * d;
         v8f b1 = (gc1 + gb1 * fy + ga1 * fx) * d;
         v8f b2 = (gc2 + gb2 * fy + ga2 * fx) * d;
-        STORE(x, sx), STORE(y, sy), STORE(triangle, triangle);
-        STORE(b0, b0), STORE(b1, b1), STORE(b2, b2);
+        if (!(skip & MESO_FRAGMENT_SKIP_SAMPLE)) STORE(x, sx), STORE(y, sy);
+        if (!(skip & MESO_FRAGMENT_SKIP_TRIANGLE)) STORE(triangle, triangle);
+        if (!(skip & MESO_FRAGMENT_SKIP_BARYCENTRICS)) STORE(b0, b0), STORE(b1, b1), STORE(b2, b2);
         /* On the camera ray through the sample centre: the same ray the reference traces
          * (meso_frame_ray_direction). */
         v8f dx = splat(frame->corner.x) +
@@ -109,7 +113,7 @@ static void fill_fragments(const raster_triangle *tri, const meso_frame *frame,
             v8f bx = INTERP(va->b, x), by = INTERP(va->b, y), bz = INTERP(va->b, z);
             STORE(tx, tx), STORE(ty, ty), STORE(tz, tz);
             STORE(bx, bx), STORE(by, by), STORE(bz, bz);
-        } else {
+        } else if (!(skip & MESO_FRAGMENT_SKIP_TANGENTS)) {
             STORE(tx, zero), STORE(ty, zero), STORE(tz, zero);
             STORE(bx, zero), STORE(by, zero), STORE(bz, zero);
         }
@@ -121,10 +125,31 @@ static void fill_fragments(const raster_triangle *tri, const meso_frame *frame,
         }
 #undef INTERP
         STORE(depth, d), STORE(out_depth, d);
-        STORE(r, zero), STORE(g, zero), STORE(b, zero);
+        if (!(skip & MESO_FRAGMENT_SKIP_COLOR_PRESET))
+            STORE(r, zero), STORE(g, zero), STORE(b, zero);
         memcpy(block->discard + at, &no_discard, sizeof(no_discard));
     }
 #undef STORE
+}
+
+/* fill_fragments_skipping with the skips of flat, bump and parallax as constants: a test of
+ * `skip` a group cost as much as the stores it saved. */
+#define FILL_SHADING_ONLY                                                                          \
+    (MESO_FRAGMENT_SKIP_SAMPLE | MESO_FRAGMENT_SKIP_TRIANGLE | MESO_FRAGMENT_SKIP_BARYCENTRICS |   \
+     MESO_FRAGMENT_SKIP_COLOR_PRESET)
+static void fill_fragments(const raster_triangle *tri, const meso_frame *frame,
+                           const vertex_attributes *va, unsigned skip, size_t n, const int32_t *xs,
+                           const int32_t *ys, const float *depths, meso_fragment_block *block,
+                           size_t first) {
+    if (skip == FILL_SHADING_ONLY)
+        fill_fragments_skipping(tri, frame, va, FILL_SHADING_ONLY, n, xs, ys, depths, block, first);
+    else if (skip == (FILL_SHADING_ONLY | MESO_FRAGMENT_SKIP_TANGENTS))
+        fill_fragments_skipping(tri, frame, va, FILL_SHADING_ONLY | MESO_FRAGMENT_SKIP_TANGENTS, n,
+                                xs, ys, depths, block, first);
+    else if (skip == 0)
+        fill_fragments_skipping(tri, frame, va, 0, n, xs, ys, depths, block, first);
+    else
+        fill_fragments_skipping(tri, frame, va, skip, n, xs, ys, depths, block, first);
 }
 
 /* The samples of one triangle that pass coverage and the early depth test, before their
@@ -504,6 +529,10 @@ static void draw_tile(void *user, size_t job, int thread_index) {
         const raster_object *obj = &dj->objects[chunk->mesh];
         if (obj != batch.object) flush_batch(&batch);
         batch.object = obj;
+        /* the adapter copies every field; the shading model reads the tangents for a normal
+         * map */
+        unsigned skip = obj->technique->shade_block ? obj->technique->skip_fields : 0;
+        if (obj->object->material.normal_map) skip &= ~MESO_FRAGMENT_SKIP_TANGENTS;
         const meso_mesh *mesh = bins->meshes[chunk->mesh].mesh;
         for (size_t e = 0; e < count; e++) {
             const raster_triangle *tri = &chunk->triangles[list[e]];
@@ -527,9 +556,9 @@ static void draw_tile(void *user, size_t job, int thread_index) {
                 if (!n) continue;
             }
             vertex_attributes va;
-            load_attributes(mesh, tri->triangle, &va);
-            fill_fragments(tri, frame, &va, n, covered->x, covered->y, covered->depth, batch.block,
-                           batch.count);
+            load_attributes(mesh, tri->triangle, !(skip & MESO_FRAGMENT_SKIP_TANGENTS), &va);
+            fill_fragments(tri, frame, &va, skip, n, covered->x, covered->y, covered->depth,
+                           batch.block, batch.count);
             batch.count += n;
         }
     }

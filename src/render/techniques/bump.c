@@ -63,5 +63,8 @@ const meso_technique meso_technique_bump = {
     .prepare = bump_prepare,
     .release = bump_release,
     .shade_block = bump_shade_block,
+    /* reads the position, the tangent frame and uv; writes every colour */
+    .skip_fields = MESO_FRAGMENT_SKIP_SAMPLE | MESO_FRAGMENT_SKIP_TRIANGLE |
+                   MESO_FRAGMENT_SKIP_BARYCENTRICS | MESO_FRAGMENT_SKIP_COLOR_PRESET,
     .memory = bump_memory,
 };

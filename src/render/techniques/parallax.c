@@ -100,5 +100,8 @@ const meso_technique meso_technique_parallax = {
     .prepare = prepare,
     .release = release,
     .shade_block = shade_block,
+    /* reads the position, the tangent frame and uv; writes every colour */
+    .skip_fields = MESO_FRAGMENT_SKIP_SAMPLE | MESO_FRAGMENT_SKIP_TRIANGLE |
+                   MESO_FRAGMENT_SKIP_BARYCENTRICS | MESO_FRAGMENT_SKIP_COLOR_PRESET,
     .memory = memory,
 };
