@@ -381,6 +381,21 @@ static inline void copy_floats(float *dst, const float *src, size_t n) {
 #endif
 }
 
+/* The tile's coverage from its depths: a sample is written exactly when its depth becomes less
+ * than the clear's +inf (the test is "nearer than the buffer", a NaN never passes), so the
+ * coverage is 1 exactly where the depth is below +inf. Worked out in the copy-out instead of a
+ * cleared coverage buffer and a store a fragment. */
+static inline void copy_coverage(float *dst, const float *depth, size_t n) {
+    size_t i = 0;
+    for (; i + LANES <= n; i += LANES) {
+        v8f d;
+        memcpy(&d, depth + i, sizeof d);
+        v8f c = v8_select(d < splat(INFINITY), splat(1.0f), splat(0.0f));
+        memcpy(dst + i, &c, sizeof c);
+    }
+    for (; i < n; i++) dst[i] = depth[i] < INFINITY ? 1.0f : 0.0f;
+}
+
 /* r0 g0 b0 r1 g1 b1 ... r7 g7 b7 in out[0..2]. */
 static inline void interleave3(v8f r, v8f g, v8f b, v8f out[3]) {
     typedef float v16f __attribute__((vector_size(64)));
@@ -400,7 +415,7 @@ typedef struct tile_batch {
     meso_fragment *scratch; /* the adapter's fragments (render_fragments.c) */
     uint32_t *pixels;       /* tile-buffer index of each fragment */
     uint8_t *pending;       /* per tile sample: 1 while a fragment of the batch covers it */
-    float *color, *coverage, *depth; /* the tile's buffers */
+    float *color, *depth;   /* the tile's buffers (coverage: where depth < +inf, copy_coverage) */
     size_t count;
     uint64_t shaded; /* fragments shaded in the tile so far */
 } tile_batch;
@@ -415,11 +430,10 @@ static void flush_batch(tile_batch *b) {
     meso_fragment_block_pad(block);
     meso_technique_shade_block(obj->technique, obj->state, b->frame, obj->object, block,
                                b->scratch);
-    float *depth = b->depth, *coverage = b->coverage, *color = b->color;
+    float *depth = b->depth, *color = b->color;
     const uint32_t *pixels = b->pixels;
     size_t count = b->count;
     const v8i consecutive = {0, 1, 2, 3, 4, 5, 6, 7};
-    const v8f one = splat(1.0f);
     /* The batch never repeats a sample, so the depths it tests against can be read eight at a
      * time before any is written. */
     for (size_t first = 0; first < count; first += LANES) {
@@ -444,7 +458,6 @@ static void flush_batch(tile_batch *b) {
             memcpy(&bl, block->b + first, sizeof bl);
             interleave3(r, g, bl, rgb);
             memcpy(depth + p, &z, sizeof z);
-            memcpy(coverage + p, &one, sizeof one);
             memcpy(color + 3 * p, rgb, sizeof rgb);
             continue;
         }
@@ -455,7 +468,6 @@ static void flush_batch(tile_batch *b) {
             if (block->discard[i]) continue; /* discarded: nothing drawn */
             uint32_t p = (uint32_t)pix[k];
             depth[p] = z[k];
-            coverage[p] = 1.0f;
             color[3 * p + 0] = block->r[i];
             color[3 * p + 1] = block->g[i];
             color[3 * p + 2] = block->b[i];
@@ -504,9 +516,8 @@ static void draw_tile(void *user, size_t job, int thread_index) {
     }
     /* The tile renders into the thread's own small buffers (they stay in cache) and is copied
      * out once at the end: every target sample is written exactly once a frame. */
-    float *color = scratch->color, *coverage = scratch->coverage, *depth = scratch->depth;
+    float *color = scratch->color, *depth = scratch->depth;
     memcpy(color, pass->clear_color, 3 * TILE_SAMPLES * sizeof(float));
-    memcpy(coverage, pass->clear_coverage, TILE_SAMPLES * sizeof(float));
     memcpy(depth, pass->clear_depth, TILE_SAMPLES * sizeof(float));
     /* One batch per (object, tile): the fragments of consecutive triangles of one object
      * gather until the object changes or a triangle covers a sample already in the batch.
@@ -520,7 +531,6 @@ static void draw_tile(void *user, size_t job, int thread_index) {
                         .pixels = scratch->pixels,
                         .pending = scratch->pending,
                         .color = color,
-                        .coverage = coverage,
                         .depth = depth,
                         .frame = frame};
     covered_samples *covered = scratch->covered;
@@ -593,7 +603,7 @@ static void draw_tile(void *user, size_t job, int thread_index) {
         size_t p = (size_t)y * width + (size_t)tx0;
         size_t l = (size_t)(y - ty0) * RASTER_TILE_SIZE;
         copy_floats(dj->color + 3 * p, color + 3 * l, 3 * tw);
-        copy_floats(dj->coverage + p, coverage + l, tw);
+        copy_coverage(dj->coverage + p, depth + l, tw);
         copy_floats(dj->depth + p, depth + l, tw);
     }
 }
@@ -614,10 +624,9 @@ static meso_result reserve_threads(meso_context *ctx, raster_pass *pass) {
         t[i].pending = calloc(TILE_SAMPLES, 1);
         t[i].covered = malloc(sizeof(covered_samples));
         t[i].color = malloc(3 * TILE_SAMPLES * sizeof(float));
-        t[i].coverage = malloc(TILE_SAMPLES * sizeof(float));
         t[i].depth = malloc(TILE_SAMPLES * sizeof(float));
         if (!t[i].block || !t[i].fragments || !t[i].pixels || !t[i].wire || !t[i].color ||
-            !t[i].coverage || !t[i].depth || !t[i].pending || !t[i].covered) {
+            !t[i].depth || !t[i].pending || !t[i].covered) {
             free(t[i].block);
             free(t[i].pending);
             free(t[i].covered);
@@ -625,7 +634,6 @@ static meso_result reserve_threads(meso_context *ctx, raster_pass *pass) {
             free(t[i].pixels);
             free(t[i].wire);
             free(t[i].color);
-            free(t[i].coverage);
             free(t[i].depth);
             goto oom;
         }
@@ -695,7 +703,6 @@ void raster_pass_release(raster_pass *pass) {
         free(pass->threads[i].pending);
         free(pass->threads[i].covered);
         free(pass->threads[i].color);
-        free(pass->threads[i].coverage);
         free(pass->threads[i].depth);
     }
     free(pass->threads);
