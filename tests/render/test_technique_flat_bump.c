@@ -271,11 +271,12 @@ static void test_shading_batches_to_block_match_shade_batch8(void **state) {
         int lanes = 29 - 8 * g < 8 ? 29 - 8 * g : 8;
         v8f r, gr, b;
         meso_shade_batch8(&frame, &o, &in[g], lanes, &r, &gr, &b);
-        for (int k = 0; k < lanes; k++) {
-            assert_memory_equal(&block->r[8 * g + k], &r[k], sizeof(float));
-            assert_memory_equal(&block->g[8 * g + k], &gr[k], sizeof(float));
-            assert_memory_equal(&block->b[8 * g + k], &b[k], sizeof(float));
-        }
+        float want[3][8];
+        memcpy(want[0], &r, sizeof r), memcpy(want[1], &gr, sizeof gr),
+            memcpy(want[2], &b, sizeof b);
+        assert_memory_equal(block->r + 8 * g, want[0], (size_t)lanes * sizeof(float));
+        assert_memory_equal(block->g + 8 * g, want[1], (size_t)lanes * sizeof(float));
+        assert_memory_equal(block->b + 8 * g, want[2], (size_t)lanes * sizeof(float));
     }
     free(block);
     meso_texture_destroy(map);
