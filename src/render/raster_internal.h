@@ -117,13 +117,14 @@ typedef struct raster_object {
 typedef struct covered_samples covered_samples;
 
 typedef struct raster_thread_scratch {
-    meso_fragment_block *block;      /* the batch: a batch never repeats a sample */
-    meso_fragment *fragments;        /* RASTER_TILE_SIZE^2, for techniques without shade_block */
-    uint32_t *pixels;                /* tile-buffer index of each fragment (2 x tile + 8) */
-    uint8_t *pending;                /* RASTER_TILE_SIZE^2: samples held by the batch (zeroed) */
-    covered_samples *covered;        /* one triangle's samples before their attributes */
-    uint8_t *wire;                   /* RASTER_TILE_SIZE^2 wireframe mask */
-    float *color, *coverage, *depth; /* the tile being drawn, RASTER_TILE_SIZE a row */
+    meso_fragment_block *block; /* the batch: a batch never repeats a sample */
+    meso_fragment *fragments;   /* RASTER_TILE_SIZE^2, for techniques without shade_block */
+    uint32_t *pixels;           /* tile-buffer index of each fragment (2 x tile + 8) */
+    uint8_t *pending;           /* RASTER_TILE_SIZE^2: samples held by the batch (zeroed) */
+    covered_samples *covered;   /* one triangle's samples before their attributes */
+    uint8_t *wire;              /* RASTER_TILE_SIZE^2 wireframe mask */
+    float *color, *depth;       /* the tile being drawn, RASTER_TILE_SIZE a row (no coverage: the
+                                 * depths below +inf, raster_tiles.c) */
 } raster_thread_scratch;
 
 typedef struct raster_pass {

@@ -38,9 +38,10 @@ typedef struct vertex_attributes {
     bool has_tangents, has_uvs;
 } vertex_attributes;
 
-static void load_attributes(const meso_mesh *mesh, uint32_t triangle, vertex_attributes *a) {
+static void load_attributes(const meso_mesh *mesh, uint32_t triangle, bool tangents,
+                            vertex_attributes *a) {
     const uint32_t *idx = mesh->indices + 3 * (size_t)triangle;
-    a->has_tangents = mesh->tangents && mesh->bitangents;
+    a->has_tangents = tangents && mesh->tangents && mesh->bitangents;
     a->has_uvs = mesh->uvs != NULL;
     for (int k = 0; k < 3; k++) {
         a->n[k] = mesh->normals ? mesh->normals[idx[k]] : (meso_vec3){0.0f, 0.0f, 0.0f};
@@ -56,13 +57,15 @@ static void load_attributes(const meso_mesh *mesh, uint32_t triangle, vertex_att
 #define splat v8_splat
 
 /* Fill the inputs and preset the outputs of n fragments from their sample positions and view
- * depths, 8 at a time (GCC vector extensions), into lanes first..first+n-1 of the block. The
+ * depths, 8 at a time (GCC vector extensions), into lanes first..first+n-1 of the block, but for
+ * the fields in `skip` (MESO_FRAGMENT_SKIP_*: the technique never reads them). The
  * inputs are padded to whole groups of 8 (cover_triangle), so up to 7 lanes past first+n are
  * written too; the next triangle's fill or flush_batch's padding writes over them. */
-static void fill_fragments(const raster_triangle *tri, const meso_frame *frame,
-                           const vertex_attributes *va, size_t n, const int32_t *xs,
-                           const int32_t *ys, const float *depths, meso_fragment_block *block,
-                           size_t first) {
+static inline __attribute__((always_inline)) void
+fill_fragments_skipping(const raster_triangle *tri, const meso_frame *frame,
+                        const vertex_attributes *va, unsigned skip, size_t n, const int32_t *xs,
+                        const int32_t *ys, const float *depths, meso_fragment_block *block,
+                        size_t first) {
     const v8f ga0 = splat(tri->ga[0]), ga1 = splat(tri->ga[1]), ga2 = splat(tri->ga[2]);
     const v8f gb0 = splat(tri->gb[0]), gb1 = splat(tri->gb[1]), gb2 = splat(tri->gb[2]);
     const v8f gc0 = splat(tri->gc[0]), gc1 = splat(tri->gc[1]), gc2 = splat(tri->gc[2]);
@@ -85,8 +88,9 @@ static void fill_fragments(const raster_triangle *tri, const meso_frame *frame,
         v8f b0 = (gc0 + gb0 * fy + ga0 * fx) * d;
         v8f b1 = (gc1 + gb1 * fy + ga1 * fx) * d;
         v8f b2 = (gc2 + gb2 * fy + ga2 * fx) * d;
-        STORE(x, sx), STORE(y, sy), STORE(triangle, triangle);
-        STORE(b0, b0), STORE(b1, b1), STORE(b2, b2);
+        if (!(skip & MESO_FRAGMENT_SKIP_SAMPLE)) STORE(x, sx), STORE(y, sy);
+        if (!(skip & MESO_FRAGMENT_SKIP_TRIANGLE)) STORE(triangle, triangle);
+        if (!(skip & MESO_FRAGMENT_SKIP_BARYCENTRICS)) STORE(b0, b0), STORE(b1, b1), STORE(b2, b2);
         /* On the camera ray through the sample centre: the same ray the reference traces
          * (meso_frame_ray_direction). */
         v8f dx = splat(frame->corner.x) +
@@ -109,7 +113,7 @@ static void fill_fragments(const raster_triangle *tri, const meso_frame *frame,
             v8f bx = INTERP(va->b, x), by = INTERP(va->b, y), bz = INTERP(va->b, z);
             STORE(tx, tx), STORE(ty, ty), STORE(tz, tz);
             STORE(bx, bx), STORE(by, by), STORE(bz, bz);
-        } else {
+        } else if (!(skip & MESO_FRAGMENT_SKIP_TANGENTS)) {
             STORE(tx, zero), STORE(ty, zero), STORE(tz, zero);
             STORE(bx, zero), STORE(by, zero), STORE(bz, zero);
         }
@@ -121,10 +125,31 @@ static void fill_fragments(const raster_triangle *tri, const meso_frame *frame,
         }
 #undef INTERP
         STORE(depth, d), STORE(out_depth, d);
-        STORE(r, zero), STORE(g, zero), STORE(b, zero);
+        if (!(skip & MESO_FRAGMENT_SKIP_COLOR_PRESET))
+            STORE(r, zero), STORE(g, zero), STORE(b, zero);
         memcpy(block->discard + at, &no_discard, sizeof(no_discard));
     }
 #undef STORE
+}
+
+/* fill_fragments_skipping with the skips of flat, bump and parallax as constants: a test of
+ * `skip` a group cost as much as the stores it saved. */
+#define FILL_SHADING_ONLY                                                                          \
+    (MESO_FRAGMENT_SKIP_SAMPLE | MESO_FRAGMENT_SKIP_TRIANGLE | MESO_FRAGMENT_SKIP_BARYCENTRICS |   \
+     MESO_FRAGMENT_SKIP_COLOR_PRESET)
+static void fill_fragments(const raster_triangle *tri, const meso_frame *frame,
+                           const vertex_attributes *va, unsigned skip, size_t n, const int32_t *xs,
+                           const int32_t *ys, const float *depths, meso_fragment_block *block,
+                           size_t first) {
+    if (skip == FILL_SHADING_ONLY)
+        fill_fragments_skipping(tri, frame, va, FILL_SHADING_ONLY, n, xs, ys, depths, block, first);
+    else if (skip == (FILL_SHADING_ONLY | MESO_FRAGMENT_SKIP_TANGENTS))
+        fill_fragments_skipping(tri, frame, va, FILL_SHADING_ONLY | MESO_FRAGMENT_SKIP_TANGENTS, n,
+                                xs, ys, depths, block, first);
+    else if (skip == 0)
+        fill_fragments_skipping(tri, frame, va, 0, n, xs, ys, depths, block, first);
+    else
+        fill_fragments_skipping(tri, frame, va, skip, n, xs, ys, depths, block, first);
 }
 
 /* The samples of one triangle that pass coverage and the early depth test, before their
@@ -230,6 +255,9 @@ static size_t cover_triangle(const raster_triangle *tri, int x0, int y0, int x1,
     /* the edge functions of samples x .. x + 7 of a row: E(x) + offsets, exact in 64 bits */
     v4l offset_lo[3], offset_hi[3];
     int64_t step_group[3];
+    /* unrolled: the loop's (k + 1) % 3 and its indexing were a tenth of the coverage of a
+     * sphere's small triangles (issue 16) */
+#pragma GCC unroll 3
     for (int k = 0; k < 3; k++) {
         int a = (k + 1) % 3;
         row[k] = (int64_t)tri->edge_a[k] * (px - tri->x[a]) +
@@ -353,6 +381,21 @@ static inline void copy_floats(float *dst, const float *src, size_t n) {
 #endif
 }
 
+/* The tile's coverage from its depths: a sample is written exactly when its depth becomes less
+ * than the clear's +inf (the test is "nearer than the buffer", a NaN never passes), so the
+ * coverage is 1 exactly where the depth is below +inf. Worked out in the copy-out instead of a
+ * cleared coverage buffer and a store a fragment. */
+static inline void copy_coverage(float *dst, const float *depth, size_t n) {
+    size_t i = 0;
+    for (; i + LANES <= n; i += LANES) {
+        v8f d;
+        memcpy(&d, depth + i, sizeof d);
+        v8f c = v8_select(d < splat(INFINITY), splat(1.0f), splat(0.0f));
+        memcpy(dst + i, &c, sizeof c);
+    }
+    for (; i < n; i++) dst[i] = depth[i] < INFINITY ? 1.0f : 0.0f;
+}
+
 /* r0 g0 b0 r1 g1 b1 ... r7 g7 b7 in out[0..2]. */
 static inline void interleave3(v8f r, v8f g, v8f b, v8f out[3]) {
     typedef float v16f __attribute__((vector_size(64)));
@@ -372,7 +415,7 @@ typedef struct tile_batch {
     meso_fragment *scratch; /* the adapter's fragments (render_fragments.c) */
     uint32_t *pixels;       /* tile-buffer index of each fragment */
     uint8_t *pending;       /* per tile sample: 1 while a fragment of the batch covers it */
-    float *color, *coverage, *depth; /* the tile's buffers */
+    float *color, *depth;   /* the tile's buffers (coverage: where depth < +inf, copy_coverage) */
     size_t count;
     uint64_t shaded; /* fragments shaded in the tile so far */
 } tile_batch;
@@ -387,11 +430,10 @@ static void flush_batch(tile_batch *b) {
     meso_fragment_block_pad(block);
     meso_technique_shade_block(obj->technique, obj->state, b->frame, obj->object, block,
                                b->scratch);
-    float *depth = b->depth, *coverage = b->coverage, *color = b->color;
+    float *depth = b->depth, *color = b->color;
     const uint32_t *pixels = b->pixels;
     size_t count = b->count;
     const v8i consecutive = {0, 1, 2, 3, 4, 5, 6, 7};
-    const v8f one = splat(1.0f);
     /* The batch never repeats a sample, so the depths it tests against can be read eight at a
      * time before any is written. */
     for (size_t first = 0; first < count; first += LANES) {
@@ -416,7 +458,6 @@ static void flush_batch(tile_batch *b) {
             memcpy(&bl, block->b + first, sizeof bl);
             interleave3(r, g, bl, rgb);
             memcpy(depth + p, &z, sizeof z);
-            memcpy(coverage + p, &one, sizeof one);
             memcpy(color + 3 * p, rgb, sizeof rgb);
             continue;
         }
@@ -427,7 +468,6 @@ static void flush_batch(tile_batch *b) {
             if (block->discard[i]) continue; /* discarded: nothing drawn */
             uint32_t p = (uint32_t)pix[k];
             depth[p] = z[k];
-            coverage[p] = 1.0f;
             color[3 * p + 0] = block->r[i];
             color[3 * p + 1] = block->g[i];
             color[3 * p + 2] = block->b[i];
@@ -476,9 +516,8 @@ static void draw_tile(void *user, size_t job, int thread_index) {
     }
     /* The tile renders into the thread's own small buffers (they stay in cache) and is copied
      * out once at the end: every target sample is written exactly once a frame. */
-    float *color = scratch->color, *coverage = scratch->coverage, *depth = scratch->depth;
+    float *color = scratch->color, *depth = scratch->depth;
     memcpy(color, pass->clear_color, 3 * TILE_SAMPLES * sizeof(float));
-    memcpy(coverage, pass->clear_coverage, TILE_SAMPLES * sizeof(float));
     memcpy(depth, pass->clear_depth, TILE_SAMPLES * sizeof(float));
     /* One batch per (object, tile): the fragments of consecutive triangles of one object
      * gather until the object changes or a triangle covers a sample already in the batch.
@@ -492,7 +531,6 @@ static void draw_tile(void *user, size_t job, int thread_index) {
                         .pixels = scratch->pixels,
                         .pending = scratch->pending,
                         .color = color,
-                        .coverage = coverage,
                         .depth = depth,
                         .frame = frame};
     covered_samples *covered = scratch->covered;
@@ -504,6 +542,10 @@ static void draw_tile(void *user, size_t job, int thread_index) {
         const raster_object *obj = &dj->objects[chunk->mesh];
         if (obj != batch.object) flush_batch(&batch);
         batch.object = obj;
+        /* the adapter copies every field; the shading model reads the tangents for a normal
+         * map */
+        unsigned skip = obj->technique->shade_block ? obj->technique->skip_fields : 0;
+        if (obj->object->material.normal_map) skip &= ~MESO_FRAGMENT_SKIP_TANGENTS;
         const meso_mesh *mesh = bins->meshes[chunk->mesh].mesh;
         for (size_t e = 0; e < count; e++) {
             const raster_triangle *tri = &chunk->triangles[list[e]];
@@ -527,9 +569,9 @@ static void draw_tile(void *user, size_t job, int thread_index) {
                 if (!n) continue;
             }
             vertex_attributes va;
-            load_attributes(mesh, tri->triangle, &va);
-            fill_fragments(tri, frame, &va, n, covered->x, covered->y, covered->depth, batch.block,
-                           batch.count);
+            load_attributes(mesh, tri->triangle, !(skip & MESO_FRAGMENT_SKIP_TANGENTS), &va);
+            fill_fragments(tri, frame, &va, skip, n, covered->x, covered->y, covered->depth,
+                           batch.block, batch.count);
             batch.count += n;
         }
     }
@@ -561,7 +603,7 @@ static void draw_tile(void *user, size_t job, int thread_index) {
         size_t p = (size_t)y * width + (size_t)tx0;
         size_t l = (size_t)(y - ty0) * RASTER_TILE_SIZE;
         copy_floats(dj->color + 3 * p, color + 3 * l, 3 * tw);
-        copy_floats(dj->coverage + p, coverage + l, tw);
+        copy_coverage(dj->coverage + p, depth + l, tw);
         copy_floats(dj->depth + p, depth + l, tw);
     }
 }
@@ -582,10 +624,9 @@ static meso_result reserve_threads(meso_context *ctx, raster_pass *pass) {
         t[i].pending = calloc(TILE_SAMPLES, 1);
         t[i].covered = malloc(sizeof(covered_samples));
         t[i].color = malloc(3 * TILE_SAMPLES * sizeof(float));
-        t[i].coverage = malloc(TILE_SAMPLES * sizeof(float));
         t[i].depth = malloc(TILE_SAMPLES * sizeof(float));
         if (!t[i].block || !t[i].fragments || !t[i].pixels || !t[i].wire || !t[i].color ||
-            !t[i].coverage || !t[i].depth || !t[i].pending || !t[i].covered) {
+            !t[i].depth || !t[i].pending || !t[i].covered) {
             free(t[i].block);
             free(t[i].pending);
             free(t[i].covered);
@@ -593,7 +634,6 @@ static meso_result reserve_threads(meso_context *ctx, raster_pass *pass) {
             free(t[i].pixels);
             free(t[i].wire);
             free(t[i].color);
-            free(t[i].coverage);
             free(t[i].depth);
             goto oom;
         }
@@ -663,7 +703,6 @@ void raster_pass_release(raster_pass *pass) {
         free(pass->threads[i].pending);
         free(pass->threads[i].covered);
         free(pass->threads[i].color);
-        free(pass->threads[i].coverage);
         free(pass->threads[i].depth);
     }
     free(pass->threads);

@@ -103,6 +103,17 @@ typedef struct meso_fragment_block {
     _Alignas(32) uint8_t discard[MESO_FRAGMENT_BLOCK_LANES];
 } meso_fragment_block;
 
+/* Fields of a block a technique may declare it never reads (meso_technique.skip_fields). The
+ * position, normal, uv, depth and the out_depth and discard presets are always filled. The
+ * tangents are filled whatever a technique declares for an object with a normal map (the
+ * shading model reads them there). */
+#define MESO_FRAGMENT_SKIP_SAMPLE 1u       /* x, y */
+#define MESO_FRAGMENT_SKIP_TRIANGLE 2u     /* triangle */
+#define MESO_FRAGMENT_SKIP_BARYCENTRICS 4u /* b0, b1, b2 */
+#define MESO_FRAGMENT_SKIP_TANGENTS 8u     /* tx..tz, bx..bz */
+/* the colour preset (r, g, b = 0): the technique writes the colour of every lane */
+#define MESO_FRAGMENT_SKIP_COLOR_PRESET 16u
+
 /* Fragment i of the block as a meso_fragment, inputs and outputs. */
 void meso_fragment_block_get(const meso_fragment_block *block, size_t i, meso_fragment *out);
 /* Write fragment i of the block from f, inputs and outputs; fragments past count are not
@@ -147,6 +158,12 @@ typedef struct meso_technique {
      * technique is drawn through shade or shade_block, for any thread count. */
     void (*shade_block)(const void *state, const meso_frame *frame, const meso_object *object,
                         meso_fragment_block *block);
+    /* Fragment fields the rasterizer need not fill for this technique's shade_block
+     * (MESO_FRAGMENT_SKIP_*; 0: every field, the default; ignored for techniques drawn
+     * through `shade`, whose adapter copies every field). A skipped field holds stale values
+     * the technique must not read. Filling only what is read saves a flat frame's tangent
+     * frame and barycentrics (docs/rasterizer.md). */
+    unsigned skip_fields;
     /* Bytes of baked data held by the state (NULL: 0). */
     size_t (*memory)(const void *state);
     /* Per-pixel techniques that draw back faces too (relief_layers: a closed mesh's far wall

@@ -30,8 +30,11 @@ static inline void gather_code_pairs(const int32_t *base, v8i index, v8i *left, 
 /* The colour map at eight uvs: bilinear between texel centres at level 0 with the texture's
  * wrap (the arithmetic of meso_texture_sample(t, uv, 0, MESO_FILTER_BILINEAR): uv reduced to
  * [0, 1) for repeat, x = u W - 0.5, y = (1 - v) H - 0.5), 0 for a non-finite uv. */
-static void sample_color_map(const meso_texture *t, v8f u, v8f v, v8f *out_r, v8f *out_g,
-                             v8f *out_b) {
+/* Inlined: a call and its prologue cost 10 % of the lookup's instructions, once a group of 8. */
+static inline __attribute__((always_inline)) void sample_color_map(const meso_texture *t,
+                                                                   const float *srgb8_table, v8f u,
+                                                                   v8f v, v8f *out_r, v8f *out_g,
+                                                                   v8f *out_b) {
     const meso_image *level = t->levels[0];
     int w = level->width, h = level->height;
     v8i finite = ((u - u) == v8_splat(0.0f)) & ((v - v) == v8_splat(0.0f));
@@ -69,7 +72,7 @@ static void sample_color_map(const meso_texture *t, v8f u, v8f v, v8f *out_r, v8
         /* 8-bit sRGB decoded in the lookup, as GPUs do: 4 gathers from a quarter of the
          * float level's bytes, then 12 from the 1 KB decode table (stays in L1) */
         const int32_t *codes = (const int32_t *)t->srgb8;
-        const float *table = meso_srgb8_table();
+        const float *table = srgb8_table;
         v8i a, b, c, d;
         if (v8_mask_bits(i1 == i0 + 1) == 0xff) {
             /* each texel's right neighbour is the next code of its row (every lane but at a
@@ -129,7 +132,7 @@ static inline v8f rsqrt_safe(v8f len2, v8i *nonzero) {
 static void apply_normal_map(const meso_material *m, const meso_shade_batch *in, v8f *nx, v8f *ny,
                              v8f *nz) {
     v8f r, g, b;
-    sample_color_map(m->normal_map, in->u, in->v, &r, &g, &b);
+    sample_color_map(m->normal_map, meso_srgb8_table(), in->u, in->v, &r, &g, &b);
     v8f x = r * splat(2.0f) - splat(1.0f), y = g * splat(2.0f) - splat(1.0f);
     v8f z = b * splat(2.0f) - splat(1.0f);
     if (m->normal_map_directx) y = -y;
@@ -160,24 +163,47 @@ static void apply_normal_map(const meso_material *m, const meso_shade_batch *in,
     *nz = select_v(ok, pz * pi, Nz);
 }
 
+/* What the shading of one object in one frame reads whatever the point: worked out once a call
+ * of meso_shade_batches_to_block instead of once a group of eight (issue 16: with the call, a
+ * tenth of flat's shading). */
+typedef struct shade_constants {
+    const meso_frame *frame;
+    const meso_object *object;
+    const float *srgb8_table; /* the colour map's decode table, when it has codes */
+    bool has_specular, integer_power;
+} shade_constants;
+
+static void shade_constants_init(shade_constants *c, const meso_frame *frame,
+                                 const meso_object *object) {
+    const meso_material *m = &object->material;
+    c->frame = frame;
+    c->object = object;
+    c->srgb8_table = m->color_map && m->color_map->srgb8 ? meso_srgb8_table() : NULL;
+    c->has_specular = m->specular.x > 0.0f || m->specular.y > 0.0f || m->specular.z > 0.0f;
+    c->integer_power = c->has_specular && m->shininess >= 0.0f && m->shininess <= 4096.0f &&
+                       m->shininess == floorf(m->shininess);
+}
+
 /* colour = albedo map(uv) (ambient + sum_i c_i max(0, N.L_i) v_i) + sum_i spec c_i (N.H_i)^s v_i
  * (DESIGN.md); with an environment, ambient + E(N) / pi (render_environment.h), specular only where
  * N.L_i > 0 and N.H_i > 0. */
-void meso_shade_batch8(const meso_frame *frame, const meso_object *object,
-                       const meso_shade_batch *in, int lanes, v8f *out_r, v8f *out_g, v8f *out_b) {
+static inline __attribute__((always_inline)) void shade8(const shade_constants *c,
+                                                         const meso_shade_batch *in, int lanes,
+                                                         v8f *out_r, v8f *out_g, v8f *out_b) {
+    const meso_frame *frame = c->frame;
     const meso_scene *scene = frame->scene;
-    const meso_material *m = &object->material;
+    const meso_material *m = &c->object->material;
     v8f br = splat(m->albedo.x), bg = splat(m->albedo.y), bb = splat(m->albedo.z);
     if (m->color_map) {
         /* Level 0, bilinear, in every technique and the reference, so images compare pixel by
          * pixel (no mip selection that would depend on screen derivatives). */
         v8f tr, tg, tb;
-        sample_color_map(m->color_map, in->u, in->v, &tr, &tg, &tb);
+        sample_color_map(m->color_map, c->srgb8_table, in->u, in->v, &tr, &tg, &tb);
         br *= tr, bg *= tg, bb *= tb;
     }
     v8f nx = in->nx, ny = in->ny, nz = in->nz;
     if (m->normal_map) apply_normal_map(m, in, &nx, &ny, &nz);
-    bool has_specular = m->specular.x > 0.0f || m->specular.y > 0.0f || m->specular.z > 0.0f;
+    bool has_specular = c->has_specular;
     v8f vx = splat(0.0f), vy = splat(0.0f), vz = splat(0.0f);
     v8i nonzero;
     if (has_specular) {
@@ -191,8 +217,7 @@ void meso_shade_batch8(const meso_frame *frame, const meso_object *object,
     if (scene->environment)
         meso_environment_ambient8(scene->environment, nx, ny, nz, &dr, &dg, &db);
     v8f sr = splat(0.0f), sg = splat(0.0f), sb = splat(0.0f);
-    bool integer_power =
-        m->shininess >= 0.0f && m->shininess <= 4096.0f && m->shininess == floorf(m->shininess);
+    bool integer_power = c->integer_power;
     for (int li = 0; li < scene->num_lights; li++) {
         const meso_light *light = &scene->lights[li];
         v8f lx, ly, lz;
@@ -243,6 +268,46 @@ void meso_shade_batch8(const meso_frame *frame, const meso_object *object,
     *out_r = br * dr + sr;
     *out_g = bg * dg + sg;
     *out_b = bb * db + sb;
+}
+
+void meso_shade_batch8(const meso_frame *frame, const meso_object *object,
+                       const meso_shade_batch *in, int lanes, v8f *out_r, v8f *out_g, v8f *out_b) {
+    shade_constants c;
+    shade_constants_init(&c, frame, object);
+    shade8(&c, in, lanes, out_r, out_g, out_b);
+}
+
+void meso_shade_batches_to_block(const meso_frame *frame, const meso_object *object,
+                                 const meso_shade_batch *in, size_t num_groups,
+                                 meso_fragment_block *b, size_t first) {
+    shade_constants c;
+    shade_constants_init(&c, frame, object);
+    for (size_t g = 0; g < num_groups; g++, first += LANES) {
+        int lanes = b->count - first < LANES ? (int)(b->count - first) : LANES;
+        v8f r, gr, bl;
+        shade8(&c, &in[g], lanes, &r, &gr, &bl);
+        meso_block_store(b->r, first, r);
+        meso_block_store(b->g, first, gr);
+        meso_block_store(b->b, first, bl);
+    }
+}
+
+void meso_shade_block(const meso_frame *frame, const meso_object *object, meso_fragment_block *b) {
+    shade_constants c;
+    shade_constants_init(&c, frame, object);
+    /* the tangents are read (and filled by the rasterizer for a technique that skips them)
+     * only for a normal map */
+    bool tangents = object->material.normal_map != NULL;
+    for (size_t first = 0; first < b->count; first += LANES) {
+        meso_shade_batch in;
+        meso_shade_batch_from_block(&in, frame, b, first, tangents);
+        int lanes = b->count - first < LANES ? (int)(b->count - first) : LANES;
+        v8f r, g, bl;
+        shade8(&c, &in, lanes, &r, &g, &bl);
+        meso_block_store(b->r, first, r);
+        meso_block_store(b->g, first, g);
+        meso_block_store(b->b, first, bl);
+    }
 }
 
 meso_vec3 meso_shade_point(const meso_frame *frame, const meso_object *object, meso_vec3 position,

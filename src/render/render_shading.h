@@ -43,19 +43,23 @@ static inline void meso_block_store(float *array, size_t first, v8f value) {
     memcpy(array + first, &value, sizeof value);
 }
 
-/* The shading inputs of lanes first..first+7 of a block as they are (position, normal, uv,
- * tangent, bitangent), every light visible. */
+/* The shading inputs of lanes first..first+7 of a block as they are (position, normal, uv, and
+ * with `tangents` the tangent and bitangent, which only a normal map reads), every light
+ * visible. */
 static inline void meso_shade_batch_from_block(meso_shade_batch *in, const meso_frame *frame,
-                                               const meso_fragment_block *b, size_t first) {
+                                               const meso_fragment_block *b, size_t first,
+                                               bool tangents) {
     in->px = meso_block_load(b->px, first), in->py = meso_block_load(b->py, first);
     in->pz = meso_block_load(b->pz, first);
     in->nx = meso_block_load(b->nx, first), in->ny = meso_block_load(b->ny, first);
     in->nz = meso_block_load(b->nz, first);
     in->u = meso_block_load(b->u, first), in->v = meso_block_load(b->v, first);
-    in->tx = meso_block_load(b->tx, first), in->ty = meso_block_load(b->ty, first);
-    in->tz = meso_block_load(b->tz, first);
-    in->bx = meso_block_load(b->bx, first), in->by = meso_block_load(b->by, first);
-    in->bz = meso_block_load(b->bz, first);
+    if (tangents) {
+        in->tx = meso_block_load(b->tx, first), in->ty = meso_block_load(b->ty, first);
+        in->tz = meso_block_load(b->tz, first);
+        in->bx = meso_block_load(b->bx, first), in->by = meso_block_load(b->by, first);
+        in->bz = meso_block_load(b->bz, first);
+    }
     meso_shade_batch_all_visible(in, frame);
 }
 
@@ -72,14 +76,15 @@ static inline void meso_shade_batch_to_block(const meso_frame *frame, const meso
 }
 
 /* meso_shade_fragments for a block, every light visible: the colour of each fragment from its
- * own position, normal, uv, tangent and bitangent, with the same bits. */
-static inline void meso_shade_block(const meso_frame *frame, const meso_object *object,
-                                    meso_fragment_block *b) {
-    for (size_t first = 0; first < b->count; first += V8_LANES) {
-        meso_shade_batch in;
-        meso_shade_batch_from_block(&in, frame, b, first);
-        meso_shade_batch_to_block(frame, object, &in, b, first);
-    }
-}
+ * own position, normal, uv, tangent and bitangent, with the same bits. The per-object constants
+ * are worked out once a block. */
+void meso_shade_block(const meso_frame *frame, const meso_object *object, meso_fragment_block *b);
+
+/* meso_shade_batch_to_block for num_groups groups of eight at once: in[k] holds lanes
+ * first + 8k .. first + 8k + 7 (first a multiple of 8); the same bits, the per-object constants
+ * worked out once a call instead of once a group. */
+void meso_shade_batches_to_block(const meso_frame *frame, const meso_object *object,
+                                 const meso_shade_batch *in, size_t num_groups,
+                                 meso_fragment_block *b, size_t first);
 
 #endif

@@ -542,6 +542,90 @@ static void test_raster_block_and_fragment_techniques_see_the_same_fragments(voi
     meso_context_destroy(ctx);
 }
 
+/* A technique that declares fields it never reads (meso_technique.skip_fields) is handed the
+ * same fragments in the same order, with the same values in every field it reads, and the
+ * tangents still filled for an object with a normal map (the shading model reads them there). */
+static meso_fragment *g_order; /* fragments in the order the technique saw them */
+static size_t g_order_count;
+
+static void record_in_order_block(const void *state, const meso_frame *frame,
+                                  const meso_object *object, meso_fragment_block *block) {
+    (void)state;
+    (void)frame;
+    (void)object;
+    for (size_t i = 0; i < block->count; i++) {
+        meso_fragment_block_get(block, i, &g_order[g_order_count++]);
+        block->r[i] = block->nx[i], block->g[i] = block->u[i], block->b[i] = block->depth[i];
+    }
+}
+
+static void test_raster_skipped_fields_leave_the_read_ones_as_they_were(void **state) {
+    (void)state;
+    const unsigned all_skips = MESO_FRAGMENT_SKIP_SAMPLE | MESO_FRAGMENT_SKIP_TRIANGLE |
+                               MESO_FRAGMENT_SKIP_BARYCENTRICS | MESO_FRAGMENT_SKIP_TANGENTS |
+                               MESO_FRAGMENT_SKIP_COLOR_PRESET;
+    const unsigned skips[3] = {0, all_skips, all_skips & ~MESO_FRAGMENT_SKIP_TANGENTS};
+    meso_context *ctx = test_context(1); /* one thread: the order of the blocks is fixed */
+    test_scene ts;
+    test_scene_init(&ts, 61, 47);
+    test_scene_add(&ts, test_shape(ctx, MESO_SHAPE_PLANE, 1.6f, 7, (meso_vec3){0}), "flat");
+    meso_object *sphere = test_scene_add(
+        &ts, test_shape(ctx, MESO_SHAPE_SPHERE, 0.8f, 24, (meso_vec3){0, 0.3f, 0}), "flat");
+    meso_image *image = NULL;
+    meso_texture *normal_map = NULL;
+    assert_int_equal(meso_image_create(ctx, 2, 2, 3, &image), MESO_OK);
+    assert_int_equal(meso_texture_create(ctx, image, MESO_WRAP_REPEAT, false, &normal_map),
+                     MESO_OK);
+    const int w = 61, h = 47;
+    size_t samples = (size_t)w * (size_t)h;
+    for (int with_map = 0; with_map < 2; with_map++) {
+        sphere->material.normal_map = with_map ? normal_map : NULL;
+        meso_fragment *seen[3];
+        size_t count[3];
+        float *color[3], *coverage = malloc(samples * sizeof(float));
+        float *depth = malloc(samples * sizeof(float));
+        for (int k = 0; k < 3; k++) {
+            const meso_technique t = {
+                .info = {.name = "record", .accepts = MESO_TECHNIQUE_ACCEPTS_NONE},
+                .shade_block = record_in_order_block,
+                .skip_fields = skips[k]};
+            seen[k] = g_order = calloc(2 * samples, sizeof(meso_fragment));
+            g_order_count = 0;
+            color[k] = malloc(3 * samples * sizeof(float));
+            draw_with(ctx, &ts.scene, &t, w, h, color[k], coverage, depth, NULL);
+            count[k] = g_order_count;
+        }
+        assert_true(count[0] > samples / 4);
+        for (int k = 1; k < 3; k++) {
+            assert_int_equal(count[k], count[0]);
+            assert_memory_equal(color[k], color[0], 3 * samples * sizeof(float));
+            for (size_t i = 0; i < count[0]; i++) {
+                const meso_fragment *a = &seen[0][i], *b = &seen[k][i];
+                assert_memory_equal(&a->position, &b->position, sizeof a->position);
+                assert_memory_equal(&a->normal, &b->normal, sizeof a->normal);
+                assert_memory_equal(&a->uv, &b->uv, sizeof a->uv);
+                assert_memory_equal(&a->depth, &b->depth, sizeof a->depth);
+                assert_memory_equal(&a->out_depth, &b->out_depth, sizeof a->out_depth);
+                assert_int_equal(a->discard, b->discard);
+                /* the tangents where declared read, and on the normal-mapped sphere */
+                bool on_sphere = a->position.y > 0.01f;
+                if (!(skips[k] & MESO_FRAGMENT_SKIP_TANGENTS) || (with_map && on_sphere)) {
+                    assert_memory_equal(&a->tangent, &b->tangent, sizeof a->tangent);
+                    assert_memory_equal(&a->bitangent, &b->bitangent, sizeof a->bitangent);
+                }
+            }
+        }
+        for (int k = 0; k < 3; k++) free(seen[k]), free(color[k]);
+        free(coverage);
+        free(depth);
+    }
+    sphere->material.normal_map = NULL;
+    meso_texture_destroy(normal_map);
+    meso_image_destroy(image);
+    test_scene_free(&ts);
+    meso_context_destroy(ctx);
+}
+
 /* flat through its block and through meso_technique_shade's adapter: the same colours as
  * meso_shade_point_tb fragment by fragment, counts that are not multiples of 8 included. */
 static void test_flat_block_matches_shade_point(void **state) {
@@ -663,6 +747,7 @@ int main(void) {
         cmocka_unit_test(test_raster_wireframe_draws_edges),
         cmocka_unit_test(test_raster_depth_map_is_thread_independent_and_bounded),
         cmocka_unit_test(test_raster_block_and_fragment_techniques_see_the_same_fragments),
+        cmocka_unit_test(test_raster_skipped_fields_leave_the_read_ones_as_they_were),
         cmocka_unit_test(test_flat_block_matches_shade_point),
         cmocka_unit_test(test_raster_back_faces_dropped_early_are_exactly_the_back_faces),
         cmocka_unit_test(test_renderer_unknown_technique_names_object_and_known_ones),

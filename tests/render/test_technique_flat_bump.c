@@ -3,6 +3,7 @@
 #include <math.h>
 
 #include "render_internal.h"
+#include "render_shading.h"
 #include "render_test_scene.h"
 
 static void render_threads(test_scene *ts, const char *technique, int threads,
@@ -222,6 +223,67 @@ static void test_shading_compact_color_map_matches_float_map(void **state) {
     meso_context_destroy(ctx);
 }
 
+/* meso_shade_batches_to_block (the per-object constants once a call) writes the bits of
+ * meso_shade_batch8 group by group, with a compact colour map, a specular term, a point light
+ * and a count that ends inside a group. */
+static void test_shading_batches_to_block_match_shade_batch8(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(1);
+    test_scene ts;
+    test_scene_init(&ts, 8, 8);
+    assert_true(ts.scene.num_lights < MESO_SCENE_MAX_LIGHTS);
+    ts.scene.lights[ts.scene.num_lights++] = (meso_light){
+        .type = MESO_LIGHT_POINT, .position = {1.0f, 2.0f, 0.5f}, .color = {0.7f, 0.6f, 0.5f}};
+    meso_frame frame;
+    meso_frame_init(&frame, &ts.scene, 8, 8);
+    const float *codes = meso_srgb8_table();
+    meso_image *image = NULL;
+    assert_int_equal(meso_image_create(ctx, 5, 3, 3, &image), MESO_OK);
+    for (int i = 0; i < 5 * 3 * 3; i++) image->pixels[i] = codes[(i * 71) % 256];
+    meso_texture *map = NULL;
+    assert_int_equal(meso_texture_create(ctx, image, MESO_WRAP_REPEAT, false, &map), MESO_OK);
+    assert_int_equal(meso_texture_add_srgb8(ctx, map), MESO_OK);
+    assert_non_null(map->srgb8);
+    meso_object o;
+    memset(&o, 0, sizeof(o));
+    o.material.albedo = (meso_vec3){0.9f, 0.8f, 0.7f};
+    o.material.color_map = map;
+    o.material.specular = (meso_vec3){0.4f, 0.4f, 0.4f};
+    o.material.shininess = 24.0f;
+    meso_fragment_block *block = aligned_alloc(32, sizeof(*block));
+    assert_non_null(block);
+    block->count = 29;
+    meso_shade_batch in[4];
+    for (int g = 0; g < 4; g++) {
+        for (int k = 0; k < 8; k++) {
+            float a = 0.37f * (float)(8 * g + k);
+            meso_vec3 n = meso_vec3_normalize((meso_vec3){sinf(a), 1.0f, cosf(2.0f * a)});
+            in[g].px[k] = 0.1f * a, in[g].py[k] = 0.0f, in[g].pz[k] = -0.05f * a;
+            in[g].nx[k] = n.x, in[g].ny[k] = n.y, in[g].nz[k] = n.z;
+            in[g].u[k] = 0.61f * a - 1.0f, in[g].v[k] = 0.23f * a;
+            in[g].tx[k] = in[g].ty[k] = in[g].tz[k] = 0.0f;
+            in[g].bx[k] = in[g].by[k] = in[g].bz[k] = 0.0f;
+        }
+        meso_shade_batch_all_visible(&in[g], &frame);
+    }
+    meso_shade_batches_to_block(&frame, &o, in, 4, block, 0);
+    for (int g = 0; g < 4; g++) {
+        int lanes = 29 - 8 * g < 8 ? 29 - 8 * g : 8;
+        v8f r, gr, b;
+        meso_shade_batch8(&frame, &o, &in[g], lanes, &r, &gr, &b);
+        float want[3][8];
+        memcpy(want[0], &r, sizeof r), memcpy(want[1], &gr, sizeof gr),
+            memcpy(want[2], &b, sizeof b);
+        assert_memory_equal(block->r + 8 * g, want[0], (size_t)lanes * sizeof(float));
+        assert_memory_equal(block->g + 8 * g, want[1], (size_t)lanes * sizeof(float));
+        assert_memory_equal(block->b + 8 * g, want[2], (size_t)lanes * sizeof(float));
+    }
+    free(block);
+    meso_texture_destroy(map);
+    meso_image_destroy(image);
+    meso_context_destroy(ctx);
+}
+
 /* The colour map in the shading equals meso_texture_sample's bilinear level-0 lookup, for
  * repeat and clamp, out-of-range and non-finite uvs, in single points and in batches. */
 static void test_shading_samples_the_color_map_like_meso_texture_sample(void **state) {
@@ -295,6 +357,7 @@ int main(void) {
         cmocka_unit_test(test_displaced_normal_tilts_against_the_slope),
         cmocka_unit_test(test_shading_samples_the_color_map_like_meso_texture_sample),
         cmocka_unit_test(test_shading_compact_color_map_matches_float_map),
+        cmocka_unit_test(test_shading_batches_to_block_match_shade_batch8),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -33,20 +33,24 @@ static meso_result bump_prepare(meso_context *ctx, const meso_scene *scene,
 }
 
 /* Whole blocks (render_internal.h): eight lanes at a time straight from the rasterizer's
- * arrays to the shading model. */
+ * arrays to the shading model, RELIEF_SHADE_GROUPS groups a call of the shading. */
 static void bump_shade_block(const void *state, const meso_frame *frame, const meso_object *object,
                              meso_fragment_block *block) {
     const bump_state *s = state;
     const relief_heights *m = &s->heights;
     float depth = object->mesostructure.depth;
-    for (size_t first = 0; first < block->count; first += RELIEF_LANES) {
-        /* Blinn 1978: the perturbed normal from dh/du, dh/dv */
-        relief_lanes l;
-        v8f x, y;
-        meso_shade_batch in;
-        relief_lanes_load_block(&l, frame, block, first);
-        relief_bump_loaded_lanes(m, frame, depth, &l, &x, &y, &in);
-        meso_shade_batch_to_block(frame, object, &in, block, first);
+    meso_shade_batch in[RELIEF_SHADE_GROUPS];
+    for (size_t first = 0; first < block->count; first += RELIEF_SHADE_GROUPS * RELIEF_LANES) {
+        size_t groups = 0;
+        for (size_t at = first; at < block->count && groups < RELIEF_SHADE_GROUPS;
+             at += RELIEF_LANES, groups++) {
+            /* Blinn 1978: the perturbed normal from dh/du, dh/dv */
+            relief_lanes l;
+            v8f x, y;
+            relief_lanes_load_block(&l, frame, block, at);
+            relief_bump_loaded_lanes(m, frame, depth, &l, &x, &y, &in[groups]);
+        }
+        meso_shade_batches_to_block(frame, object, in, groups, block, first);
     }
 }
 
@@ -63,5 +67,8 @@ const meso_technique meso_technique_bump = {
     .prepare = bump_prepare,
     .release = bump_release,
     .shade_block = bump_shade_block,
+    /* reads the position, the tangent frame and uv; writes every colour */
+    .skip_fields = MESO_FRAGMENT_SKIP_SAMPLE | MESO_FRAGMENT_SKIP_TRIANGLE |
+                   MESO_FRAGMENT_SKIP_BARYCENTRICS | MESO_FRAGMENT_SKIP_COLOR_PRESET,
     .memory = bump_memory,
 };

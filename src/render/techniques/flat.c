@@ -30,4 +30,9 @@ const meso_technique meso_technique_flat = {
     .prepare = flat_prepare,
     .release = flat_release,
     .shade_block = flat_shade_block,
+    /* reads the position, normal and uv (the tangents only for a normal map, which the
+     * rasterizer fills anyway); writes every colour */
+    .skip_fields = MESO_FRAGMENT_SKIP_SAMPLE | MESO_FRAGMENT_SKIP_TRIANGLE |
+                   MESO_FRAGMENT_SKIP_BARYCENTRICS | MESO_FRAGMENT_SKIP_TANGENTS |
+                   MESO_FRAGMENT_SKIP_COLOR_PRESET,
 };

@@ -49,13 +49,20 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
 }
 
 /* Whole blocks (render_internal.h): eight lanes at a time straight from the rasterizer's
- * arrays to the shading model. */
+ * arrays to the shading model, RELIEF_SHADE_GROUPS groups a call of the shading. */
 static void shade_block(const void *state, const meso_frame *frame, const meso_object *object,
                         meso_fragment_block *block) {
     const parallax_state *s = state;
     const relief_heights *m = &s->heights;
     float depth = object->mesostructure.depth;
+    meso_shade_batch batches[RELIEF_SHADE_GROUPS];
+    size_t groups = 0, group_first = 0;
     for (size_t first = 0; first < block->count; first += RELIEF_LANES) {
+        if (groups == RELIEF_SHADE_GROUPS) {
+            meso_shade_batches_to_block(frame, object, batches, groups, block, group_first);
+            groups = 0;
+        }
+        if (!groups) group_first = first;
         relief_lanes l;
         relief_lanes_load_block(&l, frame, block, first);
         v8f x, y;
@@ -74,15 +81,15 @@ static void shade_block(const void *state, const meso_frame *frame, const meso_o
         v8vec3 normal = relief_normal8(&l, depth, gu, gv);
         /* field by field: an initializer would also zero every light's visibility (a
          * 512-byte memset a group) */
-        meso_shade_batch in;
-        in.px = l.position.x, in.py = l.position.y, in.pz = l.position.z;
-        in.nx = normal.x, in.ny = normal.y, in.nz = normal.z;
-        in.u = l.u + uo, in.v = l.v + vo;
-        in.tx = l.tangent.x, in.ty = l.tangent.y, in.tz = l.tangent.z;
-        in.bx = l.bitangent.x, in.by = l.bitangent.y, in.bz = l.bitangent.z;
-        meso_shade_batch_all_visible(&in, frame);
-        meso_shade_batch_to_block(frame, object, &in, block, first);
+        meso_shade_batch *in = &batches[groups++];
+        in->px = l.position.x, in->py = l.position.y, in->pz = l.position.z;
+        in->nx = normal.x, in->ny = normal.y, in->nz = normal.z;
+        in->u = l.u + uo, in->v = l.v + vo;
+        in->tx = l.tangent.x, in->ty = l.tangent.y, in->tz = l.tangent.z;
+        in->bx = l.bitangent.x, in->by = l.bitangent.y, in->bz = l.bitangent.z;
+        meso_shade_batch_all_visible(in, frame);
     }
+    meso_shade_batches_to_block(frame, object, batches, groups, block, group_first);
 }
 
 static size_t memory(const void *state) {
@@ -100,5 +107,8 @@ const meso_technique meso_technique_parallax = {
     .prepare = prepare,
     .release = release,
     .shade_block = shade_block,
+    /* reads the position, the tangent frame and uv; writes every colour */
+    .skip_fields = MESO_FRAGMENT_SKIP_SAMPLE | MESO_FRAGMENT_SKIP_TRIANGLE |
+                   MESO_FRAGMENT_SKIP_BARYCENTRICS | MESO_FRAGMENT_SKIP_COLOR_PRESET,
     .memory = memory,
 };

@@ -29,6 +29,9 @@
 #include "render_shading.h"
 
 #define RELIEF_LANES V8_LANES
+/* Groups of eight a technique hands meso_shade_batches_to_block at once: the shading's
+ * per-object constants once a call (4 KB of inputs on the stack). */
+#define RELIEF_SHADE_GROUPS 4
 
 /* ---- The height field, padded ------------------------------------------------------------- */
 
