@@ -170,10 +170,17 @@ static void test_closed_mesh_with_a_constant_height_field_has_no_gap(void **stat
     meso_context_destroy(ctx);
 }
 
-static meso_solid *slab(meso_context *ctx, float thickness) {
+/* The built-in plane of side 2 drawn by gdm with a slab solid `thickness` thick at the shell's
+ * floor, the shell `depth` deep; returns the solid (the caller destroys it). */
+static meso_solid *add_slab_plane(meso_context *ctx, test_scene *ts, float depth, float thickness) {
+    meso_object *o =
+        test_scene_add(ts, test_shape(ctx, MESO_SHAPE_PLANE, 2.0f, 1, (meso_vec3){0, 0, 0}), "gdm");
     meso_solid *solid = NULL;
     meso_solid_desc desc = {.kind = MESO_SOLID_SLAB, .thickness = thickness};
     assert_int_equal(meso_solid_create_procedural(ctx, &desc, &solid), MESO_OK);
+    o->mesostructure.kind = MESO_MESOSTRUCTURE_SOLID;
+    o->mesostructure.solid = solid;
+    o->mesostructure.depth = depth;
     return solid;
 }
 
@@ -189,12 +196,7 @@ static void test_slab_solid_equals_the_translated_base_mesh(void **state) {
         test_scene ts, flat;
         test_scene_init(&ts, 64, 64);
         ts.scene.camera = (meso_camera){eyes[e], {0, -0.2f, 0}, {0, 1, 0}, 50.0f};
-        meso_object *o = test_scene_add(
-            &ts, test_shape(ctx, MESO_SHAPE_PLANE, 2.0f, 1, (meso_vec3){0, 0, 0}), "gdm");
-        meso_solid *solid = slab(ctx, thickness);
-        o->mesostructure.kind = MESO_MESOSTRUCTURE_SOLID;
-        o->mesostructure.solid = solid;
-        o->mesostructure.depth = depth;
+        meso_solid *solid = add_slab_plane(ctx, &ts, depth, thickness);
         test_scene_init(&flat, 64, 64);
         flat.scene.camera = ts.scene.camera;
         test_scene_add(&flat,
@@ -252,12 +254,7 @@ static void test_open_border_cut_is_closed_in_gdm_and_the_reference(void **state
     test_scene_init(&ts, 64, 64);
     ts.scene.camera = (meso_camera){{0.3f, -0.05f, 3.0f}, {0, -0.16f, 0.9f}, {0, 1, 0}, 20.0f};
     ts.scene.lights[0].direction = meso_vec3_normalize((meso_vec3){0.2f, 0.5f, 0.8f});
-    meso_object *o = test_scene_add(
-        &ts, test_shape(ctx, MESO_SHAPE_PLANE, 2.0f, 1, (meso_vec3){0, 0, 0}), "gdm");
-    meso_solid *solid = slab(ctx, thickness);
-    o->mesostructure.kind = MESO_MESOSTRUCTURE_SOLID;
-    o->mesostructure.solid = solid;
-    o->mesostructure.depth = depth;
+    meso_solid *solid = add_slab_plane(ctx, &ts, depth, thickness);
     meso_framebuffer *a = render(ctx, &ts.scene, "gdm", small_bake, NUM_SMALL_BAKE);
     meso_framebuffer *b = render(ctx, &ts.scene, "reference", NULL, 0);
     meso_frame frame;
