@@ -303,14 +303,16 @@ meso_result meso_environment_load(meso_context *ctx, const char *path, float int
     *out_environment = NULL;
     meso_result r = check_intensity(ctx, path, intensity);
     if (r != MESO_OK) return r;
-    char *data = NULL;
-    size_t size = 0;
-    if ((r = meso_file_read(ctx, path, MESO_ENVIRONMENT_MAX_FILE_BYTES, &data, &size))) return r;
-    float *pixels = NULL;
-    meso_image view = {0};
-    int width = 0, height = 0, channels = 0;
-    if (meso_file_is_exr(data, size)) {
-        free(data);
+    /* an OpenEXR file is read by its library from the path: only its magic number is looked
+     * at here (a file that cannot be opened falls through to meso_file_read's message) */
+    unsigned char head[4];
+    size_t head_size = 0;
+    FILE *file = fopen(path, "rb");
+    if (file) {
+        head_size = fread(head, 1, sizeof head, file);
+        fclose(file);
+    }
+    if (meso_file_is_exr(head, head_size)) {
         meso_image *image = NULL;
         r = meso_image_read_exr_rgb(ctx, path, MESO_ENVIRONMENT_MAX_SIDE,
                                     MESO_ENVIRONMENT_MAX_PIXELS, &image);
@@ -319,6 +321,12 @@ meso_result meso_environment_load(meso_context *ctx, const char *path, float int
         meso_image_destroy(image);
         return r;
     }
+    char *data = NULL;
+    size_t size = 0;
+    if ((r = meso_file_read(ctx, path, MESO_ENVIRONMENT_MAX_FILE_BYTES, &data, &size))) return r;
+    float *pixels = NULL;
+    meso_image view = {0};
+    int width = 0, height = 0, channels = 0;
     if (size > INT32_MAX || !stbi_is_hdr_from_memory((const unsigned char *)data, (int)size)) {
         r = meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: not a Radiance .hdr or OpenEXR file", path);
         goto done;

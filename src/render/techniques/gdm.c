@@ -823,8 +823,9 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
      * twin table tells a border's fin from a seam's (macro_shadows). A height field's border
      * keeps the surface's normal: the reference draws no wall under its displaced surface
      * (docs/techniques/gdm.md, "open borders"). */
-    bool border_entry =
-        d == 0.0f && slot >= MESO_PRISM_FIN && s->shell && !gdm_shell_face_is_seam(s->shell, face);
+    bool seam = gdm_shell_face_is_seam(s->shell, face); /* false without the shell */
+    bool seam_entry = d == 0.0f && seam;
+    bool border_entry = d == 0.0f && slot >= MESO_PRISM_FIN && s->shell && !seam;
     bool border_cut = border_entry && s->solid;
     if (border_cut) {
         normal = layer->planes[prism_index * MESO_PRISM_NUM_FACES + (size_t)slot].normal;
@@ -859,7 +860,6 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
             blocked =
                 !gdm_shell_light_visible_at(s->shell, prism_index, hit, &point, l, true, false);
         } else {
-            bool seam_entry = d == 0.0f && gdm_shell_face_is_seam(s->shell, face);
             blocked = !through_floor && shadowed(s, hit, normal_t, lt, s->solid && seam_entry);
             /* §3.2's slab is the point's tangent frame extended flat: where the shell curves
              * away (a sphere's terminator, a vase's neck at its outline) the flat slab holds
