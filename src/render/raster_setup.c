@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "raster_internal.h"
+#include "render_simd.h"
 
 #if defined(__SSE2__) && defined(__x86_64__)
 #include <emmintrin.h>
@@ -97,22 +98,34 @@ typedef struct snapped_triangle {
     bool swap;
 } snapped_triangle;
 
-/* Snap the vertices (clip x, y, w) to 1/256 sample and find the sample centres the bounding box
- * holds; false when there are none, the area is zero or a culled back face. This is the whole
- * cost of most triangles of a displaced mesh (they cover no sample centre, docs/performance.md),
- * so it runs before the edge functions and the planes are built and before the chunk grows. */
-static bool snap_triangle(const raster_setup_desc *desc, bool cull_back, const clip_vertex *v[3],
-                          snapped_triangle *s) {
-    int64_t *X = s->X, *Y = s->Y;
-    double W = (double)desc->width, H = (double)desc->height;
-    for (int k = 0; k < 3; k++) {
-        if (!(v[k]->w > 0.0)) return false; /* only for projections with w <= 0 in front */
-        double inv_w = 1.0 / v[k]->w;
-        double sx = (v[k]->x * inv_w * 0.5 + 0.5) * W;
-        double sy = (0.5 - 0.5 * v[k]->y * inv_w) * H;
-        X[k] = round_to_int64(sx * RASTER_SUBPIXEL_ONE);
-        Y[k] = round_to_int64(sy * RASTER_SUBPIXEL_ONE);
+/* The samples whose centres lie in the snapped triangle's bounding box, clamped to the target;
+ * false when there are none. Sample i has its centre at 256 i + 128. */
+static bool sample_box(const raster_setup_desc *desc, snapped_triangle *s) {
+    const int64_t *X = s->X, *Y = s->Y;
+    int64_t min_x = X[0], max_x = X[0], min_y = Y[0], max_y = Y[0];
+    for (int k = 1; k < 3; k++) {
+        min_x = X[k] < min_x ? X[k] : min_x;
+        max_x = X[k] > max_x ? X[k] : max_x;
+        min_y = Y[k] < min_y ? Y[k] : min_y;
+        max_y = Y[k] > max_y ? Y[k] : max_y;
     }
+    int32_t bx0 = ceil_div_subpixel(min_x - RASTER_SUBPIXEL_ONE / 2);
+    int32_t bx1 = floor_div_subpixel(max_x - RASTER_SUBPIXEL_ONE / 2);
+    int32_t by0 = ceil_div_subpixel(min_y - RASTER_SUBPIXEL_ONE / 2);
+    int32_t by1 = floor_div_subpixel(max_y - RASTER_SUBPIXEL_ONE / 2);
+    bx0 = bx0 < 0 ? 0 : bx0;
+    by0 = by0 < 0 ? 0 : by0;
+    bx1 = bx1 > desc->width - 1 ? desc->width - 1 : bx1;
+    by1 = by1 > desc->height - 1 ? desc->height - 1 : by1;
+    if (bx0 > bx1 || by0 > by1) return false;
+    s->bx0 = bx0, s->bx1 = bx1, s->by0 = by0, s->by1 = by1;
+    return true;
+}
+
+/* Orient the snapped triangle counter-clockwise on screen (y down); false when its area is zero
+ * or it is a back face to cull. */
+static bool orient_triangle(bool cull_back, snapped_triangle *s) {
+    int64_t *X = s->X, *Y = s->Y;
     int64_t area = (X[1] - X[0]) * (Y[2] - Y[0]) - (Y[1] - Y[0]) * (X[2] - X[0]);
     if (area == 0) return false;
     /* Counter-clockwise from outside in the world is clockwise on screen (y down): area < 0. */
@@ -126,25 +139,27 @@ static bool snap_triangle(const raster_setup_desc *desc, bool cull_back, const c
         Y[1] = Y[2];
         Y[2] = t;
     }
-    int64_t min_x = X[0], max_x = X[0], min_y = Y[0], max_y = Y[0];
-    for (int k = 1; k < 3; k++) {
-        min_x = X[k] < min_x ? X[k] : min_x;
-        max_x = X[k] > max_x ? X[k] : max_x;
-        min_y = Y[k] < min_y ? Y[k] : min_y;
-        max_y = Y[k] > max_y ? Y[k] : max_y;
-    }
-    /* sample i has its centre at 256 i + 128 */
-    int32_t bx0 = ceil_div_subpixel(min_x - RASTER_SUBPIXEL_ONE / 2);
-    int32_t bx1 = floor_div_subpixel(max_x - RASTER_SUBPIXEL_ONE / 2);
-    int32_t by0 = ceil_div_subpixel(min_y - RASTER_SUBPIXEL_ONE / 2);
-    int32_t by1 = floor_div_subpixel(max_y - RASTER_SUBPIXEL_ONE / 2);
-    bx0 = bx0 < 0 ? 0 : bx0;
-    by0 = by0 < 0 ? 0 : by0;
-    bx1 = bx1 > desc->width - 1 ? desc->width - 1 : bx1;
-    by1 = by1 > desc->height - 1 ? desc->height - 1 : by1;
-    if (bx0 > bx1 || by0 > by1) return false;
-    s->bx0 = bx0, s->bx1 = bx1, s->by0 = by0, s->by1 = by1;
     return true;
+}
+
+/* Snap the vertices (clip x, y, w) to 1/256 sample and find the sample centres the bounding box
+ * holds; false when there are none, the area is zero or a culled back face. This is the whole
+ * cost of many triangles of a displaced mesh (they cover no sample centre, docs/performance.md),
+ * so it runs before the edge functions and the planes are built and before the chunk grows.
+ * The 8-wide path (setup_source_triangles8) computes the same integers. */
+static bool snap_triangle(const raster_setup_desc *desc, bool cull_back, const clip_vertex *v[3],
+                          snapped_triangle *s) {
+    double W = (double)desc->width, H = (double)desc->height;
+    for (int k = 0; k < 3; k++) {
+        if (!(v[k]->w > 0.0)) return false; /* only for projections with w <= 0 in front */
+        double inv_w = 1.0 / v[k]->w;
+        double sx = (v[k]->x * inv_w * 0.5 + 0.5) * W;
+        double sy = (0.5 - 0.5 * v[k]->y * inv_w) * H;
+        s->X[k] = round_to_int64(sx * RASTER_SUBPIXEL_ONE);
+        s->Y[k] = round_to_int64(sy * RASTER_SUBPIXEL_ONE);
+    }
+    /* the box does not depend on the orientation: test the cheaper rejection first */
+    return sample_box(desc, s) && orient_triangle(cull_back, s);
 }
 
 /* Set up one (possibly clipped) triangle that snap_triangle kept. */
@@ -259,21 +274,11 @@ static void emit_triangle(const raster_setup_desc *desc, bool cull_back, const c
     setup_triangle(desc, &st, tri, t, &chunk->triangles[chunk->num_triangles++]);
 }
 
-/* Clip and set up source triangle t; appends 0..6 triangles to the chunk. */
-static void setup_source_triangle(const raster_bins *bins, const raster_mesh *rm, uint32_t t,
-                                  raster_chunk *chunk) {
+/* Reject, clip and set up source triangle t from its clip-space vertices; appends 0..6
+ * triangles to the chunk. */
+static void setup_clip_triangle(const raster_bins *bins, bool cull_back, const meso_vec4 c[3],
+                                uint32_t t, raster_chunk *chunk) {
     const raster_setup_desc *desc = &bins->desc;
-    const uint32_t *idx = rm->mesh->indices + 3 * (size_t)t;
-    bool cull_back = desc->cull_back && !rm->both_faces;
-    meso_vec3 p[3] = {rm->mesh->positions[idx[0]], rm->mesh->positions[idx[1]],
-                      rm->mesh->positions[idx[2]]};
-    if (cull_back && bins->has_eye && faces_away(bins, p[0], p[1], p[2])) return;
-    /* Vertices are transformed here, per triangle: a vertex shared by several triangles is
-     * transformed several times (always to the same bits), which costs less than a separate
-     * parallel pass and its barrier. */
-    meso_vec4 c[3];
-    for (int k = 0; k < 3; k++)
-        c[k] = meso_mat4_mul_vec4(desc->view_projection, (meso_vec4){p[k].x, p[k].y, p[k].z, 1.0f});
     /* x * 0 is NaN exactly when x is infinite or NaN, and a NaN survives the sum: one
      * branch for the twelve coordinates (a million-triangle mesh runs this twice a frame) */
     float poison = 0.0f;
@@ -318,13 +323,197 @@ static void setup_source_triangle(const raster_bins *bins, const raster_mesh *rm
     }
 }
 
+/* Set up source triangle t alone (the tail of a chunk, and the reference the 8-wide path is
+ * tested against). */
+static void setup_source_triangle(const raster_bins *bins, const raster_mesh *rm, uint32_t t,
+                                  raster_chunk *chunk) {
+    const raster_setup_desc *desc = &bins->desc;
+    const uint32_t *idx = rm->mesh->indices + 3 * (size_t)t;
+    bool cull_back = desc->cull_back && !rm->both_faces;
+    meso_vec3 p[3] = {rm->mesh->positions[idx[0]], rm->mesh->positions[idx[1]],
+                      rm->mesh->positions[idx[2]]};
+    if (cull_back && bins->has_eye && faces_away(bins, p[0], p[1], p[2])) return;
+    /* Vertices are transformed here, per triangle: a vertex shared by several triangles is
+     * transformed several times (always to the same bits), which costs less than a separate
+     * parallel pass and its barrier. */
+    meso_vec4 c[3];
+    for (int k = 0; k < 3; k++)
+        c[k] = meso_mat4_mul_vec4(desc->view_projection, (meso_vec4){p[k].x, p[k].y, p[k].z, 1.0f});
+    setup_clip_triangle(bins, cull_back, c, t, chunk);
+}
+
+/* ---- Eight source triangles at a time ----------------------------------------------------- */
+
+typedef float v4f __attribute__((vector_size(16)));
+typedef double v4d __attribute__((vector_size(32)));
+
+static inline v8f v8_abs(v8f x) { return (v8f)((v8i)x & v8i_splat(0x7fffffff)); }
+static inline v8i v8i_min(v8i a, v8i b) {
+    v8i m = a < b;
+    return (a & m) | (b & ~m);
+}
+static inline v8i v8i_max(v8i a, v8i b) {
+    v8i m = a > b;
+    return (a & m) | (b & ~m);
+}
+
+/* Lanes 4 h .. 4 h + 3 of x in double. */
+static inline v4d v4d_half(v8f x, int h) {
+    v4f q = {x[4 * h], x[4 * h + 1], x[4 * h + 2], x[4 * h + 3]};
+    return __builtin_convertvector(q, v4d);
+}
+
+/* round_to_int64 of eight doubles that lie well inside the int32 range (the snapped coordinates
+ * of triangles inside the guard band: below 2^27): cvtpd2dq rounds in the current mode as
+ * cvtsd2si does, so the integers are the same. */
+static inline v8i round8(v4d lo, v4d hi) {
+#if defined(__AVX__)
+    __m128i a = _mm256_cvtpd_epi32((__m256d)lo), b = _mm256_cvtpd_epi32((__m256d)hi);
+    return (v8i)_mm256_set_m128i(b, a);
+#else
+    v8i r;
+    for (int j = 0; j < 4; j++) {
+        r[j] = (int32_t)round_to_int64(lo[j]);
+        r[j + 4] = (int32_t)round_to_int64(hi[j]);
+    }
+    return r;
+#endif
+}
+
+/* faces_away for eight triangles, with the same operations in the same order. */
+static inline v8i faces_away8(meso_vec3 eye, const v8f px[3], const v8f py[3], const v8f pz[3]) {
+    v8f ax = px[1] - px[0], ay = py[1] - py[0], az = pz[1] - pz[0];
+    v8f bx = px[2] - px[0], by = py[2] - py[0], bz = pz[2] - pz[0];
+    v8f nx = ay * bz - az * by, ny = az * bx - ax * bz, nz = ax * by - ay * bx;
+    v8f ex = eye.x - px[0], ey = eye.y - py[0], ez = eye.z - pz[0];
+    v8f d = nx * ex + ny * ey + nz * ez;
+    v8f scale = (nx * nx + ny * ny + nz * nz) * (ex * ex + ey * ey + ez * ez);
+    return (d < 0.0f) & (d * d > RASTER_BACK_FACE_MARGIN * RASTER_BACK_FACE_MARGIN * scale);
+}
+
+/* snap_triangle's projection and snapping of one vertex of eight triangles. */
+static inline void snap8(v8f x, v8f y, v8f w, double width, double height, v8i *out_x, v8i *out_y) {
+    v4d sx[2], sy[2];
+    for (int h = 0; h < 2; h++) {
+        v4d inv_w = 1.0 / v4d_half(w, h);
+        sx[h] = (v4d_half(x, h) * inv_w * 0.5 + 0.5) * width * (double)RASTER_SUBPIXEL_ONE;
+        sy[h] = (0.5 - 0.5 * v4d_half(y, h) * inv_w) * height * (double)RASTER_SUBPIXEL_ONE;
+    }
+    *out_x = round8(sx[0], sx[1]);
+    *out_y = round8(sy[0], sy[1]);
+}
+
+/* Source triangles t .. t + 7: the world-space back-face test, the vertex transform, the poison
+ * and frustum rejects and, for the triangles that need no clipping, the snap and the sample-box
+ * test, eight lanes wide with the very operations of the one-triangle path in the same order
+ * (and no fused multiply-add: -ffp-contract=off), so every bit and integer is the same. Most
+ * triangles of a displaced mesh end there. The others are set up one by one in source order —
+ * the survivors by setup_triangle, the rare ones that need clipping by the one-triangle path —
+ * so the chunk holds the same triangles in the same order. */
+static void setup_source_triangles8(const raster_bins *bins, const raster_mesh *rm, uint32_t t,
+                                    raster_chunk *chunk) {
+    const raster_setup_desc *desc = &bins->desc;
+    const meso_mesh *mesh = rm->mesh;
+    bool cull_back = desc->cull_back && !rm->both_faces;
+    v8f px[3], py[3], pz[3];
+    const uint32_t *idx = mesh->indices + 3 * (size_t)t;
+    for (int j = 0; j < V8_LANES; j++) {
+        for (int k = 0; k < 3; k++) {
+            meso_vec3 p = mesh->positions[idx[3 * j + k]];
+            px[k][j] = p.x, py[k][j] = p.y, pz[k][j] = p.z;
+        }
+    }
+    v8i dropped = v8i_splat(0);
+    if (cull_back && bins->has_eye) dropped = faces_away8(bins->eye, px, py, pz);
+    const float *m = desc->view_projection.m;
+    v8f cx[3], cy[3], cz[3], cw[3];
+    for (int k = 0; k < 3; k++) { /* meso_mat4_mul_vec4 with w = 1 */
+        cx[k] = m[0] * px[k] + m[4] * py[k] + m[8] * pz[k] + m[12] * 1.0f;
+        cy[k] = m[1] * px[k] + m[5] * py[k] + m[9] * pz[k] + m[13] * 1.0f;
+        cz[k] = m[2] * px[k] + m[6] * py[k] + m[10] * pz[k] + m[14] * 1.0f;
+        cw[k] = m[3] * px[k] + m[7] * py[k] + m[11] * pz[k] + m[15] * 1.0f;
+    }
+    v8f poison = v8_splat(0.0f);
+    for (int k = 0; k < 3; k++)
+        poison += (cx[k] * 0.0f + cy[k] * 0.0f) + (cz[k] * 0.0f + cw[k] * 0.0f);
+    dropped |= poison != poison;
+    dropped |= (cx[0] > cw[0]) & (cx[1] > cw[1]) & (cx[2] > cw[2]);
+    dropped |= (cx[0] < -cw[0]) & (cx[1] < -cw[1]) & (cx[2] < -cw[2]);
+    dropped |= (cy[0] > cw[0]) & (cy[1] > cw[1]) & (cy[2] > cw[2]);
+    dropped |= (cy[0] < -cw[0]) & (cy[1] < -cw[1]) & (cy[2] < -cw[2]);
+    float zn = desc->clip_z ? -1.0f : desc->z_near;
+    v8f nd[3];
+    for (int k = 0; k < 3; k++) nd[k] = desc->clip_z ? cz[k] + cw[k] : cw[k] - zn;
+    dropped |= (nd[0] < 0.0f) & (nd[1] < 0.0f) & (nd[2] < 0.0f);
+    v8f g = v8_splat(bins->guard);
+    v8i inside = ~dropped;
+    for (int k = 0; k < 3; k++) {
+        inside &= (nd[k] >= 0.0f) & (cw[k] > 0.0f) & (v8_abs(cx[k]) <= g * cw[k]) &
+                  (v8_abs(cy[k]) <= g * cw[k]);
+    }
+    int clip_bits = v8_mask_bits(~dropped & ~inside);
+    int keep_bits = 0;
+    v8i X[3], Y[3], bx0, bx1, by0, by1;
+    if (v8_any(inside)) {
+        for (int k = 0; k < 3; k++)
+            snap8(cx[k], cy[k], cw[k], (double)desc->width, (double)desc->height, &X[k], &Y[k]);
+        /* sample_box: sample i has its centre at 256 i + 128 */
+        const int32_t half = RASTER_SUBPIXEL_ONE / 2;
+        bx0 = -(-(v8i_min(X[0], v8i_min(X[1], X[2])) - half) >> RASTER_SUBPIXEL_BITS);
+        bx1 = (v8i_max(X[0], v8i_max(X[1], X[2])) - half) >> RASTER_SUBPIXEL_BITS;
+        by0 = -(-(v8i_min(Y[0], v8i_min(Y[1], Y[2])) - half) >> RASTER_SUBPIXEL_BITS);
+        by1 = (v8i_max(Y[0], v8i_max(Y[1], Y[2])) - half) >> RASTER_SUBPIXEL_BITS;
+        bx0 = v8i_max(bx0, v8i_splat(0));
+        by0 = v8i_max(by0, v8i_splat(0));
+        bx1 = v8i_min(bx1, v8i_splat(desc->width - 1));
+        by1 = v8i_min(by1, v8i_splat(desc->height - 1));
+        keep_bits = v8_mask_bits(inside & (bx0 <= bx1) & (by0 <= by1));
+    }
+    /* The survivors and the triangles to clip, one by one in source order. */
+    for (int todo = keep_bits | clip_bits; todo; todo &= todo - 1) {
+        int j = __builtin_ctz((unsigned)todo);
+        uint32_t tj = t + (uint32_t)j;
+        if (clip_bits >> j & 1) {
+            meso_vec4 c[3];
+            for (int k = 0; k < 3; k++) c[k] = (meso_vec4){cx[k][j], cy[k][j], cz[k][j], cw[k][j]};
+            setup_clip_triangle(bins, cull_back, c, tj, chunk);
+            if (chunk->failed) return;
+            continue;
+        }
+        snapped_triangle st = {.X = {X[0][j], X[1][j], X[2][j]},
+                               .Y = {Y[0][j], Y[1][j], Y[2][j]},
+                               .bx0 = bx0[j],
+                               .bx1 = bx1[j],
+                               .by0 = by0[j],
+                               .by1 = by1[j]};
+        if (!orient_triangle(cull_back, &st)) continue;
+        clip_vertex v[3];
+        for (int k = 0; k < 3; k++)
+            v[k] = (clip_vertex){cx[k][j], cy[k][j], cz[k][j], cw[k][j], {k == 0, k == 1, k == 2}};
+        const clip_vertex *tri[3] = {&v[0], &v[1], &v[2]};
+        if (!reserve((void **)&chunk->triangles, &chunk->capacity, chunk->num_triangles + 1,
+                     sizeof(raster_triangle))) {
+            chunk->failed = true;
+            return;
+        }
+        setup_triangle(desc, &st, tri, tj, &chunk->triangles[chunk->num_triangles++]);
+    }
+}
+
 /* Set up the chunk's source triangles and bin them into tiles. */
 static void process_chunk(const raster_bins *bins, raster_chunk *chunk) {
     const raster_mesh *rm = &bins->meshes[chunk->mesh];
     chunk->num_triangles = 0;
     chunk->num_entries = 0;
     chunk->failed = false;
-    for (uint32_t t = chunk->first; t < chunk->first + chunk->count; t++) {
+    uint32_t t = chunk->first, end = chunk->first + chunk->count;
+    if (!bins->desc.one_at_a_time) {
+        for (; t + V8_LANES <= end; t += V8_LANES) {
+            setup_source_triangles8(bins, rm, t, chunk);
+            if (chunk->failed) return;
+        }
+    }
+    for (; t < end; t++) {
         setup_source_triangle(bins, rm, t, chunk);
         if (chunk->failed) return;
     }
