@@ -403,6 +403,152 @@ static inline void snap8(v8f x, v8f y, v8f w, double width, double height, v8i *
     *out_y = round8(sy[0], sy[1]);
 }
 
+typedef int32_t v4i __attribute__((vector_size(16)));
+typedef int64_t v4l __attribute__((vector_size(32)));
+
+static inline v4l v4l_half(v8i x, int h) {
+    v4i q = {x[4 * h], x[4 * h + 1], x[4 * h + 2], x[4 * h + 3]};
+    return __builtin_convertvector(q, v4l);
+}
+/* Lanes 4 h .. 4 h + 3 of integer x in double. */
+static inline v4d v4d_half_int(v8i x, int h) {
+    v4i q = {x[4 * h], x[4 * h + 1], x[4 * h + 2], x[4 * h + 3]};
+    return __builtin_convertvector(q, v4d);
+}
+static inline int v4l_mask_bits(v4l mask) {
+#if defined(__AVX__)
+    return _mm256_movemask_pd((__m256d)mask);
+#else
+    int bits = 0;
+    for (int j = 0; j < 4; ++j) bits |= (mask[j] != 0) << j;
+    return bits;
+#endif
+}
+static inline v8i v8i_select(v8i mask, v8i a, v8i b) { return (a & mask) | (b & ~mask); }
+
+/* Eight unclipped triangles that passed the sample-box test, set up as setup_triangle would:
+ * the fields, lane by lane, in `out` (raster_triangle's layout transposed). */
+typedef struct triangles8 {
+    v8i x[3], y[3], edge_a[3], edge_b[3], bias[3];
+    v8f ref_x, ref_y, ga[3], gb[3], gc[3], za, zb, zc;
+    int kept;       /* lanes kept by the orientation (area and back-face) test */
+    int one_by_one; /* lanes whose planes are not finite: left to setup_triangle */
+} triangles8;
+
+/* orient_triangle and setup_triangle for the lanes of `lanes`, eight wide, to the same bits:
+ * the area in 64-bit integers, the planes in double with the same operations in the same
+ * order. Unclipped, vertex k's barycentrics are e_k, so setup_triangle's sums
+ * 0 + b_0 l_0 + b_1 l_1 + b_2 l_2 are the one term l_k plus zeros: l_k + 0, bit for bit, when
+ * l_k is finite (a NaN or infinite l_k would spread through the zero products: such lanes,
+ * slivers spanning the guard band, go to setup_triangle). */
+static void setup_triangles8(const raster_setup_desc *desc, bool cull_back, const v8i X[3],
+                             const v8i Y[3], v8i bx0, v8i bx1, v8i by0, v8i by1, const v8f cz[3],
+                             const v8f cw[3], int lanes, triangles8 *out) {
+    int neg = 0, zero = 0, pos = 0;
+    v8i dx1 = X[1] - X[0], dy2 = Y[2] - Y[0], dy1 = Y[1] - Y[0], dx2 = X[2] - X[0];
+    for (int h = 0; h < 2; h++) {
+        v4l area = v4l_half(dx1, h) * v4l_half(dy2, h) - v4l_half(dy1, h) * v4l_half(dx2, h);
+        neg |= v4l_mask_bits(area < 0) << 4 * h;
+        zero |= v4l_mask_bits(area == 0) << 4 * h;
+        pos |= v4l_mask_bits(area > 0) << 4 * h;
+    }
+    out->kept = lanes & ~zero & ~(cull_back ? pos : 0);
+    out->one_by_one = 0;
+    if (!out->kept) return;
+    v8i swap = v8_mask_from_bits(neg);
+    /* counter-clockwise on screen: vertices 1 and 2 swapped where the area is negative */
+    v8i x[3] = {X[0], v8i_select(swap, X[2], X[1]), v8i_select(swap, X[1], X[2])};
+    v8i y[3] = {Y[0], v8i_select(swap, Y[2], Y[1]), v8i_select(swap, Y[1], Y[2])};
+    v8f w[3] = {cw[0], v8_select(swap, cw[2], cw[1]), v8_select(swap, cw[1], cw[2])};
+    v8f z[3] = {cz[0], v8_select(swap, cz[2], cz[1]), v8_select(swap, cz[1], cz[2])};
+#pragma GCC unroll 3
+    for (int k = 0; k < 3; k++) {
+        int a = (k + 1) % 3, b = (k + 2) % 3;
+        out->x[k] = x[k], out->y[k] = y[k];
+        v8i ea = -(y[b] - y[a]), eb = x[b] - x[a];
+        out->edge_a[k] = ea, out->edge_b[k] = eb;
+        out->bias[k] = ~((ea > 0) | ((ea == 0) & (eb > 0)));
+    }
+    v8i ref2_x = bx0 + bx1 + 1, ref2_y = by0 + by1 + 1;
+    v8f non_finite = v8_splat(0.0f);
+    for (int h = 0; h < 2; h++) {
+        v4d rx = 0.5 * v4d_half_int(ref2_x, h), ry = 0.5 * v4d_half_int(ref2_y, h);
+        v4d px[3], py[3], wd[3];
+        for (int k = 0; k < 3; k++) {
+            px[k] = v4d_half_int(x[k], h) / (double)RASTER_SUBPIXEL_ONE;
+            py[k] = v4d_half_int(y[k], h) / (double)RASTER_SUBPIXEL_ONE;
+            wd[k] = v4d_half(w[k], h);
+        }
+        v4d area_d = (px[1] - px[0]) * (py[2] - py[0]) - (py[1] - py[0]) * (px[2] - px[0]);
+        v4d la[3], lb[3], lc[3], bad = {0.0, 0.0, 0.0, 0.0};
+#pragma GCC unroll 3
+        for (int k = 0; k < 3; k++) {
+            int a = (k + 1) % 3, b = (k + 2) % 3;
+            v4d inv = 1.0 / (area_d * wd[k]);
+            la[k] = -(py[b] - py[a]) * inv;
+            lb[k] = (px[b] - px[a]) * inv;
+            lc[k] = ((px[b] - px[a]) * (ry - py[a]) - (py[b] - py[a]) * (rx - px[a])) * inv;
+            bad += (la[k] * 0.0 + lb[k] * 0.0) + lc[k] * 0.0; /* NaN where one is not finite */
+        }
+        v4f bad_f = __builtin_convertvector(bad, v4f);
+        for (int j = 0; j < 4; j++) non_finite[4 * h + j] = bad_f[j];
+        /* source barycentric i is vertex k's of the oriented triangle: k = i, or 1 and 2
+         * exchanged where swapped */
+        v4l swap_h = v4l_half(swap, h);
+        v4d g_a[3] = {la[0], (v4d)(((v4l)la[2] & swap_h) | ((v4l)la[1] & ~swap_h)),
+                      (v4d)(((v4l)la[1] & swap_h) | ((v4l)la[2] & ~swap_h))};
+        v4d g_b[3] = {lb[0], (v4d)(((v4l)lb[2] & swap_h) | ((v4l)lb[1] & ~swap_h)),
+                      (v4d)(((v4l)lb[1] & swap_h) | ((v4l)lb[2] & ~swap_h))};
+        v4d g_c[3] = {lc[0], (v4d)(((v4l)lc[2] & swap_h) | ((v4l)lc[1] & ~swap_h)),
+                      (v4d)(((v4l)lc[1] & swap_h) | ((v4l)lc[2] & ~swap_h))};
+        for (int i = 0; i < 3; i++) {
+            v4f qa = __builtin_convertvector(g_a[i] + 0.0, v4f);
+            v4f qb = __builtin_convertvector(g_b[i] + 0.0, v4f);
+            v4f qc = __builtin_convertvector(g_c[i] + 0.0, v4f);
+            for (int j = 0; j < 4; j++) {
+                out->ga[i][4 * h + j] = qa[j];
+                out->gb[i][4 * h + j] = qb[j];
+                out->gc[i][4 * h + j] = qc[j];
+            }
+        }
+        v4f qx = __builtin_convertvector(rx, v4f), qy = __builtin_convertvector(ry, v4f);
+        v4f qza = {0.0f, 0.0f, 0.0f, 0.0f}, qzb = qza, qzc = qza;
+        if (desc->depth_plane) {
+            v4d za = {0.0, 0.0, 0.0, 0.0}, zb = za, zc = za;
+            for (int k = 0; k < 3; k++) {
+                v4d zk = v4d_half(z[k], h) / wd[k] * 0.5 + 0.5;
+                za += la[k] * wd[k] * zk;
+                zb += lb[k] * wd[k] * zk;
+                zc += lc[k] * wd[k] * zk;
+            }
+            qza = __builtin_convertvector(za, v4f);
+            qzb = __builtin_convertvector(zb, v4f);
+            qzc = __builtin_convertvector(zc, v4f);
+        }
+        for (int j = 0; j < 4; j++) {
+            out->ref_x[4 * h + j] = qx[j], out->ref_y[4 * h + j] = qy[j];
+            out->za[4 * h + j] = qza[j], out->zb[4 * h + j] = qzb[j], out->zc[4 * h + j] = qzc[j];
+        }
+    }
+    out->one_by_one = out->kept & v8_mask_bits(non_finite != non_finite);
+}
+
+/* Lane j of the eight triangles into `o`. */
+static void store_triangle8(const triangles8 *s, int j, int32_t bx0, int32_t bx1, int32_t by0,
+                            int32_t by1, uint32_t triangle, raster_triangle *o) {
+#pragma GCC unroll 3
+    for (int k = 0; k < 3; k++) {
+        o->x[k] = s->x[k][j], o->y[k] = s->y[k][j];
+        o->edge_a[k] = s->edge_a[k][j], o->edge_b[k] = s->edge_b[k][j];
+        o->bias[k] = s->bias[k][j];
+        o->ga[k] = s->ga[k][j], o->gb[k] = s->gb[k][j], o->gc[k] = s->gc[k][j];
+    }
+    o->min_x = bx0, o->max_x = bx1, o->min_y = by0, o->max_y = by1;
+    o->ref_x = s->ref_x[j], o->ref_y = s->ref_y[j];
+    o->za = s->za[j], o->zb = s->zb[j], o->zc = s->zc[j];
+    o->triangle = triangle;
+}
+
 /* Source triangles t .. t + 7: the world-space back-face test, the vertex transform, the poison
  * and frustum rejects and, for the triangles that need no clipping, the snap and the sample-box
  * test, eight lanes wide with the very operations of the one-triangle path in the same order
@@ -469,8 +615,12 @@ static void setup_source_triangles8(const raster_bins *bins, const raster_mesh *
         by1 = v8i_min(by1, v8i_splat(desc->height - 1));
         keep_bits = v8_mask_bits(inside & (bx0 <= bx1) & (by0 <= by1));
     }
-    /* The survivors and the triangles to clip, one by one in source order. */
-    for (int todo = keep_bits | clip_bits; todo; todo &= todo - 1) {
+    triangles8 set;
+    set.kept = set.one_by_one = 0;
+    if (keep_bits)
+        setup_triangles8(desc, cull_back, X, Y, bx0, bx1, by0, by1, cz, cw, keep_bits, &set);
+    /* The survivors and the triangles to clip, in source order. */
+    for (int todo = set.kept | clip_bits; todo; todo &= todo - 1) {
         int j = __builtin_ctz((unsigned)todo);
         uint32_t tj = t + (uint32_t)j;
         if (clip_bits >> j & 1) {
@@ -480,23 +630,28 @@ static void setup_source_triangles8(const raster_bins *bins, const raster_mesh *
             if (chunk->failed) return;
             continue;
         }
+        if (!reserve((void **)&chunk->triangles, &chunk->capacity, chunk->num_triangles + 1,
+                     sizeof(raster_triangle))) {
+            chunk->failed = true;
+            return;
+        }
+        raster_triangle *o = &chunk->triangles[chunk->num_triangles++];
+        if (!(set.one_by_one >> j & 1)) {
+            store_triangle8(&set, j, bx0[j], bx1[j], by0[j], by1[j], tj, o);
+            continue;
+        }
         snapped_triangle st = {.X = {X[0][j], X[1][j], X[2][j]},
                                .Y = {Y[0][j], Y[1][j], Y[2][j]},
                                .bx0 = bx0[j],
                                .bx1 = bx1[j],
                                .by0 = by0[j],
                                .by1 = by1[j]};
-        if (!orient_triangle(cull_back, &st)) continue;
+        orient_triangle(cull_back, &st); /* kept: setup_triangles8 found it so */
         clip_vertex v[3];
         for (int k = 0; k < 3; k++)
             v[k] = (clip_vertex){cx[k][j], cy[k][j], cz[k][j], cw[k][j], {k == 0, k == 1, k == 2}};
         const clip_vertex *tri[3] = {&v[0], &v[1], &v[2]};
-        if (!reserve((void **)&chunk->triangles, &chunk->capacity, chunk->num_triangles + 1,
-                     sizeof(raster_triangle))) {
-            chunk->failed = true;
-            return;
-        }
-        setup_triangle(desc, &st, tri, tj, &chunk->triangles[chunk->num_triangles++]);
+        setup_triangle(desc, &st, tri, tj, o);
     }
 }
 
