@@ -563,7 +563,9 @@ static void setup_source_triangles8(const raster_bins *bins, const raster_mesh *
     bool cull_back = desc->cull_back && !rm->both_faces;
     v8f px[3], py[3], pz[3];
     const uint32_t *idx = mesh->indices + 3 * (size_t)t;
+#pragma GCC unroll 8
     for (int j = 0; j < V8_LANES; j++) {
+#pragma GCC unroll 3
         for (int k = 0; k < 3; k++) {
             meso_vec3 p = mesh->positions[idx[3 * j + k]];
             px[k][j] = p.x, py[k][j] = p.y, pz[k][j] = p.z;
