@@ -657,6 +657,17 @@ static void setup_source_triangles8(const raster_bins *bins, const raster_mesh *
     }
 }
 
+/* The tiles a triangle's sample box touches, inclusive. The box is clamped to the target, so
+ * its bounds are not negative and divide as unsigned (a shift, no rounding toward zero). */
+typedef struct tile_range {
+    uint32_t x0, x1, y0, y1;
+} tile_range;
+static inline tile_range triangle_tiles(const raster_triangle *tri) {
+    return (tile_range){
+        (uint32_t)tri->min_x / RASTER_TILE_SIZE, (uint32_t)tri->max_x / RASTER_TILE_SIZE,
+        (uint32_t)tri->min_y / RASTER_TILE_SIZE, (uint32_t)tri->max_y / RASTER_TILE_SIZE};
+}
+
 /* Set up the chunk's source triangles and bin them into tiles. */
 static void process_chunk(const raster_bins *bins, raster_chunk *chunk) {
     const raster_mesh *rm = &bins->meshes[chunk->mesh];
@@ -682,15 +693,19 @@ static void process_chunk(const raster_bins *bins, raster_chunk *chunk) {
         return;
     }
     uint32_t *start = chunk->tile_start;
+    uint32_t tiles_x = (uint32_t)bins->tiles_x;
     memset(start, 0, (num_tiles + 1) * sizeof(uint32_t));
     size_t total = 0;
     for (size_t i = 0; i < chunk->num_triangles; i++) {
-        const raster_triangle *tri = &chunk->triangles[i];
-        int tx0 = tri->min_x / RASTER_TILE_SIZE, tx1 = tri->max_x / RASTER_TILE_SIZE;
-        int ty0 = tri->min_y / RASTER_TILE_SIZE, ty1 = tri->max_y / RASTER_TILE_SIZE;
-        for (int ty = ty0; ty <= ty1; ty++)
-            for (int tx = tx0; tx <= tx1; tx++) start[ty * bins->tiles_x + tx + 1]++;
-        total += (size_t)(tx1 - tx0 + 1) * (size_t)(ty1 - ty0 + 1);
+        tile_range r = triangle_tiles(&chunk->triangles[i]);
+        if (r.x0 == r.x1 && r.y0 == r.y1) { /* most triangles: one tile */
+            start[r.y0 * tiles_x + r.x0 + 1]++;
+            total++;
+            continue;
+        }
+        for (uint32_t ty = r.y0; ty <= r.y1; ty++)
+            for (uint32_t tx = r.x0; tx <= r.x1; tx++) start[ty * tiles_x + tx + 1]++;
+        total += (size_t)(r.x1 - r.x0 + 1) * (size_t)(r.y1 - r.y0 + 1);
     }
     if (total > UINT32_MAX ||
         !reserve((void **)&chunk->entries, &chunk->entries_capacity, total, sizeof(uint32_t))) {
@@ -701,12 +716,14 @@ static void process_chunk(const raster_bins *bins, raster_chunk *chunk) {
     /* start[tile] is now the first slot of `tile`; fill using start[tile] as a cursor and
      * shift back afterwards. */
     for (size_t i = 0; i < chunk->num_triangles; i++) {
-        const raster_triangle *tri = &chunk->triangles[i];
-        int tx0 = tri->min_x / RASTER_TILE_SIZE, tx1 = tri->max_x / RASTER_TILE_SIZE;
-        int ty0 = tri->min_y / RASTER_TILE_SIZE, ty1 = tri->max_y / RASTER_TILE_SIZE;
-        for (int ty = ty0; ty <= ty1; ty++)
-            for (int tx = tx0; tx <= tx1; tx++)
-                chunk->entries[start[ty * bins->tiles_x + tx]++] = (uint32_t)i;
+        tile_range r = triangle_tiles(&chunk->triangles[i]);
+        if (r.x0 == r.x1 && r.y0 == r.y1) {
+            chunk->entries[start[r.y0 * tiles_x + r.x0]++] = (uint32_t)i;
+            continue;
+        }
+        for (uint32_t ty = r.y0; ty <= r.y1; ty++)
+            for (uint32_t tx = r.x0; tx <= r.x1; tx++)
+                chunk->entries[start[ty * tiles_x + tx]++] = (uint32_t)i;
     }
     for (size_t i = num_tiles; i > 0; i--) start[i] = start[i - 1];
     start[0] = 0;
