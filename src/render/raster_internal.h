@@ -162,6 +162,12 @@ meso_result raster_draw_avx2(meso_context *ctx, raster_pass *pass, const meso_fr
 void raster_resolve_avx2(meso_context *ctx, int n, int width, int height, const float *sample_color,
                          const float *sample_coverage, const float *sample_depth, float *color,
                          float *coverage, float *depth);
+/* raster_setup.c's AVX2 copy (8 source triangles at a time); raster_draw_avx2 calls it, and
+ * meso_raster_depth_map when meso_technique_isa() is "avx2". Its bins are released by either
+ * copy's raster_bins_release. */
+meso_result raster_bins_build_avx2(meso_context *ctx, raster_bins *bins,
+                                   const meso_mesh *const *meshes, const bool *both_faces,
+                                   int num_meshes, const raster_setup_desc *desc);
 #endif
 
 /* A 64-byte aligned array of floats for render targets (free() releases it); NULL when out of

@@ -344,6 +344,11 @@ static void setup_source_triangle(const raster_bins *bins, const raster_mesh *rm
 
 /* ---- Eight source triangles at a time ----------------------------------------------------- */
 
+/* With AVX2 only: compiled for SSE2 (a portable build's baseline), the 8-wide code costs more
+ * instructions than the one-triangle path (bricks-plane displacement +11 %, docs/rasterizer.md):
+ * no 64-bit or 32-bit lane minimum, no packed double rounding, every vector split in pairs. */
+#if defined(__AVX2__)
+
 typedef float v4f __attribute__((vector_size(16)));
 typedef double v4d __attribute__((vector_size(32)));
 
@@ -367,17 +372,8 @@ static inline v4d v4d_half(v8f x, int h) {
  * of triangles inside the guard band: below 2^27): cvtpd2dq rounds in the current mode as
  * cvtsd2si does, so the integers are the same. */
 static inline v8i round8(v4d lo, v4d hi) {
-#if defined(__AVX__)
     __m128i a = _mm256_cvtpd_epi32((__m256d)lo), b = _mm256_cvtpd_epi32((__m256d)hi);
     return (v8i)_mm256_set_m128i(b, a);
-#else
-    v8i r;
-    for (int j = 0; j < 4; j++) {
-        r[j] = (int32_t)round_to_int64(lo[j]);
-        r[j + 4] = (int32_t)round_to_int64(hi[j]);
-    }
-    return r;
-#endif
 }
 
 /* faces_away for eight triangles, with the same operations in the same order. */
@@ -415,15 +411,7 @@ static inline v4d v4d_half_int(v8i x, int h) {
     v4i q = {x[4 * h], x[4 * h + 1], x[4 * h + 2], x[4 * h + 3]};
     return __builtin_convertvector(q, v4d);
 }
-static inline int v4l_mask_bits(v4l mask) {
-#if defined(__AVX__)
-    return _mm256_movemask_pd((__m256d)mask);
-#else
-    int bits = 0;
-    for (int j = 0; j < 4; ++j) bits |= (mask[j] != 0) << j;
-    return bits;
-#endif
-}
+static inline int v4l_mask_bits(v4l mask) { return _mm256_movemask_pd((__m256d)mask); }
 static inline v8i v8i_select(v8i mask, v8i a, v8i b) { return (a & mask) | (b & ~mask); }
 
 /* Eight unclipped triangles that passed the sample-box test, set up as setup_triangle would:
@@ -657,6 +645,8 @@ static void setup_source_triangles8(const raster_bins *bins, const raster_mesh *
     }
 }
 
+#endif /* __AVX2__ */
+
 /* The tiles a triangle's sample box touches, inclusive. The box is clamped to the target, so
  * its bounds are not negative and divide as unsigned (a shift, no rounding toward zero). */
 typedef struct tile_range {
@@ -675,12 +665,14 @@ static void process_chunk(const raster_bins *bins, raster_chunk *chunk) {
     chunk->num_entries = 0;
     chunk->failed = false;
     uint32_t t = chunk->first, end = chunk->first + chunk->count;
+#if defined(__AVX2__)
     if (!bins->desc.one_at_a_time) {
         for (; t + V8_LANES <= end; t += V8_LANES) {
             setup_source_triangles8(bins, rm, t, chunk);
             if (chunk->failed) return;
         }
     }
+#endif
     for (; t < end; t++) {
         setup_source_triangle(bins, rm, t, chunk);
         if (chunk->failed) return;
