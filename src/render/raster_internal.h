@@ -70,11 +70,13 @@ typedef struct raster_chunk {
 
 typedef struct raster_setup_desc {
     meso_mat4 view_projection;
-    int width, height; /* target, samples */
-    float z_near;      /* clip at clip w >= z_near */
-    bool clip_z;       /* instead clip at z_ndc >= -1 (depth maps: any projection) */
-    bool cull_back;    /* drop triangles facing away (clockwise on screen from outside) */
-    bool depth_plane;  /* fill za/zb/zc */
+    int width, height;  /* target, samples */
+    float z_near;       /* clip at clip w >= z_near */
+    bool clip_z;        /* instead clip at z_ndc >= -1 (depth maps: any projection) */
+    bool cull_back;     /* drop triangles facing away (clockwise on screen from outside) */
+    bool depth_plane;   /* fill za/zb/zc */
+    bool one_at_a_time; /* tests: set up source triangles one by one, the reference of the
+                           8-wide path (the same triangles, raster_setup.c) */
 } raster_setup_desc;
 
 /* Scratch reused from frame to frame: buffers only grow. */
@@ -160,6 +162,12 @@ meso_result raster_draw_avx2(meso_context *ctx, raster_pass *pass, const meso_fr
 void raster_resolve_avx2(meso_context *ctx, int n, int width, int height, const float *sample_color,
                          const float *sample_coverage, const float *sample_depth, float *color,
                          float *coverage, float *depth);
+/* raster_setup.c's AVX2 copy (8 source triangles at a time); raster_draw_avx2 calls it, and
+ * meso_raster_depth_map when meso_technique_isa() is "avx2". Its bins are released by either
+ * copy's raster_bins_release. */
+meso_result raster_bins_build_avx2(meso_context *ctx, raster_bins *bins,
+                                   const meso_mesh *const *meshes, const bool *both_faces,
+                                   int num_meshes, const raster_setup_desc *desc);
 #endif
 
 /* A 64-byte aligned array of floats for render targets (free() releases it); NULL when out of

@@ -453,6 +453,124 @@ static void test_raster_back_faces_dropped_early_are_exactly_the_back_faces(void
     meso_context_destroy(ctx);
 }
 
+/* ---- The 8-wide setup (raster_setup.c, setup_source_triangles8) ---------------------------- */
+
+static uint32_t g_lcg = 12345u;
+static float random_unit(void) { /* [0, 1) */
+    g_lcg = g_lcg * 1664525u + 1013904223u;
+    return (float)(g_lcg >> 8) / 16777216.0f;
+}
+
+/* Asserts that two binnings hold the same triangles, bit for bit, and the same tile lists. */
+static void assert_same_bins(const raster_bins *a, const raster_bins *b) {
+    assert_int_equal(a->num_chunks, b->num_chunks);
+    size_t num_tiles = (size_t)a->tiles_x * (size_t)a->tiles_y;
+    for (size_t c = 0; c < a->num_chunks; c++) {
+        const raster_chunk *ca = &a->chunks[c], *cb = &b->chunks[c];
+        assert_int_equal(ca->num_triangles, cb->num_triangles);
+        if (ca->num_triangles)
+            assert_memory_equal(ca->triangles, cb->triangles,
+                                ca->num_triangles * sizeof(raster_triangle));
+        assert_memory_equal(ca->tile_start, cb->tile_start, (num_tiles + 1) * sizeof(uint32_t));
+        assert_int_equal(ca->num_entries, cb->num_entries);
+        if (ca->num_entries)
+            assert_memory_equal(ca->entries, cb->entries, ca->num_entries * sizeof(uint32_t));
+    }
+}
+
+/* Sets the mesh up 8 triangles at a time and one at a time with `desc`; the same bins. Returns
+ * the triangles kept. */
+static size_t check_setup_8_wide(meso_context *ctx, const meso_mesh *mesh, bool both_faces,
+                                 raster_setup_desc desc) {
+    const meso_mesh *meshes[1] = {mesh};
+    bool keep_back[1] = {both_faces};
+    raster_bins wide, single;
+    memset(&wide, 0, sizeof(wide));
+    memset(&single, 0, sizeof(single));
+    desc.one_at_a_time = false;
+    assert_int_equal(raster_bins_build(ctx, &wide, meshes, keep_back, 1, &desc), MESO_OK);
+    desc.one_at_a_time = true;
+    assert_int_equal(raster_bins_build(ctx, &single, meshes, keep_back, 1, &desc), MESO_OK);
+    assert_same_bins(&wide, &single);
+    size_t kept = 0;
+    for (size_t c = 0; c < wide.num_chunks; c++) kept += wide.chunks[c].num_triangles;
+    raster_bins_release(&wide);
+    raster_bins_release(&single);
+    return kept;
+}
+
+/* The 8-wide setup keeps the triangles, bit for bit and in the order, that the one-triangle
+ * path keeps: sub-sample triangles (most end at the sample-box test), triangles crossing the
+ * near plane and the guard band (clipped one by one), slivers, degenerate and non-finite
+ * triangles, back faces near and far from edge-on, a mesh whose size is not a multiple of 8;
+ * for the colour pass (culling back faces, or both faces) and for depth maps (z_ndc clipping,
+ * the depth plane, perspective and orthographic). */
+static void test_raster_setup_8_wide_matches_one_at_a_time(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(1);
+    enum { NUM_TRIANGLES = 6007 };
+    meso_vec3 *positions = malloc(3 * NUM_TRIANGLES * sizeof(meso_vec3));
+    uint32_t *indices = malloc(3 * NUM_TRIANGLES * sizeof(uint32_t));
+    for (uint32_t t = 0; t < NUM_TRIANGLES; t++) {
+        int kind = (int)(random_unit() * 10.0f);
+        meso_vec3 centre = {random_unit() * 3.0f - 1.5f, random_unit() * 2.0f - 1.0f,
+                            random_unit() * 3.0f - 1.5f};
+        float size = kind < 5 ? 0.004f : kind < 7 ? 0.05f : kind < 8 ? 3.0f : 2000.0f;
+        if (kind == 8) centre.z = 2.0f; /* about the camera: crosses the near plane */
+        for (int k = 0; k < 3; k++) {
+            positions[3 * t + (uint32_t)k] = (meso_vec3){centre.x + size * (random_unit() - 0.5f),
+                                                         centre.y + size * (random_unit() - 0.5f),
+                                                         centre.z + size * (random_unit() - 0.5f)};
+            indices[3 * t + (uint32_t)k] = 3 * t + (uint32_t)k;
+        }
+        if (kind == 9 && t % 3 == 0) positions[3 * t + 1] = positions[3 * t]; /* degenerate */
+        if (kind == 9 && t % 3 == 1) positions[3 * t + 2].x = t % 2 ? INFINITY : NAN;
+        if (kind == 9 && t % 3 == 2) { /* a sliver: the third vertex nearly on the first edge */
+            meso_vec3 a = positions[3 * t], b = positions[3 * t + 1];
+            positions[3 * t + 2] =
+                (meso_vec3){0.5f * (a.x + b.x) + 1e-6f, 0.5f * (a.y + b.y), 0.5f * (a.z + b.z)};
+        }
+    }
+    meso_mesh soup = {.num_vertices = 3 * NUM_TRIANGLES,
+                      .num_triangles = NUM_TRIANGLES,
+                      .positions = positions,
+                      .indices = indices};
+    meso_mesh *sphere = test_shape(ctx, MESO_SHAPE_SPHERE, 0.7f, 96, (meso_vec3){0.1f, 0, 0});
+    test_scene ts;
+    test_scene_init(&ts, 256, 192);
+    meso_frame frame;
+    meso_frame_init(&frame, &ts.scene, 256, 192);
+    raster_setup_desc colour = {.view_projection = frame.view_projection,
+                                .width = 256,
+                                .height = 192,
+                                .z_near = frame.z_near,
+                                .cull_back = true};
+    raster_setup_desc depth = {.view_projection = frame.view_projection,
+                               .width = 300,
+                               .height = 200,
+                               .clip_z = true,
+                               .depth_plane = true};
+    raster_setup_desc ortho = depth;
+    ortho.view_projection = meso_mat4_scale(0.7f); /* w = 1: orthographic */
+    const meso_mesh *tested[2] = {&soup, sphere};
+    for (int m = 0; m < 2; m++) {
+        assert_true(check_setup_8_wide(ctx, tested[m], false, colour) > 100);
+        assert_true(check_setup_8_wide(ctx, tested[m], true, colour) > 100);
+        assert_true(check_setup_8_wide(ctx, tested[m], false, depth) > 100);
+        assert_true(check_setup_8_wide(ctx, tested[m], false, ortho) > 100);
+    }
+    /* a camera inside the soup: most triangles are clipped or behind */
+    ts.scene.camera.eye = (meso_vec3){0.1f, 0.05f, 0.2f};
+    meso_frame_init(&frame, &ts.scene, 256, 192);
+    colour.view_projection = frame.view_projection;
+    assert_true(check_setup_8_wide(ctx, &soup, false, colour) > 100);
+    free(positions);
+    free(indices);
+    test_scene_free(&ts);
+    meso_mesh_destroy(sphere);
+    meso_context_destroy(ctx);
+}
+
 /* ---- Renderer errors ------------------------------------------------------------------------ */
 
 /* ---- Blocks and fragments: a technique written per block sees exactly what one written per
@@ -750,6 +868,7 @@ int main(void) {
         cmocka_unit_test(test_raster_skipped_fields_leave_the_read_ones_as_they_were),
         cmocka_unit_test(test_flat_block_matches_shade_point),
         cmocka_unit_test(test_raster_back_faces_dropped_early_are_exactly_the_back_faces),
+        cmocka_unit_test(test_raster_setup_8_wide_matches_one_at_a_time),
         cmocka_unit_test(test_renderer_unknown_technique_names_object_and_known_ones),
         cmocka_unit_test(test_renderer_rejects_technique_for_wrong_mesostructure),
         cmocka_unit_test(test_renderer_rejects_reference_mixed_with_others),
