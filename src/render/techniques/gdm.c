@@ -36,6 +36,8 @@ typedef struct gdm_state {
     const meso_solid *solid;
     float depth;       /* world units */
     float probe_scale; /* a height field's (1 - h) - w times this bounds the distance */
+    /* a height field's slope bounds: |dh/du| <= slope_u, |dh/dv| <= slope_v (texture units) */
+    float slope_u, slope_v;
     /* height fields: w below which nothing is solid, in each prism's column (prism_clear)
      * and anywhere (clear_w); -1 for solids */
     float *prism_clear, clear_w, map_max;
@@ -145,8 +147,10 @@ static void gdm_release(void *state) {
 
 /* 1 / the Lipschitz constant of (1 - h(u, v)) - w in (u, v, w): h is bilinear between texel
  * centres, so its slope along u is at most the largest step between neighbouring texels
- * (wrapped pairs included: at worst an overestimate) times the width, likewise along v. */
-static float heightfield_probe_scale(const meso_heightfield *hf) {
+ * (wrapped pairs included: at worst an overestimate) times the width, likewise along v. The
+ * two slope bounds go to *out_slope_u, *out_slope_v (ray_probe_start's bound along a ray). */
+static float heightfield_probe_scale(const meso_heightfield *hf, float *out_slope_u,
+                                     float *out_slope_v) {
     float step_u = 0.0f, step_v = 0.0f;
     for (int j = 0; j < hf->height; j++)
         for (int i = 0; i < hf->width; i++) {
@@ -155,6 +159,7 @@ static float heightfield_probe_scale(const meso_heightfield *hf) {
             step_v = fmaxf(step_v, fabsf(meso_heightfield_texel(hf, i, j + 1) - h));
         }
     float gu = step_u * (float)hf->width, gv = step_v * (float)hf->height;
+    *out_slope_u = gu, *out_slope_v = gv;
     float lipschitz = sqrtf(1.0f + gu * gu + gv * gv);
     return isfinite(lipschitz) ? 1.0f / lipschitz : 0.0f;
 }
@@ -356,7 +361,9 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
     s->refine_window = 3.0f / (float)(options.layers - 1);
     s->voxel = (meso_vec3){1.0f / (float)options.resolution, 1.0f / (float)options.resolution,
                            1.0f / (float)(options.layers - 1)};
-    s->probe_scale = desc.heightfield ? heightfield_probe_scale(desc.heightfield) : 1.0f;
+    s->probe_scale = desc.heightfield
+                         ? heightfield_probe_scale(desc.heightfield, &s->slope_u, &s->slope_v)
+                         : 1.0f;
     if ((r = meso_prism_layer_create(ctx, object->mesh, ms->depth, object->name, &s->layer)) !=
         MESO_OK)
         goto fail;
@@ -540,11 +547,21 @@ static inline bool inside_mesostructure(const gdm_state *s, meso_vec3 uvw) {
  * is a height field's (1 - h) - w scaled by probe_scale; every point nearer than |f| to a
  * sample is on the same side of the surface. A probe there gets the same answer without
  * evaluating the mesostructure (the weave's distance function was 56 % of weave-torus's
- * frame): the answers, and so the images, are those of evaluating every probe. */
+ * frame): the answers, and so the images, are those of evaluating every probe.
+ *
+ * Along one ray a height field's f changes faster than |dir.z| + |dir.x| slope_u + |dir.y|
+ * slope_v per unit of x nowhere (h is bilinear: its slope along u is at most slope_u, along v
+ * slope_v), at most probe_scale's sqrt(1 + slope_u^2 + slope_v^2) and much less where the ray
+ * is steep in (u, v, w) -- where the shell is thin against a tile, most rays: bumps-sphere's
+ * light rays and view rays are. So a sample's |f| proves `scale` |f| of the ray; the rounding
+ * margin is the one the isotropic bound had, in f's units (margin = 1e-6 scale / probe_scale),
+ * so a probe proven here differs from its evaluation only where one proven by the isotropic
+ * bound could. */
 typedef struct ray_probe {
     meso_vec3 t0, dir;
     float x[2], radius[2]; /* [0] the last outside sample, [1] the last inside: where, |f| */
     float clear_w;         /* outside above this w (height fields; prism_clear, clear_w) */
+    float scale, margin;   /* height fields: a sample proves scale |f| of x, less margin */
 } ray_probe;
 
 /* A solid's distance at p, or a value of its sign: the nearest node of the solid's distance
@@ -597,19 +614,29 @@ static bool state_segment_outside(const void *state, meso_vec3 a, meso_vec3 b) {
     return gdm_fmaxf(a.z, b.z) + 1e-6f < 1.0f - highest - 1e-6f;
 }
 
-static inline ray_probe ray_probe_start(meso_vec3 t0, meso_vec3 dir, float clear_w) {
-    return (ray_probe){.t0 = t0, .dir = dir, .radius = {-1.0f, -1.0f}, .clear_w = clear_w};
+static inline ray_probe ray_probe_start(const gdm_state *s, meso_vec3 t0, meso_vec3 dir,
+                                        float clear_w) {
+    ray_probe r = {.t0 = t0, .dir = dir, .radius = {-1.0f, -1.0f}, .clear_w = clear_w};
+    r.margin = 1e-6f; /* solids: solid_probe's radius is the bound itself */
+    if (s->heightfield && s->probe_scale > 0.0f) {
+        float rate = fabsf(dir.z) + fabsf(dir.x) * s->slope_u + fabsf(dir.y) * s->slope_v;
+        r.scale = 1.0f / rate;
+        r.margin = 1e-6f * r.scale / s->probe_scale;
+        if (!(r.scale >= s->probe_scale) || !isfinite(r.margin)) /* rounding, 0 or NaN: */
+            r.scale = s->probe_scale, r.margin = 1e-6f;          /* the isotropic bound */
+    }
+    return r;
 }
 
 static inline bool ray_probe_inside(const gdm_state *s, ray_probe *r, float x) {
     for (int side = 0; side < 2; side++) /* 0.999, 1e-6: positions are rounded, bounds tight */
-        if (fabsf(x - r->x[side]) < 0.999f * r->radius[side] - 1e-6f) return side == 1;
+        if (fabsf(x - r->x[side]) < 0.999f * r->radius[side] - r->margin) return side == 1;
     meso_vec3 p = meso_vec3_madd(r->t0, r->dir, x);
     if (p.z < r->clear_w) return false;
     float f, radius;
     if (s->heightfield) { /* inside_mesostructure's test: w >= 1 - h is (1 - h) - w <= 0 */
         f = (1.0f - meso_heightfield_sample(s->heightfield, p.x, p.y)) - p.z;
-        radius = fabsf(f) * s->probe_scale;
+        radius = fabsf(f) * r->scale;
     } else {
         f = solid_probe(s, p, &radius);
     }
@@ -629,7 +656,7 @@ static inline bool ray_probe_inside(const gdm_state *s, ray_probe *r, float x) {
  * inside whatever its rounding. Returns the hit's distance along V_t, negative for none. */
 static float refine_hit(const gdm_state *s, float clear_w, meso_vec3 t_in, meso_vec3 vt, float d,
                         float dt, bool solid_floor) {
-    ray_probe probe = ray_probe_start(t_in, vt, clear_w);
+    ray_probe probe = ray_probe_start(s, t_in, vt, clear_w);
 #define INSIDE(x) ((solid_floor && (x) >= dt) || ray_probe_inside(s, &probe, (x)))
     float window = s->refine_window;
     float guess = gdm_fminf(gdm_fmaxf(d, 0.0f), dt);
@@ -732,10 +759,14 @@ __attribute__((flatten)) static bool shadowed(const gdm_state *s, meso_vec3 t, m
                                          gdm_fminf(t.y, end.y), gdm_fmaxf(t.y, end.y));
             clear_w = gdm_fmaxf(clear_w, 1.0f - highest - 1e-6f);
         }
-        ray_probe probe = ray_probe_start(t, lt, clear_w);
+        ray_probe probe = ray_probe_start(s, t, lt, clear_w);
         if (ray_probe_inside(s, &probe, d + 0.5f * s->refine_window)) return true;
         for (int k = 0; k < s->shadow_steps; k++) {
             float x = boundary * ((float)k + 0.5f) / (float)s->shadow_steps;
+            /* the light rises (lt.z < 0) and x grows: from the first probe above clear_w on,
+             * every probe is (each would answer outside: no inside sample is remembered, the
+             * first one returns) */
+            if (t.z + lt.z * x < clear_w) return false;
             if (ray_probe_inside(s, &probe, x)) return true;
         }
         return false;
