@@ -38,6 +38,9 @@ typedef struct gdm_state {
     float probe_scale; /* a height field's (1 - h) - w times this bounds the distance */
     /* a height field's slope bounds: |dh/du| <= slope_u, |dh/dv| <= slope_v (texture units) */
     float slope_u, slope_v;
+    /* a repeating height field whose sides are powers of two: side - 1 (heightfield_sample's
+     * wrap by a mask); 0 otherwise */
+    int wrap_mask_u, wrap_mask_v;
     /* height fields: w below which nothing is solid, in each prism's column (prism_clear)
      * and anywhere (clear_w); -1 for solids */
     float *prism_clear, clear_w, map_max;
@@ -361,6 +364,12 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
     s->refine_window = 3.0f / (float)(options.layers - 1);
     s->voxel = (meso_vec3){1.0f / (float)options.resolution, 1.0f / (float)options.resolution,
                            1.0f / (float)(options.layers - 1)};
+    if (desc.heightfield && desc.heightfield->wrap != MESO_WRAP_CLAMP &&
+        !(desc.heightfield->width & (desc.heightfield->width - 1)) &&
+        !(desc.heightfield->height & (desc.heightfield->height - 1))) {
+        s->wrap_mask_u = desc.heightfield->width - 1;
+        s->wrap_mask_v = desc.heightfield->height - 1;
+    }
     s->probe_scale = desc.heightfield
                          ? heightfield_probe_scale(desc.heightfield, &s->slope_u, &s->slope_v)
                          : 1.0f;
@@ -537,7 +546,31 @@ static inline meso_vec3 texture_direction(const texture_frame *f, meso_vec3 x) {
 
 /* ---- The mesostructure itself (normals; the refinement beyond the paper) ------------------- */
 
+/* meso_heightfield_sample(s->heightfield, u, v), bit for bit (the same float operations in the
+ * same order), with a repeating map's texel indices wrapped by a mask where its sides are
+ * powers of two: gdm's (u, v) run over several tiles (uv_scale 6 x 3 on bumps-sphere), so most
+ * samples took the header's wrap, two integer divisions. i & (n - 1) is the header's wrapped
+ * index for every int i when n is a power of two (two's complement). */
+static inline float heightfield_sample(const gdm_state *s, float u, float v) {
+    const meso_heightfield *hf = s->heightfield;
+    if (!s->wrap_mask_u) return meso_heightfield_sample(hf, u, v);
+    float x = u * (float)hf->width - 0.5f;
+    float y = (1.0f - v) * (float)hf->height - 0.5f;
+    float fx = floorf(x), fy = floorf(y);
+    float tx = x - fx, ty = y - fy;
+    int i = (int)fx, j = (int)fy;
+    int i0 = i & s->wrap_mask_u, i1 = (int)((unsigned)i + 1u) & s->wrap_mask_u;
+    int j0 = j & s->wrap_mask_v, j1 = (int)((unsigned)j + 1u) & s->wrap_mask_v;
+    const float *row0 = hf->heights + (size_t)j0 * (size_t)hf->width;
+    const float *row1 = hf->heights + (size_t)j1 * (size_t)hf->width;
+    float h00 = row0[i0], h10 = row0[i1], h01 = row1[i0], h11 = row1[i1];
+    float top = h00 + (h10 - h00) * tx, bottom = h01 + (h11 - h01) * tx;
+    return top + (bottom - top) * ty;
+}
+
+/* gdm_mesostructure_inside (gdm_shell_shadow.h) through heightfield_sample: the same answer. */
 static inline bool inside_mesostructure(const gdm_state *s, meso_vec3 uvw) {
+    if (s->heightfield) return uvw.z >= 1.0f - heightfield_sample(s, uvw.x, uvw.y);
     return gdm_mesostructure_inside(s->heightfield, s->solid, uvw);
 }
 
@@ -635,7 +668,7 @@ static inline bool ray_probe_inside(const gdm_state *s, ray_probe *r, float x) {
     if (p.z < r->clear_w) return false;
     float f, radius;
     if (s->heightfield) { /* inside_mesostructure's test: w >= 1 - h is (1 - h) - w <= 0 */
-        f = (1.0f - meso_heightfield_sample(s->heightfield, p.x, p.y)) - p.z;
+        f = (1.0f - heightfield_sample(s, p.x, p.y)) - p.z;
         radius = fabsf(f) * r->scale;
     } else {
         f = solid_probe(s, p, &radius);
@@ -698,8 +731,16 @@ static meso_vec3 texture_normal(const gdm_state *s, meso_vec3 uvw) {
     if (s->baked_normals) return meso_gdm_normal(s->gdm, uvw);
     if (s->heightfield) {
         /* the solid w >= 1 - h: outward gradient of (1 - h) - w */
-        meso_vec2 g = meso_heightfield_gradient(s->heightfield, uvw.x, uvw.y);
-        return (meso_vec3){-g.x, -g.y, -1.0f};
+        /* meso_heightfield_gradient's central differences, through heightfield_sample */
+        const meso_heightfield *hf = s->heightfield;
+        float du = 1.0f / (float)hf->width, dv = 1.0f / (float)hf->height;
+        float hu = (heightfield_sample(s, uvw.x + du, uvw.y) -
+                    heightfield_sample(s, uvw.x - du, uvw.y)) /
+                   (2.0f * du);
+        float hv = (heightfield_sample(s, uvw.x, uvw.y + dv) -
+                    heightfield_sample(s, uvw.x, uvw.y - dv)) /
+                   (2.0f * dv);
+        return (meso_vec3){-hu, -hv, -1.0f};
     }
     return meso_solid_gradient(s->solid, gdm_tile_point(uvw));
 }
