@@ -734,12 +734,12 @@ static meso_vec3 texture_normal(const gdm_state *s, meso_vec3 uvw) {
         /* meso_heightfield_gradient's central differences, through heightfield_sample */
         const meso_heightfield *hf = s->heightfield;
         float du = 1.0f / (float)hf->width, dv = 1.0f / (float)hf->height;
-        float hu = (heightfield_sample(s, uvw.x + du, uvw.y) -
-                    heightfield_sample(s, uvw.x - du, uvw.y)) /
-                   (2.0f * du);
-        float hv = (heightfield_sample(s, uvw.x, uvw.y + dv) -
-                    heightfield_sample(s, uvw.x, uvw.y - dv)) /
-                   (2.0f * dv);
+        float hu =
+            (heightfield_sample(s, uvw.x + du, uvw.y) - heightfield_sample(s, uvw.x - du, uvw.y)) /
+            (2.0f * du);
+        float hv =
+            (heightfield_sample(s, uvw.x, uvw.y + dv) - heightfield_sample(s, uvw.x, uvw.y - dv)) /
+            (2.0f * dv);
         return (meso_vec3){-hu, -hv, -1.0f};
     }
     return meso_solid_gradient(s->solid, gdm_tile_point(uvw));
