@@ -311,6 +311,8 @@ static bool solid_grid(meso_context *ctx, gdm_state *s) {
 
 static bool state_inside(const void *state, meso_vec3 uvw);
 static bool state_segment_outside(const void *state, meso_vec3 a, meso_vec3 b);
+static bool state_probes_inside(const void *state, meso_vec3 t0, meso_vec3 dir, float first,
+                                float length, int steps);
 
 static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
                                const meso_object *object, void **out_state) {
@@ -418,7 +420,8 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
                                .shadow_steps = s->shadow_steps,
                                .inside = state_inside,
                                .inside_user = s,
-                               .segment_outside = s->heightfield ? state_segment_outside : NULL},
+                               .segment_outside = s->heightfield ? state_segment_outside : NULL,
+                               .probes_inside = state_probes_inside},
              object->name, &s->shell)) != MESO_OK)
         goto fail;
     if (options.gi && scene->environment &&
@@ -677,6 +680,20 @@ static inline bool ray_probe_inside(const gdm_state *s, ray_probe *r, float x) {
     r->x[side] = x;
     r->radius[side] = radius;
     return side == 1;
+}
+
+/* gdm_shell_desc.probes_inside: the walk's probes of a prism's segment (segment_blocked) as a
+ * ray_probe, so that a sample's |f| answers the probes near it; each answer is state_inside's
+ * (above a height field's clear_w: outside; else the sample or a solid's grid), so the walk's
+ * answers are the same. */
+static bool state_probes_inside(const void *state, meso_vec3 t0, meso_vec3 dir, float first,
+                                float length, int steps) {
+    const gdm_state *s = state;
+    ray_probe probe = ray_probe_start(s, t0, dir, s->heightfield ? s->clear_w : -1.0f);
+    if (first >= 0.0f && ray_probe_inside(s, &probe, first)) return true;
+    for (int k = 0; k < steps; k++)
+        if (ray_probe_inside(s, &probe, length * ((float)k + 0.5f) / (float)steps)) return true;
+    return false;
 }
 
 /* Beyond the paper (docs/techniques/gdm.md): d interpolated across an occluding edge lands
