@@ -856,22 +856,25 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
     meso_vec3 p_out = meso_vec3_madd(f->position, view, t);
     meso_vec3 t_out = meso_prism_layer_face_uvw(
         layer, meso_prism_layer_face(layer, prism_index, exit_slot), p_out);
-    meso_vec3 segment = meso_vec3_sub(t_out, t_in);
-    float dt = meso_vec3_length(segment);
-    if (!(dt > 1e-7f)) return false;
-    meso_vec3 vt = meso_vec3_scale(segment, 1.0f / dt);
     /* height fields: outside above this w on the segment (the refinement's probes) */
     float clear_w = s->prism_clear ? s->prism_clear[prism_index] : -1.0f;
     if (s->window_max && s->refine_steps > 0) {
         /* Beyond the paper: every probe of refine_hit lies on the segment (to a rounding); when
          * the segment stays above the highest texel its (u, v) box can read, all of them are
          * outside and it misses, known without the lookup (the same answer, so the same
-         * image): most fins of a sphere's outline band are crossed above the bumps. */
+         * image): most fins of a sphere's outline band are crossed above the bumps. The
+         * prism's own clearance (its whole column; one read) settles some before the box's. */
+        float top = gdm_fmaxf(t_in.z, t_out.z) + 1e-6f;
+        if (top < clear_w) return false;
         float highest = window_bound(s, gdm_fminf(t_in.x, t_out.x), gdm_fmaxf(t_in.x, t_out.x),
                                      gdm_fminf(t_in.y, t_out.y), gdm_fmaxf(t_in.y, t_out.y));
         clear_w = gdm_fmaxf(clear_w, 1.0f - highest - 1e-6f);
-        if (gdm_fmaxf(t_in.z, t_out.z) + 1e-6f < clear_w) return false;
+        if (top < clear_w) return false;
     }
+    meso_vec3 segment = meso_vec3_sub(t_out, t_in);
+    float dt = meso_vec3_length(segment);
+    if (!(dt > 1e-7f)) return false;
+    meso_vec3 vt = meso_vec3_scale(segment, 1.0f / dt);
     float d = lookup(s, t_in, vt);
     if (s->refine_steps > 0) {
         d = refine_hit(s, clear_w, t_in, vt, d, dt,
