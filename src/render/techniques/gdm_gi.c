@@ -70,6 +70,7 @@ typedef float gi_v4f __attribute__((vector_size(16)));
  * chunk count (16 x 4 eigenfunctions / 8) unrolls into registers. */
 static inline void accumulate_rows(v8f *acc, const float *row, float weight, int chunks) {
     v8f cw = v8_splat(weight);
+#pragma GCC unroll 8
     for (int j = 0; j < chunks; j++) {
         v8f x;
         memcpy(&x, row + 8 * j, sizeof x);
@@ -81,6 +82,7 @@ static inline void accumulate_rows(v8f *acc, const float *row, float weight, int
  * order. */
 static inline void interpolate_rows(const gdm_gi *gi, const meso_rtv_cell *cell, v8f *w, v8f *e,
                                     int chunks) {
+#pragma GCC unroll 8
     for (int j = 0; j < chunks; j++) w[j] = e[j] = v8_splat(0.0f);
     for (int c = 0; c < 8; c++)
         accumulate_rows(w, gi->weights + cell->corner[c] * (size_t)gi->stride,

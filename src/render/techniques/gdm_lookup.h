@@ -149,6 +149,7 @@ static inline float gdm_lookup8(const gdm_lookup_table *t, meso_vec3 uvw, meso_v
      * (x, y) parts made once for the two phi corners */
     float cw[8];
     const float *rows[8];
+#pragma GCC unroll 4
     for (int xy = 0; xy < 4; xy++) {
         float wxy = wx[xy & 1] * wy[xy >> 1];
         size_t cell =
@@ -164,6 +165,7 @@ static inline float gdm_lookup8(const gdm_lookup_table *t, meso_vec3 uvw, meso_v
         v8f e = v8_splat(c00) * gdm_load8(e00 + o) + v8_splat(c01) * gdm_load8(e01 + o) +
                 v8_splat(c10) * gdm_load8(e10 + o) + v8_splat(c11) * gdm_load8(e11 + o);
         v8f wsum = v8_splat(0.0f);
+#pragma GCC unroll 8
         for (int corner = 0; corner < 8; corner++)
             wsum += v8_splat(cw[corner]) * gdm_load8(rows[corner] + o);
         v8f p = wsum * e;
