@@ -117,6 +117,7 @@ static void evaluate(const gdm_gi *gi, meso_vec3 uvw, meso_vec3 view,
     memcpy(f, &f_lo, sizeof f_lo);
     memcpy(f + 8, &f_hi, sizeof f_hi);
     gi_v4f rgb = {0.0f, 0.0f, 0.0f, 0.0f};
+#pragma GCC unroll 16
     for (int i = 0; i < MESO_SH_COUNT; i++) {
         gi_v4f l = {radiance[0][i], radiance[1][i], radiance[2][i], 0.0f};
         rgb += (gi_v4f){f[i], f[i], f[i], f[i]} * l;
@@ -134,6 +135,7 @@ static inline void radiance_interpolate(const float *radiance, uint32_t i0, uint
     const float *c = radiance + (size_t)i2 * N;
     float *o = &out[0][0];
     v8f w0 = v8_splat(b0), w1 = v8_splat(b1), w2 = v8_splat(b2);
+#pragma GCC unroll 6
     for (int j = 0; j < N; j += 8) {
         v8f x, y, z;
         memcpy(&x, a + j, sizeof x);
