@@ -554,9 +554,14 @@ static inline meso_vec3 texture_direction(const texture_frame *f, meso_vec3 x) {
  * powers of two: gdm's (u, v) run over several tiles (uv_scale 6 x 3 on bumps-sphere), so most
  * samples took the header's wrap, two integer divisions. i & (n - 1) is the header's wrapped
  * index for every int i when n is a power of two (two's complement). */
+__attribute__((noinline)) static float heightfield_sample_any(const meso_heightfield *hf, float u,
+                                                              float v) {
+    return meso_heightfield_sample(hf, u, v);
+}
+
 static inline float heightfield_sample(const gdm_state *s, float u, float v) {
     const meso_heightfield *hf = s->heightfield;
-    if (!s->wrap_mask_u) return meso_heightfield_sample(hf, u, v);
+    if (!s->wrap_mask_u) return heightfield_sample_any(hf, u, v);
     float x = u * (float)hf->width - 0.5f;
     float y = (1.0f - v) * (float)hf->height - 0.5f;
     float fx = floorf(x), fy = floorf(y);
