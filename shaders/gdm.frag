@@ -274,6 +274,26 @@ vec3 gdm_prism_map(int prism, vec3 uvw) {
     return p0 * (1.0 - b1 - b2) + p1 * b1 + p2 * b2;
 }
 
+// meso_prism_unmap (meso/prism.h): the texture point whose prism map is x, one Newton step from
+// `guess`.
+vec3 gdm_prism_unmap(int prism, vec3 x, vec3 guess) {
+    vec4 a = gdm_prism(prism, 9), b = gdm_prism(prism, 10);
+    vec3 p0 = gdm_prism(prism, 11).xyz, n0 = gdm_prism(prism, 14).xyz;
+    vec3 dp1 = gdm_prism(prism, 12).xyz - p0, dp2 = gdm_prism(prism, 13).xyz - p0;
+    vec3 dn1 = gdm_prism(prism, 15).xyz - n0, dn2 = gdm_prism(prism, 16).xyz - n0;
+    float du = guess.x - a.x, dv = guess.y - a.y;
+    float b1 = a.z * du + a.w * dv, b2 = b.x * du + b.y * dv;
+    float s = -guess.z * u_depth;
+    vec3 e1 = dp1 + dn1 * s, e2 = dp2 + dn2 * s;
+    vec3 n = n0 + dn1 * b1 + dn2 * b2;
+    vec3 residual = p0 + n0 * s + e1 * b1 + e2 * b2 - x;
+    vec3 ju = e1 * a.z + e2 * b.x, jv = e1 * a.w + e2 * b.y, jw = n * -u_depth;
+    vec3 cu = cross(jv, jw), cv = cross(jw, ju), cw = cross(ju, jv);
+    float det = dot(ju, cu);
+    if (!(det != 0.0) || !gdm_finite(det)) return guess;
+    return guess - vec3(dot(cu, residual), dot(cv, residual), dot(cw, residual)) * (1.0 / det);
+}
+
 // gdm.c frame_at: the Jacobian of the prism map at a texture point with the interpolated
 // tangent frame (T, B, -depth N), and its cofactor columns (J^-T = (cu cv cw) / det).
 struct gdm_frame {
@@ -336,12 +356,20 @@ bool gdm_floor_is_solid(vec3 t) {
 // it and inside just past it, then bisected; else probes from the entry. The hit's distance
 // along vt, negative for none. (The CPU skips probes its earlier samples' distance bounds
 // already decide, with the same answers; every probe is evaluated here.)
-float gdm_refine_hit(vec3 t_in, vec3 vt, float d, float dt, bool solid_floor, float window) {
+// The view ray's path through its prism (gdm.c shade_one): t_in + x vt + x (dt - x) bow.
+vec3 gdm_path(vec3 t_in, vec3 vt, vec3 bow, float dt, float x) {
+    return t_in + vt * x + bow * (x * (dt - x));
+}
+
+float gdm_refine_hit(vec3 t_in, vec3 vt, vec3 bow, float d, float dt, bool solid_floor,
+                     float window) {
     float guess = min(max(d, 0.0), dt);
     float before = max(guess - window, 0.0), after = min(guess + 0.5 * window, dt);
     float lo = 0.0, hi = -1.0;
-    bool in_before = (solid_floor && before >= dt) || gdm_inside(t_in + vt * before);
-    bool in_after = !in_before && ((solid_floor && after >= dt) || gdm_inside(t_in + vt * after));
+    bool in_before =
+        (solid_floor && before >= dt) || gdm_inside(gdm_path(t_in, vt, bow, dt, before));
+    bool in_after = !in_before && ((solid_floor && after >= dt) ||
+                                   gdm_inside(gdm_path(t_in, vt, bow, dt, after)));
     if (!in_before && in_after) {
         lo = before;
         hi = after;
@@ -350,7 +378,7 @@ float gdm_refine_hit(vec3 t_in, vec3 vt, float d, float dt, bool solid_floor, fl
         const int probes = 8;
         for (int k = 1; k <= probes && hi < 0.0; ++k) {
             float x = dt * float(k) / float(probes);
-            if ((solid_floor && x >= dt) || gdm_inside(t_in + vt * x))
+            if ((solid_floor && x >= dt) || gdm_inside(gdm_path(t_in, vt, bow, dt, x)))
                 hi = x;
             else
                 lo = x;
@@ -359,7 +387,7 @@ float gdm_refine_hit(vec3 t_in, vec3 vt, float d, float dt, bool solid_floor, fl
     }
     for (int k = 0; k < u_refine_steps; ++k) {
         float mid = 0.5 * (lo + hi);
-        if ((solid_floor && mid >= dt) || gdm_inside(t_in + vt * mid))
+        if ((solid_floor && mid >= dt) || gdm_inside(gdm_path(t_in, vt, bow, dt, mid)))
             hi = mid;
         else
             lo = mid;
@@ -418,8 +446,15 @@ void main() {
     float d = gdm_lookup(t_in, vt);
     float window = 3.0 / float(u_layers - 1);
     bool floor_exit = exit_slot == GDM_BOTTOM && gdm_floor_is_solid(t_out);
+    // the ray's curved path through the prism (gdm.c shade_one): its midpoint mapped back
+    vec3 bow = vec3(0.0);
     if (u_refine_steps > 0) {
-        d = gdm_refine_hit(t_in, vt, d, dt, floor_exit, window);
+        vec3 line_mid = 0.5 * (t_in + t_out);
+        vec3 sag = gdm_prism_unmap(prism, entry + view * (0.5 * t), line_mid) - line_mid;
+        if (gdm_finite(dot(sag, sag))) bow = sag * (4.0 / (dt * dt));
+    }
+    if (u_refine_steps > 0) {
+        d = gdm_refine_hit(t_in, vt, bow, d, dt, floor_exit, window);
         if (d < 0.0) discard;
     } else if (!(d < dt - u_hit_margin)) {
         // §3.2: the ray passes through the prism -- unless it leaves through the bottom into
@@ -428,7 +463,7 @@ void main() {
         d = d < dt ? d : dt;
     }
     d = d > 0.0 ? d : 0.0;
-    vec3 hit = t_in + vt * d;
+    vec3 hit = gdm_path(t_in, vt, bow, dt, d);
     vec3 position = gdm_prism_map(prism, hit);
     // between the entry's depth (never nearer) and the exit's (gdm.c says why)
     float entry_depth = dot(entry - u_eye, u_forward);

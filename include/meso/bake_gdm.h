@@ -34,7 +34,7 @@ extern "C" {
 #endif
 
 #define MESO_GDM_KIND "gdm"
-#define MESO_GDM_KIND_VERSION 1u
+#define MESO_GDM_KIND_VERSION 2u /* 2: solids baked on the dual-contoured surface */
 #define MESO_GDM_RMSE_COUNT 16
 /* Limits, checked before allocating (MESO_ERROR_LIMIT naming the field). */
 #define MESO_GDM_MAX_SIDE 512
@@ -93,8 +93,8 @@ typedef struct meso_gdm_compression {
 /* Bake the GDM of a solid or a height field (§3.1) and compress it (§4.1).
  *
  * Rays are traced with Embree against a watertight triangle surface of the source: the
- * solid's surface nets (meso_bake_isosurface, 2x finer than the voxels and at least 128 x 128
- * x 64 cells a tile) or the height field's texel-centre triangles (at most 1024 a side). A
+ * solid's dual-contoured surface (meso_bake_isosurface, 2x finer than the voxels and at least 128 x
+ * 128 x 64 cells a tile) or the height field's texel-centre triangles (at most 1024 a side). A
  * voxel inside the source (meso_solid_distance <= 0; w >= 1 - h) gets 0 without a ray; a ray
  * from outside takes the first point where it enters that surface.
  * desc      Read during the call only. Zero fields take the defaults.

@@ -3,15 +3,17 @@
  * Overview
  *   The reference tracer (issue 3) needs a solid's surface as real triangles. This bake samples
  *   the solid's signed distance on a regular grid over one tile (u, v in [0,1], w in [0,1])
- *   and extracts the zero level set by surface nets (a dual contouring method): one vertex per
- *   cell the surface crosses, at the mean of its edges' zero crossings, and one quad (two
- *   triangles) per grid edge that changes sign, through the vertices of the four cells around
- *   it, so the surface is watertight by construction. The grid is periodic in u and v; the
- *   quads along u = 0 and v = 0 use vertices of the cells just below (positions < 0), which
- *   are the last cells' vertices moved by exactly -1, so copies of the tile laid side by side
- *   share those vertices bit for bit and join without a gap. The slab 0 <= w <= 1 is closed:
- *   the field is taken as max(distance, -w, w - 1) and one padding node layer is sampled above
- *   and below, so the surface caps the solid exactly at w = 0 and w = 1.
+ *   and extracts the zero level set by dual contouring (Ju et al. 2002): one vertex per cell
+ *   the surface crosses, where the planes through its edges' zero crossings (found on the field
+ *   itself, with the field's normal there) meet in the least-squares sense, kept inside the
+ *   cell -- so a box's edges and corners are kept, not cut off as the crossings' mean (surface
+ *   nets) cut them -- and one quad (two triangles) per grid edge that changes sign, through the
+ *   vertices of the four cells around it, so the surface is watertight by construction. The grid is
+ * periodic in u and v; the quads along u = 0 and v = 0 use vertices of the cells just below
+ * (positions < 0), which are the last cells' vertices moved by exactly -1, so copies of the tile
+ * laid side by side share those vertices bit for bit and join without a gap. The slab 0 <= w <= 1
+ * is closed: the field is taken as max(distance, -w, w - 1) and one padding node layer is sampled
+ * above and below, so the surface caps the solid exactly at w = 0 and w = 1.
  *
  * Output
  *   An indexed triangle mesh in texture space (positions are (u, v, w)), triangles grouped by

@@ -87,6 +87,48 @@ meso_vec3 meso_prism_shell_point(const meso_mesh *mesh, uint32_t vertex, float w
 meso_vec3 meso_prism_map(const meso_prism *prism, const meso_mesh *mesh, float depth, meso_vec3 uvw,
                          int on_edge);
 
+/* The texture point (u, v, w) of the prism whose meso_prism_map is the object-space point x:
+ * Newton's method from `guess`, `iterations` steps (the map is bilinear in the barycentrics
+ * and w: from a guess a fraction of a voxel off, one step leaves an error of the square of
+ * that); the last estimate where the map's Jacobian is singular. Inline, without
+ * meso_prism_shell_point's exact bits: a renderer calls it per fragment. Pure. */
+static inline meso_vec3 meso_prism_unmap(const meso_prism *prism, const meso_mesh *mesh,
+                                         float depth, meso_vec3 x, meso_vec3 guess,
+                                         int iterations) {
+    const uint32_t *v = prism->vertices;
+    const float *inv = prism->uv_inverse;
+    meso_vec3 p0 = mesh->positions[v[0]], n0 = mesh->normals[v[0]];
+    meso_vec3 dp1 = meso_vec3_sub(mesh->positions[v[1]], p0);
+    meso_vec3 dp2 = meso_vec3_sub(mesh->positions[v[2]], p0);
+    meso_vec3 dn1 = meso_vec3_sub(mesh->normals[v[1]], n0);
+    meso_vec3 dn2 = meso_vec3_sub(mesh->normals[v[2]], n0);
+    meso_vec3 uvw = guess;
+    for (int k = 0; k < iterations; k++) {
+        float du = uvw.x - prism->uv[0].x, dv = uvw.y - prism->uv[0].y;
+        float b1 = inv[0] * du + inv[1] * dv, b2 = inv[2] * du + inv[3] * dv;
+        float s = -uvw.z * depth;
+        /* the shell's edges at this w, and the normal at (b1, b2) */
+        meso_vec3 e1 = meso_vec3_madd(dp1, dn1, s), e2 = meso_vec3_madd(dp2, dn2, s);
+        meso_vec3 n = meso_vec3_madd(meso_vec3_madd(n0, dn1, b1), dn2, b2);
+        meso_vec3 residual = meso_vec3_sub(
+            meso_vec3_madd(meso_vec3_madd(meso_vec3_madd(p0, n0, s), e1, b1), e2, b2), x);
+        /* the Jacobian's columns: d/du and d/dv through the weights, d/dw = -depth n */
+        meso_vec3 ju = meso_vec3_add(meso_vec3_scale(e1, inv[0]), meso_vec3_scale(e2, inv[2]));
+        meso_vec3 jv = meso_vec3_add(meso_vec3_scale(e1, inv[1]), meso_vec3_scale(e2, inv[3]));
+        meso_vec3 jw = meso_vec3_scale(n, -depth);
+        /* J^-1 r by Cramer's rule: the rows of J^-1 are the cofactor columns over det */
+        meso_vec3 cu = meso_vec3_cross(jv, jw), cv = meso_vec3_cross(jw, ju);
+        meso_vec3 cw = meso_vec3_cross(ju, jv);
+        float det = meso_vec3_dot(ju, cu);
+        if (!(det != 0.0f) || !isfinite(det)) return uvw;
+        float r = 1.0f / det;
+        uvw.x -= meso_vec3_dot(cu, residual) * r;
+        uvw.y -= meso_vec3_dot(cv, residual) * r;
+        uvw.z -= meso_vec3_dot(cw, residual) * r;
+    }
+    return uvw;
+}
+
 /* Barycentric weights of uv in the prism's UV triangle (the b_i of the overview). Pure. */
 static inline void meso_prism_weights(const meso_prism *prism, meso_vec2 uv, float out[3]) {
     float dx = uv.x - prism->uv[0].x, dy = uv.y - prism->uv[0].y;

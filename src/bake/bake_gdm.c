@@ -2,10 +2,10 @@
  * lookups and bake files. Conventions in include/meso/bake_gdm.h; docs/techniques/gdm.md
  * ("Bake and compression") has the measurements behind the choices below.
  *
- * Rays are traced with Embree against a watertight triangle surface of the solid (surface nets
- * of meso_bake_isosurface for solids, the texel-centre grid for height fields), inside the
- * tile's column 0 <= u, v <= 1 and wrapped across its sides (GDM §3.1: the volume surrounded
- * by identical tiles). Whether a voxel is inside is decided on the source itself (the solid's
+ * Rays are traced with Embree against a watertight triangle surface of the solid (the dual
+ * contouring of meso_bake_isosurface for solids, the texel-centre grid for height fields), inside
+ * the tile's column 0 <= u, v <= 1 and wrapped across its sides (GDM §3.1: the volume surrounded by
+ * identical tiles). Whether a voxel is inside is decided on the source itself (the solid's
  * distance, w >= 1 - h), and a ray that starts outside it takes the first hit where it enters
  * the surface: a surface that bulges a little past the source cannot turn a free voxel's ray
  * into a hit at distance 0. */
@@ -21,7 +21,7 @@
 
 /* The solid's surface is extracted this many times finer than the voxels in every direction,
  * and at least SURFACE_MIN_CELLS_UV x SURFACE_MIN_CELLS_UV x SURFACE_MIN_CELLS_W cells a tile:
- * the surface nets' error is a fraction of one of its cells (docs/techniques/gdm.md), and a
+ * the extraction's error is a fraction of one of its cells (docs/techniques/gdm.md), and a
  * coarse table should not have a coarse surface too. */
 #define SURFACE_REFINE 2
 #define SURFACE_MIN_CELLS_UV 128
@@ -590,7 +590,7 @@ meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm
      * surface, the raw table when kept. Holding A between the passes is extra, taken only if
      * it fits. */
     uint64_t table_bytes = (uint64_t)rows * (uint64_t)columns * sizeof(float);
-    /* The surface: a height field's triangles are known now; a solid's surface nets need
+    /* The surface: a height field's triangles are known now; a solid's extraction needs
      * their node grid (a float and a vertex index a node), and their triangles are checked
      * once counted (surface_build). */
     meso_isosurface_desc cells = surface_cells_of(&d);

@@ -1,10 +1,14 @@
-/* Texture-space surface extraction of solid mesostructure: surface nets, a dual contouring
- * method, on a periodic grid (see include/meso/bake_isosurface.h for the contract).
+/* Texture-space surface extraction of solid mesostructure: dual contouring on a periodic grid
+ * (see include/meso/bake_isosurface.h for the contract).
  *
  * Steps: (1) sample the field at every node (parallel over w layers); (2) give every cell whose
- * corners change sign one vertex, the mean of the points where its twelve edges cross zero
- * (each crossing computed from the edge's lower node to its higher node, so neighbouring cells
- * agree); cells one step below u = 0 and v = 0 are copies of the last cells shifted by -1, so
+ * corners change sign one vertex (cell_vertex_position): each of its edges that changes sign
+ * has a zero crossing, found on the field from the edge's lower node toward its higher one (so
+ * neighbouring cells agree), and the field's normal there; the vertex is the least-squares
+ * meeting point of those planes, weakly pulled toward the crossings' mean and kept in the cell.
+ * The mean alone (surface nets, used until 2026-12-02) cut sharp edges by up to a cell, which on
+ * grid-vase's bars kept the reference 33 dB from a finer one (docs/reference.md); cells one
+ * step below u = 0 and v = 0 are copies of the last cells shifted by -1, so
  * a tile's border quads use exactly the vertices the neighbouring tile uses; (3) for every
  * grid edge that changes sign, one quad (two triangles) through the vertices of the four cells
  * around it. Each quad is shared by nothing else and every cell vertex is shared by all quads
@@ -15,10 +19,19 @@
  * (376832 against ~120000 a tile for the weave at 128 x 128 x 32), which the reference's BVH
  * build could not afford on the weave-torus scene.
  */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "meso/bake_isosurface.h"
+
+/* Dual contouring's settings (cell_vertex_position): at most this many regula falsi steps for an
+ * edge's crossing, the gradient's difference step and the pull toward the crossings' mean, in
+ * cells. */
+#define ISO_CROSSING_ITERATIONS 8
+#define ISO_CROSSING_TOLERANCE 1e-3f /* of the edge: the bracket's width that ends the search */
+#define ISO_GRADIENT_STEP 0.01f
+#define ISO_QEF_PULL 0.02
 
 typedef struct grid {
     int ru, rv, rw;        /* cells per tile */
@@ -65,6 +78,15 @@ static bool inside(float value) { return value < 0.0f; }
 
 /* ---- Sampling ----------------------------------------------------------------------------- */
 
+/* The field as the grid samples it: the slab 0 <= w <= 1 closes the solid (header), NaN
+ * counts as outside. */
+static float closed_field(const grid *g, meso_vec3 p) {
+    float f = g->field(g->user, p);
+    float slab = p.z < 0.5f ? -p.z : p.z - 1.0f;
+    if (!(f == f)) f = 1.0f;
+    return f > slab ? f : slab;
+}
+
 static void sample_layer(void *user, size_t job, int thread_index) {
     grid *g = user;
     int k = (int)job;
@@ -72,13 +94,9 @@ static void sample_layer(void *user, size_t job, int thread_index) {
         for (int i = 0; i < g->nu; i++) {
             /* periodic: the last node column/row samples the first again, bit for bit */
             int si = i == g->ru ? 0 : i, sj = j == g->rv ? 0 : j;
-            meso_vec3 p = node_position(g, si, sj, k);
-            float f = g->field(g->user, p);
-            /* the slab 0 <= w <= 1 closes the solid (header); a node exactly on it counts as
-             * outside, so the cap lies exactly at w = 0 and w = 1 */
-            float slab = p.z < 0.5f ? -p.z : p.z - 1.0f;
-            if (!(f == f)) f = 1.0f; /* NaN counts as outside */
-            g->values[node_index(g, i, j, k)] = f > slab ? f : slab;
+            /* a node exactly on the slab's faces counts as outside (closed_field), so the cap
+             * lies exactly at w = 0 and w = 1 */
+            g->values[node_index(g, i, j, k)] = closed_field(g, node_position(g, si, sj, k));
         }
 }
 
@@ -90,28 +108,120 @@ static const unsigned char cube_edges[12][2] = {
     {0, 1}, {2, 3}, {4, 5}, {6, 7}, {0, 2}, {1, 3}, {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7},
 };
 
-/* Whether cell (i, j, k) (i, j in [0, ru), [0, rv)) has a vertex, and where. */
-static bool cell_vertex_position(const grid *g, int i, int j, int k, meso_vec3 *out) {
-    float value[8];
+/* Whether cell (i, j, k) (i, j in [0, ru), [0, rv)) has corners on both sides. */
+static bool cell_has_vertex(const grid *g, int i, int j, int k) {
     int n_in = 0;
-    for (int c = 0; c < 8; c++) {
-        value[c] = g->values[node_index(g, i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1))];
-        n_in += inside(value[c]);
+    for (int c = 0; c < 8; c++)
+        n_in +=
+            inside(g->values[node_index(g, i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1))]);
+    return n_in != 0 && n_in != 8;
+}
+
+/* Where the field crosses zero on the edge pa -> pb (fa = F(pa) inside-or-not unlike fb): the
+ * linear guess from the node values refined on the field itself by regula falsi (Illinois), so
+ * that the crossing is the surface's to a small fraction of a cell whatever the field's
+ * curvature (a box's distance is not linear across its edges). The edge is always taken from its
+ * lower node to its higher one, so every cell around it finds the same point. */
+static meso_vec3 edge_crossing(const grid *g, meso_vec3 pa, meso_vec3 pb, float fa, float fb) {
+    float lo = 0.0f, hi = 1.0f;
+    bool side_lo = inside(fa);
+    for (int iteration = 0; iteration < ISO_CROSSING_ITERATIONS; iteration++) {
+        float t = lo + (hi - lo) * (fa / (fa - fb));
+        if (!(t > lo && t < hi)) t = 0.5f * (lo + hi); /* rounding, or equal values */
+        float ft = closed_field(g, meso_vec3_lerp(pa, pb, t));
+        if (ft == 0.0f) return meso_vec3_lerp(pa, pb, t);
+        if (inside(ft) == side_lo) {
+            lo = t, fa = ft;
+            fb *= 0.5f; /* Illinois: the end that stays is halved, against slow convergence */
+        } else {
+            hi = t, fb = ft;
+            fa *= 0.5f;
+        }
+        if (hi - lo < ISO_CROSSING_TOLERANCE) break;
     }
-    if (n_in == 0 || n_in == 8) return false;
-    meso_vec3 sum = {0, 0, 0};
+    float t = lo + (hi - lo) * (fa / (fa - fb));
+    if (!(t >= lo && t <= hi)) t = 0.5f * (lo + hi);
+    return meso_vec3_lerp(pa, pb, t);
+}
+
+/* The field's gradient at p in the cell's units (u * ru, v * rv, w * rw), unit; zero where it
+ * vanishes. Central differences a small fraction of a cell wide. */
+static meso_vec3 cell_gradient(const grid *g, meso_vec3 p) {
+    meso_vec3 h = {ISO_GRADIENT_STEP / (float)g->ru, ISO_GRADIENT_STEP / (float)g->rv,
+                   ISO_GRADIENT_STEP / (float)g->rw};
+    meso_vec3 n = {
+        closed_field(g, (meso_vec3){p.x + h.x, p.y, p.z}) -
+            closed_field(g, (meso_vec3){p.x - h.x, p.y, p.z}),
+        closed_field(g, (meso_vec3){p.x, p.y + h.y, p.z}) -
+            closed_field(g, (meso_vec3){p.x, p.y - h.y, p.z}),
+        closed_field(g, (meso_vec3){p.x, p.y, p.z + h.z}) -
+            closed_field(g, (meso_vec3){p.x, p.y, p.z - h.z}),
+    };
+    float len2 = meso_vec3_dot(n, n);
+    return len2 > 0.0f && isfinite(len2) ? meso_vec3_scale(n, 1.0f / sqrtf(len2))
+                                         : (meso_vec3){0.0f, 0.0f, 0.0f};
+}
+
+/* Cell (i, j, k)'s vertex (i, j in [0, ru), [0, rv); the cell has corners on both sides): dual
+ * contouring (Ju et al. 2002). Each edge crossing with the field's normal there is a plane the
+ * surface passes through; the vertex is the point nearest all of them in the least-squares
+ * sense, pulled weakly toward the crossings' mean where they leave a direction free (a flat
+ * face: along it; an edge: along the edge), and kept inside the cell. The mean alone (surface
+ * nets) cuts a box's edges and corners off by up to a cell: on grid-vase's thin bars that was
+ * the reference's largest error (docs/reference.md). In double, in cell units. */
+static meso_vec3 cell_vertex_position(const grid *g, int i, int j, int k) {
+    float value[8];
+    for (int c = 0; c < 8; c++)
+        value[c] = g->values[node_index(g, i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1))];
+    meso_vec3 origin = node_position(g, i, j, k);
+    double scale[3] = {g->ru, g->rv, g->rw};
+    double ata[3][3] = {{0}}, atb[3] = {0}, mean[3] = {0};
     int count = 0;
     for (int e = 0; e < 12; e++) {
         int a = cube_edges[e][0], b = cube_edges[e][1];
         if (inside(value[a]) == inside(value[b])) continue;
         meso_vec3 pa = node_position(g, i + (a & 1), j + ((a >> 1) & 1), k + ((a >> 2) & 1));
         meso_vec3 pb = node_position(g, i + (b & 1), j + ((b >> 1) & 1), k + ((b >> 2) & 1));
-        float t = value[a] / (value[a] - value[b]);
-        sum = meso_vec3_add(sum, meso_vec3_lerp(pa, pb, t));
+        meso_vec3 p = edge_crossing(g, pa, pb, value[a], value[b]);
+        meso_vec3 n = cell_gradient(g, p);
+        double x[3] = {((double)p.x - origin.x) * scale[0], ((double)p.y - origin.y) * scale[1],
+                       ((double)p.z - origin.z) * scale[2]};
+        double nn[3] = {n.x, n.y, n.z};
+        double d = nn[0] * x[0] + nn[1] * x[1] + nn[2] * x[2];
+        for (int r = 0; r < 3; r++) {
+            for (int c = 0; c < 3; c++) ata[r][c] += nn[r] * nn[c];
+            atb[r] += nn[r] * d;
+            mean[r] += x[r];
+        }
         count++;
     }
-    *out = meso_vec3_scale(sum, 1.0f / (float)count);
-    return true;
+    double lambda = ISO_QEF_PULL * count;
+    for (int r = 0; r < 3; r++) {
+        mean[r] /= count;
+        ata[r][r] += lambda;
+        atb[r] += lambda * mean[r];
+    }
+    /* (A^T A + lambda I) x = A^T b + lambda mean: symmetric positive definite (lambda > 0), by
+     * Cramer's rule */
+    double(*m)[3] = ata;
+    double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+                 m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                 m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    double x[3] = {mean[0], mean[1], mean[2]};
+    if (det > 0.0 && isfinite(det)) {
+        for (int c = 0; c < 3; c++) {
+            double col[3][3];
+            memcpy(col, m, sizeof col);
+            for (int r = 0; r < 3; r++) col[r][c] = atb[r];
+            x[c] = (col[0][0] * (col[1][1] * col[2][2] - col[1][2] * col[2][1]) -
+                    col[0][1] * (col[1][0] * col[2][2] - col[1][2] * col[2][0]) +
+                    col[0][2] * (col[1][0] * col[2][1] - col[1][1] * col[2][0])) /
+                   det;
+        }
+    }
+    for (int r = 0; r < 3; r++) x[r] = x[r] > 0.0 ? (x[r] < 1.0 ? x[r] : 1.0) : 0.0;
+    return (meso_vec3){(float)(origin.x + x[0] / scale[0]), (float)(origin.y + x[1] / scale[1]),
+                       (float)(origin.z + x[2] / scale[2])};
 }
 
 typedef struct vertex_pass {
@@ -127,8 +237,8 @@ static void vertices_layer(void *user, size_t job, int thread_index) {
     size_t count = 0, next = pass->positions ? pass->layer_offsets[k] : 0;
     for (int j = -1; j < g->rv; j++)
         for (int i = -1; i < g->ru; i++) {
-            meso_vec3 p;
-            bool has = cell_vertex_position(g, i < 0 ? g->ru - 1 : i, j < 0 ? g->rv - 1 : j, k, &p);
+            int ci = i < 0 ? g->ru - 1 : i, cj = j < 0 ? g->rv - 1 : j;
+            bool has = cell_has_vertex(g, ci, cj, k);
             if (!pass->positions) {
                 count += has;
                 continue;
@@ -138,6 +248,7 @@ static void vertices_layer(void *user, size_t job, int thread_index) {
                 *slot = UINT32_MAX;
                 continue;
             }
+            meso_vec3 p = cell_vertex_position(g, ci, cj, k);
             /* exact (Sterbenz): p.x is within a cell of 1, so tile + (p.x - 1) equals
              * (tile - 1) + p.x bit for bit */
             if (i < 0) p.x -= 1.0f;
