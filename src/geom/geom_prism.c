@@ -284,20 +284,23 @@ bool meso_prism_layer_exit(const meso_prism_layer *layer, size_t prism, meso_vec
     float times[MESO_PRISM_NUM_FACES];
     leave_times(layer->plane_lanes + prism * 4 * MESO_PRISM_NUM_FACES, origin, direction, tolerance,
                 entry_slot, times);
+    /* the top, the bottom, then the three fins, in slot order (a loop of constant trip count,
+     * unrolled: gdm calls this for every fragment and every crossing of its shadow walk) */
     float best = INFINITY;
     int best_slot = -1;
-    for (int slot = 0; slot < MESO_PRISM_NUM_FACES; slot += slot < MESO_PRISM_FIN ? 1 : 2) {
-        float t = times[slot];
-        int which = slot;
-        if (slot >= MESO_PRISM_FIN) {
-            float t2 = times[slot + 1];
-            bool convex = layer->fin_convex[3 * prism + (size_t)(slot - MESO_PRISM_FIN) / 2];
-            /* Fig. 5: a convex fin bounds the intersection of its two half-spaces (the nearer
-             * plane), a concave one their union (the farther) */
-            bool first = convex ? t <= t2 : t >= t2;
-            t = first ? t : t2;
-            which = first ? slot : slot + 1;
-        }
+    if (times[MESO_PRISM_TOP] < best) best = times[MESO_PRISM_TOP], best_slot = MESO_PRISM_TOP;
+    if (times[MESO_PRISM_BOTTOM] < best)
+        best = times[MESO_PRISM_BOTTOM], best_slot = MESO_PRISM_BOTTOM;
+#pragma GCC unroll 3
+    for (int e = 0; e < 3; e++) {
+        int slot = MESO_PRISM_FIN + 2 * e;
+        float t = times[slot], t2 = times[slot + 1];
+        bool convex = layer->fin_convex[3 * prism + (size_t)e];
+        /* Fig. 5: a convex fin bounds the intersection of its two half-spaces (the nearer
+         * plane), a concave one their union (the farther) */
+        bool first = convex ? t <= t2 : t >= t2;
+        t = first ? t : t2;
+        int which = first ? slot : slot + 1;
         if (t < best) {
             best = t;
             best_slot = which;

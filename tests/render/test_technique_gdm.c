@@ -57,6 +57,26 @@ static void test_lookup_atan2_is_within_3e7_radians(void **state) {
     assert_true(fabs(gdm_atan2(-1.0f, 0.0f) + 0.5 * 3.14159265358979) < 3e-7);
 }
 
+/* gdm_axis_wrap gives meso_axis_wrap's indices and weight bit for bit, on power-of-two periods
+ * (the mask) and others (the remainder), for positions in and far outside [0, n), negative
+ * ones and exact integers included. */
+static void test_lookup_axis_wrap_equals_math_h(void **state) {
+    (void)state;
+    const int periods[] = {1, 2, 3, 32, 64, 100, 128};
+    unsigned seed = 11;
+    for (size_t p = 0; p < sizeof periods / sizeof periods[0]; p++) {
+        int n = periods[p];
+        for (int i = 0; i < 20000; i++) {
+            float x = (test_uniform(&seed) * 2.0f - 1.0f) * (float)(i % 3 == 0 ? n : 40 * n);
+            if (i % 7 == 0) x = floorf(x); /* on a texel centre */
+            meso_axis a = meso_axis_wrap(x, n), b = gdm_axis_wrap(x, n);
+            assert_int_equal(a.i0, b.i0);
+            assert_int_equal(a.i1, b.i1);
+            assert_memory_equal(&a.w, &b.w, sizeof a.w);
+        }
+    }
+}
+
 /* gdm_fminf and gdm_fmaxf give libm's fminf and fmaxf bits, infinities, subnormals and NaNs
  * included (a NaN result only as a NaN). Of two zeros either may come back: C allows both and
  * GCC, taking fminf as commutative, may swap the call's operands, so libm's own pick varies
@@ -377,6 +397,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_lookup_atan2_is_within_3e7_radians),
         cmocka_unit_test(test_inline_fmin_fmax_equal_libm),
+        cmocka_unit_test(test_lookup_axis_wrap_equals_math_h),
         cmocka_unit_test(test_lookup8_equals_the_bakes_lookup),
         cmocka_unit_test(test_closed_mesh_with_a_constant_height_field_has_no_gap),
         cmocka_unit_test(test_hits_lie_on_the_ray_in_a_curved_prism),

@@ -41,6 +41,11 @@ typedef struct gdm_state {
     const meso_solid *solid;
     float depth;       /* world units */
     float probe_scale; /* a height field's (1 - h) - w times this bounds the distance */
+    /* a height field's slope bounds: |dh/du| <= slope_u, |dh/dv| <= slope_v (texture units) */
+    float slope_u, slope_v;
+    /* a repeating height field whose sides are powers of two: side - 1 (heightfield_sample's
+     * wrap by a mask); 0 otherwise */
+    int wrap_mask_u, wrap_mask_v;
     /* height fields: w below which nothing is solid, in each prism's column (prism_clear)
      * and anywhere (clear_w); -1 for solids */
     float *prism_clear, clear_w, map_max;
@@ -150,8 +155,10 @@ static void gdm_release(void *state) {
 
 /* 1 / the Lipschitz constant of (1 - h(u, v)) - w in (u, v, w): h is bilinear between texel
  * centres, so its slope along u is at most the largest step between neighbouring texels
- * (wrapped pairs included: at worst an overestimate) times the width, likewise along v. */
-static float heightfield_probe_scale(const meso_heightfield *hf) {
+ * (wrapped pairs included: at worst an overestimate) times the width, likewise along v. The
+ * two slope bounds go to *out_slope_u, *out_slope_v (ray_probe_start's bound along a ray). */
+static float heightfield_probe_scale(const meso_heightfield *hf, float *out_slope_u,
+                                     float *out_slope_v) {
     float step_u = 0.0f, step_v = 0.0f;
     for (int j = 0; j < hf->height; j++)
         for (int i = 0; i < hf->width; i++) {
@@ -160,6 +167,7 @@ static float heightfield_probe_scale(const meso_heightfield *hf) {
             step_v = fmaxf(step_v, fabsf(meso_heightfield_texel(hf, i, j + 1) - h));
         }
     float gu = step_u * (float)hf->width, gv = step_v * (float)hf->height;
+    *out_slope_u = gu, *out_slope_v = gv;
     float lipschitz = sqrtf(1.0f + gu * gu + gv * gv);
     return isfinite(lipschitz) ? 1.0f / lipschitz : 0.0f;
 }
@@ -308,6 +316,8 @@ static bool solid_grid(meso_context *ctx, gdm_state *s) {
 
 static bool state_inside(const void *state, meso_vec3 uvw);
 static bool state_segment_outside(const void *state, meso_vec3 a, meso_vec3 b);
+static bool state_probes_inside(const void *state, meso_vec3 t0, meso_vec3 dir, float first,
+                                float length, int steps);
 
 static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
                                const meso_object *object, void **out_state) {
@@ -361,7 +371,15 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
     s->refine_window = 3.0f / (float)(options.layers - 1);
     s->voxel = (meso_vec3){1.0f / (float)options.resolution, 1.0f / (float)options.resolution,
                            1.0f / (float)(options.layers - 1)};
-    s->probe_scale = desc.heightfield ? heightfield_probe_scale(desc.heightfield) : 1.0f;
+    if (desc.heightfield && desc.heightfield->wrap != MESO_WRAP_CLAMP &&
+        !(desc.heightfield->width & (desc.heightfield->width - 1)) &&
+        !(desc.heightfield->height & (desc.heightfield->height - 1))) {
+        s->wrap_mask_u = desc.heightfield->width - 1;
+        s->wrap_mask_v = desc.heightfield->height - 1;
+    }
+    s->probe_scale = desc.heightfield
+                         ? heightfield_probe_scale(desc.heightfield, &s->slope_u, &s->slope_v)
+                         : 1.0f;
     if ((r = meso_prism_layer_create(ctx, object->mesh, ms->depth, object->name, &s->layer)) !=
         MESO_OK)
         goto fail;
@@ -407,7 +425,8 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
                                .shadow_steps = s->shadow_steps,
                                .inside = state_inside,
                                .inside_user = s,
-                               .segment_outside = s->heightfield ? state_segment_outside : NULL},
+                               .segment_outside = s->heightfield ? state_segment_outside : NULL,
+                               .probes_inside = state_probes_inside},
              object->name, &s->shell)) != MESO_OK)
         goto fail;
     if (options.gi && scene->environment &&
@@ -535,7 +554,36 @@ static inline meso_vec3 texture_direction(const texture_frame *f, meso_vec3 x) {
 
 /* ---- The mesostructure itself (normals; the refinement beyond the paper) ------------------- */
 
+/* meso_heightfield_sample(s->heightfield, u, v), bit for bit (the same float operations in the
+ * same order), with a repeating map's texel indices wrapped by a mask where its sides are
+ * powers of two: gdm's (u, v) run over several tiles (uv_scale 6 x 3 on bumps-sphere), so most
+ * samples took the header's wrap, two integer divisions. i & (n - 1) is the header's wrapped
+ * index for every int i when n is a power of two (two's complement). */
+__attribute__((noinline)) static float heightfield_sample_any(const meso_heightfield *hf, float u,
+                                                              float v) {
+    return meso_heightfield_sample(hf, u, v);
+}
+
+static inline float heightfield_sample(const gdm_state *s, float u, float v) {
+    const meso_heightfield *hf = s->heightfield;
+    if (!s->wrap_mask_u) return heightfield_sample_any(hf, u, v);
+    float x = u * (float)hf->width - 0.5f;
+    float y = (1.0f - v) * (float)hf->height - 0.5f;
+    float fx = floorf(x), fy = floorf(y);
+    float tx = x - fx, ty = y - fy;
+    int i = (int)fx, j = (int)fy;
+    int i0 = i & s->wrap_mask_u, i1 = (int)((unsigned)i + 1u) & s->wrap_mask_u;
+    int j0 = j & s->wrap_mask_v, j1 = (int)((unsigned)j + 1u) & s->wrap_mask_v;
+    const float *row0 = hf->heights + (size_t)j0 * (size_t)hf->width;
+    const float *row1 = hf->heights + (size_t)j1 * (size_t)hf->width;
+    float h00 = row0[i0], h10 = row0[i1], h01 = row1[i0], h11 = row1[i1];
+    float top = h00 + (h10 - h00) * tx, bottom = h01 + (h11 - h01) * tx;
+    return top + (bottom - top) * ty;
+}
+
+/* gdm_mesostructure_inside (gdm_shell_shadow.h) through heightfield_sample: the same answer. */
 static inline bool inside_mesostructure(const gdm_state *s, meso_vec3 uvw) {
+    if (s->heightfield) return uvw.z >= 1.0f - heightfield_sample(s, uvw.x, uvw.y);
     return gdm_mesostructure_inside(s->heightfield, s->solid, uvw);
 }
 
@@ -545,7 +593,16 @@ static inline bool inside_mesostructure(const gdm_state *s, meso_vec3 uvw) {
  * is a height field's (1 - h) - w scaled by probe_scale; every point nearer than |f| to a
  * sample is on the same side of the surface. A probe there gets the same answer without
  * evaluating the mesostructure (the weave's distance function was 56 % of weave-torus's
- * frame): the answers, and so the images, are those of evaluating every probe. */
+ * frame): the answers, and so the images, are those of evaluating every probe.
+ *
+ * Along one ray a height field's f changes faster than |dir.z| + |dir.x| slope_u + |dir.y|
+ * slope_v per unit of x nowhere (h is bilinear: its slope along u is at most slope_u, along v
+ * slope_v), at most probe_scale's sqrt(1 + slope_u^2 + slope_v^2) and much less where the ray
+ * is steep in (u, v, w) -- where the shell is thin against a tile, most rays: bumps-sphere's
+ * light rays and view rays are. So a sample's |f| proves `scale` |f| of the ray; the rounding
+ * margin is the one the isotropic bound had, in f's units (margin = 1e-6 scale / probe_scale),
+ * so a probe proven here differs from its evaluation only where one proven by the isotropic
+ * bound could. */
 typedef struct ray_probe {
     /* the path t0 + x dir + x (length - x) bow: a line where bow is zero (light rays), the view
      * ray's curve through its prism otherwise (view_path) */
@@ -554,6 +611,7 @@ typedef struct ray_probe {
     float stretch; /* 1 / the bound of |dp/dx| on [0, length]: distances along x to (u, v, w) */
     float x[2], radius[2]; /* [0] the last outside sample, [1] the last inside: where, |f| */
     float clear_w;         /* outside above this w (height fields; prism_clear, clear_w) */
+    float scale, margin;   /* height fields: a sample proves scale |f| of x, less margin */
 } ray_probe;
 
 /* A solid's distance at p, or a value of its sign: the nearest node of the solid's distance
@@ -606,9 +664,41 @@ static bool state_segment_outside(const void *state, meso_vec3 a, meso_vec3 b) {
     return gdm_fmaxf(a.z, b.z) + 1e-6f < 1.0f - highest - 1e-6f;
 }
 
-static inline ray_probe ray_probe_start(meso_vec3 t0, meso_vec3 dir, float clear_w) {
-    return (ray_probe){
+static inline ray_probe ray_probe_start(const gdm_state *s, meso_vec3 t0, meso_vec3 dir,
+                                        float clear_w) {
+    ray_probe r = {
         .t0 = t0, .dir = dir, .stretch = 1.0f, .radius = {-1.0f, -1.0f}, .clear_w = clear_w};
+    r.margin = 1e-6f; /* solids: solid_probe's radius is the bound itself */
+    if (s->heightfield && s->probe_scale > 0.0f) {
+        float rate = fabsf(dir.z) + fabsf(dir.x) * s->slope_u + fabsf(dir.y) * s->slope_v;
+        r.scale = 1.0f / rate;
+        r.margin = 1e-6f * r.scale / s->probe_scale;
+        if (!(r.scale >= s->probe_scale) || !isfinite(r.margin)) /* rounding, 0 or NaN: */
+            r.scale = s->probe_scale, r.margin = 1e-6f;          /* the isotropic bound */
+    }
+    return r;
+}
+
+/* The probe's path bent into the view ray's curve through its prism: p(x) = t0 + x dir +
+ * x (length - x) bow, |p'| <= stretch on [0, length]. A height field's bound along the path
+ * takes each component's largest rate there, |dir_c| + |bow_c| length (p'(x) = dir + (length
+ * - 2 x) bow), in place of stretch; a solid's (isotropic) bound is scaled by stretch. */
+static inline void ray_probe_bend(const gdm_state *s, ray_probe *r, meso_vec3 bow, float length,
+                                  float stretch) {
+    r->bow = bow;
+    r->length = length;
+    r->stretch = stretch;
+    if (!s->heightfield || !(s->probe_scale > 0.0f)) return;
+    float rate = (fabsf(r->dir.z) + fabsf(bow.z) * length) +
+                 (fabsf(r->dir.x) + fabsf(bow.x) * length) * s->slope_u +
+                 (fabsf(r->dir.y) + fabsf(bow.y) * length) * s->slope_v;
+    r->scale = 1.0f / rate;
+    r->margin = 1e-6f * r->scale / s->probe_scale;
+    r->stretch = 1.0f; /* in the scale */
+    if (!(r->scale * stretch >= s->probe_scale) || !isfinite(r->margin)) {
+        /* the isotropic bound along the path */
+        r->scale = s->probe_scale, r->margin = 1e-6f, r->stretch = stretch;
+    }
 }
 
 /* The point at x along the probe's path. */
@@ -618,13 +708,14 @@ static inline meso_vec3 ray_probe_point(const ray_probe *r, float x) {
 
 static inline bool ray_probe_inside(const gdm_state *s, ray_probe *r, float x) {
     for (int side = 0; side < 2; side++) /* 0.999, 1e-6: positions are rounded, bounds tight */
-        if (fabsf(x - r->x[side]) * r->stretch < 0.999f * r->radius[side] - 1e-6f) return side == 1;
+        if (fabsf(x - r->x[side]) * r->stretch < 0.999f * r->radius[side] - r->margin)
+            return side == 1;
     meso_vec3 p = ray_probe_point(r, x);
     if (p.z < r->clear_w) return false;
     float f, radius;
     if (s->heightfield) { /* inside_mesostructure's test: w >= 1 - h is (1 - h) - w <= 0 */
-        f = (1.0f - meso_heightfield_sample(s->heightfield, p.x, p.y)) - p.z;
-        radius = fabsf(f) * s->probe_scale;
+        f = (1.0f - heightfield_sample(s, p.x, p.y)) - p.z;
+        radius = fabsf(f) * r->scale;
     } else {
         f = solid_probe(s, p, &radius);
     }
@@ -632,6 +723,20 @@ static inline bool ray_probe_inside(const gdm_state *s, ray_probe *r, float x) {
     r->x[side] = x;
     r->radius[side] = radius;
     return side == 1;
+}
+
+/* gdm_shell_desc.probes_inside: the walk's probes of a prism's segment (segment_blocked) as a
+ * ray_probe, so that a sample's |f| answers the probes near it; each answer is state_inside's
+ * (above a height field's clear_w: outside; else the sample or a solid's grid), so the walk's
+ * answers are the same. */
+static bool state_probes_inside(const void *state, meso_vec3 t0, meso_vec3 dir, float first,
+                                float length, int steps) {
+    const gdm_state *s = state;
+    ray_probe probe = ray_probe_start(s, t0, dir, s->heightfield ? s->clear_w : -1.0f);
+    if (first >= 0.0f && ray_probe_inside(s, &probe, first)) return true;
+    for (int k = 0; k < steps; k++)
+        if (ray_probe_inside(s, &probe, length * ((float)k + 0.5f) / (float)steps)) return true;
+    return false;
 }
 
 /* Beyond the paper (docs/techniques/gdm.md): d interpolated across an occluding edge lands
@@ -695,8 +800,16 @@ static meso_vec3 texture_normal(const gdm_state *s, meso_vec3 uvw) {
     if (s->baked_normals) return meso_gdm_normal(s->gdm, uvw);
     if (s->heightfield) {
         /* the solid w >= 1 - h: outward gradient of (1 - h) - w */
-        meso_vec2 g = meso_heightfield_gradient(s->heightfield, uvw.x, uvw.y);
-        return (meso_vec3){-g.x, -g.y, -1.0f};
+        /* meso_heightfield_gradient's central differences, through heightfield_sample */
+        const meso_heightfield *hf = s->heightfield;
+        float du = 1.0f / (float)hf->width, dv = 1.0f / (float)hf->height;
+        float hu =
+            (heightfield_sample(s, uvw.x + du, uvw.y) - heightfield_sample(s, uvw.x - du, uvw.y)) /
+            (2.0f * du);
+        float hv =
+            (heightfield_sample(s, uvw.x, uvw.y + dv) - heightfield_sample(s, uvw.x, uvw.y - dv)) /
+            (2.0f * dv);
+        return (meso_vec3){-hu, -hv, -1.0f};
     }
     return meso_solid_gradient(s->solid, gdm_tile_point(uvw));
 }
@@ -756,10 +869,14 @@ __attribute__((flatten)) static bool shadowed(const gdm_state *s, meso_vec3 t, m
                                          gdm_fminf(t.y, end.y), gdm_fmaxf(t.y, end.y));
             clear_w = gdm_fmaxf(clear_w, 1.0f - highest - 1e-6f);
         }
-        ray_probe probe = ray_probe_start(t, lt, clear_w);
+        ray_probe probe = ray_probe_start(s, t, lt, clear_w);
         if (ray_probe_inside(s, &probe, d + 0.5f * s->refine_window)) return true;
         for (int k = 0; k < s->shadow_steps; k++) {
             float x = boundary * ((float)k + 0.5f) / (float)s->shadow_steps;
+            /* the light rises (lt.z < 0) and x grows: from the first probe above clear_w on,
+             * every probe is (each would answer outside: no inside sample is remembered, the
+             * first one returns) */
+            if (t.z + lt.z * x < clear_w) return false;
             if (ray_probe_inside(s, &probe, x)) return true;
         }
         return false;
@@ -791,10 +908,6 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
     meso_vec3 p_out = meso_vec3_madd(f->position, view, t);
     meso_vec3 t_out = meso_prism_layer_face_uvw(
         layer, meso_prism_layer_face(layer, prism_index, exit_slot), p_out);
-    meso_vec3 segment = meso_vec3_sub(t_out, t_in);
-    float dt = meso_vec3_length(segment);
-    if (!(dt > 1e-7f)) return false;
-    meso_vec3 vt = meso_vec3_scale(segment, 1.0f / dt);
     /* height fields: outside above this w on the segment (the refinement's probes) */
     float clear_w = s->prism_clear ? s->prism_clear[prism_index] : -1.0f;
     if (s->window_max && s->refine_steps > 0) {
@@ -802,13 +915,20 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
          * (below), near the segment; when the segment stays above the highest texel its (u, v)
          * box can read (a texel's margin each side), the probes are outside and it misses,
          * known without the lookup: most fins of a sphere's outline band are crossed above
-         * the bumps. */
+         * the bumps. The prism's own clearance (its whole column, which the path stays in;
+         * one read) settles some before the box's. */
+        float top = gdm_fmaxf(t_in.z, t_out.z) + 1e-6f;
+        if (top < clear_w) return false;
         float highest = window_bound(s, gdm_fminf(t_in.x, t_out.x), gdm_fmaxf(t_in.x, t_out.x),
                                      gdm_fminf(t_in.y, t_out.y), gdm_fmaxf(t_in.y, t_out.y));
         clear_w = gdm_fmaxf(clear_w, 1.0f - highest - 1e-6f);
-        if (gdm_fmaxf(t_in.z, t_out.z) + 1e-6f < clear_w) return false;
+        if (top < clear_w) return false;
     }
-    ray_probe path = ray_probe_start(t_in, vt, clear_w);
+    meso_vec3 segment = meso_vec3_sub(t_out, t_in);
+    float dt = meso_vec3_length(segment);
+    if (!(dt > 1e-7f)) return false;
+    meso_vec3 vt = meso_vec3_scale(segment, 1.0f / dt);
+    ray_probe path = ray_probe_start(s, t_in, vt, clear_w);
     if (s->refine_steps > 0) {
         /* Beyond the paper: the view ray's path through the prism is not straight in (u, v, w).
          * The prism's map is bilinear in the barycentrics and w, so where the vertex normals
@@ -822,12 +942,10 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
                              line_mid, GDM_UNMAP_ITERATIONS);
         meso_vec3 sag = meso_vec3_sub(mid, line_mid);
         float sag_length = meso_vec3_length(sag);
-        if (isfinite(sag_length) && sag_length > 0.0f) {
+        if (isfinite(sag_length) && sag_length > 0.0f)
             /* p(x) = t_in + x vt + x (dt - x) bow, p(dt / 2) = mid; |p'| <= 1 + dt |bow| */
-            path.bow = meso_vec3_scale(sag, 4.0f / (dt * dt));
-            path.length = dt;
-            path.stretch = 1.0f + 4.0f * sag_length / dt;
-        }
+            ray_probe_bend(s, &path, meso_vec3_scale(sag, 4.0f / (dt * dt)), dt,
+                           1.0f + 4.0f * sag_length / dt);
     }
     float d = lookup(s, t_in, vt);
     if (s->refine_steps > 0) {
@@ -926,36 +1044,47 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
     return true;
 }
 
-static void gdm_shade(const void *state, const meso_frame *frame, const meso_object *object,
-                      meso_fragment *fragments, size_t count) {
+/* A block of fragments (render_internal.h): each one's ray through its prism (shade_one, on a
+ * meso_fragment holding the inputs it reads), then the hits of up to 64 fragments shaded
+ * together 8-wide; misses draw nothing. Read straight from the block's arrays: through the
+ * per-fragment adapter every field of every fragment was copied out and back (bumps-sphere:
+ * 306 k fragments, three in four of them misses). Each fragment's result is its own, so the
+ * same bits as shading it alone. */
+static void gdm_shade_block(const void *state, const meso_frame *frame, const meso_object *object,
+                            meso_fragment_block *block) {
     const gdm_state *s = state;
     int num_lights = frame->scene->num_lights;
     enum { CHUNK = 64 };
     float visibility[CHUNK * MESO_SCENE_MAX_LIGHTS];
     gdm_gi_hit hits[CHUNK];
+    meso_fragment fragments[CHUNK];
+    size_t lanes[CHUNK]; /* the block lane of each hit */
+    size_t count = block->count;
     for (size_t start = 0; start < count; start += CHUNK) {
-        size_t end = start + CHUNK < count ? start + CHUNK : count;
+        size_t end = start + CHUNK < count ? start + CHUNK : count, n = 0;
         for (size_t i = start; i < end; i++) {
-            /* fragments of one batch may come from different faces and prisms */
-            meso_fragment *f = &fragments[i];
-            if (!shade_one(s, frame, object, f, visibility + (i - start) * (size_t)num_lights,
-                           &hits[i - start]))
-                f->discard = true;
-        }
-        /* shade the runs of hits 8-wide; misses draw nothing */
-        for (size_t i = start; i < end;) {
-            if (fragments[i].discard) {
-                i++;
-                continue;
-            }
-            size_t run = i;
-            while (run < end && !fragments[run].discard) run++;
-            const float *v = visibility + (i - start) * (size_t)num_lights;
-            if (s->gi)
-                gdm_gi_shade(s->gi, frame, object, fragments + i, run - i, v, hits + (i - start));
+            meso_fragment *f = &fragments[n];
+            f->triangle = block->triangle[i];
+            f->b0 = block->b0[i], f->b1 = block->b1[i], f->b2 = block->b2[i];
+            f->position = (meso_vec3){block->px[i], block->py[i], block->pz[i]};
+            f->depth = block->depth[i];
+            f->out_depth = block->out_depth[i];
+            if (shade_one(s, frame, object, f, visibility + n * (size_t)num_lights, &hits[n]))
+                lanes[n++] = i;
             else
-                meso_shade_fragments(frame, object, fragments + i, run - i, v);
-            i = run;
+                block->discard[i] = 1;
+        }
+        if (!n) continue;
+        if (s->gi)
+            gdm_gi_shade(s->gi, frame, object, fragments, n, visibility, hits);
+        else
+            meso_shade_fragments(frame, object, fragments, n, visibility);
+        for (size_t h = 0; h < n; h++) {
+            size_t i = lanes[h];
+            block->r[i] = fragments[h].color.x;
+            block->g[i] = fragments[h].color.y;
+            block->b[i] = fragments[h].color.z;
+            block->out_depth[i] = fragments[h].out_depth;
         }
     }
 }
@@ -987,6 +1116,8 @@ const meso_technique meso_technique_gdm = {
     .prepare = gdm_prepare,
     .release = gdm_release,
     .geometry = gdm_geometry,
-    .shade = gdm_shade,
+    .shade_block = gdm_shade_block,
+    /* shade_one reads a fragment's triangle, barycentrics, position and depth */
+    .skip_fields = MESO_FRAGMENT_SKIP_SAMPLE | MESO_FRAGMENT_SKIP_TANGENTS,
     .memory = gdm_memory,
 };

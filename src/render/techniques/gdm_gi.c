@@ -19,9 +19,10 @@ struct gdm_gi {
     const meso_environment *environment;
     float *radiance;     /* per vertex: 3 x 16 incident radiance in the vertex's frame */
     meso_vec3 *tangents; /* per vertex: the frame's unit T (meso_gi_vertex_tangent) */
-    /* the RTV's arrays voxel-major and view-major, [voxel][16][k] and [view][16][k]: a hit
+    /* the RTV's arrays voxel-major and view-major, [voxel][k][16] and [view][k][16]: a hit
      * reads 8 + 4 runs of 16 k floats instead of 16 x (8 + 4) scattered ones (bake_rtv.h
-     * keeps them coefficient-major, as §4.1's SVD produces them) */
+     * keeps them coefficient-major, as §4.1's SVD produces them), and an eigenfunction's 16
+     * coefficients fill two vectors (evaluate's sums over the eigenfunctions, 16 at once) */
     float *weights, *eigen;
     int stride; /* 16 k */
     /* this frame's scene and frame with the environment removed (the direct part: constant
@@ -53,53 +54,96 @@ static meso_result pack_rtv(meso_context *ctx, gdm_gi *gi, const char *name) {
     for (size_t i = 0; i < MESO_SH_COUNT; i++)
         for (size_t e = 0; e < k; e++) {
             for (size_t c = 0; c < voxels; c++)
-                gi->weights[c * stride + i * k + e] = rtv->weights[(i * voxels + c) * k + e];
+                gi->weights[c * stride + e * MESO_SH_COUNT + i] =
+                    rtv->weights[(i * voxels + c) * k + e];
             for (size_t v = 0; v < views; v++)
-                gi->eigen[v * stride + i * k + e] = rtv->eigen[(i * k + e) * views + v];
+                gi->eigen[v * stride + e * MESO_SH_COUNT + i] = rtv->eigen[(i * k + e) * views + v];
         }
     return MESO_OK;
 }
 
+/* Four float lanes: one hit's three colour channels side by side (lane 3 unused). */
+typedef float gi_v4f __attribute__((vector_size(16)));
+
+/* acc[j] += weight x row[8 j .. 8 j + 7] for the chunks of a packed row, each lane as the
+ * scalar multiply-add (-ffp-contract=off: no fused rounding). Inline, so that the default
+ * chunk count (16 x 4 eigenfunctions / 8) unrolls into registers. */
+static inline void accumulate_rows(v8f *acc, const float *row, float weight, int chunks) {
+    v8f cw = v8_splat(weight);
+#pragma GCC unroll 8
+    for (int j = 0; j < chunks; j++) {
+        v8f x;
+        memcpy(&x, row + 8 * j, sizeof x);
+        acc[j] += cw * x;
+    }
+}
+
+/* W and E interpolated at the cell (8 voxel corners, 4 views), chunk by chunk in the corners'
+ * order. */
+static inline void interpolate_rows(const gdm_gi *gi, const meso_rtv_cell *cell, v8f *w, v8f *e,
+                                    int chunks) {
+#pragma GCC unroll 8
+    for (int j = 0; j < chunks; j++) w[j] = e[j] = v8_splat(0.0f);
+    for (int c = 0; c < 8; c++)
+        accumulate_rows(w, gi->weights + cell->corner[c] * (size_t)gi->stride,
+                        cell->corner_weight[c], chunks);
+    for (int v = 0; v < 4; v++)
+        accumulate_rows(e, gi->eigen + (size_t)cell->view_index[v] * (size_t)gi->stride,
+                        cell->view_weight[v], chunks);
+}
+
 /* meso_rtv_evaluate on the packed arrays: the same sums in another order, 8 wide (16 k is a
- * multiple of 8). */
+ * multiple of 8). Coefficient i's transfer is the sum over the eigenfunctions q of W E, in q's
+ * order from 0 -- the sum the coefficient-major layout made one coefficient at a time, here
+ * for 16 coefficients at once (the same additions per coefficient, so the same bits); the
+ * colour is the sum over i in i's order, the three channels in the lanes of one vector. */
 static void evaluate(const gdm_gi *gi, meso_vec3 uvw, meso_vec3 view,
                      const float radiance[GI_CHANNELS][MESO_SH_COUNT], float out_rgb[3]) {
-    enum { MAX_CHUNKS = MESO_SH_COUNT * GI_MAX_EIGEN / 8 };
+    enum { MAX_CHUNKS = MESO_SH_COUNT * GI_MAX_EIGEN / 8, DEFAULT_CHUNKS = MESO_SH_COUNT * 4 / 8 };
     meso_rtv_cell cell;
     meso_rtv_cell_at(gi->rtv, uvw, view, &cell);
     int chunks = gi->stride / 8, k = gi->rtv->num_eigen;
     v8f w[MAX_CHUNKS], e[MAX_CHUNKS];
-    for (int j = 0; j < chunks; j++) w[j] = e[j] = v8_splat(0.0f);
-    for (int c = 0; c < 8; c++) {
-        const float *p = gi->weights + cell.corner[c] * (size_t)gi->stride;
-        v8f cw = v8_splat(cell.corner_weight[c]);
-        for (int j = 0; j < chunks; j++) {
-            v8f x;
-            memcpy(&x, p + 8 * j, sizeof x);
-            w[j] += cw * x;
-        }
+    if (chunks == DEFAULT_CHUNKS) /* the default 4 eigenfunctions, unrolled */
+        interpolate_rows(gi, &cell, w, e, DEFAULT_CHUNKS);
+    else
+        interpolate_rows(gi, &cell, w, e, chunks);
+    v8f f_lo = v8_splat(0.0f), f_hi = v8_splat(0.0f); /* coefficients 0-7, 8-15 */
+    for (int q = 0; q < k; q++) {
+        f_lo += w[2 * q] * e[2 * q];
+        f_hi += w[2 * q + 1] * e[2 * q + 1];
     }
-    for (int v = 0; v < 4; v++) {
-        const float *p = gi->eigen + (size_t)cell.view_index[v] * (size_t)gi->stride;
-        v8f vw = v8_splat(cell.view_weight[v]);
-        for (int j = 0; j < chunks; j++) {
-            v8f x;
-            memcpy(&x, p + 8 * j, sizeof x);
-            e[j] += vw * x;
-        }
-    }
-    float product[MESO_SH_COUNT * GI_MAX_EIGEN];
-    for (int j = 0; j < chunks; j++) {
-        v8f x = w[j] * e[j];
-        memcpy(product + 8 * j, &x, sizeof x);
-    }
-    float rgb[GI_CHANNELS] = {0};
+    float f[MESO_SH_COUNT];
+    memcpy(f, &f_lo, sizeof f_lo);
+    memcpy(f + 8, &f_hi, sizeof f_hi);
+    gi_v4f rgb = {0.0f, 0.0f, 0.0f, 0.0f};
+#pragma GCC unroll 16
     for (int i = 0; i < MESO_SH_COUNT; i++) {
-        float f = 0.0f;
-        for (int q = 0; q < k; q++) f += product[i * k + q];
-        for (int c = 0; c < GI_CHANNELS; c++) rgb[c] += f * radiance[c][i];
+        gi_v4f l = {radiance[0][i], radiance[1][i], radiance[2][i], 0.0f};
+        rgb += (gi_v4f){f[i], f[i], f[i], f[i]} * l;
     }
     for (int c = 0; c < GI_CHANNELS; c++) out_rgb[c] = rgb[c] > 0.0f ? rgb[c] : 0.0f;
+}
+
+/* meso_gi_radiance_interpolate (render_gi.h) 8 coefficients at a time: each the same
+ * b0 a + b1 b + b2 c, so the same bits. */
+static inline void radiance_interpolate(const float *radiance, uint32_t i0, uint32_t i1,
+                                        uint32_t i2, float b0, float b1, float b2,
+                                        float out[GI_CHANNELS][MESO_SH_COUNT]) {
+    enum { N = GI_CHANNELS * MESO_SH_COUNT };
+    const float *a = radiance + (size_t)i0 * N, *b = radiance + (size_t)i1 * N;
+    const float *c = radiance + (size_t)i2 * N;
+    float *o = &out[0][0];
+    v8f w0 = v8_splat(b0), w1 = v8_splat(b1), w2 = v8_splat(b2);
+#pragma GCC unroll 6
+    for (int j = 0; j < N; j += 8) {
+        v8f x, y, z;
+        memcpy(&x, a + j, sizeof x);
+        memcpy(&y, b + j, sizeof y);
+        memcpy(&z, c + j, sizeof z);
+        v8f r = w0 * x + w1 * y + w2 * z;
+        memcpy(o + j, &r, sizeof r);
+    }
 }
 
 meso_result gdm_gi_create(meso_context *ctx, const meso_scene *scene, const meso_object *object,
@@ -224,7 +268,7 @@ static bool reflected_at(const gdm_gi *gi, const meso_frame *frame, const meso_f
     float b[3];
     meso_prism_weights(hit->prism, (meso_vec2){hit->uvw.x, hit->uvw.y}, b);
     float radiance[GI_CHANNELS][MESO_SH_COUNT];
-    meso_gi_radiance_interpolate(gi->radiance, v[0], v[1], v[2], b[0], b[1], b[2], radiance);
+    radiance_interpolate(gi->radiance, v[0], v[1], v[2], b[0], b[1], b[2], radiance);
     meso_vec3 n = meso_vec3_normalize(meso_vec3_barycentric(
         mesh->normals[v[0]], mesh->normals[v[1]], mesh->normals[v[2]], b[0], b[1], b[2]));
     meso_vec3 t = meso_vec3_barycentric(gi->tangents[v[0]], gi->tangents[v[1]], gi->tangents[v[2]],

@@ -106,14 +106,24 @@ static inline float gdm_atan2(float y, float x) {
     return y < 0.0f ? -r : r;
 }
 
+/* meso_axis_wrap(x, n) (math.h), with a mask instead of the remainder where n is a power of
+ * two (the default table's 64 x 64 voxels and 32 azimuths): i & (n - 1) is the wrapped index
+ * for every int i. Three integer divisions a lookup fewer, the same axis. */
+static inline meso_axis gdm_axis_wrap(float x, int n) {
+    if (n & (n - 1)) return meso_axis_wrap(x, n);
+    float f = floorf(x);
+    int i = (int)f & (n - 1);
+    return (meso_axis){i, (i + 1) & (n - 1), x - f};
+}
+
 /* d at uvw along the unit (u, v, w) direction: meso_gdm_lookup's value (compressed, k of the
  * table) up to the order of the additions. Pure. */
 static inline float gdm_lookup8(const gdm_lookup_table *t, meso_vec3 uvw, meso_vec3 direction) {
     const float two_pi = 6.28318530717958647692f, pi = 3.14159265358979323846f;
     float u = gdm_tile_fraction(uvw.x), v = gdm_tile_fraction(uvw.y);
     float w = isfinite(uvw.z) ? gdm_fminf(gdm_fmaxf(uvw.z, 0.0f), 1.0f) : 0.0f;
-    meso_axis ax = meso_axis_wrap(u * (float)t->width - 0.5f, t->width);
-    meso_axis ay = meso_axis_wrap((1.0f - v) * (float)t->height - 0.5f, t->height);
+    meso_axis ax = gdm_axis_wrap(u * (float)t->width - 0.5f, t->width);
+    meso_axis ay = gdm_axis_wrap((1.0f - v) * (float)t->height - 0.5f, t->height);
     meso_axis az = meso_axis_clamp(w * (float)(t->layers - 1), t->layers);
     float length = meso_vec3_length(direction);
     bool valid = length > 0.0f && isfinite(length);
@@ -123,7 +133,7 @@ static inline float gdm_lookup8(const gdm_lookup_table *t, meso_vec3 uvw, meso_v
     float phi = valid ? gdm_atan2(direction.y, direction.x) : 0.0f;
     if (phi < 0.0f) phi += two_pi;
     meso_axis at = meso_axis_clamp(theta * (float)t->num_theta / pi - 0.5f, t->num_theta);
-    meso_axis ap = meso_axis_wrap(phi * (float)t->num_phi / two_pi, t->num_phi);
+    meso_axis ap = gdm_axis_wrap(phi * (float)t->num_phi / two_pi, t->num_phi);
     int lanes = 8 * t->chunks;
     /* E(z, theta), bilinear */
     const float *e00 = t->eigen + ((size_t)az.i0 * t->num_theta + (size_t)at.i0) * lanes;
@@ -139,6 +149,7 @@ static inline float gdm_lookup8(const gdm_lookup_table *t, meso_vec3 uvw, meso_v
      * (x, y) parts made once for the two phi corners */
     float cw[8];
     const float *rows[8];
+#pragma GCC unroll 4
     for (int xy = 0; xy < 4; xy++) {
         float wxy = wx[xy & 1] * wy[xy >> 1];
         size_t cell =
@@ -154,6 +165,7 @@ static inline float gdm_lookup8(const gdm_lookup_table *t, meso_vec3 uvw, meso_v
         v8f e = v8_splat(c00) * gdm_load8(e00 + o) + v8_splat(c01) * gdm_load8(e01 + o) +
                 v8_splat(c10) * gdm_load8(e10 + o) + v8_splat(c11) * gdm_load8(e11 + o);
         v8f wsum = v8_splat(0.0f);
+#pragma GCC unroll 8
         for (int corner = 0; corner < 8; corner++)
             wsum += v8_splat(cw[corner]) * gdm_load8(rows[corner] + o);
         v8f p = wsum * e;

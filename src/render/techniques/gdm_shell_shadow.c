@@ -389,10 +389,10 @@ static bool segment_blocked(const gdm_shell_desc *d, meso_vec3 t0, meso_vec3 dir
     } else if (!(hit < length - margin)) {
         return false;
     }
-    if (hit < length - margin) {
-        float past = fminf(fmaxf(hit, 0.0f) + 0.5f * d->refine_window, length);
-        if (inside(d, meso_vec3_madd(t0, dir, past))) return true;
-    }
+    float past = -1.0f; /* none */
+    if (hit < length - margin) past = fminf(fmaxf(hit, 0.0f) + 0.5f * d->refine_window, length);
+    if (d->probes_inside) return d->probes_inside(d->inside_user, t0, dir, past, length, steps);
+    if (past >= 0.0f && inside(d, meso_vec3_madd(t0, dir, past))) return true;
     for (int k = 0; k < steps; k++) {
         float x = length * ((float)k + 0.5f) / (float)steps;
         if (inside(d, meso_vec3_madd(t0, dir, x))) return true;

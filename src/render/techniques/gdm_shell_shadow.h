@@ -69,6 +69,12 @@ typedef struct gdm_shell_desc {
      * outside without evaluating the mesostructure (gdm.c: a height field's window maxima);
      * false where not proven. Called with inside_user. */
     bool (*segment_outside)(const void *inside_user, meso_vec3 a, meso_vec3 b);
+    /* NULL, or whether any of the points t0 + x dir is inside -- x = first (when first >= 0),
+     * then x = length (k + 0.5) / steps for k = 0 .. steps - 1 -- each point answered as
+     * `inside` answers it (gdm.c: the probes remember what a sample proves about the next
+     * ones, gdm.c's ray_probe). Called with inside_user. */
+    bool (*probes_inside)(const void *inside_user, meso_vec3 t0, meso_vec3 dir, float first,
+                          float length, int steps);
 } gdm_shell_desc;
 
 /* Build the Embree scene of desc->layer's faces. *out_shell NULL on failure:
