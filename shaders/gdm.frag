@@ -375,14 +375,11 @@ float gdm_refine_hit(vec3 t_in, vec3 vt, vec3 bow, float d, float dt, bool solid
         hi = after;
     } else {
         if ((solid_floor && 0.0 >= dt) || gdm_inside(t_in)) return 0.0;
-        // gdm.c: 8 probes for a height field; for a solid one every quarter window, 8 to 64
-        int probes = 8;
-        if (!u_gdm_heightfield) {
-            float wanted = ceil(8.0 * dt / window);
-            probes = wanted > 8.0 ? (wanted < 64.0 ? int(wanted) : 64) : 8;
-        }
+        // gdm.c: one every eighth of the window, 8 to GDM_PROBES (64)
+        float wanted = ceil(8.0 * dt / window);
+        int probes = wanted > 8.0 ? (wanted < 64.0 ? int(wanted) : 64) : 8;
         for (int k = 1; k <= probes && hi < 0.0; ++k) {
-            float x = dt * float(k) / float(probes);
+            float x = k == probes ? dt : dt * float(k) / float(probes); // exactly the exit last
             if ((solid_floor && x >= dt) || gdm_inside(gdm_path(t_in, vt, bow, dt, x)))
                 hi = x;
             else

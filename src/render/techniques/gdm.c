@@ -25,8 +25,8 @@
 /* Newton steps mapping the view ray's midpoint into its prism (shade_one): from the segment's
  * midpoint, a fraction of a voxel off, two steps leave rounding error */
 #define GDM_UNMAP_ITERATIONS 1
-/* refine_hit's probes along a solid's segment where the table was wrong */
-#define GDM_SOLID_PROBES 64
+/* refine_hit's most probes along a segment where the table was wrong */
+#define GDM_PROBES 64
 
 typedef struct gdm_state {
     meso_gdm *gdm;
@@ -758,20 +758,17 @@ static float refine_hit(const gdm_state *s, ray_probe probe, float d, float dt, 
         hi = after;
     } else {
         if (INSIDE(0.0f)) return 0.0f;
-        /* probes from the entry, evenly spaced: 8 for a height field; for a solid, whose
-         * bars, rings and threads are thinner than an eighth of a long segment, one every
-         * eighth of the refinement's window (3 layers), 8 to GDM_SOLID_PROBES (chainmail-plane
-         * 21.6 -> 34.2 dB, docs/techniques/gdm.md); the probe cache skips the evaluations the
+        /* probes from the entry, evenly spaced, one every eighth of the refinement's window
+         * (3 layers), 8 to GDM_PROBES: eight along a long segment skipped chainmail rings,
+         * threads, bars and mortar grooves (chainmail-plane 21.6 -> 34.2 dB, bricks-plane
+         * 35.8 -> 44.9, docs/techniques/gdm.md); the probe cache skips the evaluations the
          * distance bounds already decide */
-        int probes = 8;
-        if (s->solid) {
-            float wanted = ceilf(8.0f * dt / window);
-            probes = wanted > 8.0f
-                         ? (wanted < (float)GDM_SOLID_PROBES ? (int)wanted : GDM_SOLID_PROBES)
-                         : 8;
-        }
+        float wanted = ceilf(8.0f * dt / window);
+        int probes = wanted > 8.0f ? (wanted < (float)GDM_PROBES ? (int)wanted : GDM_PROBES) : 8;
         for (int k = 1; k <= probes && hi < 0.0f; k++) {
-            float x = dt * (float)k / (float)probes;
+            /* the last probe exactly at the exit: dt k / k rounds below dt for most k, and a
+             * solid floor there would be missed (a hole) */
+            float x = k == probes ? dt : dt * (float)k / (float)probes;
             if (INSIDE(x))
                 hi = x;
             else
