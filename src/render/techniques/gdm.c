@@ -679,12 +679,17 @@ static inline ray_probe ray_probe_start(const gdm_state *s, meso_vec3 t0, meso_v
     return r;
 }
 
-/* The probe's path bent into the view ray's curve through its prism: p(x) = t0 + x dir +
- * x (length - x) bow, |p'| <= stretch on [0, length]. A height field's bound along the path
- * takes each component's largest rate there, |dir_c| + |bow_c| length (p'(x) = dir + (length
- * - 2 x) bow), in place of stretch; a solid's (isotropic) bound is scaled by stretch. */
-static inline void ray_probe_bend(const gdm_state *s, ray_probe *r, meso_vec3 bow, float length,
-                                  float stretch) {
+/* The probe's path bent into the view ray's curve through its prism, given the curve's
+ * midpoint `sag` off the segment's: p(x) = t0 + x dir + x (length - x) bow with bow = 4 sag /
+ * length^2, |p'| <= stretch = 1 + 4 |sag| / length on [0, length]. A height field's bound
+ * along the path takes each component's largest rate there, |dir_c| + |bow_c| length (p'(x) =
+ * dir + (length - 2 x) bow), in place of stretch; a solid's (isotropic) bound is scaled by
+ * stretch. A sag that is zero or not finite leaves the path straight. */
+static inline void ray_probe_bend(const gdm_state *s, ray_probe *r, meso_vec3 sag, float length) {
+    float sag_length = meso_vec3_length(sag);
+    if (!(isfinite(sag_length) && sag_length > 0.0f)) return;
+    meso_vec3 bow = meso_vec3_scale(sag, 4.0f / (length * length));
+    float stretch = 1.0f + 4.0f * sag_length / length;
     r->bow = bow;
     r->length = length;
     r->stretch = stretch;
@@ -937,12 +942,7 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
         meso_vec3 mid =
             meso_prism_unmap(prism, mesh, s->depth, meso_vec3_madd(f->position, view, 0.5f * t),
                              line_mid, GDM_UNMAP_ITERATIONS);
-        meso_vec3 sag = meso_vec3_sub(mid, line_mid);
-        float sag_length = meso_vec3_length(sag);
-        if (isfinite(sag_length) && sag_length > 0.0f)
-            /* p(x) = t_in + x vt + x (dt - x) bow, p(dt / 2) = mid; |p'| <= 1 + dt |bow| */
-            ray_probe_bend(s, &path, meso_vec3_scale(sag, 4.0f / (dt * dt)), dt,
-                           1.0f + 4.0f * sag_length / dt);
+        ray_probe_bend(s, &path, meso_vec3_sub(mid, line_mid), dt);
     }
     float d = lookup(s, t_in, vt);
     if (s->refine_steps > 0) {
