@@ -38,8 +38,10 @@
  * y along +v, z out of the surface (up, toward -w). Shadowing depends on the shell's world
  * shape, so the bake takes `aspect` = shell depth / tile side in world units (a tile is
  * assumed square in the world). A height field h is the solid w >= 1 - h(u, v); below the
- * shell's bottom is solid; a ray that stays inside the shell for `max_tiles` tiles is taken
- * to escape.
+ * shell's bottom is solid. A solid's shell is open at both faces: a ray that leaves through the
+ * bottom escapes too, and carries the light arriving from below the tangent plane (the inside
+ * of a closed mesh seen through the holes, meso_gi_vertex_radiance_through_shell). A ray that
+ * stays inside the shell for `max_tiles` tiles is taken to escape.
  *
  * Threads: meso_bake_rtv uses every worker of ctx, output identical for any thread count;
  * meso_rtv_evaluate is pure and thread-safe.
@@ -72,6 +74,7 @@ typedef struct meso_rtv_desc {
 } meso_rtv_desc;
 
 #define MESO_RTV_KIND "rtv"
+#define MESO_RTV_KIND_VERSION 2u /* 2: the same-surface lookup; solids open below */
 #define MESO_RTV_RMSE_COUNT 16
 
 typedef struct meso_rtv {

@@ -18,12 +18,16 @@ typedef struct rtv_job {
     float step;                 /* march step, world units (a tile is 1) */
     const float *first;         /* the first pass (second pass only) */
     float *out;
+    meso_vec3 *surface_point;  /* per voxel: the nearest surface point (u, v, w) ... */
+    meso_vec3 *surface_normal; /* ... and its unit normal, tangent frame */
 } rtv_job;
 
 /* Texture space (u, v, w) to world-like space: a tile 1 wide, the shell `aspect` deep, z up. A
  * unit world direction d moves (u, v, w) by (d.x, d.y, -d.z / aspect). */
 static bool occupied(const meso_rtv_desc *d, meso_vec3 uvw) {
-    if (uvw.z >= 1.0f) return true; /* below the shell's bottom: solid */
+    /* below the shell's bottom: a height field's floor; a solid's shell is open there (its
+     * holes let the light from below the tangent plane through: render_gi.h) */
+    if (uvw.z >= 1.0f) return !d->solid;
     if (d->heightfield)
         return uvw.z >= 1.0f - meso_heightfield_sample(d->heightfield, uvw.x, uvw.y);
     return meso_solid_distance(d->solid, uvw) <= 0.0f;
@@ -73,7 +77,7 @@ static bool escapes(const rtv_job *rj, meso_vec3 p, meso_vec3 w, meso_vec3 *out_
     int steps = march_steps(rj, w, move, &step);
     for (int s = 1; s <= steps; s++) {
         meso_vec3 q = meso_vec3_madd(p, move, step * (float)s);
-        if (q.z < 0.0f) return true;
+        if (q.z < 0.0f || (q.z > 1.0f && d->solid)) return true;
         if (occupied(d, q)) {
             *out_hit = q;
             return false;
@@ -82,40 +86,109 @@ static bool escapes(const rtv_job *rj, meso_vec3 p, meso_vec3 w, meso_vec3 *out_
     return true;
 }
 
-/* The first pass's coefficients at (u, v, w): trilinear, periodic in u and v. */
-static void lookup(const meso_rtv *rtv, const float *table, meso_vec3 uvw,
-                   float out[MESO_SH_COUNT]) {
-    float x = (uvw.x - floorf(uvw.x)) * (float)rtv->width - 0.5f;
-    float v = uvw.y - floorf(uvw.y);
-    float y = (1.0f - v) * (float)rtv->height - 0.5f;
-    float z = meso_clampf(uvw.z, 0.0f, 1.0f) * (float)(rtv->layers - 1);
-    float fx = floorf(x), fy = floorf(y), fz = floorf(z);
-    float tx = x - fx, ty = y - fy, tz = z - fz;
-    int i0 = ((int)fx % rtv->width + rtv->width) % rtv->width, i1 = (i0 + 1) % rtv->width;
-    int j0 = ((int)fy % rtv->height + rtv->height) % rtv->height, j1 = (j0 + 1) % rtv->height;
-    int l0 = (int)fz, l1 = l0 + 1 < rtv->layers ? l0 + 1 : l0;
-    memset(out, 0, MESO_SH_COUNT * sizeof(float));
-    const int is[2] = {i0, i1}, js[2] = {j0, j1}, ls[2] = {l0, l1};
-    const float wx[2] = {1.0f - tx, tx}, wy[2] = {1.0f - ty, ty}, wz[2] = {1.0f - tz, tz};
-    for (int a = 0; a < 2; a++)
-        for (int b = 0; b < 2; b++)
-            for (int c = 0; c < 2; c++) {
-                float weight = wx[a] * wy[b] * wz[c];
-                const float *t = table + (((size_t)ls[c] * (size_t)rtv->height + (size_t)js[b]) *
-                                              (size_t)rtv->width +
-                                          (size_t)is[a]) *
-                                             MESO_SH_COUNT;
-                for (int k = 0; k < MESO_SH_COUNT; k++) out[k] += weight * t[k];
-            }
-}
-
 typedef struct pass_job {
     const rtv_job *rj;
     const meso_rtv *rtv; /* its size; the first pass' table in rj->first */
 } pass_job;
 
-/* One row of voxels (layer l, row j) per job: disjoint output, any thread count. */
-static void bake_row(void *user, size_t job, int thread_index) {
+/* A corner voxel answers for a surface point when its own nearest surface point is the same
+ * surface: within this many voxels of it, with normals less than 60 degrees apart. */
+#define SAME_SURFACE_VOXELS 1.5f
+#define SAME_SURFACE_COSINE 0.5f
+
+/* Wrapped difference of two periodic coordinates, in (-0.5, 0.5]. */
+static float periodic_difference(float a, float b) {
+    float d = a - b;
+    return d - roundf(d);
+}
+
+/* A table's coefficients at the surface point nearest q: trilinear over the voxels, periodic in
+ * u and v, counting only the corners whose nearest surface point is the same surface (above).
+ * Without that test a point on top of a thin feature (a thread lying on another) blends in the
+ * voxels inside the feature that answer for its underside, and the top comes out dark along
+ * every edge. Where no corner passes, the nearest corner of the same orientation answers, and
+ * where none faces the same way, all eight as before. A height field's voxels all answer for
+ * the surface point of their column, one surface: every corner counts. */
+static void surface_lookup(const rtv_job *rj, const meso_rtv *rtv, const float *table, meso_vec3 q,
+                           float out[MESO_SH_COUNT]) {
+    const meso_rtv_desc *d = &rj->desc;
+    meso_vec3 at, normal;
+    surface_at(d, q, &at, &normal);
+    float x = (at.x - floorf(at.x)) * (float)rtv->width - 0.5f;
+    float y = (1.0f - (at.y - floorf(at.y))) * (float)rtv->height - 0.5f;
+    float z = meso_clampf(at.z, 0.0f, 1.0f) * (float)(rtv->layers - 1);
+    float fx = floorf(x), fy = floorf(y), fz = floorf(z);
+    int i0 = ((int)fx % rtv->width + rtv->width) % rtv->width, i1 = (i0 + 1) % rtv->width;
+    int j0 = ((int)fy % rtv->height + rtv->height) % rtv->height, j1 = (j0 + 1) % rtv->height;
+    int l0 = (int)fz < rtv->layers - 1 ? (int)fz : rtv->layers - 1;
+    int l1 = l0 + 1 < rtv->layers ? l0 + 1 : l0;
+    size_t voxel[8];
+    float weight[8], same[8];
+    int nearest = -1;
+    float nearest_distance2 = INFINITY, kept = 0.0f;
+    for (int c = 0; c < 8; c++) {
+        int ii = c & 1 ? i1 : i0, jj = c & 2 ? j1 : j0, ll = c & 4 ? l1 : l0;
+        voxel[c] =
+            ((size_t)ll * (size_t)rtv->height + (size_t)jj) * (size_t)rtv->width + (size_t)ii;
+        weight[c] = (c & 1 ? x - fx : 1.0f - (x - fx)) * (c & 2 ? y - fy : 1.0f - (y - fy)) *
+                    (c & 4 ? z - fz : 1.0f - (z - fz));
+        same[c] = weight[c];
+        if (!d->solid) continue;
+        meso_vec3 sp = rj->surface_point[voxel[c]];
+        float du = periodic_difference(sp.x, at.x) * (float)rtv->width;
+        float dv = periodic_difference(sp.y, at.y) * (float)rtv->height;
+        float dw = (sp.z - at.z) * (float)(rtv->layers - 1);
+        float distance2 = du * du + dv * dv + dw * dw;
+        bool facing = meso_vec3_dot(rj->surface_normal[voxel[c]], normal) >= SAME_SURFACE_COSINE;
+        if (facing && distance2 < nearest_distance2) nearest = c, nearest_distance2 = distance2;
+        if (!facing || distance2 > SAME_SURFACE_VOXELS * SAME_SURFACE_VOXELS) same[c] = 0.0f;
+    }
+    for (int c = 0; c < 8; c++) kept += same[c];
+    if (!(kept > 1e-3f)) { /* either way the weights sum to 1 */
+        for (int c = 0; c < 8; c++) same[c] = nearest < 0 ? weight[c] : (float)(c == nearest);
+        kept = 1.0f;
+    }
+    memset(out, 0, MESO_SH_COUNT * sizeof(float));
+    for (int c = 0; c < 8; c++) {
+        if (same[c] == 0.0f) continue;
+        const float *t = table + voxel[c] * MESO_SH_COUNT;
+        for (int k = 0; k < MESO_SH_COUNT; k++) out[k] += same[c] / kept * t[k];
+    }
+}
+
+/* The response at the surface point p with unit normal n (tangent frame): the light arriving
+ * unblocked and, with the first pass' table `first`, the light the blocking points reflect. */
+static void response_at(const rtv_job *rj, const meso_rtv *rtv, const float *first, meso_vec3 p,
+                        meso_vec3 n, float out[MESO_SH_COUNT]) {
+    const meso_rtv_desc *d = &rj->desc;
+    /* start just off the surface, on its open side; where the field's projection left the
+     * point inside (two features in contact), a few more half steps out */
+    meso_vec3 out_of_surface = {n.x, n.y, -n.z / d->aspect};
+    p = meso_vec3_madd(p, out_of_surface, 0.5f * rj->step);
+    for (int k = 0; k < 8 && occupied(d, p); k++)
+        p = meso_vec3_madd(p, out_of_surface, 0.5f * rj->step);
+    memset(out, 0, MESO_SH_COUNT * sizeof(float));
+    for (int k = 0; k < d->directions; k++) {
+        meso_vec3 w = rj->direction[k];
+        float cosine = meso_vec3_dot(n, w);
+        if (cosine <= 0.0f) continue;
+        meso_vec3 hit;
+        bool open = escapes(rj, p, w, &hit);
+        if (!open && !first) continue;
+        float scale = rj->direction_weight * cosine * (float)M_1_PI;
+        float basis[MESO_SH_COUNT];
+        if (open) {
+            meso_sh_basis(w, basis);
+        } else { /* the light the blocking point reflects */
+            surface_lookup(rj, rtv, first, hit, basis);
+            scale *= d->albedo;
+        }
+        for (int m = 0; m < MESO_SH_COUNT; m++) out[m] += scale * basis[m];
+    }
+}
+
+/* Each voxel's nearest surface point and normal, a row of voxels (layer l, row j) per job. */
+static void surface_row(void *user, size_t job, int thread_index) {
     (void)thread_index;
     const pass_job *pj = user;
     const rtv_job *rj = pj->rj;
@@ -125,34 +198,22 @@ static void bake_row(void *user, size_t job, int thread_index) {
         meso_vec3 c = {((float)i + 0.5f) / (float)d->width,
                        1.0f - ((float)j + 0.5f) / (float)d->height,
                        (float)l / (float)(d->layers - 1)};
-        meso_vec3 p, n;
-        surface_at(d, c, &p, &n);
-        /* start just off the surface, on its open side */
-        p = meso_vec3_madd(p, (meso_vec3){n.x, n.y, -n.z / d->aspect}, 0.5f * rj->step);
-        float *out =
-            rj->out + (((size_t)l * (size_t)d->height + (size_t)j) * (size_t)d->width + (size_t)i) *
-                          MESO_SH_COUNT;
-        memset(out, 0, MESO_SH_COUNT * sizeof(float));
-        for (int k = 0; k < d->directions; k++) {
-            meso_vec3 w = rj->direction[k];
-            float cosine = meso_vec3_dot(n, w);
-            if (cosine <= 0.0f) continue;
-            meso_vec3 hit;
-            bool open = escapes(rj, p, w, &hit);
-            float scale = rj->direction_weight * cosine * (float)M_1_PI;
-            float basis[MESO_SH_COUNT];
-            if (!rj->first) { /* first pass: light arriving unblocked */
-                if (!open) continue;
-                meso_sh_basis(w, basis);
-                for (int m = 0; m < MESO_SH_COUNT; m++) out[m] += scale * basis[m];
-            } else if (open) { /* second pass: the first pass' direct part again */
-                meso_sh_basis(w, basis);
-                for (int m = 0; m < MESO_SH_COUNT; m++) out[m] += scale * basis[m];
-            } else { /* ... plus the light the blocking point reflects */
-                lookup(pj->rtv, rj->first, hit, basis);
-                for (int m = 0; m < MESO_SH_COUNT; m++) out[m] += scale * d->albedo * basis[m];
-            }
-        }
+        size_t voxel = ((size_t)l * (size_t)d->height + (size_t)j) * (size_t)d->width + (size_t)i;
+        surface_at(d, c, &rj->surface_point[voxel], &rj->surface_normal[voxel]);
+    }
+}
+
+/* One row of voxels (layer l, row j) per job: disjoint output, any thread count. */
+static void bake_row(void *user, size_t job, int thread_index) {
+    (void)thread_index;
+    const pass_job *pj = user;
+    const rtv_job *rj = pj->rj;
+    const meso_rtv_desc *d = &rj->desc;
+    int l = (int)(job / (size_t)d->height), j = (int)(job % (size_t)d->height);
+    for (int i = 0; i < d->width; i++) {
+        size_t voxel = ((size_t)l * (size_t)d->height + (size_t)j) * (size_t)d->width + (size_t)i;
+        response_at(rj, pj->rtv, rj->first, rj->surface_point[voxel], rj->surface_normal[voxel],
+                    rj->out + voxel * MESO_SH_COUNT);
     }
 }
 
@@ -202,9 +263,9 @@ static void view_row(void *user, size_t job, int thread_index) {
         for (int t = 0; t < rtv->num_theta; t++)
             for (int p = 0; p < rtv->num_phi; p++) {
                 meso_vec3 q = seen_point(vj->rj, c, view_direction(rtv, t, p));
-                lookup(rtv, rtv->coefficients, q,
-                       vj->raw + (voxel * (size_t)views + (size_t)(t * rtv->num_phi + p)) *
-                                     MESO_SH_COUNT);
+                surface_lookup(vj->rj, rtv, rtv->coefficients, q,
+                               vj->raw + (voxel * (size_t)views + (size_t)(t * rtv->num_phi + p)) *
+                                             MESO_SH_COUNT);
             }
     }
 }
@@ -309,19 +370,25 @@ meso_result meso_bake_rtv(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv
                               (unsigned long long)voxels, (unsigned long long)MESO_RTV_MAX_VOXELS);
     bool bounce = d.albedo > 0.0f;
     uint64_t views = (uint64_t)d.num_theta * (uint64_t)d.num_phi;
-    meso_result r = meso_memory_check(ctx, "rtv",
-                                      voxels * MESO_SH_COUNT * sizeof(float) *
-                                          ((bounce ? 2u : 1u) + views + d.eigen));
+    meso_result r = meso_memory_check(
+        ctx, "rtv",
+        voxels * (MESO_SH_COUNT * sizeof(float) * ((bounce ? 2u : 1u) + views + d.eigen) +
+                  2 * sizeof(meso_vec3)));
     if (r != MESO_OK) return r;
     double start = meso_time_seconds();
     meso_rtv *rtv = calloc(1, sizeof *rtv);
     float *first = NULL;
     meso_vec3 *direction = malloc((size_t)d.directions * sizeof *direction);
+    meso_vec3 *surface_point = malloc((size_t)voxels * sizeof *surface_point);
+    meso_vec3 *surface_normal = malloc((size_t)voxels * sizeof *surface_normal);
     if (rtv) rtv->coefficients = malloc((size_t)voxels * MESO_SH_COUNT * sizeof(float));
     if (bounce) first = malloc((size_t)voxels * MESO_SH_COUNT * sizeof(float));
-    if (!rtv || !rtv->coefficients || !direction || (bounce && !first)) {
+    if (!rtv || !rtv->coefficients || !direction || !surface_point || !surface_normal ||
+        (bounce && !first)) {
         free(first);
         free(direction);
+        free(surface_point);
+        free(surface_normal);
         meso_rtv_destroy(rtv);
         return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "rtv: %llu voxels",
                               (unsigned long long)voxels);
@@ -343,9 +410,12 @@ meso_result meso_bake_rtv(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv
                   (float)(4.0 * M_PI / d.directions),
                   0.5f / (float)texels,
                   NULL,
-                  bounce ? first : rtv->coefficients};
+                  bounce ? first : rtv->coefficients,
+                  surface_point,
+                  surface_normal};
     pass_job pj = {&rj, rtv};
     size_t rows = (size_t)d.layers * (size_t)d.height;
+    meso_parallel_for(ctx, rows, surface_row, &pj);
     meso_parallel_for(ctx, rows, bake_row, &pj);
     if (bounce) {
         rj.first = first;
@@ -355,6 +425,8 @@ meso_result meso_bake_rtv(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv
     free(first);
     r = compress(ctx, &rj, rtv);
     free(direction);
+    free(surface_point);
+    free(surface_normal);
     if (r != MESO_OK) {
         meso_rtv_destroy(rtv);
         return r;
@@ -442,8 +514,10 @@ static meso_bake_file to_bake_file(const meso_rtv *rtv, int32_t shape[5]) {
     uint64_t views = (uint64_t)rtv->num_theta * (uint64_t)rtv->num_phi;
     shape[0] = rtv->width, shape[1] = rtv->height, shape[2] = rtv->layers;
     shape[3] = rtv->num_theta, shape[4] = rtv->num_phi;
-    meso_bake_file bake = {
-        .kind = MESO_RTV_KIND, .kind_version = 1, .params_json = "{}", .num_arrays = 4};
+    meso_bake_file bake = {.kind = MESO_RTV_KIND,
+                           .kind_version = MESO_RTV_KIND_VERSION,
+                           .params_json = "{}",
+                           .num_arrays = 4};
     bake.arrays[0] = (meso_bake_array){
         .name = "shape", .type = MESO_BAKE_I32, .num_dims = 1, .dims = {5}, .data = shape};
     bake.arrays[1] = (meso_bake_array){.name = "weights",
@@ -490,7 +564,9 @@ meso_result meso_rtv_from_bake_file(meso_context *ctx, const meso_bake_file *bak
     *out_rtv = NULL;
     meso_result r = MESO_OK;
     meso_rtv *rtv = NULL;
-    if (strcmp(bake->kind, MESO_RTV_KIND) != 0 || bake->kind_version != 1) {
+    /* version 1 files hold the same arrays (baked before the same-surface lookup) */
+    if (strcmp(bake->kind, MESO_RTV_KIND) != 0 || bake->kind_version < 1 ||
+        bake->kind_version > MESO_RTV_KIND_VERSION) {
         r = meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: not an rtv bake (kind \"%s\" version %u)",
                            path, bake->kind, (unsigned)bake->kind_version);
         goto done;
@@ -572,7 +648,8 @@ meso_result meso_rtv_bake_cached(meso_context *ctx, const meso_rtv_desc *desc, m
     uint64_t source = d.heightfield ? d.heightfield->hash : d.solid ? meso_solid_hash(d.solid) : 0;
     uint64_t key = cache_key(&d, source);
     meso_bake_file *cached = NULL;
-    meso_result r = meso_bake_cache_load(ctx, MESO_RTV_KIND, 1, key, source, &cached);
+    meso_result r =
+        meso_bake_cache_load(ctx, MESO_RTV_KIND, MESO_RTV_KIND_VERSION, key, source, &cached);
     if (r != MESO_OK) return r;
     if (cached) {
         r = meso_rtv_from_bake_file(ctx, cached, "rtv cache entry", out_rtv);

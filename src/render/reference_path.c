@@ -96,6 +96,10 @@ typedef struct path_job {
      * objects without mesostructure, which keep the SH ambient of the shading model) */
     meso_rtv **rtvs;
     float **vertex_radiance;
+    /* per object, for a solid whose shell lets light through: the vertices' coefficients of
+     * the directions into the base mesh and the interior's radiance (render_gi.h); NULL */
+    float **vertex_interior;
+    meso_vec3 *interior_radiance;
     meso_progress *progress;
     atomic_bool cancelled;
 } path_job;
@@ -194,6 +198,13 @@ static meso_vec3 rtv_reflected(const path_job *pj, const meso_frame *frame,
     float radiance[3][MESO_SH_COUNT];
     meso_gi_radiance_interpolate(pj->vertex_radiance[o], tri[0], tri[1], tri[2], b[0], b[1], b[2],
                                  radiance);
+    const float *interior = pj->vertex_interior[o];
+    for (int i = 0; interior && i < MESO_SH_COUNT; i++) { /* as gdm's: gdm_gi.c */
+        float m = b[0] * interior[(size_t)tri[0] * MESO_SH_COUNT + (size_t)i] +
+                  b[1] * interior[(size_t)tri[1] * MESO_SH_COUNT + (size_t)i] +
+                  b[2] * interior[(size_t)tri[2] * MESO_SH_COUNT + (size_t)i];
+        for (int c = 0; c < 3; c++) radiance[c][i] += (&pj->interior_radiance[o].x)[c] * m;
+    }
     /* the tangent frame as the vertices' (render_gi_transfer.c): T made orthogonal to N */
     meso_vec3 n = meso_vec3_normalize(meso_vec3_barycentric(
         mesh->normals[tri[0]], mesh->normals[tri[1]], mesh->normals[tri[2]], b[0], b[1], b[2]));
@@ -206,8 +217,13 @@ static meso_vec3 rtv_reflected(const path_job *pj, const meso_frame *frame,
     meso_vec3 v = meso_vec3_normalize(meso_vec3_sub(frame->eye, hit->position));
     meso_vec3 view = {meso_vec3_dot(v, t), meso_vec3_dot(v, bt), meso_vec3_dot(v, n)};
     float rgb[3];
-    meso_rtv_evaluate(pj->rtvs[o], (meso_vec3){hit->uv.x, hit->uv.y, hit->base.w}, view, radiance,
-                      rgb);
+    if (view.z < 0.0f && interior) /* seen from inside: the light from below (gdm_gi.c) */
+        for (int c = 0; c < 3; c++)
+            rgb[c] = fmaxf(0.0f, 0.282095f * radiance[c][0] - 0.325735f * radiance[c][2] +
+                                     0.157696f * radiance[c][6]);
+    else
+        meso_rtv_evaluate(pj->rtvs[o], (meso_vec3){hit->uv.x, hit->uv.y, hit->base.w}, view,
+                          radiance, rgb);
     return meso_vec3_mul(albedo, (meso_vec3){rgb[0], rgb[1], rgb[2]});
 }
 
@@ -221,7 +237,9 @@ static meso_result prepare_rtv(meso_context *ctx, path_job *pj) {
     int n = reference->num_objects;
     pj->rtvs = calloc((size_t)n, sizeof *pj->rtvs);
     pj->vertex_radiance = calloc((size_t)n, sizeof *pj->vertex_radiance);
-    if (!pj->rtvs || !pj->vertex_radiance)
+    pj->vertex_interior = calloc((size_t)n, sizeof *pj->vertex_interior);
+    pj->interior_radiance = calloc((size_t)n, sizeof *pj->interior_radiance);
+    if (!pj->rtvs || !pj->vertex_radiance || !pj->vertex_interior || !pj->interior_radiance)
         return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "reference: rtv");
     for (int o = 0; o < n; o++) {
         const meso_object *object = reference->objects[o].object;
@@ -232,10 +250,19 @@ static meso_result prepare_rtv(meso_context *ctx, path_job *pj) {
             .solid = ms->kind == MESO_MESOSTRUCTURE_SOLID ? ms->solid : NULL,
             .aspect = meso_gi_shell_aspect(object)};
         meso_result r = meso_rtv_bake_cached(ctx, &desc, &pj->rtvs[o]);
-        if (r == MESO_OK)
+        float open_fraction = meso_gi_open_fraction(ms);
+        if (r == MESO_OK && open_fraction > 0.0f)
+            r = meso_gi_vertex_radiance_through_shell(ctx, object->mesh, scene->environment, NULL,
+                                                      &pj->vertex_radiance[o],
+                                                      &pj->vertex_interior[o]);
+        else if (r == MESO_OK)
             r = meso_gi_vertex_radiance(ctx, object->mesh, scene->environment, NULL,
                                         &pj->vertex_radiance[o]);
         if (r != MESO_OK) return r;
+        if (pj->vertex_interior[o])
+            pj->interior_radiance[o] =
+                meso_gi_interior_radiance(object->mesh, pj->vertex_radiance[o], scene,
+                                          object->material.albedo, open_fraction);
     }
     return MESO_OK;
 }
@@ -243,6 +270,9 @@ static meso_result prepare_rtv(meso_context *ctx, path_job *pj) {
 static void release_rtv(path_job *pj, int n) {
     for (int o = 0; pj->rtvs && o < n; o++) meso_rtv_destroy(pj->rtvs[o]);
     for (int o = 0; pj->vertex_radiance && o < n; o++) free(pj->vertex_radiance[o]);
+    for (int o = 0; pj->vertex_interior && o < n; o++) free(pj->vertex_interior[o]);
+    free(pj->vertex_interior);
+    free(pj->interior_radiance);
     free(pj->rtvs);
     free(pj->vertex_radiance);
 }

@@ -21,6 +21,7 @@
 
 #include "meso/environment.h"
 #include "meso/geom.h"
+#include "meso/mesostructure.h"
 #include "meso/scene.h"
 
 /* Zero fields take the defaults. */
@@ -36,6 +37,33 @@ typedef struct meso_gi_vertex_desc {
 meso_result meso_gi_vertex_radiance(meso_context *ctx, const meso_mesh *mesh,
                                     const meso_environment *environment,
                                     const meso_gi_vertex_desc *desc, float **out_radiance);
+
+/* meso_gi_vertex_radiance for a shell that lets light through (a woven solid with holes):
+ * directions below the tangent plane count too. One that leaves the base mesh brings the
+ * environment's radiance into out_radiance; one that meets it (the inside of a closed mesh)
+ * is counted in *out_interior, num_vertices x 16 floats in the vertex's frame: the SH
+ * coefficients of those directions, to be multiplied by the interior's radiance
+ * (meso_gi_interior_radiance) when the frame's lights are known. */
+meso_result meso_gi_vertex_radiance_through_shell(meso_context *ctx, const meso_mesh *mesh,
+                                                  const meso_environment *environment,
+                                                  const meso_gi_vertex_desc *desc,
+                                                  float **out_radiance, float **out_interior);
+
+/* The fraction of a solid mesostructure's tile that light crosses straight through the shell
+ * (columns of (u, v) with no solid over the depth, 64 x 64 columns of 64 samples); 0 for a
+ * height field, whose shell is closed. Pure. */
+float meso_gi_open_fraction(const meso_mesostructure *ms);
+
+/* The radiance inside a closed base mesh whose shell lets through the fraction tau of the
+ * light, as a cavity in balance (one uniform radiance): the light arriving on the outside,
+ * E (the environment from the vertices' coefficients, the scene's lights at their cosine,
+ * averaged over the mesh by area), enters through the holes; the inner walls, a fraction
+ * 1 - tau of what a ray inside meets, reflect rho of it again and again, the holes let it out:
+ *     wall radiance = rho tau E / (pi (1 - tau) (1 - rho (1 - tau))),
+ *     interior = (1 - tau) wall + tau (the environment's mean radiance, seen through a hole).
+ * Per channel; rho the material's albedo. Pure. */
+meso_vec3 meso_gi_interior_radiance(const meso_mesh *mesh, const float *radiance,
+                                    const meso_scene *scene, meso_vec3 albedo, float open_fraction);
 
 /* Direction k of n over the sphere: a spherical Fibonacci point (equal areas). Pure. */
 static inline meso_vec3 meso_gi_fibonacci_direction(int k, int n) {

@@ -95,6 +95,76 @@ static void test_gi_torus_hole_is_darker_than_its_outside(void **state) {
     meso_context_destroy(ctx);
 }
 
+/* Through the shell, on a closed sphere under a uniform sky: above the tangent plane as
+ * before; every direction below it meets the sphere's far side, so the interior's
+ * coefficients are those of the lower hemisphere (c_0 = 2 pi Y_0 = 1.7725, c_2 = -pi 0.4886 =
+ * -1.5349, c_12 = pi / 2 0.3732 = 0.5862), and the cavity's radiance has its closed form. */
+static void test_gi_closed_sphere_through_the_shell(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    meso_mesh *sphere = shape(ctx, MESO_SHAPE_SPHERE);
+    meso_environment *env = uniform_sky(ctx);
+    float *opaque = NULL, *radiance = NULL, *interior = NULL;
+    assert_int_equal(meso_gi_vertex_radiance(ctx, sphere, env, NULL, &opaque), MESO_OK);
+    assert_int_equal(
+        meso_gi_vertex_radiance_through_shell(ctx, sphere, env, NULL, &radiance, &interior),
+        MESO_OK);
+    /* a few directions just below the tangent plane slip past the faceted sphere */
+    float largest = 0.0f;
+    for (size_t k = 0; k < sphere->num_vertices * 3 * MESO_SH_COUNT; k++)
+        largest = fmaxf(largest, fabsf(opaque[k] - radiance[k]));
+    print_message("through the shell, largest change above: %.4f\n", largest);
+    assert_true(largest < 0.05f);
+    const float lower[MESO_SH_COUNT] = {1.7725f, 0, -1.5349f, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.5862f};
+    for (size_t v = 0; v < sphere->num_vertices; v += 97)
+        for (int k = 0; k < MESO_SH_COUNT; k++)
+            assert_float_equal(interior[v * MESO_SH_COUNT + (size_t)k], lower[k], 0.03);
+    /* tau 0.5, albedo 0.5, E = pi, the sky's mean 1: wall = 0.25 pi / (pi 0.5 0.75) = 2 / 3,
+     * interior = 0.5 (2 / 3) + 0.5 = 5 / 6; closed, no light comes in; open, the sky */
+    meso_scene scene = {.environment = env};
+    meso_vec3 grey = {0.5f, 0.5f, 0.5f};
+    meso_vec3 half = meso_gi_interior_radiance(sphere, radiance, &scene, grey, 0.5f);
+    assert_float_equal(half.y, 5.0f / 6.0f, 0.02f);
+    assert_float_equal(meso_gi_interior_radiance(sphere, radiance, &scene, grey, 0.0f).y, 0.0,
+                       1e-6);
+    assert_float_equal(meso_gi_interior_radiance(sphere, radiance, &scene, grey, 1.0f).y, 1.0,
+                       0.01);
+    /* a light adds its mean cosine over the sphere, 1/4 of its intensity, to E: 1 here, so
+     * the interior 0.5 x 0.25 / (pi 0.5 0.75) more */
+    scene.lights[0] =
+        (meso_light){.type = MESO_LIGHT_DIRECTIONAL, .direction = {0, 1, 0}, .color = {4, 4, 4}};
+    scene.num_lights = 1;
+    meso_vec3 lit = meso_gi_interior_radiance(sphere, radiance, &scene, grey, 0.5f);
+    assert_float_equal(lit.y - half.y, (float)(0.125 / (M_PI * 0.375)), 0.005f);
+    free(opaque);
+    free(radiance);
+    free(interior);
+    meso_environment_destroy(env);
+    meso_mesh_destroy(sphere);
+    meso_context_destroy(ctx);
+}
+
+/* A woven solid lets light through its holes; a height field's shell is closed. */
+static void test_gi_open_fraction_of_the_shell(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(1);
+    meso_solid *weave = NULL;
+    assert_int_equal(
+        meso_solid_create_procedural(ctx, &(meso_solid_desc){.kind = MESO_SOLID_WEAVE}, &weave),
+        MESO_OK);
+    meso_mesostructure woven = {.kind = MESO_MESOSTRUCTURE_SOLID, .solid = weave};
+    float tau = meso_gi_open_fraction(&woven);
+    print_message("weave: open fraction %.3f\n", tau);
+    assert_true(tau > 0.05f && tau < 0.5f);
+    meso_heightfield *hf = NULL;
+    assert_int_equal(meso_heightfield_create_constant(ctx, 4, 4, 0.0f, &hf), MESO_OK);
+    meso_mesostructure field = {.kind = MESO_MESOSTRUCTURE_HEIGHT_FIELD, .height_field = hf};
+    assert_float_equal(meso_gi_open_fraction(&field), 0.0, 0.0);
+    meso_heightfield_destroy(hf);
+    meso_solid_destroy(weave);
+    meso_context_destroy(ctx);
+}
+
 static void test_gi_bad_arguments_are_refused(void **state) {
     (void)state;
     meso_context *ctx = test_context(1);
@@ -118,6 +188,8 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_gi_open_plane_receives_the_sky),
         cmocka_unit_test(test_gi_torus_hole_is_darker_than_its_outside),
+        cmocka_unit_test(test_gi_closed_sphere_through_the_shell),
+        cmocka_unit_test(test_gi_open_fraction_of_the_shell),
         cmocka_unit_test(test_gi_bad_arguments_are_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

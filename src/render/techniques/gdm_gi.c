@@ -34,6 +34,12 @@ struct gdm_gi {
      * (the quadrature weight 4 pi / n over pi: E / pi) */
     const gdm_shell *shell;
     meso_vec3 albedo; /* the material's (the inside's interreflection) */
+    /* a solid whose shell lets light through (open_fraction > 0): per vertex the 16
+     * coefficients of the directions below the tangent plane that meet the base mesh, and the
+     * interior's radiance this frame (render_gi.h); NULL and 0 otherwise */
+    float *interior;
+    float open_fraction;
+    meso_vec3 interior_radiance;
     meso_vec3 inside_direction[GI_INSIDE_DIRECTIONS];
     meso_vec3 inside_radiance[GI_INSIDE_DIRECTIONS];
 };
@@ -174,9 +180,12 @@ meso_result gdm_gi_create(meso_context *ctx, const meso_scene *scene, const meso
         .eigen = desc->eigen};
     if ((r = meso_rtv_bake_cached(ctx, &rtv_desc, &gi->rtv)) != MESO_OK) goto fail;
     if ((r = pack_rtv(ctx, gi, object->name)) != MESO_OK) goto fail;
-    if ((r = meso_gi_vertex_radiance(ctx, mesh, scene->environment, NULL, &gi->radiance)) !=
-        MESO_OK)
-        goto fail;
+    gi->open_fraction = meso_gi_open_fraction(ms);
+    r = gi->open_fraction > 0.0f
+            ? meso_gi_vertex_radiance_through_shell(ctx, mesh, scene->environment, NULL,
+                                                    &gi->radiance, &gi->interior)
+            : meso_gi_vertex_radiance(ctx, mesh, scene->environment, NULL, &gi->radiance);
+    if (r != MESO_OK) goto fail;
     gi->shell = desc->shell;
     gi->albedo = object->material.albedo;
     for (int k = 0; k < GI_INSIDE_DIRECTIONS; k++) {
@@ -199,6 +208,7 @@ void gdm_gi_destroy(gdm_gi *gi) {
     if (!gi) return;
     meso_rtv_destroy(gi->rtv);
     free(gi->radiance);
+    free(gi->interior);
     free(gi->tangents);
     free(gi->weights);
     free(gi->eigen);
@@ -209,7 +219,8 @@ size_t gdm_gi_memory(const gdm_gi *gi) {
     if (!gi) return 0;
     return 2 * (size_t)gi->rtv->compressed_bytes + /* the RTV and its packed copy */
            gi->mesh->num_vertices *
-               (GI_CHANNELS * MESO_SH_COUNT * sizeof(float) + sizeof(meso_vec3));
+               ((GI_CHANNELS + (gi->interior ? 1 : 0)) * MESO_SH_COUNT * sizeof(float) +
+                sizeof(meso_vec3));
 }
 
 void gdm_gi_begin_frame(gdm_gi *gi, const meso_frame *frame) {
@@ -222,6 +233,9 @@ void gdm_gi_begin_frame(gdm_gi *gi, const meso_frame *frame) {
     gi->albedo_scene.ambient = (meso_vec3){1.0f, 1.0f, 1.0f};
     gi->albedo_frame = *frame;
     gi->albedo_frame.scene = &gi->albedo_scene;
+    if (gi->interior) /* the lights may have moved */
+        gi->interior_radiance = meso_gi_interior_radiance(gi->mesh, gi->radiance, frame->scene,
+                                                          gi->albedo, gi->open_fraction);
 }
 
 /* The sky's irradiance over pi at a hit seen from inside the base mesh, shadowed by the shell:
@@ -269,6 +283,16 @@ static bool reflected_at(const gdm_gi *gi, const meso_frame *frame, const meso_f
     meso_prism_weights(hit->prism, (meso_vec2){hit->uvw.x, hit->uvw.y}, b);
     float radiance[GI_CHANNELS][MESO_SH_COUNT];
     radiance_interpolate(gi->radiance, v[0], v[1], v[2], b[0], b[1], b[2], radiance);
+    if (gi->interior) { /* plus the interior's light from below the tangent plane */
+        const float *m0 = gi->interior + (size_t)v[0] * MESO_SH_COUNT;
+        const float *m1 = gi->interior + (size_t)v[1] * MESO_SH_COUNT;
+        const float *m2 = gi->interior + (size_t)v[2] * MESO_SH_COUNT;
+        const float *l = &gi->interior_radiance.x;
+        for (int i = 0; i < MESO_SH_COUNT; i++) {
+            float m = b[0] * m0[i] + b[1] * m1[i] + b[2] * m2[i];
+            for (int c = 0; c < GI_CHANNELS; c++) radiance[c][i] += l[c] * m;
+        }
+    }
     meso_vec3 n = meso_vec3_normalize(meso_vec3_barycentric(
         mesh->normals[v[0]], mesh->normals[v[1]], mesh->normals[v[2]], b[0], b[1], b[2]));
     meso_vec3 t = meso_vec3_barycentric(gi->tangents[v[0]], gi->tangents[v[1]], gi->tangents[v[2]],
@@ -280,6 +304,14 @@ static bool reflected_at(const gdm_gi *gi, const meso_frame *frame, const meso_f
                       meso_vec3_dot(toward, n)};
     if (view.z < 0.0f && gi->shell) {
         inside_sky(gi, f, hit, gi->albedo, out_rgb);
+        return false;
+    }
+    if (view.z < 0.0f && gi->interior) {
+        /* the light from below the tangent plane, on a surface facing it: E / pi about -z,
+         * the clamped cosine's coefficients with the odd band's sign turned */
+        for (int c = 0; c < GI_CHANNELS; c++)
+            out_rgb[c] = fmaxf(0.0f, 0.282095f * radiance[c][0] - 0.325735f * radiance[c][2] +
+                                         0.157696f * radiance[c][6]);
         return false;
     }
     if (view.z < 0.0f) {
