@@ -271,10 +271,11 @@ static void inside_sky(const gdm_gi *gi, const meso_fragment *f, const gdm_gi_hi
  * render_gi_transfer.c, and the reference's rtv mode).
  *
  * A hit seen from below its base surface (the far wall of a woven teapot seen from inside
- * through the near wall's holes) is lit, in the model, only by the vertices' outer
- * hemisphere: nothing, the macro surface being opaque below its tangent plane. The model has
- * no incident light for the inside of a closed mesh; there the shading model's unshadowed SH
- * ambient at the hit's normal stands in (gi off's term). Returns false for such a hit. */
+ * through the near wall's holes) faces the light from below the tangent plane: with an open
+ * shell (gi->interior), the environment and the interior's radiance the vertices hold; with
+ * gi_inside_sky, the sky through the shell; otherwise (a height field's closed shell: the
+ * model has no light there) the shading model's unshadowed SH ambient at the hit's normal
+ * (gi off's term). Returns false for such a hit. */
 static bool reflected_at(const gdm_gi *gi, const meso_frame *frame, const meso_fragment *f,
                          const gdm_gi_hit *hit, float out_rgb[3]) {
     const meso_mesh *mesh = gi->mesh;

@@ -27,8 +27,9 @@ typedef struct gdm_gi gdm_gi;
 /* The RTV's bake resolution (zero fields: bake_rtv.h's defaults). */
 typedef struct gdm_gi_desc {
     int resolution, layers, eigen;
-    /* gdm's shadows through the shell, borrowed (outliving the gi); NULL: a hit seen from
-     * inside the base mesh takes the unshadowed SH ambient, else the sky through the shell */
+    /* gdm's shadows through the shell, borrowed (outliving the gi); set: a hit seen from
+     * inside the base mesh takes the sky through the shell (gi_inside_sky); NULL: the light
+     * from below the tangent plane (a solid's open shell) or else the unshadowed SH ambient */
     const gdm_shell *shell;
 } gdm_gi_desc;
 
