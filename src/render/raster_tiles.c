@@ -655,7 +655,9 @@ meso_result raster_draw(meso_context *ctx, raster_pass *pass, const meso_frame *
                               .width = frame->width,
                               .height = frame->height,
                               .z_near = frame->z_near,
-                              .cull_back = true};
+                              .cull_back = true,
+                              /* the wireframe draws the edges of triangles covering nothing */
+                              .drop_uncovered = !wireframe};
     if (num_objects > pass->both_faces_capacity) {
         bool *b = realloc(pass->both_faces, (size_t)num_objects * sizeof(*b));
         if (!b) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "render: out of memory");
