@@ -266,7 +266,7 @@ static size_t cover_triangle(const raster_triangle *tri, int x0, int y0, int x1,
         step_y[k] = (int64_t)tri->edge_b[k] * RASTER_SUBPIXEL_ONE;
         int64_t s = step_x[k];
         offset_lo[k] = (v4l){0, s, 2 * s, 3 * s};
-        offset_hi[k] = (v4l){4 * s, 5 * s, 6 * s, 7 * s};
+        offset_hi[k] = offset_lo[k] + 4 * s; /* one vector add instead of four lane inserts */
         step_group[k] = 8 * s;
     }
     const v8f ga0 = splat(tri->ga[0]), ga1 = splat(tri->ga[1]), ga2 = splat(tri->ga[2]);
@@ -317,9 +317,12 @@ static size_t cover_triangle(const raster_triangle *tri, int x0, int y0, int x1,
         }
     }
     if (!n) return 0;
-    for (size_t i = n; i % LANES; i++) { /* unused lanes repeat the last fragment */
-        out->x[i] = out->x[n - 1], out->y[i] = out->y[n - 1], out->depth[i] = out->depth[n - 1];
-    }
+    /* unused lanes of the last group repeat the last fragment (the arrays hold a group more) */
+    v8i last_x = v8i_splat(out->x[n - 1]), last_y = v8i_splat(out->y[n - 1]);
+    v8f last_depth = splat(out->depth[n - 1]);
+    memcpy(out->x + n, &last_x, sizeof last_x);
+    memcpy(out->y + n, &last_y, sizeof last_y);
+    memcpy(out->depth + n, &last_depth, sizeof last_depth);
     return n;
 }
 
