@@ -282,6 +282,16 @@ static meso_result displacement_geometry(meso_context *ctx, void *state, const m
     return MESO_OK;
 }
 
+/* One fragment at a time (hand-built fragments; the reference the block path is tested
+ * against). */
+static void displacement_shade(const void *state, const meso_frame *frame,
+                               const meso_object *object, meso_fragment *fragments, size_t count) {
+    (void)object;
+    const displacement_state *s = state;
+    /* fragments name triangles of this frame's drawn mesh */
+    displace_shade(&s->surface, &s->shadows, &s->drawn, frame, fragments, count);
+}
+
 /* Eight fragments at a time from the rasterizer's block (displace_shade8.h): the colours of
  * displace_shade, bit for bit. */
 static void displacement_shade_block(const void *state, const meso_frame *frame,
@@ -313,6 +323,7 @@ const meso_technique meso_technique_displacement = {
     .prepare = displacement_prepare,
     .release = displacement_release,
     .geometry = displacement_geometry,
+    .shade = displacement_shade,
     .shade_block = displacement_shade_block,
     /* reads the position, the tangent frame, uv and the triangle; writes every colour */
     .skip_fields = MESO_FRAGMENT_SKIP_SAMPLE | MESO_FRAGMENT_SKIP_BARYCENTRICS |
