@@ -429,6 +429,7 @@ static inline void snap8(v8f x, v8f y, v8f w, double width, double height, v8i *
 
 typedef int32_t v4i __attribute__((vector_size(16)));
 typedef int64_t v4l __attribute__((vector_size(32)));
+typedef uint64_t v4lu __attribute__((vector_size(32)));
 
 static inline v4l v4l_half(v8i x, int h) {
     v4i q = {x[4 * h], x[4 * h + 1], x[4 * h + 2], x[4 * h + 3]};
@@ -508,8 +509,10 @@ static void setup_triangles8(const raster_setup_desc *desc, bool cull_back, cons
                     v4l ea = v4l_half(out->edge_a[k], h), eb = v4l_half(out->edge_b[k], h);
                     v4l e00 = mul_wide(ea, v4l_half(px - x[a], h)) +
                               mul_wide(eb, v4l_half(py - y[a], h)) + v4l_half(out->bias[k], h);
-                    v4l dx = (ea << RASTER_SUBPIXEL_BITS) & step_x;
-                    v4l dy = (eb << RASTER_SUBPIXEL_BITS) & step_y;
+                    /* one sample on: the step times 256, shifted as unsigned (defined for a
+                     * negative step, and no 64-bit lane product) */
+                    v4l dx = (v4l)((v4lu)ea << RASTER_SUBPIXEL_BITS) & step_x;
+                    v4l dy = (v4l)((v4lu)eb << RASTER_SUBPIXEL_BITS) & step_y;
                     neg00 |= e00, neg10 |= e00 + dx, neg01 |= e00 + dy, neg11 |= e00 + dx + dy;
                 }
                 int miss = v4l_mask_bits(neg00 < 0) & v4l_mask_bits(neg10 < 0) &
