@@ -73,7 +73,8 @@ meso_result meso_raster_depth_map(meso_context *ctx, const meso_mesh *mesh,
                               .height = height,
                               .clip_z = true,
                               .cull_back = false,
-                              .depth_plane = true};
+                              .depth_plane = true,
+                              .drop_uncovered = true};
     const meso_mesh *meshes[1] = {mesh};
 #if MESO_HAS_AVX2_TECHNIQUES
     /* the setup's AVX2 copy where the techniques run theirs: 8 triangles at a time */

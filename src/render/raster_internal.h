@@ -70,13 +70,15 @@ typedef struct raster_chunk {
 
 typedef struct raster_setup_desc {
     meso_mat4 view_projection;
-    int width, height;  /* target, samples */
-    float z_near;       /* clip at clip w >= z_near */
-    bool clip_z;        /* instead clip at z_ndc >= -1 (depth maps: any projection) */
-    bool cull_back;     /* drop triangles facing away (clockwise on screen from outside) */
-    bool depth_plane;   /* fill za/zb/zc */
-    bool one_at_a_time; /* tests: set up source triangles one by one, the reference of the
-                           8-wide path (the same triangles, raster_setup.c) */
+    int width, height;   /* target, samples */
+    float z_near;        /* clip at clip w >= z_near */
+    bool clip_z;         /* instead clip at z_ndc >= -1 (depth maps: any projection) */
+    bool cull_back;      /* drop triangles facing away (clockwise on screen from outside) */
+    bool depth_plane;    /* fill za/zb/zc */
+    bool one_at_a_time;  /* tests: set up source triangles one by one, the reference of the
+                            8-wide path (the same triangles, raster_setup.c) */
+    bool drop_uncovered; /* drop a triangle whose sample box (at most 2 x 2 samples) holds no
+                            sample centre it covers: it draws nothing, only a wireframe shows it */
 } raster_setup_desc;
 
 /* Scratch reused from frame to frame: buffers only grow. */

@@ -142,6 +142,33 @@ static bool orient_triangle(bool cull_back, snapped_triangle *s) {
     return true;
 }
 
+/* Whether the oriented triangle covers a sample centre of its sample box when that box is at
+ * most 2 x 2 samples (true for larger boxes): the edge functions and the top-left rule of
+ * setup_triangle at each centre, evaluated as cover_triangle evaluates them (raster_tiles.c),
+ * so a triangle this rejects would have covered no sample. Most triangles of a displaced mesh
+ * are smaller than a sample, and many of those whose box holds a centre miss it
+ * (docs/rasterizer.md). */
+static bool covers_small_box(const snapped_triangle *s) {
+    if (s->bx1 - s->bx0 > 1 || s->by1 - s->by0 > 1) return true;
+    const int64_t half = RASTER_SUBPIXEL_ONE / 2;
+    const int64_t *X = s->X, *Y = s->Y;
+    for (int corner = 0; corner < 4; corner++) {
+        int64_t px = ((int64_t)(corner & 1 ? s->bx1 : s->bx0) << RASTER_SUBPIXEL_BITS) + half;
+        int64_t py = ((int64_t)(corner & 2 ? s->by1 : s->by0) << RASTER_SUBPIXEL_BITS) + half;
+        bool inside = true;
+#pragma GCC unroll 3
+        for (int k = 0; k < 3; k++) {
+            int a = (k + 1) % 3, b = (k + 2) % 3;
+            int32_t ea = (int32_t)(-(Y[b] - Y[a])), eb = (int32_t)(X[b] - X[a]);
+            int32_t bias = (ea > 0 || (ea == 0 && eb > 0)) ? 0 : -1;
+            inside &=
+                (int64_t)ea * (px - (int32_t)X[a]) + (int64_t)eb * (py - (int32_t)Y[a]) + bias >= 0;
+        }
+        if (inside) return true;
+    }
+    return false;
+}
+
 /* Snap the vertices (clip x, y, w) to 1/256 sample and find the sample centres the bounding box
  * holds; false when there are none, the area is zero or a culled back face. This is the whole
  * cost of many triangles of a displaced mesh (they cover no sample centre, docs/performance.md),
@@ -159,7 +186,8 @@ static bool snap_triangle(const raster_setup_desc *desc, bool cull_back, const c
         s->Y[k] = round_to_int64(sy * RASTER_SUBPIXEL_ONE);
     }
     /* the box does not depend on the orientation: test the cheaper rejection first */
-    return sample_box(desc, s) && orient_triangle(cull_back, s);
+    return sample_box(desc, s) && orient_triangle(cull_back, s) &&
+           (!desc->drop_uncovered || covers_small_box(s));
 }
 
 /* Set up one (possibly clipped) triangle that snap_triangle kept. */
@@ -401,6 +429,7 @@ static inline void snap8(v8f x, v8f y, v8f w, double width, double height, v8i *
 
 typedef int32_t v4i __attribute__((vector_size(16)));
 typedef int64_t v4l __attribute__((vector_size(32)));
+typedef uint64_t v4lu __attribute__((vector_size(32)));
 
 static inline v4l v4l_half(v8i x, int h) {
     v4i q = {x[4 * h], x[4 * h + 1], x[4 * h + 2], x[4 * h + 3]};
@@ -412,6 +441,9 @@ static inline v4d v4d_half_int(v8i x, int h) {
     return __builtin_convertvector(q, v4d);
 }
 static inline int v4l_mask_bits(v4l mask) { return _mm256_movemask_pd((__m256d)mask); }
+/* a * b of 64-bit lanes holding sign-extended 32-bit integers (vpmuldq: no 64-bit product
+ * emulated from three). */
+static inline v4l mul_wide(v4l a, v4l b) { return (v4l)_mm256_mul_epi32((__m256i)a, (__m256i)b); }
 static inline v8i v8i_select(v8i mask, v8i a, v8i b) { return (a & mask) | (b & ~mask); }
 
 /* Eight unclipped triangles that passed the sample-box test, set up as setup_triangle would:
@@ -456,6 +488,40 @@ static void setup_triangles8(const raster_setup_desc *desc, bool cull_back, cons
         v8i ea = -(y[b] - y[a]), eb = x[b] - x[a];
         out->edge_a[k] = ea, out->edge_b[k] = eb;
         out->bias[k] = ~((ea > 0) | ((ea == 0) & (eb > 0)));
+    }
+    /* covers_small_box, eight wide */
+    if (desc->drop_uncovered) {
+        v8i wide = bx1 - bx0, tall = by1 - by0; /* 0 or 1 in a small box */
+        int small_bits = out->kept & v8_mask_bits((wide <= 1) & (tall <= 1));
+        if (small_bits) {
+            const int32_t half = RASTER_SUBPIXEL_ONE / 2;
+            v8i px = (bx0 << RASTER_SUBPIXEL_BITS) + half,
+                py = (by0 << RASTER_SUBPIXEL_BITS) + half;
+            int covered = 0;
+            for (int h = 0; h < 2; h++) {
+                /* the edge functions at the box's four corners (the same centre twice in a
+                 * box one sample wide or tall): at (bx0, by0) and one sample step on */
+                v4l step_x = v4l_half(wide == 1, h), step_y = v4l_half(tall == 1, h); /* masks */
+                v4l neg00 = {0, 0, 0, 0}, neg10 = neg00, neg01 = neg00, neg11 = neg00;
+#pragma GCC unroll 3
+                for (int k = 0; k < 3; k++) {
+                    int a = (k + 1) % 3;
+                    v4l ea = v4l_half(out->edge_a[k], h), eb = v4l_half(out->edge_b[k], h);
+                    v4l e00 = mul_wide(ea, v4l_half(px - x[a], h)) +
+                              mul_wide(eb, v4l_half(py - y[a], h)) + v4l_half(out->bias[k], h);
+                    /* one sample on: the step times 256, shifted as unsigned (defined for a
+                     * negative step, and no 64-bit lane product) */
+                    v4l dx = (v4l)((v4lu)ea << RASTER_SUBPIXEL_BITS) & step_x;
+                    v4l dy = (v4l)((v4lu)eb << RASTER_SUBPIXEL_BITS) & step_y;
+                    neg00 |= e00, neg10 |= e00 + dx, neg01 |= e00 + dy, neg11 |= e00 + dx + dy;
+                }
+                int miss = v4l_mask_bits(neg00 < 0) & v4l_mask_bits(neg10 < 0) &
+                           v4l_mask_bits(neg01 < 0) & v4l_mask_bits(neg11 < 0);
+                covered |= (~miss & 15) << 4 * h;
+            }
+            out->kept &= ~(small_bits & ~covered);
+            if (!out->kept) return;
+        }
     }
     v8i ref2_x = bx0 + bx1 + 1, ref2_y = by0 + by1 + 1;
     v8f non_finite = v8_splat(0.0f);

@@ -56,6 +56,50 @@ static void load_attributes(const meso_mesh *mesh, uint32_t triangle, bool tange
 #define LANES V8_LANES
 #define splat v8_splat
 
+/* fill_fragments_skipping of one fragment, lane `at` of the block only, with the very
+ * operations of a lane of the vector code in their order (so the same bits). The lanes after it
+ * are written by the next triangle's fill or by flush_batch's padding. */
+static inline __attribute__((always_inline)) void
+fill_one_skipping(const raster_triangle *tri, const meso_frame *frame, const vertex_attributes *va,
+                  unsigned skip, int32_t ix, int32_t iy, float d, meso_fragment_block *block,
+                  size_t at) {
+    float sx = (float)ix + 0.5f, sy = (float)iy + 0.5f;
+    float fx = sx - tri->ref_x, fy = sy - tri->ref_y;
+    float b0 = (tri->gc[0] + tri->gb[0] * fy + tri->ga[0] * fx) * d;
+    float b1 = (tri->gc[1] + tri->gb[1] * fy + tri->ga[1] * fx) * d;
+    float b2 = (tri->gc[2] + tri->gb[2] * fy + tri->ga[2] * fx) * d;
+    if (!(skip & MESO_FRAGMENT_SKIP_SAMPLE)) block->x[at] = sx, block->y[at] = sy;
+    if (!(skip & MESO_FRAGMENT_SKIP_TRIANGLE)) block->triangle[at] = tri->triangle;
+    if (!(skip & MESO_FRAGMENT_SKIP_BARYCENTRICS))
+        block->b0[at] = b0, block->b1[at] = b1, block->b2[at] = b2;
+    float dx = frame->corner.x + (frame->pixel_right.x * sx + frame->pixel_down.x * sy);
+    float dy = frame->corner.y + (frame->pixel_right.y * sx + frame->pixel_down.y * sy);
+    float dz = frame->corner.z + (frame->pixel_right.z * sx + frame->pixel_down.z * sy);
+    block->px[at] = frame->eye.x + dx * d, block->py[at] = frame->eye.y + dy * d;
+    block->pz[at] = frame->eye.z + dz * d;
+#define INTERP(arr, c) (arr[0].c * b0 + arr[1].c * b1 + arr[2].c * b2)
+    float nx = INTERP(va->n, x), ny = INTERP(va->n, y), nz = INTERP(va->n, z);
+    float len2 = nx * nx + ny * ny + nz * nz;
+    float inv = len2 > 0.0f ? 1.0f / sqrtf(len2) : 1.0f;
+    block->nx[at] = nx * inv, block->ny[at] = ny * inv, block->nz[at] = nz * inv;
+    if (va->has_tangents) {
+        block->tx[at] = INTERP(va->t, x), block->ty[at] = INTERP(va->t, y);
+        block->tz[at] = INTERP(va->t, z);
+        block->bx[at] = INTERP(va->b, x), block->by[at] = INTERP(va->b, y);
+        block->bz[at] = INTERP(va->b, z);
+    } else if (!(skip & MESO_FRAGMENT_SKIP_TANGENTS)) {
+        block->tx[at] = block->ty[at] = block->tz[at] = 0.0f;
+        block->bx[at] = block->by[at] = block->bz[at] = 0.0f;
+    }
+    block->u[at] = va->has_uvs ? INTERP(va->uv, x) : 0.0f;
+    block->v[at] = va->has_uvs ? INTERP(va->uv, y) : 0.0f;
+#undef INTERP
+    block->depth[at] = d, block->out_depth[at] = d;
+    if (!(skip & MESO_FRAGMENT_SKIP_COLOR_PRESET))
+        block->r[at] = block->g[at] = block->b[at] = 0.0f;
+    block->discard[at] = 0;
+}
+
 /* Fill the inputs and preset the outputs of n fragments from their sample positions and view
  * depths, 8 at a time (GCC vector extensions), into lanes first..first+n-1 of the block, but for
  * the fields in `skip` (MESO_FRAGMENT_SKIP_*: the technique never reads them). The
@@ -66,6 +110,10 @@ fill_fragments_skipping(const raster_triangle *tri, const meso_frame *frame,
                         const vertex_attributes *va, unsigned skip, size_t n, const int32_t *xs,
                         const int32_t *ys, const float *depths, meso_fragment_block *block,
                         size_t first) {
+    if (n == 1) { /* most triangles of a displaced mesh: one lane, not a group of eight */
+        fill_one_skipping(tri, frame, va, skip, xs[0], ys[0], depths[0], block, first);
+        return;
+    }
     const v8f ga0 = splat(tri->ga[0]), ga1 = splat(tri->ga[1]), ga2 = splat(tri->ga[2]);
     const v8f gb0 = splat(tri->gb[0]), gb1 = splat(tri->gb[1]), gb2 = splat(tri->gb[2]);
     const v8f gc0 = splat(tri->gc[0]), gc1 = splat(tri->gc[1]), gc2 = splat(tri->gc[2]);
@@ -132,8 +180,8 @@ fill_fragments_skipping(const raster_triangle *tri, const meso_frame *frame,
 #undef STORE
 }
 
-/* fill_fragments_skipping with the skips of flat, bump and parallax as constants: a test of
- * `skip` a group cost as much as the stores it saved. */
+/* fill_fragments_skipping with the skips of flat, bump, parallax and displacement as constants:
+ * a test of `skip` a group cost as much as the stores it saved. */
 #define FILL_SHADING_ONLY                                                                          \
     (MESO_FRAGMENT_SKIP_SAMPLE | MESO_FRAGMENT_SKIP_TRIANGLE | MESO_FRAGMENT_SKIP_BARYCENTRICS |   \
      MESO_FRAGMENT_SKIP_COLOR_PRESET)
@@ -145,6 +193,9 @@ static void fill_fragments(const raster_triangle *tri, const meso_frame *frame,
         fill_fragments_skipping(tri, frame, va, FILL_SHADING_ONLY, n, xs, ys, depths, block, first);
     else if (skip == (FILL_SHADING_ONLY | MESO_FRAGMENT_SKIP_TANGENTS))
         fill_fragments_skipping(tri, frame, va, FILL_SHADING_ONLY | MESO_FRAGMENT_SKIP_TANGENTS, n,
+                                xs, ys, depths, block, first);
+    else if (skip == (FILL_SHADING_ONLY & ~MESO_FRAGMENT_SKIP_TRIANGLE)) /* displacement */
+        fill_fragments_skipping(tri, frame, va, FILL_SHADING_ONLY & ~MESO_FRAGMENT_SKIP_TRIANGLE, n,
                                 xs, ys, depths, block, first);
     else if (skip == 0)
         fill_fragments_skipping(tri, frame, va, 0, n, xs, ys, depths, block, first);
@@ -266,7 +317,7 @@ static size_t cover_triangle(const raster_triangle *tri, int x0, int y0, int x1,
         step_y[k] = (int64_t)tri->edge_b[k] * RASTER_SUBPIXEL_ONE;
         int64_t s = step_x[k];
         offset_lo[k] = (v4l){0, s, 2 * s, 3 * s};
-        offset_hi[k] = (v4l){4 * s, 5 * s, 6 * s, 7 * s};
+        offset_hi[k] = offset_lo[k] + 4 * s; /* one vector add instead of four lane inserts */
         step_group[k] = 8 * s;
     }
     const v8f ga0 = splat(tri->ga[0]), ga1 = splat(tri->ga[1]), ga2 = splat(tri->ga[2]);
@@ -317,9 +368,12 @@ static size_t cover_triangle(const raster_triangle *tri, int x0, int y0, int x1,
         }
     }
     if (!n) return 0;
-    for (size_t i = n; i % LANES; i++) { /* unused lanes repeat the last fragment */
-        out->x[i] = out->x[n - 1], out->y[i] = out->y[n - 1], out->depth[i] = out->depth[n - 1];
-    }
+    /* unused lanes of the last group repeat the last fragment (the arrays hold a group more) */
+    v8i last_x = v8i_splat(out->x[n - 1]), last_y = v8i_splat(out->y[n - 1]);
+    v8f last_depth = splat(out->depth[n - 1]);
+    memcpy(out->x + n, &last_x, sizeof last_x);
+    memcpy(out->y + n, &last_y, sizeof last_y);
+    memcpy(out->depth + n, &last_depth, sizeof last_depth);
     return n;
 }
 
@@ -655,7 +709,9 @@ meso_result raster_draw(meso_context *ctx, raster_pass *pass, const meso_frame *
                               .width = frame->width,
                               .height = frame->height,
                               .z_near = frame->z_near,
-                              .cull_back = true};
+                              .cull_back = true,
+                              /* the wireframe draws the edges of triangles covering nothing */
+                              .drop_uncovered = !wireframe};
     if (num_objects > pass->both_faces_capacity) {
         bool *b = realloc(pass->both_faces, (size_t)num_objects * sizeof(*b));
         if (!b) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "render: out of memory");

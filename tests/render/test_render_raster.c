@@ -558,6 +558,12 @@ static void test_raster_setup_8_wide_matches_one_at_a_time(void **state) {
         assert_true(check_setup_8_wide(ctx, tested[m], true, colour) > 100);
         assert_true(check_setup_8_wide(ctx, tested[m], false, depth) > 100);
         assert_true(check_setup_8_wide(ctx, tested[m], false, ortho) > 100);
+        /* with the triangles that cover no sample of a small box dropped */
+        raster_setup_desc dropping[3] = {colour, depth, ortho};
+        for (int d = 0; d < 3; d++) {
+            dropping[d].drop_uncovered = true;
+            assert_true(check_setup_8_wide(ctx, tested[m], false, dropping[d]) > 100);
+        }
     }
     /* a camera inside the soup: most triangles are clipped or behind */
     ts.scene.camera.eye = (meso_vec3){0.1f, 0.05f, 0.2f};
@@ -566,6 +572,81 @@ static void test_raster_setup_8_wide_matches_one_at_a_time(void **state) {
     assert_true(check_setup_8_wide(ctx, &soup, false, colour) > 100);
     free(positions);
     free(indices);
+    test_scene_free(&ts);
+    meso_mesh_destroy(sphere);
+    meso_context_destroy(ctx);
+}
+
+/* Whether the set-up triangle covers some sample centre of its box (the edge functions of
+ * cover_triangle, sample by sample). */
+static bool covers_some_sample(const raster_triangle *tri) {
+    for (int y = tri->min_y; y <= tri->max_y; y++)
+        for (int x = tri->min_x; x <= tri->max_x; x++) {
+            int64_t px = ((int64_t)x << RASTER_SUBPIXEL_BITS) + RASTER_SUBPIXEL_ONE / 2;
+            int64_t py = ((int64_t)y << RASTER_SUBPIXEL_BITS) + RASTER_SUBPIXEL_ONE / 2;
+            bool inside = true;
+            for (int k = 0; k < 3; k++) {
+                int a = (k + 1) % 3;
+                inside &= (int64_t)tri->edge_a[k] * (px - tri->x[a]) +
+                              (int64_t)tri->edge_b[k] * (py - tri->y[a]) + tri->bias[k] >=
+                          0;
+            }
+            if (inside) return true;
+        }
+    return false;
+}
+
+/* drop_uncovered leaves out exactly the triangles whose sample box is at most 2 x 2 samples and
+ * that cover none of them; the others stay, bit for bit and in their order (so the colour
+ * pass and the depth maps draw the same samples). */
+static void test_raster_dropped_triangles_cover_no_sample(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(1);
+    meso_mesh *sphere = test_shape(ctx, MESO_SHAPE_SPHERE, 0.7f, 192, (meso_vec3){0.1f, 0, 0});
+    test_scene ts;
+    test_scene_init(&ts, 256, 192);
+    meso_frame frame;
+    meso_frame_init(&frame, &ts.scene, 256, 192);
+    raster_setup_desc descs[2] = {{.view_projection = frame.view_projection,
+                                   .width = 256,
+                                   .height = 192,
+                                   .z_near = frame.z_near,
+                                   .cull_back = true},
+                                  {.view_projection = frame.view_projection,
+                                   .width = 300,
+                                   .height = 200,
+                                   .clip_z = true,
+                                   .depth_plane = true}};
+    const meso_mesh *meshes[1] = {sphere};
+    for (int d = 0; d < 2; d++) {
+        raster_bins all, kept;
+        memset(&all, 0, sizeof(all));
+        memset(&kept, 0, sizeof(kept));
+        assert_int_equal(raster_bins_build(ctx, &all, meshes, NULL, 1, &descs[d]), MESO_OK);
+        descs[d].drop_uncovered = true;
+        assert_int_equal(raster_bins_build(ctx, &kept, meshes, NULL, 1, &descs[d]), MESO_OK);
+        assert_int_equal(all.num_chunks, kept.num_chunks);
+        size_t dropped = 0;
+        for (size_t c = 0; c < all.num_chunks; c++) {
+            const raster_chunk *ca = &all.chunks[c], *ck = &kept.chunks[c];
+            size_t j = 0;
+            for (size_t i = 0; i < ca->num_triangles; i++) {
+                const raster_triangle *t = &ca->triangles[i];
+                bool small = t->max_x - t->min_x <= 1 && t->max_y - t->min_y <= 1;
+                if (small && !covers_some_sample(t)) {
+                    dropped++;
+                    continue;
+                }
+                assert_true(j < ck->num_triangles);
+                assert_memory_equal(t, &ck->triangles[j], sizeof(*t));
+                j++;
+            }
+            assert_int_equal(j, ck->num_triangles);
+        }
+        assert_true(dropped > 100);
+        raster_bins_release(&all);
+        raster_bins_release(&kept);
+    }
     test_scene_free(&ts);
     meso_mesh_destroy(sphere);
     meso_context_destroy(ctx);
@@ -869,6 +950,7 @@ int main(void) {
         cmocka_unit_test(test_flat_block_matches_shade_point),
         cmocka_unit_test(test_raster_back_faces_dropped_early_are_exactly_the_back_faces),
         cmocka_unit_test(test_raster_setup_8_wide_matches_one_at_a_time),
+        cmocka_unit_test(test_raster_dropped_triangles_cover_no_sample),
         cmocka_unit_test(test_renderer_unknown_technique_names_object_and_known_ones),
         cmocka_unit_test(test_renderer_rejects_technique_for_wrong_mesostructure),
         cmocka_unit_test(test_renderer_rejects_reference_mixed_with_others),

@@ -4,6 +4,7 @@
  * base mesh + displacement map = displaced mesh) and of VDM §1. Self-shadowing by a shadow map
  * of the displaced mesh (displace_common.c). */
 #include "displace_common.h"
+#include "displace_shade8.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -281,12 +282,24 @@ static meso_result displacement_geometry(meso_context *ctx, void *state, const m
     return MESO_OK;
 }
 
+/* One fragment at a time (hand-built fragments; the reference the block path is tested
+ * against). */
 static void displacement_shade(const void *state, const meso_frame *frame,
                                const meso_object *object, meso_fragment *fragments, size_t count) {
     (void)object;
     const displacement_state *s = state;
     /* fragments name triangles of this frame's drawn mesh */
     displace_shade(&s->surface, &s->shadows, &s->drawn, frame, fragments, count);
+}
+
+/* Eight fragments at a time from the rasterizer's block (displace_shade8.h): the colours of
+ * displace_shade, bit for bit. */
+static void displacement_shade_block(const void *state, const meso_frame *frame,
+                                     const meso_object *object, meso_fragment_block *block) {
+    (void)object;
+    const displacement_state *s = state;
+    /* fragments name triangles of this frame's drawn mesh */
+    displace_shade_block(&s->surface, &s->shadows, &s->drawn, frame, block);
 }
 
 static size_t displacement_memory(const void *state) {
@@ -311,5 +324,9 @@ const meso_technique meso_technique_displacement = {
     .release = displacement_release,
     .geometry = displacement_geometry,
     .shade = displacement_shade,
+    .shade_block = displacement_shade_block,
+    /* reads the position, the tangent frame, uv and the triangle; writes every colour */
+    .skip_fields = MESO_FRAGMENT_SKIP_SAMPLE | MESO_FRAGMENT_SKIP_BARYCENTRICS |
+                   MESO_FRAGMENT_SKIP_COLOR_PRESET,
     .memory = displacement_memory,
 };
