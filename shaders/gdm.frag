@@ -274,24 +274,30 @@ vec3 gdm_prism_map(int prism, vec3 uvw) {
     return p0 * (1.0 - b1 - b2) + p1 * b1 + p2 * b2;
 }
 
-// meso_prism_unmap (meso/prism.h): the texture point whose prism map is x, one Newton step from
-// `guess`.
+// meso_prism_unmap (meso/prism.h): the texture point whose prism map is x, Newton's method from
+// `guess` with gdm.c's GDM_UNMAP_ITERATIONS (4) and GDM_UNMAP_TOLERANCE (5e-3).
 vec3 gdm_prism_unmap(int prism, vec3 x, vec3 guess) {
     vec4 a = gdm_prism(prism, 9), b = gdm_prism(prism, 10);
     vec3 p0 = gdm_prism(prism, 11).xyz, n0 = gdm_prism(prism, 14).xyz;
     vec3 dp1 = gdm_prism(prism, 12).xyz - p0, dp2 = gdm_prism(prism, 13).xyz - p0;
     vec3 dn1 = gdm_prism(prism, 15).xyz - n0, dn2 = gdm_prism(prism, 16).xyz - n0;
-    float du = guess.x - a.x, dv = guess.y - a.y;
-    float b1 = a.z * du + a.w * dv, b2 = b.x * du + b.y * dv;
-    float s = -guess.z * u_depth;
-    vec3 e1 = dp1 + dn1 * s, e2 = dp2 + dn2 * s;
-    vec3 n = n0 + dn1 * b1 + dn2 * b2;
-    vec3 residual = p0 + n0 * s + e1 * b1 + e2 * b2 - x;
-    vec3 ju = e1 * a.z + e2 * b.x, jv = e1 * a.w + e2 * b.y, jw = n * -u_depth;
-    vec3 cu = cross(jv, jw), cv = cross(jw, ju), cw = cross(ju, jv);
-    float det = dot(ju, cu);
-    if (!(det != 0.0) || !gdm_finite(det)) return guess;
-    return guess - vec3(dot(cu, residual), dot(cv, residual), dot(cw, residual)) * (1.0 / det);
+    vec3 uvw = guess;
+    for (int k = 0; k < 4; k++) {
+        float du = uvw.x - a.x, dv = uvw.y - a.y;
+        float b1 = a.z * du + a.w * dv, b2 = b.x * du + b.y * dv;
+        float s = -uvw.z * u_depth;
+        vec3 e1 = dp1 + dn1 * s, e2 = dp2 + dn2 * s;
+        vec3 n = n0 + dn1 * b1 + dn2 * b2;
+        vec3 residual = p0 + n0 * s + e1 * b1 + e2 * b2 - x;
+        vec3 ju = e1 * a.z + e2 * b.x, jv = e1 * a.w + e2 * b.y, jw = n * -u_depth;
+        vec3 cu = cross(jv, jw), cv = cross(jw, ju), cw = cross(ju, jv);
+        float det = dot(ju, cu);
+        if (!(det != 0.0) || !gdm_finite(det)) return uvw;
+        vec3 step = vec3(dot(cu, residual), dot(cv, residual), dot(cw, residual)) * (1.0 / det);
+        uvw -= step;
+        if (all(lessThan(abs(step), vec3(5e-3)))) break;
+    }
+    return uvw;
 }
 
 // gdm.c frame_at: the Jacobian of the prism map at a texture point with the interpolated

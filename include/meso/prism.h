@@ -88,13 +88,16 @@ meso_vec3 meso_prism_map(const meso_prism *prism, const meso_mesh *mesh, float d
                          int on_edge);
 
 /* The texture point (u, v, w) of the prism whose meso_prism_map is the object-space point x:
- * Newton's method from `guess`, `iterations` steps (the map is bilinear in the barycentrics
- * and w: from a guess a fraction of a voxel off, one step leaves an error of the square of
- * that); the last estimate where the map's Jacobian is singular. Inline, without
- * meso_prism_shell_point's exact bits: a renderer calls it per fragment. Pure. */
+ * Newton's method from `guess`, at most `iterations` steps, ending after a step that moves
+ * no coordinate by `tolerance` or more (0: every step). The map is bilinear in the
+ * barycentrics and w: from a guess a fraction of a voxel off, one step leaves an error of the
+ * square of that; where the shell turns sharply (a thin tube's prisms) the guess is farther
+ * and the steps converge over two or three. The last estimate where the map's Jacobian is
+ * singular. Inline, without meso_prism_shell_point's exact bits: a renderer calls it per
+ * fragment. Pure. */
 static inline meso_vec3 meso_prism_unmap(const meso_prism *prism, const meso_mesh *mesh,
-                                         float depth, meso_vec3 x, meso_vec3 guess,
-                                         int iterations) {
+                                         float depth, meso_vec3 x, meso_vec3 guess, int iterations,
+                                         float tolerance) {
     const uint32_t *v = prism->vertices;
     const float *inv = prism->uv_inverse;
     meso_vec3 p0 = mesh->positions[v[0]], n0 = mesh->normals[v[0]];
@@ -122,9 +125,11 @@ static inline meso_vec3 meso_prism_unmap(const meso_prism *prism, const meso_mes
         float det = meso_vec3_dot(ju, cu);
         if (!(det != 0.0f) || !isfinite(det)) return uvw;
         float r = 1.0f / det;
-        uvw.x -= meso_vec3_dot(cu, residual) * r;
-        uvw.y -= meso_vec3_dot(cv, residual) * r;
-        uvw.z -= meso_vec3_dot(cw, residual) * r;
+        meso_vec3 step = {meso_vec3_dot(cu, residual) * r, meso_vec3_dot(cv, residual) * r,
+                          meso_vec3_dot(cw, residual) * r};
+        uvw = meso_vec3_sub(uvw, step);
+        if (fabsf(step.x) < tolerance && fabsf(step.y) < tolerance && fabsf(step.z) < tolerance)
+            break;
     }
     return uvw;
 }
