@@ -44,6 +44,9 @@
 extern "C" {
 #endif
 
+#define MESO_CONE_KIND "cone"
+#define MESO_CONE_KIND_VERSION 1u
+
 /* The radius (L1, texels) searched exactly; the field's highest texel bounds the rest. */
 #define MESO_CONE_RADIUS 16
 
@@ -61,6 +64,13 @@ typedef struct meso_cone_map {
  * Threads      Uses every worker of ctx; safe on different contexts at once. */
 meso_result meso_bake_cone(meso_context *ctx, const meso_heightfield *heightfield,
                            const meso_minmax_pyramid *pyramid, meso_cone_map **out_map);
+
+/* meso_bake_cone through the bake cache (bake_cache: kind "cone", keyed by the field's hash and
+ * the radius): a cached map is loaded instead of baked, a new one stored (a failure to store is
+ * a warning). Same results, errors and threads as meso_bake_cone; an unusable entry is baked
+ * again with a warning. */
+meso_result meso_bake_cone_cached(meso_context *ctx, const meso_heightfield *heightfield,
+                                  const meso_minmax_pyramid *pyramid, meso_cone_map **out_map);
 
 /* Bytes held by the map (0 for NULL). */
 size_t meso_cone_map_memory(const meso_cone_map *map);

@@ -9,7 +9,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bake_internal.h"
 #include "meso/bake_cone.h"
+#include "meso/bake_file.h"
 
 /* A depth-first walk holds at most 3 siblings a level plus the node opened. */
 #define STACK_NODES (4 * MESO_MINMAX_MAX_LEVELS)
@@ -159,6 +161,76 @@ oom:
     meso_cone_map_destroy(map);
     return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "cone: out of memory for %d x %d",
                           heightfield->width, heightfield->height);
+}
+
+/* The cache entry's key: the field, the radius and the cell layout (the version). */
+static uint64_t cone_cache_key(uint64_t source_hash) {
+    int32_t fields[2] = {MESO_CONE_RADIUS, MESO_CONE_KIND_VERSION};
+    uint64_t key = meso_hash64(&source_hash, sizeof source_hash, MESO_HASH_SEED);
+    return meso_hash64(fields, sizeof fields, key);
+}
+
+/* A cache entry's cells into a new map; MESO_ERROR_FORMAT (logged) if it does not fit. */
+static meso_result cone_from_bake_file(meso_context *ctx, const meso_bake_file *bake,
+                                       const meso_heightfield *heightfield,
+                                       meso_cone_map **out_map) {
+    const meso_bake_array *cells = meso_bake_file_find(bake, "cells");
+    if (!cells || cells->type != MESO_BAKE_F32 || cells->num_dims != 3 ||
+        cells->dims[0] != (uint64_t)heightfield->height ||
+        cells->dims[1] != (uint64_t)heightfield->width || cells->dims[2] != 2)
+        return meso_log_error(ctx, MESO_ERROR_FORMAT,
+                              "cone cache entry: array \"cells\" missing "
+                              "or not %d x %d x 2 floats",
+                              heightfield->height, heightfield->width);
+    meso_result r = meso_bake_array_check_values(ctx, "cone cache entry", cells, -1e30, 1e30);
+    if (r != MESO_OK) return r;
+    meso_cone_map *map = calloc(1, sizeof *map);
+    size_t bytes = 2 * (size_t)heightfield->width * (size_t)heightfield->height * sizeof(float);
+    if (!map || !(map->cells = malloc(bytes))) {
+        free(map);
+        return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "cone: out of memory");
+    }
+    map->width = heightfield->width;
+    map->height = heightfield->height;
+    map->source_hash = heightfield->hash;
+    memcpy(map->cells, cells->data, bytes);
+    *out_map = map;
+    return MESO_OK;
+}
+
+meso_result meso_bake_cone_cached(meso_context *ctx, const meso_heightfield *heightfield,
+                                  const meso_minmax_pyramid *pyramid, meso_cone_map **out_map) {
+    *out_map = NULL;
+    if (!heightfield) return meso_bake_cone(ctx, heightfield, pyramid, out_map);
+    uint64_t key = cone_cache_key(heightfield->hash);
+    meso_bake_file *cached = NULL;
+    meso_result r = meso_bake_cache_load(ctx, MESO_CONE_KIND, MESO_CONE_KIND_VERSION, key,
+                                         heightfield->hash, &cached);
+    if (r != MESO_OK) return r;
+    if (cached) {
+        r = cone_from_bake_file(ctx, cached, heightfield, out_map);
+        meso_bake_file_destroy(cached);
+        if (r == MESO_OK) return MESO_OK;
+        if (r == MESO_ERROR_OUT_OF_MEMORY) return r;
+        meso_log_warning(ctx, "cone: cache entry unusable, baking again: %s",
+                         meso_context_last_error(ctx));
+    }
+    if ((r = meso_bake_cone(ctx, heightfield, pyramid, out_map)) != MESO_OK) return r;
+    meso_bake_file bake = {.kind = MESO_CONE_KIND,
+                           .kind_version = MESO_CONE_KIND_VERSION,
+                           .source_hash = heightfield->hash,
+                           .params_json = "{}",
+                           .num_arrays = 1};
+    bake.arrays[0] =
+        (meso_bake_array){.name = "cells",
+                          .type = MESO_BAKE_F32,
+                          .num_dims = 3,
+                          .dims = {(uint64_t)heightfield->height, (uint64_t)heightfield->width, 2},
+                          .data = (*out_map)->cells};
+    if (meso_bake_cache_save(ctx, &bake, key) != MESO_OK)
+        meso_log_warning(ctx, "cone: could not store the bake in the cache: %s",
+                         meso_context_last_error(ctx));
+    return MESO_OK;
 }
 
 size_t meso_cone_map_memory(const meso_cone_map *map) {

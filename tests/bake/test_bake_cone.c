@@ -133,6 +133,31 @@ static void test_one_and_two_threads_bake_the_same_bytes(void **state) {
     meso_context_destroy(two);
 }
 
+/* Through the cache: the first call bakes and stores, the second loads the same bytes. */
+static void test_cached_map_is_the_baked_map(void **state) {
+    (void)state;
+    setenv("MESO_CACHE_DIR", test_path(test_temp_dir(), "cone_cache"), 1);
+    meso_context *ctx = test_context(2);
+    meso_heightfield *hf = random_field(ctx, 64, 32, MESO_WRAP_REPEAT, 11u);
+    meso_minmax_pyramid *p = NULL;
+    meso_cone_map *baked = NULL, *first = NULL, *second = NULL;
+    bake(ctx, hf, &p, &baked);
+    assert_int_equal(meso_bake_cone_cached(ctx, hf, p, &first), MESO_OK);
+    assert_int_equal(meso_bake_cone_cached(ctx, hf, p, &second), MESO_OK);
+    size_t bytes = 2 * 64 * 32 * sizeof(float);
+    assert_memory_equal(baked->cells, first->cells, bytes);
+    assert_memory_equal(baked->cells, second->cells, bytes);
+    assert_int_equal(second->width, 64);
+    assert_int_equal(second->height, 32);
+    meso_cone_map_destroy(baked);
+    meso_cone_map_destroy(first);
+    meso_cone_map_destroy(second);
+    meso_minmax_pyramid_destroy(p);
+    meso_heightfield_destroy(hf);
+    meso_context_destroy(ctx);
+    unsetenv("MESO_CACHE_DIR");
+}
+
 static void test_bad_input_is_an_invalid_argument(void **state) {
     (void)state;
     meso_context *ctx = test_context(1);
@@ -159,6 +184,7 @@ int main(void) {
         cmocka_unit_test(test_cones_match_a_brute_force_search),
         cmocka_unit_test(test_far_texels_are_bounded_by_the_field_maximum),
         cmocka_unit_test(test_one_and_two_threads_bake_the_same_bytes),
+        cmocka_unit_test(test_cached_map_is_the_baked_map),
         cmocka_unit_test(test_bad_input_is_an_invalid_argument),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

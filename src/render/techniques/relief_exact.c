@@ -679,8 +679,8 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
     int w = s->heights.width, h = s->heights.height;
     s->power_of_two = (w & (w - 1)) == 0 && (h & (h - 1)) == 0;
     if (s->power_of_two && !s->heights.clamp &&
-        (r = meso_bake_cone(ctx, object->mesostructure.height_field, s->pyramid, &s->cones)) !=
-            MESO_OK)
+        (r = meso_bake_cone_cached(ctx, object->mesostructure.height_field, s->pyramid,
+                                   &s->cones)) != MESO_OK)
         goto fail;
     for (int l = 0; l < s->pyramid->num_levels; ++l) {
         s->level_offset[l] = (int32_t)(s->pyramid->levels[l].max - s->pyramid->block);
