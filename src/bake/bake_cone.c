@@ -184,6 +184,12 @@ static meso_result cone_from_bake_file(meso_context *ctx, const meso_bake_file *
                               heightfield->height, heightfield->width);
     meso_result r = meso_bake_array_check_values(ctx, "cone cache entry", cells, -1e30, 1e30);
     if (r != MESO_OK) return r;
+    const float *values = cells->data;
+    for (size_t k = 1; k < 2 * (size_t)heightfield->width * (size_t)heightfield->height; k += 2)
+        if (!(values[k] >= 0.0f)) /* a negative slope would let a ray step through the surface */
+            return meso_log_error(ctx, MESO_ERROR_FORMAT,
+                                  "cone cache entry: array \"cells\": slope %zu is %g, not >= 0",
+                                  k / 2, (double)values[k]);
     meso_cone_map *map = calloc(1, sizeof *map);
     size_t bytes = 2 * (size_t)heightfield->width * (size_t)heightfield->height * sizeof(float);
     if (!map || !(map->cells = malloc(bytes))) {
