@@ -386,36 +386,35 @@ trace8_step(const exact_state *s, const exact_rays8 *r, trace8_state *st) {
  * the ray's end has no hit. */
 static void trace8_cone(const exact_state *s, const exact_rays8 *r, trace8_state *st) {
     const relief_heights *m = &s->heights;
-    const v8f zero = v8_splat(0.0f), big = v8_splat(FLT_MAX);
+    const v8f zero = v8_splat(0.0f);
     v8f length = v8_max(r->xd, -r->xd) + v8_max(r->yd, -r->yd);
     v8f slope = v8_max(v8_max(r->c1 + 2.0f * r->c2 * r->t0, r->c1 + 2.0f * r->c2 * r->t1), zero);
     v8f t = st->t;
-    v8i moved = v8i_splat(0);
+    v8i moved = v8i_splat(0), finished = v8i_splat(0);
     v8i wmask = v8i_splat(m->width - 1), hmask = v8i_splat(m->height - 1);
-    int coning = st->active, finished = 0;
-    for (int i = 0; i < CONE_STEPS && coning; ++i) {
-        v8i on = v8_mask_from_bits(coning);
+    int row_shift = __builtin_ctz((unsigned)m->width) + 1; /* pairs of floats a cell */
+    v8i on = v8_mask_from_bits(st->active);
+    for (int i = 0; i < CONE_STEPS && v8_mask_bits(on); ++i) {
         v8f px = r->x0 + r->xd * t, py = r->y0 + r->yd * t;
         v8i ix = __builtin_convertvector(v8_floor(px), v8i);
         v8i iy = __builtin_convertvector(v8_floor(py), v8i);
-        v8i cell = ((iy & hmask) * m->width + (ix & wmask)) * 2;
-        cell = (v8i)v8_select(on, (v8f)cell, (v8f)v8i_splat(0));
+        /* wrapped by the masks, so every lane reads inside the map */
+        v8i cell = ((iy & hmask) << row_shift) | ((ix & wmask) << 1);
         v8f top, cone;
         relief_gather_pairs8(s->cones->cells, cell, &top, &cone);
         v8f gap = (1.0f - top) + r->bias - depth8(r, t) - cone * CONE_POSITION_SLACK;
-        v8f denom = slope + cone * length;
-        v8i ok = on & (gap > 0.0f);
-        v8f dt = v8_select(denom > 0.0f,
-                           0.99f * gap / v8_select(denom > 0.0f, denom, v8_splat(1.0f)), big);
+        /* a zero denominator (a level ray, no higher texel) makes an infinite step: past t1 */
+        v8f dt = 0.99f * gap / v8_max(slope + cone * length, v8_splat(FLT_MIN));
         v8f t_next = t + dt;
+        v8i ok = on & (gap > 0.0f);
         v8i past = ok & (t_next >= r->t1);
         v8i advance = ok & ~past;
         t = v8_select(advance, t_next, t);
         moved |= advance;
-        finished |= v8_mask_bits(past);
-        coning = v8_mask_bits(advance & (dt * length >= CONE_MIN_STEP));
+        finished |= past;
+        on = advance & (dt * length >= CONE_MIN_STEP);
     }
-    st->active &= ~finished;
+    st->active &= ~v8_mask_bits(finished);
     st->t = t;
     st->advanced |= moved;
     st->level = (v8i)v8_select(moved, (v8f)v8i_splat(0), (v8f)st->level);
