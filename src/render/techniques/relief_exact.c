@@ -39,7 +39,11 @@
 typedef struct exact_state {
     relief_heights heights;
     meso_minmax_pyramid *pyramid;
-    meso_cone_map *cones; /* power-of-two repeating fields only */
+    /* The cone map's slopes as bytes (power-of-two repeating fields only, else NULL): slope =
+     * (code / 255)^2 * cone_scale, rounded up, so the cone steps read a quarter of the map's
+     * bytes (the tops come from the pyramid's level 0, which the traversal reads too). */
+    uint8_t *cone_codes;
+    float cone_scale;
     relief_maxmip maxmip; /* the pyramid's tables for relief_shadow_clear8 */
     relief_params params;
     bool power_of_two; /* both sides: the 8-wide traversal applies */
@@ -384,6 +388,17 @@ trace8_step(const exact_state *s, const exact_rays8 *r, trace8_state *st) {
  * solving each patch from the cell's entry as after the clearance advance) finds the same first
  * hit. A lane stops when its step falls under CONE_MIN_STEP texels; a lane whose step passes
  * the ray's end has no hit. */
+/* codes[index[k]] per lane (the array has 3 bytes of padding: 32-bit loads). */
+static inline v8i cone_code8(const uint8_t *codes, v8i index) {
+#if defined(__AVX2__)
+    return (v8i)_mm256_i32gather_epi32((const int *)(const void *)codes, (__m256i)index, 1) & 0xff;
+#else
+    v8i r;
+    for (int k = 0; k < V8_LANES; ++k) r[k] = codes[index[k]];
+    return r;
+#endif
+}
+
 static void trace8_cone(const exact_state *s, const exact_rays8 *r, trace8_state *st) {
     const relief_heights *m = &s->heights;
     const v8f zero = v8_splat(0.0f);
@@ -392,16 +407,19 @@ static void trace8_cone(const exact_state *s, const exact_rays8 *r, trace8_state
     v8f t = st->t;
     v8i moved = v8i_splat(0), finished = v8i_splat(0);
     v8i wmask = v8i_splat(m->width - 1), hmask = v8i_splat(m->height - 1);
-    int row_shift = __builtin_ctz((unsigned)m->width) + 1; /* pairs of floats a cell */
+    int row_shift = __builtin_ctz((unsigned)m->width);
+    const float *tops = s->pyramid->levels[0].max;
+    const v8f inv255 = v8_splat(1.0f / 255.0f), scale = v8_splat(s->cone_scale);
     v8i on = v8_mask_from_bits(st->active);
     for (int i = 0; i < CONE_STEPS && v8_mask_bits(on); ++i) {
         v8f px = r->x0 + r->xd * t, py = r->y0 + r->yd * t;
         v8i ix = __builtin_convertvector(v8_floor(px), v8i);
         v8i iy = __builtin_convertvector(v8_floor(py), v8i);
         /* wrapped by the masks, so every lane reads inside the map */
-        v8i cell = ((iy & hmask) << row_shift) | ((ix & wmask) << 1);
-        v8f top, cone;
-        relief_gather_pairs8(s->cones->cells, cell, &top, &cone);
+        v8i cell = ((iy & hmask) << row_shift) | (ix & wmask);
+        v8f top = v8_gather(tops, cell);
+        v8f q = __builtin_convertvector(cone_code8(s->cone_codes, cell), v8f) * inv255;
+        v8f cone = q * q * scale;
         v8f gap = (1.0f - top) + r->bias - depth8(r, t) - cone * CONE_POSITION_SLACK;
         /* a zero denominator (a level ray, no higher texel) makes an infinite step: past t1 */
         v8f dt = 0.99f * gap / v8_max(slope + cone * length, v8_splat(FLT_MIN));
@@ -451,7 +469,7 @@ static void trace8x2(const exact_state *s, const exact_rays8 *rays, const int *a
     const exact_rays8 *r = rays;
     for (int g = 0; g < count; ++g) {
         trace8_begin(s, &r[g], active[g], &st[g]);
-        if (cone && s->cones) trace8_cone(s, &r[g], &st[g]);
+        if (cone && s->cone_codes) trace8_cone(s, &r[g], &st[g]);
     }
     int i = 0;
     if (count == 2) {
@@ -658,9 +676,35 @@ static void release(void *state) {
     exact_state *s = state;
     if (!s) return;
     relief_heights_deinit(&s->heights);
-    meso_cone_map_destroy(s->cones);
+    free(s->cone_codes);
     meso_minmax_pyramid_destroy(s->pyramid);
     free(s);
+}
+
+/* The cone map's slopes as bytes, each rounded up with the tracer's arithmetic
+ * ((code / 255)^2 * scale >= slope), so a step is never longer than the map allows. */
+static meso_result cone_codes_init(meso_context *ctx, const meso_object *object,
+                                   const meso_cone_map *cones, exact_state *s) {
+    size_t n = (size_t)cones->width * (size_t)cones->height;
+    float scale = 0.0f;
+    for (size_t k = 0; k < n; ++k)
+        scale = cones->cells[2 * k + 1] > scale ? cones->cells[2 * k + 1] : scale;
+    s->cone_codes = calloc(n + 3, 1);
+    if (!s->cone_codes)
+        return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
+    s->cone_scale = scale;
+    for (size_t k = 0; k < n; ++k) {
+        float slope = cones->cells[2 * k + 1];
+        int code = scale > 0.0f ? (int)ceil(sqrt((double)slope / (double)scale) * 255.0) : 0;
+        code = code < 0 ? 0 : (code > 255 ? 255 : code);
+        for (;;) {
+            float q = (float)code * (1.0f / 255.0f);
+            if (q * q * scale >= slope || code == 255) break;
+            ++code;
+        }
+        s->cone_codes[k] = (uint8_t)code;
+    }
+    return MESO_OK;
 }
 
 static meso_result prepare(meso_context *ctx, const meso_scene *scene, const meso_object *object,
@@ -677,10 +721,15 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
         goto fail;
     int w = s->heights.width, h = s->heights.height;
     s->power_of_two = (w & (w - 1)) == 0 && (h & (h - 1)) == 0;
-    if (s->power_of_two && !s->heights.clamp &&
-        (r = meso_bake_cone_cached(ctx, object->mesostructure.height_field, s->pyramid,
-                                   &s->cones)) != MESO_OK)
-        goto fail;
+    if (s->power_of_two && !s->heights.clamp) {
+        meso_cone_map *cones = NULL;
+        if ((r = meso_bake_cone_cached(ctx, object->mesostructure.height_field, s->pyramid,
+                                       &cones)) != MESO_OK)
+            goto fail;
+        r = cone_codes_init(ctx, object, cones, s);
+        meso_cone_map_destroy(cones);
+        if (r != MESO_OK) goto fail;
+    }
     for (int l = 0; l < s->pyramid->num_levels; ++l) {
         s->level_offset[l] = (int32_t)(s->pyramid->levels[l].max - s->pyramid->block);
     }
@@ -712,9 +761,9 @@ static void shade_block(const void *state, const meso_frame *frame, const meso_o
 
 static size_t memory(const void *state) {
     const exact_state *s = state;
-    return s ? relief_heights_memory(&s->heights) + meso_minmax_pyramid_memory(s->pyramid) +
-                   meso_cone_map_memory(s->cones)
-             : 0;
+    if (!s) return 0;
+    size_t codes = s->cone_codes ? (size_t)s->heights.width * (size_t)s->heights.height + 3 : 0;
+    return relief_heights_memory(&s->heights) + meso_minmax_pyramid_memory(s->pyramid) + codes;
 }
 
 const meso_technique meso_technique_relief_exact = {
