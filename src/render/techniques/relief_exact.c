@@ -4,10 +4,13 @@
  * rendering", §3-4): a cell whose highest point lies above the ray over the ray's whole span in
  * the cell is skipped to its exit; otherwise the traversal descends; at level 0 the ray meets
  * the bilinear patch between four texel centres, solved exactly (both the ray's depth and the
- * bilinear height are quadratics in the ray parameter). Silhouettes, depth correction, shading
+ * bilinear height are quadratics in the ray parameter). On power-of-two repeating fields the view
+ * rays first take conservative cone steps (Dummer 2006; bake_cone.h) through the space the cone
+ * map proves empty, then the traversal takes over. Silhouettes, depth correction, shading
  * and the shadow rays' set-up are relief's (relief_common.h). docs/techniques/relief_exact.md. */
 #include <float.h>
 
+#include "meso/bake_cone.h"
 #include "meso/bake_minmax.h"
 #include "relief_common.h"
 
@@ -22,10 +25,25 @@
 #ifndef START_LEVEL_CAP
 #define START_LEVEL_CAP 2
 #endif
+/* Cone steps (trace8_cone): at most this many before the maximum mip-map traversal, which
+ * takes over once a step would be shorter than CONE_MIN_STEP texels (L1). */
+#ifndef CONE_STEPS
+#define CONE_STEPS 32
+#endif
+#ifndef CONE_MIN_STEP
+#define CONE_MIN_STEP 0.25f
+#endif
+/* The cone's bound is shortened by this many texels of the ray's position (float rounding). */
+#define CONE_POSITION_SLACK 1e-3f
 
 typedef struct exact_state {
     relief_heights heights;
     meso_minmax_pyramid *pyramid;
+    /* The cone map's slopes as bytes (power-of-two repeating fields only, else NULL): slope =
+     * (code / 255)^2 * cone_scale, rounded up, so the cone steps read a quarter of the map's
+     * bytes (the tops come from the pyramid's level 0, which the traversal reads too). */
+    uint8_t *cone_codes;
+    float cone_scale;
     relief_maxmip maxmip; /* the pyramid's tables for relief_shadow_clear8 */
     relief_params params;
     bool power_of_two; /* both sides: the 8-wide traversal applies */
@@ -361,6 +379,65 @@ trace8_step(const exact_state *s, const exact_rays8 *r, trace8_state *st) {
     st->active &= ~(found_bits | done);
 }
 
+/* Cone steps (Dummer 2006, conservative cones; bake_cone.h) before the traversal: a ray at t
+ * above the top of the level-0 cell under it, by `gap` in depth, meets no surface while its
+ * depth rises less than gap minus the cone's rise, slope * (L1 distance moved); with the
+ * depth's steepest slope over the ray (a bound for any parabola: the slope is linear in t)
+ * that is a step of gap / (depth slope + cone slope * L1 length a unit of t). The steps only
+ * skip space the surface provably leaves empty, so the traversal that takes over (at level 0,
+ * solving each patch from the cell's entry as after the clearance advance) finds the same first
+ * hit. A lane stops when its step falls under CONE_MIN_STEP texels; a lane whose step passes
+ * the ray's end has no hit. */
+/* codes[index[k]] per lane (the array has 3 bytes of padding: 32-bit loads). */
+static inline v8i cone_code8(const uint8_t *codes, v8i index) {
+#if defined(__AVX2__)
+    return (v8i)_mm256_i32gather_epi32((const int *)(const void *)codes, (__m256i)index, 1) & 0xff;
+#else
+    v8i r;
+    for (int k = 0; k < V8_LANES; ++k) r[k] = codes[index[k]];
+    return r;
+#endif
+}
+
+static void trace8_cone(const exact_state *s, const exact_rays8 *r, trace8_state *st) {
+    const relief_heights *m = &s->heights;
+    const v8f zero = v8_splat(0.0f);
+    v8f length = v8_max(r->xd, -r->xd) + v8_max(r->yd, -r->yd);
+    v8f slope = v8_max(v8_max(r->c1 + 2.0f * r->c2 * r->t0, r->c1 + 2.0f * r->c2 * r->t1), zero);
+    v8f t = st->t;
+    v8i moved = v8i_splat(0), finished = v8i_splat(0);
+    v8i wmask = v8i_splat(m->width - 1), hmask = v8i_splat(m->height - 1);
+    int row_shift = __builtin_ctz((unsigned)m->width);
+    const float *tops = s->pyramid->levels[0].max;
+    const v8f inv255 = v8_splat(1.0f / 255.0f), scale = v8_splat(s->cone_scale);
+    v8i on = v8_mask_from_bits(st->active);
+    for (int i = 0; i < CONE_STEPS && v8_mask_bits(on); ++i) {
+        v8f px = r->x0 + r->xd * t, py = r->y0 + r->yd * t;
+        v8i ix = __builtin_convertvector(v8_floor(px), v8i);
+        v8i iy = __builtin_convertvector(v8_floor(py), v8i);
+        /* wrapped by the masks, so every lane reads inside the map */
+        v8i cell = ((iy & hmask) << row_shift) | (ix & wmask);
+        v8f top = v8_gather(tops, cell);
+        v8f q = __builtin_convertvector(cone_code8(s->cone_codes, cell), v8f) * inv255;
+        v8f cone = q * q * scale;
+        v8f gap = (1.0f - top) + r->bias - depth8(r, t) - cone * CONE_POSITION_SLACK;
+        /* a zero denominator (a level ray, no higher texel) makes an infinite step: past t1 */
+        v8f dt = 0.99f * gap / v8_max(slope + cone * length, v8_splat(FLT_MIN));
+        v8f t_next = t + dt;
+        v8i ok = on & (gap > 0.0f);
+        v8i past = ok & (t_next >= r->t1);
+        v8i advance = ok & ~past;
+        t = v8_select(advance, t_next, t);
+        moved |= advance;
+        finished |= past;
+        on = advance & (dt * length >= CONE_MIN_STEP);
+    }
+    st->active &= ~v8_mask_bits(finished);
+    st->t = t;
+    st->advanced |= moved;
+    st->level = (v8i)v8_select(moved, (v8f)v8i_splat(0), (v8f)st->level);
+}
+
 static inline int trace8_end(trace8_state *st, v8f *out_t) {
     /* the iteration cap (pathological input only): take where the lanes got to */
     st->t_hit = v8_select(v8_mask_from_bits(st->active), st->t, st->t_hit);
@@ -386,11 +463,14 @@ static inline void trace8_move_lane(exact_rays8 *a, trace8_state *p, int j, cons
  * two steps for one step's work. Every lane's arithmetic is its own (the group-wide `curved`
  * only enables a computation the other lanes ignore), so the results do not change. */
 static void trace8x2(const exact_state *s, const exact_rays8 *rays, const int *active, int count,
-                     v8f *out_t, int *out_hit) {
+                     bool cone, v8f *out_t, int *out_hit) {
     trace8_state st[2];
     memset(st, 0, sizeof st);
     const exact_rays8 *r = rays;
-    for (int g = 0; g < count; ++g) trace8_begin(s, &r[g], active[g], &st[g]);
+    for (int g = 0; g < count; ++g) {
+        trace8_begin(s, &r[g], active[g], &st[g]);
+        if (cone && s->cone_codes) trace8_cone(s, &r[g], &st[g]);
+    }
     int i = 0;
     if (count == 2) {
         for (; (st[0].active | st[1].active) && i < MAX_ITERATIONS; ++i) {
@@ -505,7 +585,7 @@ static void search(const void *user, const relief_batch *batches, int count, v8f
          * advance they no longer saved a step (4.3 M instructions on bricks-plane, same
          * images). */
         for (int g = 0; g < count; ++g) r[g] = view_rays(s, &batches[g]);
-        trace8x2(s, r, todo, count, t, hit);
+        trace8x2(s, r, todo, count, true, t, hit);
         for (int g = 0; g < count; ++g) {
             out_t[g] = v8_select(v8_mask_from_bits(hit[g]), t[g], out_t[g]);
             out_hit[g] = hit[g];
@@ -570,7 +650,10 @@ static void shadow(const void *user, const relief_shadow_batch *batches, int cou
             probed[g] = blocked;
             active[g] = b->active_bits & ~blocked;
         }
-        trace8x2(s, r, active, count, t, out_blocked);
+        /* No cone steps: a shadow ray starts on the surface, where the cone of the cell under it
+         * allows no step (measured: +1.7 M instructions on bumps-sphere, +0.6 M on
+         * bricks-plane). */
+        trace8x2(s, r, active, count, false, t, out_blocked);
         for (int g = 0; g < count; ++g) out_blocked[g] |= probed[g];
         return;
     }
@@ -593,8 +676,35 @@ static void release(void *state) {
     exact_state *s = state;
     if (!s) return;
     relief_heights_deinit(&s->heights);
+    free(s->cone_codes);
     meso_minmax_pyramid_destroy(s->pyramid);
     free(s);
+}
+
+/* The cone map's slopes as bytes, each rounded up with the tracer's arithmetic
+ * ((code / 255)^2 * scale >= slope), so a step is never longer than the map allows. */
+static meso_result cone_codes_init(meso_context *ctx, const meso_object *object,
+                                   const meso_cone_map *cones, exact_state *s) {
+    size_t n = (size_t)cones->width * (size_t)cones->height;
+    float scale = 0.0f;
+    for (size_t k = 0; k < n; ++k)
+        scale = cones->cells[2 * k + 1] > scale ? cones->cells[2 * k + 1] : scale;
+    s->cone_codes = calloc(n + 3, 1);
+    if (!s->cone_codes)
+        return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
+    s->cone_scale = scale;
+    for (size_t k = 0; k < n; ++k) {
+        float slope = cones->cells[2 * k + 1];
+        int code = scale > 0.0f ? (int)ceil(sqrt((double)slope / (double)scale) * 255.0) : 0;
+        code = code < 0 ? 0 : (code > 255 ? 255 : code);
+        for (;;) {
+            float q = (float)code * (1.0f / 255.0f);
+            if (q * q * scale >= slope || code == 255) break;
+            ++code;
+        }
+        s->cone_codes[k] = (uint8_t)code;
+    }
+    return MESO_OK;
 }
 
 static meso_result prepare(meso_context *ctx, const meso_scene *scene, const meso_object *object,
@@ -611,6 +721,15 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
         goto fail;
     int w = s->heights.width, h = s->heights.height;
     s->power_of_two = (w & (w - 1)) == 0 && (h & (h - 1)) == 0;
+    if (s->power_of_two && !s->heights.clamp) {
+        meso_cone_map *cones = NULL;
+        if ((r = meso_bake_cone_cached(ctx, object->mesostructure.height_field, s->pyramid,
+                                       &cones)) != MESO_OK)
+            goto fail;
+        r = cone_codes_init(ctx, object, cones, s);
+        meso_cone_map_destroy(cones);
+        if (r != MESO_OK) goto fail;
+    }
     for (int l = 0; l < s->pyramid->num_levels; ++l) {
         s->level_offset[l] = (int32_t)(s->pyramid->levels[l].max - s->pyramid->block);
     }
@@ -642,7 +761,9 @@ static void shade_block(const void *state, const meso_frame *frame, const meso_o
 
 static size_t memory(const void *state) {
     const exact_state *s = state;
-    return s ? relief_heights_memory(&s->heights) + meso_minmax_pyramid_memory(s->pyramid) : 0;
+    if (!s) return 0;
+    size_t codes = s->cone_codes ? (size_t)s->heights.width * (size_t)s->heights.height + 3 : 0;
+    return relief_heights_memory(&s->heights) + meso_minmax_pyramid_memory(s->pyramid) + codes;
 }
 
 const meso_technique meso_technique_relief_exact = {
