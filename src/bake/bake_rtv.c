@@ -187,23 +187,9 @@ static void response_at(const rtv_job *rj, const meso_rtv *rtv, const float *fir
     }
 }
 
-/* Each voxel's nearest surface point and normal, a row of voxels (layer l, row j) per job. */
-static void surface_row(void *user, size_t job, int thread_index) {
-    (void)thread_index;
-    const pass_job *pj = user;
-    const rtv_job *rj = pj->rj;
-    const meso_rtv_desc *d = &rj->desc;
-    int l = (int)(job / (size_t)d->height), j = (int)(job % (size_t)d->height);
-    for (int i = 0; i < d->width; i++) {
-        meso_vec3 c = {((float)i + 0.5f) / (float)d->width,
-                       1.0f - ((float)j + 0.5f) / (float)d->height,
-                       (float)l / (float)(d->layers - 1)};
-        size_t voxel = ((size_t)l * (size_t)d->height + (size_t)j) * (size_t)d->width + (size_t)i;
-        surface_at(d, c, &rj->surface_point[voxel], &rj->surface_normal[voxel]);
-    }
-}
-
-/* One row of voxels (layer l, row j) per job: disjoint output, any thread count. */
+/* One row of voxels (layer l, row j) per job: disjoint output, any thread count. The first
+ * pass also finds each voxel's nearest surface point and normal, which the second pass' and
+ * the per-view table's lookups compare. */
 static void bake_row(void *user, size_t job, int thread_index) {
     (void)thread_index;
     const pass_job *pj = user;
@@ -212,6 +198,12 @@ static void bake_row(void *user, size_t job, int thread_index) {
     int l = (int)(job / (size_t)d->height), j = (int)(job % (size_t)d->height);
     for (int i = 0; i < d->width; i++) {
         size_t voxel = ((size_t)l * (size_t)d->height + (size_t)j) * (size_t)d->width + (size_t)i;
+        if (!rj->first) {
+            meso_vec3 c = {((float)i + 0.5f) / (float)d->width,
+                           1.0f - ((float)j + 0.5f) / (float)d->height,
+                           (float)l / (float)(d->layers - 1)};
+            surface_at(d, c, &rj->surface_point[voxel], &rj->surface_normal[voxel]);
+        }
         response_at(rj, pj->rtv, rj->first, rj->surface_point[voxel], rj->surface_normal[voxel],
                     rj->out + voxel * MESO_SH_COUNT);
     }
@@ -415,7 +407,6 @@ meso_result meso_bake_rtv(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv
                   surface_normal};
     pass_job pj = {&rj, rtv};
     size_t rows = (size_t)d.layers * (size_t)d.height;
-    meso_parallel_for(ctx, rows, surface_row, &pj);
     meso_parallel_for(ctx, rows, bake_row, &pj);
     if (bounce) {
         rj.first = first;
