@@ -102,6 +102,26 @@ static float periodic_difference(float a, float b) {
     return d - roundf(d);
 }
 
+/* The 8 voxels around uvw (indices into [layers][height][width]) and their trilinear weights,
+ * periodic in u and v: meso_rtv_cell_at's voxel half. */
+static void voxel_corners(const meso_rtv *rtv, meso_vec3 uvw, size_t corner[8], float weight[8]) {
+    float x = (uvw.x - floorf(uvw.x)) * (float)rtv->width - 0.5f;
+    float y = (1.0f - (uvw.y - floorf(uvw.y))) * (float)rtv->height - 0.5f;
+    float z = meso_clampf(uvw.z, 0.0f, 1.0f) * (float)(rtv->layers - 1);
+    float fx = floorf(x), fy = floorf(y), fz = floorf(z);
+    int i0 = ((int)fx % rtv->width + rtv->width) % rtv->width, i1 = (i0 + 1) % rtv->width;
+    int j0 = ((int)fy % rtv->height + rtv->height) % rtv->height, j1 = (j0 + 1) % rtv->height;
+    int l0 = (int)fz < rtv->layers - 1 ? (int)fz : rtv->layers - 1;
+    int l1 = l0 + 1 < rtv->layers ? l0 + 1 : l0;
+    for (int c = 0; c < 8; c++) {
+        int ii = c & 1 ? i1 : i0, jj = c & 2 ? j1 : j0, ll = c & 4 ? l1 : l0;
+        corner[c] =
+            ((size_t)ll * (size_t)rtv->height + (size_t)jj) * (size_t)rtv->width + (size_t)ii;
+        weight[c] = (c & 1 ? x - fx : 1.0f - (x - fx)) * (c & 2 ? y - fy : 1.0f - (y - fy)) *
+                    (c & 4 ? z - fz : 1.0f - (z - fz));
+    }
+}
+
 /* A table's coefficients at the surface point nearest q: trilinear over the voxels, periodic in
  * u and v, counting only the corners whose nearest surface point is the same surface (above).
  * Without that test a point on top of a thin feature (a thread lying on another) blends in the
@@ -114,24 +134,12 @@ static void surface_lookup(const rtv_job *rj, const meso_rtv *rtv, const float *
     const meso_rtv_desc *d = &rj->desc;
     meso_vec3 at, normal;
     surface_at(d, q, &at, &normal);
-    float x = (at.x - floorf(at.x)) * (float)rtv->width - 0.5f;
-    float y = (1.0f - (at.y - floorf(at.y))) * (float)rtv->height - 0.5f;
-    float z = meso_clampf(at.z, 0.0f, 1.0f) * (float)(rtv->layers - 1);
-    float fx = floorf(x), fy = floorf(y), fz = floorf(z);
-    int i0 = ((int)fx % rtv->width + rtv->width) % rtv->width, i1 = (i0 + 1) % rtv->width;
-    int j0 = ((int)fy % rtv->height + rtv->height) % rtv->height, j1 = (j0 + 1) % rtv->height;
-    int l0 = (int)fz < rtv->layers - 1 ? (int)fz : rtv->layers - 1;
-    int l1 = l0 + 1 < rtv->layers ? l0 + 1 : l0;
     size_t voxel[8];
     float weight[8], same[8];
+    voxel_corners(rtv, at, voxel, weight);
     int nearest = -1;
     float nearest_distance2 = INFINITY, kept = 0.0f;
     for (int c = 0; c < 8; c++) {
-        int ii = c & 1 ? i1 : i0, jj = c & 2 ? j1 : j0, ll = c & 4 ? l1 : l0;
-        voxel[c] =
-            ((size_t)ll * (size_t)rtv->height + (size_t)jj) * (size_t)rtv->width + (size_t)ii;
-        weight[c] = (c & 1 ? x - fx : 1.0f - (x - fx)) * (c & 2 ? y - fy : 1.0f - (y - fy)) *
-                    (c & 4 ? z - fz : 1.0f - (z - fz));
         same[c] = weight[c];
         if (!d->solid) continue;
         meso_vec3 sp = rj->surface_point[voxel[c]];
@@ -438,23 +446,7 @@ void meso_rtv_destroy(meso_rtv *rtv) {
 /* ---- Evaluation --------------------------------------------------------------------------- */
 
 void meso_rtv_cell_at(const meso_rtv *rtv, meso_vec3 uvw, meso_vec3 view, meso_rtv_cell *out) {
-    /* the voxel corners and weights (as lookup), the view cell and weights */
-    float x = (uvw.x - floorf(uvw.x)) * (float)rtv->width - 0.5f;
-    float y = (1.0f - (uvw.y - floorf(uvw.y))) * (float)rtv->height - 0.5f;
-    float z = meso_clampf(uvw.z, 0.0f, 1.0f) * (float)(rtv->layers - 1);
-    float fx = floorf(x), fy = floorf(y), fz = floorf(z);
-    int i0 = ((int)fx % rtv->width + rtv->width) % rtv->width, i1 = (i0 + 1) % rtv->width;
-    int j0 = ((int)fy % rtv->height + rtv->height) % rtv->height, j1 = (j0 + 1) % rtv->height;
-    int l0 = (int)fz < rtv->layers - 1 ? (int)fz : rtv->layers - 1;
-    int l1 = l0 + 1 < rtv->layers ? l0 + 1 : l0;
-    for (int c = 0; c < 8; c++) {
-        int ii = c & 1 ? i1 : i0, jj = c & 2 ? j1 : j0, ll = c & 4 ? l1 : l0;
-        out->corner[c] =
-            ((size_t)ll * (size_t)rtv->height + (size_t)jj) * (size_t)rtv->width + (size_t)ii;
-        out->corner_weight[c] = (c & 1 ? x - fx : 1.0f - (x - fx)) *
-                                (c & 2 ? y - fy : 1.0f - (y - fy)) *
-                                (c & 4 ? z - fz : 1.0f - (z - fz));
-    }
+    voxel_corners(rtv, uvw, out->corner, out->corner_weight);
     float theta = acosf(meso_clampf(view.z, 0.0f, 1.0f));
     float t = meso_clampf(theta / (0.5f * (float)M_PI) * (float)rtv->num_theta - 0.5f, 0.0f,
                           (float)(rtv->num_theta - 1));

@@ -199,12 +199,9 @@ static meso_vec3 rtv_reflected(const path_job *pj, const meso_frame *frame,
     meso_gi_radiance_interpolate(pj->vertex_radiance[o], tri[0], tri[1], tri[2], b[0], b[1], b[2],
                                  radiance);
     const float *interior = pj->vertex_interior[o];
-    for (int i = 0; interior && i < MESO_SH_COUNT; i++) { /* as gdm's: gdm_gi.c */
-        float m = b[0] * interior[(size_t)tri[0] * MESO_SH_COUNT + (size_t)i] +
-                  b[1] * interior[(size_t)tri[1] * MESO_SH_COUNT + (size_t)i] +
-                  b[2] * interior[(size_t)tri[2] * MESO_SH_COUNT + (size_t)i];
-        for (int c = 0; c < 3; c++) radiance[c][i] += (&pj->interior_radiance[o].x)[c] * m;
-    }
+    if (interior) /* as gdm's: gdm_gi.c */
+        meso_gi_radiance_add_interior(interior, tri[0], tri[1], tri[2], b[0], b[1], b[2],
+                                      pj->interior_radiance[o], radiance);
     /* the tangent frame as the vertices' (render_gi_transfer.c): T made orthogonal to N */
     meso_vec3 n = meso_vec3_normalize(meso_vec3_barycentric(
         mesh->normals[tri[0]], mesh->normals[tri[1]], mesh->normals[tri[2]], b[0], b[1], b[2]));
@@ -218,9 +215,7 @@ static meso_vec3 rtv_reflected(const path_job *pj, const meso_frame *frame,
     meso_vec3 view = {meso_vec3_dot(v, t), meso_vec3_dot(v, bt), meso_vec3_dot(v, n)};
     float rgb[3];
     if (view.z < 0.0f && interior) /* seen from inside: the light from below (gdm_gi.c) */
-        for (int c = 0; c < 3; c++)
-            rgb[c] = fmaxf(0.0f, 0.282095f * radiance[c][0] - 0.325735f * radiance[c][2] +
-                                     0.157696f * radiance[c][6]);
+        meso_gi_reflected_from_below((const float(*)[MESO_SH_COUNT])radiance, rgb);
     else
         meso_rtv_evaluate(pj->rtvs[o], (meso_vec3){hit->uv.x, hit->uv.y, hit->base.w}, view,
                           radiance, rgb);

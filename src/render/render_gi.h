@@ -23,6 +23,7 @@
 #include "meso/geom.h"
 #include "meso/mesostructure.h"
 #include "meso/scene.h"
+#include "meso/sh.h"
 
 /* Zero fields take the defaults. */
 typedef struct meso_gi_vertex_desc {
@@ -92,6 +93,31 @@ static inline void meso_gi_radiance_interpolate(const float *radiance, uint32_t 
     const float *c = radiance + (size_t)i2 * 3 * MESO_SH_COUNT;
     for (int k = 0; k < 3 * MESO_SH_COUNT; k++)
         out[k / MESO_SH_COUNT][k % MESO_SH_COUNT] = b0 * a[k] + b1 * b[k] + b2 * c[k];
+}
+
+/* Add the interior's light to a radiance interpolated at a point of triangle (i0, i1, i2)
+ * (meso_gi_radiance_interpolate): the vertices' interior coefficients
+ * (meso_gi_vertex_radiance_through_shell) interpolated alike, times the interior's radiance. */
+static inline void meso_gi_radiance_add_interior(const float *interior, uint32_t i0, uint32_t i1,
+                                                 uint32_t i2, float b0, float b1, float b2,
+                                                 meso_vec3 interior_radiance,
+                                                 float radiance[3][MESO_SH_COUNT]) {
+    const float *l = &interior_radiance.x;
+    for (int i = 0; i < MESO_SH_COUNT; i++) {
+        float m = b0 * interior[(size_t)i0 * MESO_SH_COUNT + (size_t)i] +
+                  b1 * interior[(size_t)i1 * MESO_SH_COUNT + (size_t)i] +
+                  b2 * interior[(size_t)i2 * MESO_SH_COUNT + (size_t)i];
+        for (int c = 0; c < 3; c++) radiance[c][i] += l[c] * m;
+    }
+}
+
+/* What a surface facing the light from below the tangent plane (a hit seen from inside the base
+ * mesh) reflects per unit albedo: its irradiance about -z over pi, per channel. */
+static inline void meso_gi_reflected_from_below(const float radiance[3][MESO_SH_COUNT],
+                                                float out_rgb[3]) {
+    for (int c = 0; c < 3; c++)
+        out_rgb[c] =
+            fmaxf(0.0f, meso_sh_irradiance(radiance[c], (meso_vec3){0, 0, -1}) * (float)M_1_PI);
 }
 
 #endif

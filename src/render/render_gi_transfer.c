@@ -232,9 +232,8 @@ float meso_gi_open_fraction(const meso_mesostructure *ms) {
 }
 
 /* The light arriving on the outside per unit area, averaged over the mesh by area: the
- * environment's irradiance from each vertex's coefficients (the clamped cosine's SH
- * coefficients over pi: E / pi = 0.282095 c_0 + 0.325735 c_2 + 0.157696 c_6 about the
- * local z) and the lights' at their cosine, unshadowed. */
+ * environment's irradiance from each vertex's coefficients about its local z, and the lights'
+ * at their cosine, unshadowed. */
 static meso_vec3 mean_outside_irradiance(const meso_mesh *mesh, const float *radiance,
                                          const meso_scene *scene) {
     double sum[CHANNELS] = {0}, area = 0.0;
@@ -248,8 +247,7 @@ static meso_vec3 mean_outside_irradiance(const meso_mesh *mesh, const float *rad
             const float *c = radiance + (size_t)tri[k] * CHANNELS * MESO_SH_COUNT;
             meso_vec3 n = meso_vec3_normalize(mesh->normals[tri[k]]);
             for (int ch = 0; ch < CHANNELS; ch++) {
-                const float *l = c + ch * MESO_SH_COUNT;
-                double e = M_PI * (0.282095 * l[0] + 0.325735 * l[2] + 0.157696 * l[6]);
+                double e = meso_sh_irradiance(c + ch * MESO_SH_COUNT, (meso_vec3){0, 0, 1});
                 for (int i = 0; i < scene->num_lights; i++) {
                     const meso_light *light = &scene->lights[i];
                     meso_vec3 to = light->type == MESO_LIGHT_DIRECTIONAL

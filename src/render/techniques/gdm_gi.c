@@ -40,6 +40,9 @@ struct gdm_gi {
     float *interior;
     float open_fraction;
     meso_vec3 interior_radiance;
+    /* the lights interior_radiance was computed for (num_lights -1: none yet) */
+    meso_light interior_lights[MESO_SCENE_MAX_LIGHTS];
+    int interior_num_lights;
     meso_vec3 inside_direction[GI_INSIDE_DIRECTIONS];
     meso_vec3 inside_radiance[GI_INSIDE_DIRECTIONS];
 };
@@ -181,6 +184,7 @@ meso_result gdm_gi_create(meso_context *ctx, const meso_scene *scene, const meso
     if ((r = meso_rtv_bake_cached(ctx, &rtv_desc, &gi->rtv)) != MESO_OK) goto fail;
     if ((r = pack_rtv(ctx, gi, object->name)) != MESO_OK) goto fail;
     gi->open_fraction = meso_gi_open_fraction(ms);
+    gi->interior_num_lights = -1;
     r = gi->open_fraction > 0.0f
             ? meso_gi_vertex_radiance_through_shell(ctx, mesh, scene->environment, NULL,
                                                     &gi->radiance, &gi->interior)
@@ -233,9 +237,16 @@ void gdm_gi_begin_frame(gdm_gi *gi, const meso_frame *frame) {
     gi->albedo_scene.ambient = (meso_vec3){1.0f, 1.0f, 1.0f};
     gi->albedo_frame = *frame;
     gi->albedo_frame.scene = &gi->albedo_scene;
-    if (gi->interior) /* the lights may have moved */
-        gi->interior_radiance = meso_gi_interior_radiance(gi->mesh, gi->radiance, frame->scene,
-                                                          gi->albedo, gi->open_fraction);
+    const meso_scene *scene = frame->scene;
+    size_t light_bytes = (size_t)scene->num_lights * sizeof *scene->lights;
+    if (gi->interior && (scene->num_lights != gi->interior_num_lights ||
+                         memcmp(scene->lights, gi->interior_lights, light_bytes) != 0)) {
+        /* the lights moved (the viewer): a pass over the mesh, not every frame */
+        gi->interior_radiance =
+            meso_gi_interior_radiance(gi->mesh, gi->radiance, scene, gi->albedo, gi->open_fraction);
+        memcpy(gi->interior_lights, scene->lights, light_bytes);
+        gi->interior_num_lights = scene->num_lights;
+    }
 }
 
 /* The sky's irradiance over pi at a hit seen from inside the base mesh, shadowed by the shell:
@@ -284,16 +295,9 @@ static bool reflected_at(const gdm_gi *gi, const meso_frame *frame, const meso_f
     meso_prism_weights(hit->prism, (meso_vec2){hit->uvw.x, hit->uvw.y}, b);
     float radiance[GI_CHANNELS][MESO_SH_COUNT];
     radiance_interpolate(gi->radiance, v[0], v[1], v[2], b[0], b[1], b[2], radiance);
-    if (gi->interior) { /* plus the interior's light from below the tangent plane */
-        const float *m0 = gi->interior + (size_t)v[0] * MESO_SH_COUNT;
-        const float *m1 = gi->interior + (size_t)v[1] * MESO_SH_COUNT;
-        const float *m2 = gi->interior + (size_t)v[2] * MESO_SH_COUNT;
-        const float *l = &gi->interior_radiance.x;
-        for (int i = 0; i < MESO_SH_COUNT; i++) {
-            float m = b[0] * m0[i] + b[1] * m1[i] + b[2] * m2[i];
-            for (int c = 0; c < GI_CHANNELS; c++) radiance[c][i] += l[c] * m;
-        }
-    }
+    if (gi->interior) /* plus the interior's light from below the tangent plane */
+        meso_gi_radiance_add_interior(gi->interior, v[0], v[1], v[2], b[0], b[1], b[2],
+                                      gi->interior_radiance, radiance);
     meso_vec3 n = meso_vec3_normalize(meso_vec3_barycentric(
         mesh->normals[v[0]], mesh->normals[v[1]], mesh->normals[v[2]], b[0], b[1], b[2]));
     meso_vec3 t = meso_vec3_barycentric(gi->tangents[v[0]], gi->tangents[v[1]], gi->tangents[v[2]],
@@ -308,11 +312,7 @@ static bool reflected_at(const gdm_gi *gi, const meso_frame *frame, const meso_f
         return false;
     }
     if (view.z < 0.0f && gi->interior) {
-        /* the light from below the tangent plane, on a surface facing it: E / pi about -z,
-         * the clamped cosine's coefficients with the odd band's sign turned */
-        for (int c = 0; c < GI_CHANNELS; c++)
-            out_rgb[c] = fmaxf(0.0f, 0.282095f * radiance[c][0] - 0.325735f * radiance[c][2] +
-                                         0.157696f * radiance[c][6]);
+        meso_gi_reflected_from_below((const float(*)[MESO_SH_COUNT])radiance, out_rgb);
         return false;
     }
     if (view.z < 0.0f) {
