@@ -252,6 +252,17 @@ static void test_rtv_file_round_trip_and_corruption(void **state) {
     assert_int_equal(meso_bake_file_save(ctx, &wrong, bad), MESO_OK);
     assert_int_equal(meso_rtv_load(ctx, bad, &none), MESO_ERROR_FORMAT);
     rtv->eigen[5] = saved;
+    /* a file of version 1 (before the same-surface read) still loads; a newer one is refused */
+    meso_rtv *old_version = NULL;
+    assert_int_equal(meso_bake_file_save(ctx, &wrong, bad), MESO_OK);
+    assert_int_equal(meso_rtv_load(ctx, bad, &old_version), MESO_OK);
+    meso_rtv_destroy(old_version);
+    wrong.kind_version = MESO_RTV_KIND_VERSION + 1;
+    assert_int_equal(meso_bake_file_save(ctx, &wrong, bad), MESO_OK);
+    assert_int_equal(meso_rtv_load(ctx, bad, &none), MESO_ERROR_FORMAT);
+    assert_null(none);
+    if (!strstr(meso_context_last_error(ctx), "not an rtv bake (kind \"rtv\" version 3)"))
+        fail_msg("%s", meso_context_last_error(ctx));
     meso_rtv_destroy(loaded);
     meso_rtv_destroy(rtv);
     meso_heightfield_destroy(hf);
