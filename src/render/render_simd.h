@@ -10,6 +10,8 @@
 #include <immintrin.h>
 #endif
 
+#include "meso/geom.h"
+
 typedef float v8f __attribute__((vector_size(32)));
 typedef int32_t v8i __attribute__((vector_size(32)));
 #define V8_LANES 8
@@ -87,6 +89,22 @@ static inline v8i v8i_gather(const int32_t *base, v8i index) {
 static inline int v8_any(v8i mask) {
     return ((mask[0] | mask[1]) | (mask[2] | mask[3])) |
            ((mask[4] | mask[5]) | (mask[6] | mask[7]));
+}
+
+/* Eight 3-vectors as vectors of their components. */
+typedef struct v8vec3 {
+    v8f x, y, z;
+} v8vec3;
+
+static inline v8f v8_dot(v8vec3 a, v8vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static inline v8vec3 v8_cross(v8vec3 a, v8vec3 b) {
+    return (v8vec3){a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+static inline v8vec3 v8_madd(v8vec3 a, v8vec3 b, v8f s) {
+    return (v8vec3){a.x + b.x * s, a.y + b.y * s, a.z + b.z * s};
+}
+static inline v8vec3 v8_splat3(meso_vec3 a) {
+    return (v8vec3){v8_splat(a.x), v8_splat(a.y), v8_splat(a.z)};
 }
 
 #endif

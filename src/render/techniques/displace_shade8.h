@@ -33,16 +33,8 @@ static inline v8i displace_gather8i(const uint32_t *base, v8i index) {
     return r;
 }
 
-typedef struct displace_v8vec3 {
-    v8f x, y, z;
-} displace_v8vec3;
-
-static inline v8f displace_dot8(displace_v8vec3 a, displace_v8vec3 b) {
-    return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-
 /* Finite in every component (a NaN or an infinity times 0 is NaN). */
-static inline v8i displace_finite8(displace_v8vec3 a) {
+static inline v8i displace_finite8(v8vec3 a) {
     return (a.x * 0.0f == 0.0f) & (a.y * 0.0f == 0.0f) & (a.z * 0.0f == 0.0f);
 }
 
@@ -91,31 +83,27 @@ static inline void displace_gradient8(const displace_surface *surface, v8f u, v8
 
 /* meso_displaced_normal per lane, then displace_shade's choice: the displaced normal where it
  * is non-zero and finite, the interpolated one elsewhere. */
-static inline displace_v8vec3 displace_normal8(displace_v8vec3 n, displace_v8vec3 t,
-                                               displace_v8vec3 b, float depth, v8f gu, v8f gv) {
+static inline v8vec3 displace_normal8(v8vec3 n, v8vec3 t, v8vec3 b, float depth, v8f gu, v8f gv) {
     v8f su = depth * gu, sv = depth * gv;
-    displace_v8vec3 du = {t.x + n.x * su, t.y + n.y * su, t.z + n.z * su};
-    displace_v8vec3 dv = {b.x + n.x * sv, b.y + n.y * sv, b.z + n.z * sv};
-    displace_v8vec3 c = {du.y * dv.z - du.z * dv.y, du.z * dv.x - du.x * dv.z,
-                         du.x * dv.y - du.y * dv.x};
-    v8f len2 = displace_dot8(c, c);
+    v8vec3 du = {t.x + n.x * su, t.y + n.y * su, t.z + n.z * su};
+    v8vec3 dv = {b.x + n.x * sv, b.y + n.y * sv, b.z + n.z * sv};
+    v8vec3 c = {du.y * dv.z - du.z * dv.y, du.z * dv.x - du.x * dv.z, du.x * dv.y - du.y * dv.x};
+    v8f len2 = v8_dot(c, c);
     v8i ok = (len2 > 0.0f) & (len2 < INFINITY);
     v8f inv = 1.0f / v8_sqrt(v8_select(ok, len2, v8_splat(1.0f)));
-    displace_v8vec3 s = {c.x * inv, c.y * inv, c.z * inv};
-    v8i flip = displace_dot8(s, n) < 0.0f;
-    s = (displace_v8vec3){v8_select(flip, -s.x, s.x), v8_select(flip, -s.y, s.y),
-                          v8_select(flip, -s.z, s.z)};
-    s = (displace_v8vec3){v8_select(ok, s.x, n.x), v8_select(ok, s.y, n.y),
-                          v8_select(ok, s.z, n.z)};
-    v8i use = (displace_dot8(s, s) > 0.0f) & displace_finite8(s);
-    return (displace_v8vec3){v8_select(use, s.x, n.x), v8_select(use, s.y, n.y),
-                             v8_select(use, s.z, n.z)};
+    v8vec3 s = {c.x * inv, c.y * inv, c.z * inv};
+    v8i flip = v8_dot(s, n) < 0.0f;
+    s = (v8vec3){v8_select(flip, -s.x, s.x), v8_select(flip, -s.y, s.y),
+                 v8_select(flip, -s.z, s.z)};
+    s = (v8vec3){v8_select(ok, s.x, n.x), v8_select(ok, s.y, n.y), v8_select(ok, s.z, n.z)};
+    v8i use = (v8_dot(s, s) > 0.0f) & displace_finite8(s);
+    return (v8vec3){v8_select(use, s.x, n.x), v8_select(use, s.y, n.y), v8_select(use, s.z, n.z)};
 }
 
 /* The unit face normal of each lane's triangle of `mesh` (positions gathered by index), or
  * `fallback` where the triangle is degenerate or out of range: displace_shade's face. */
-static inline displace_v8vec3 displace_face8(const meso_mesh *mesh, const uint32_t *triangle,
-                                             displace_v8vec3 fallback) {
+static inline v8vec3 displace_face8(const meso_mesh *mesh, const uint32_t *triangle,
+                                    v8vec3 fallback) {
     v8i t;
     memcpy(&t, triangle, sizeof t);
     v8i valid = v8i_splat(0);
@@ -131,20 +119,18 @@ static inline displace_v8vec3 displace_face8(const meso_mesh *mesh, const uint32
     v8i v0 = displace_gather8i(mesh->indices, corner) * 3;
     v8i v1 = displace_gather8i(mesh->indices, corner + 1) * 3;
     v8i v2 = displace_gather8i(mesh->indices, corner + 2) * 3;
-    displace_v8vec3 p0 = {displace_gather8(p, v0), displace_gather8(p, v0 + 1),
-                          displace_gather8(p, v0 + 2)};
-    displace_v8vec3 a = {displace_gather8(p, v1) - p0.x, displace_gather8(p, v1 + 1) - p0.y,
-                         displace_gather8(p, v1 + 2) - p0.z};
-    displace_v8vec3 b = {displace_gather8(p, v2) - p0.x, displace_gather8(p, v2 + 1) - p0.y,
-                         displace_gather8(p, v2 + 2) - p0.z};
-    displace_v8vec3 e = {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-    v8f len2 = displace_dot8(e, e);
+    v8vec3 p0 = {displace_gather8(p, v0), displace_gather8(p, v0 + 1), displace_gather8(p, v0 + 2)};
+    v8vec3 a = {displace_gather8(p, v1) - p0.x, displace_gather8(p, v1 + 1) - p0.y,
+                displace_gather8(p, v1 + 2) - p0.z};
+    v8vec3 b = {displace_gather8(p, v2) - p0.x, displace_gather8(p, v2 + 1) - p0.y,
+                displace_gather8(p, v2 + 2) - p0.z};
+    v8vec3 e = {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+    v8f len2 = v8_dot(e, e);
     v8i have = valid & (len2 > 0.0f);
     /* meso_vec3_normalize: e * (1 / sqrt(len2)) */
     v8f inv = 1.0f / v8_sqrt(v8_select(have, len2, v8_splat(1.0f)));
-    return (displace_v8vec3){v8_select(have, e.x * inv, fallback.x),
-                             v8_select(have, e.y * inv, fallback.y),
-                             v8_select(have, e.z * inv, fallback.z)};
+    return (v8vec3){v8_select(have, e.x * inv, fallback.x), v8_select(have, e.y * inv, fallback.y),
+                    v8_select(have, e.z * inv, fallback.z)};
 }
 
 /* lit_tap per lane: 1 where z is not behind the map's depth at texel (i, j) clamped. */
@@ -159,41 +145,40 @@ static inline v8f displace_lit8(const float *depth, int size, v8i i, v8i j, v8f 
 /* displace_shadows_visibility of light l per lane (1 where the light casts no map, faces away
  * from the shading normal or the point falls outside its map). */
 static inline v8f displace_visibility8(const displace_shadows *shadows, const meso_scene *scene,
-                                       int l, displace_v8vec3 position, displace_v8vec3 normal,
-                                       displace_v8vec3 face) {
+                                       int l, v8vec3 position, v8vec3 normal, v8vec3 face) {
     v8f one = v8_splat(1.0f);
     if (l >= shadows->num_lights || !shadows->lights[l].active) return one;
     const displace_light_map *map = &shadows->lights[l];
     const meso_light *light = &scene->lights[l];
-    displace_v8vec3 to_light, from = {0};
+    v8vec3 to_light, from = {0};
     if (light->type == MESO_LIGHT_DIRECTIONAL) {
-        to_light = (displace_v8vec3){v8_splat(light->direction.x), v8_splat(light->direction.y),
-                                     v8_splat(light->direction.z)};
+        to_light = (v8vec3){v8_splat(light->direction.x), v8_splat(light->direction.y),
+                            v8_splat(light->direction.z)};
     } else { /* meso_vec3_normalize(light - position) */
-        from = (displace_v8vec3){light->position.x - position.x, light->position.y - position.y,
-                                 light->position.z - position.z};
-        v8f len2 = displace_dot8(from, from);
+        from = (v8vec3){light->position.x - position.x, light->position.y - position.y,
+                        light->position.z - position.z};
+        v8f len2 = v8_dot(from, from);
         v8i positive = len2 > 0.0f;
         v8f inv = 1.0f / v8_sqrt(v8_select(positive, len2, one));
-        to_light = (displace_v8vec3){v8_select(positive, from.x * inv, from.x),
-                                     v8_select(positive, from.y * inv, from.y),
-                                     v8_select(positive, from.z * inv, from.z)};
+        to_light = (v8vec3){v8_select(positive, from.x * inv, from.x),
+                            v8_select(positive, from.y * inv, from.y),
+                            v8_select(positive, from.z * inv, from.z)};
     }
     /* looked up unless facing away (a NaN is looked up, as the scalar `<= 0` test lets it) */
-    v8i look = ~(displace_dot8(normal, to_light) <= 0.0f);
+    v8i look = ~(v8_dot(normal, to_light) <= 0.0f);
     if (!v8_any(look)) return one;
     /* slope-scaled bias (displace_shadows_visibility) */
-    v8f c = displace_dot8(face, to_light);
+    v8f c = v8_dot(face, to_light);
     c = v8_select(c < 0.0f, -c, c); /* fabsf: -0 and 0 give the same below */
     c = v8_select(c < 0.1f, v8_splat(0.1f), c);
     v8f s2 = 1.0f - c * c;
     s2 = v8_select(s2 > 0.0f, s2, v8_splat(0.0f)); /* fmaxf(0, x): 0 for a NaN too */
     v8f slope = v8_sqrt(s2) / c;
     v8f texel = v8_splat(map->texel_size);
-    if (light->type != MESO_LIGHT_DIRECTIONAL) texel = texel * v8_sqrt(displace_dot8(from, from));
+    if (light->type != MESO_LIGHT_DIRECTIONAL) texel = texel * v8_sqrt(v8_dot(from, from));
     v8f offset = shadows->options.bias * texel * (1.0f + slope);
-    displace_v8vec3 p = {position.x + to_light.x * offset, position.y + to_light.y * offset,
-                         position.z + to_light.z * offset};
+    v8vec3 p = {position.x + to_light.x * offset, position.y + to_light.y * offset,
+                position.z + to_light.z * offset};
     const float *m = map->view_projection.m;
     v8f cx = m[0] * p.x + m[4] * p.y + m[8] * p.z + m[12] * 1.0f;
     v8f cy = m[1] * p.x + m[5] * p.y + m[9] * p.z + m[13] * 1.0f;
@@ -241,17 +226,16 @@ static inline void displace_shade_block(const displace_surface *surface,
         for (size_t at = first; at < block->count && groups < DISPLACE_SHADE_GROUPS;
              at += V8_LANES, groups++) {
             meso_shade_batch *b = &in[groups];
-            displace_v8vec3 position = {meso_block_load(block->px, at),
-                                        meso_block_load(block->py, at),
-                                        meso_block_load(block->pz, at)};
-            displace_v8vec3 base = {meso_block_load(block->nx, at), meso_block_load(block->ny, at),
-                                    meso_block_load(block->nz, at)};
-            displace_v8vec3 t = {meso_block_load(block->tx, at), meso_block_load(block->ty, at),
-                                 meso_block_load(block->tz, at)};
-            displace_v8vec3 bt = {meso_block_load(block->bx, at), meso_block_load(block->by, at),
-                                  meso_block_load(block->bz, at)};
+            v8vec3 position = {meso_block_load(block->px, at), meso_block_load(block->py, at),
+                               meso_block_load(block->pz, at)};
+            v8vec3 base = {meso_block_load(block->nx, at), meso_block_load(block->ny, at),
+                           meso_block_load(block->nz, at)};
+            v8vec3 t = {meso_block_load(block->tx, at), meso_block_load(block->ty, at),
+                        meso_block_load(block->tz, at)};
+            v8vec3 bt = {meso_block_load(block->bx, at), meso_block_load(block->by, at),
+                         meso_block_load(block->bz, at)};
             v8f u = meso_block_load(block->u, at), v = meso_block_load(block->v, at);
-            displace_v8vec3 normal = base;
+            v8vec3 normal = base;
             if (surface->heightfield) {
                 /* the bump-map operation on the interpolated BASE frame (displace_shade) */
                 v8f gu, gv;
@@ -259,7 +243,7 @@ static inline void displace_shade_block(const displace_surface *surface,
                 normal = displace_normal8(base, t, bt, surface->depth, gu, gv);
             }
             if (shadows->num_lights > 0) {
-                displace_v8vec3 face = displace_face8(mesh, block->triangle + at, base);
+                v8vec3 face = displace_face8(mesh, block->triangle + at, base);
                 for (int l = 0; l < num_lights; l++)
                     b->visibility[l] =
                         displace_visibility8(shadows, frame->scene, l, position, normal, face);

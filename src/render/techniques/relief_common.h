@@ -514,21 +514,6 @@ static inline int relief_shadow_clear8(const relief_maxmip *mm, const relief_hei
 
 /* ---- Eight fragments as vectors ---------------------------------------------------------- */
 
-typedef struct v8vec3 {
-    v8f x, y, z;
-} v8vec3;
-
-static inline v8f v8_dot(v8vec3 a, v8vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-static inline v8vec3 v8_cross(v8vec3 a, v8vec3 b) {
-    return (v8vec3){a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-static inline v8vec3 v8_madd(v8vec3 a, v8vec3 b, v8f s) {
-    return (v8vec3){a.x + b.x * s, a.y + b.y * s, a.z + b.z * s};
-}
-static inline v8vec3 v8_splat3(meso_vec3 a) {
-    return (v8vec3){v8_splat(a.x), v8_splat(a.y), v8_splat(a.z)};
-}
-
 /* Up to eight fragments in structure-of-arrays form with their texture-space frame: the dual
  * basis (B x N, N x T, T x B) / det writes a world direction D as (du, dv, dn) with
  * D = du T + dv B + dn N by three dot products (relief_frame_solve, eight at once). Lanes past
