@@ -184,6 +184,9 @@ typedef struct meso_prism_layer {
     meso_prism_face_frame *face_frames; /* per face of `faces`: meso_prism_layer_face_uvw's */
     uint8_t *fin_convex; /* 3 per prism: the fin's two triangles bound a convex side */
     size_t num_prisms;
+    /* prisms whose bottom triangle turned over (the shell deeper than the surface's radius of
+     * curvature there): their bottom's plane is the zero plane, the fins bound them */
+    size_t num_folded;
     float depth;
 } meso_prism_layer;
 

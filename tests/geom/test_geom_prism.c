@@ -381,6 +381,73 @@ static void test_exit_and_face_uvw_match_the_scalar_computation(void **state) {
     meso_context_destroy(ctx);
 }
 
+static int compare_floats(const void *a, const void *b) {
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+/* A shell deeper than the surface's radius of curvature folds: a cylinder of radius 0.6 in a
+ * shell 0.75 deep crosses its axis at w = 0.8. Every prism's bottom triangle comes out mirrored
+ * (its outward normal pointing up) and the fins over its circumferential edges are bow ties.
+ * Before meso_prism_layer_create unbound those planes, a ray entering through the top left at
+ * t = 0 through the bottom. Now no ray leaves through the bottom, and the exit lies in the
+ * prism: the map takes its (u, v, w) back to within 0.05 of it (the fins' flat triangles against
+ * the map's bilinear fins). A ray from the top toward the axis stays in its prism's volume
+ * down to the axis: most get there (the median exit). The fins over the grid's diagonals are
+ * twisted past the fold, and their flat triangles end some rays early (docs/techniques/gdm.md,
+ * "folded prisms"). A shell 0.5 deep does not fold. */
+static void test_folded_prisms_are_left_through_their_fins(void **state) {
+    meso_context *ctx = test_context(1);
+    meso_mesh *mesh = make_shape(ctx, MESO_SHAPE_CYLINDER, 16);
+    meso_prism_layer *layer = NULL;
+    assert_int_equal(meso_prism_layer_create(ctx, mesh, 0.5f, "cylinder", &layer), MESO_OK);
+    assert_int_equal(layer->num_folded, 0);
+    meso_prism_layer_destroy(layer);
+    const float depth = 0.75f;
+    assert_int_equal(meso_prism_layer_create(ctx, mesh, depth, "cylinder", &layer), MESO_OK);
+    float *exits = malloc(layer->num_prisms * sizeof *exits);
+    assert_non_null(exits);
+    size_t valid = 0;
+    float worst_off = 0.0f;
+    unsigned seed = 5;
+    for (size_t p = 0; p < layer->num_prisms; p++) {
+        const meso_prism *prism = &layer->prisms[p];
+        if (!prism->valid) continue;
+        /* from a point of the top toward the axis at its height, a little off */
+        float a = 0.2f + 0.6f * test_uniform(&seed), b = (0.8f - a) * test_uniform(&seed);
+        meso_vec3 uvw = {0.0f, 0.0f, 0.0f};
+        uvw.x = prism->uv[0].x * (1.0f - a - b) + prism->uv[1].x * a + prism->uv[2].x * b;
+        uvw.y = prism->uv[0].y * (1.0f - a - b) + prism->uv[1].y * a + prism->uv[2].y * b;
+        meso_vec3 origin = meso_prism_map(prism, mesh, depth, uvw, -1);
+        meso_vec3 aim = {0.02f * (test_uniform(&seed) - 0.5f), origin.y,
+                         0.02f * (test_uniform(&seed) - 0.5f)};
+        meso_vec3 dir = meso_vec3_normalize(meso_vec3_sub(aim, origin));
+        float t;
+        int slot;
+        assert_true(meso_prism_layer_exit(layer, p, origin, dir, MESO_PRISM_TOP, &t, &slot));
+        assert_true(slot >= MESO_PRISM_FIN);
+        assert_true(t > 0.0f);
+        exits[valid++] = t;
+        meso_vec3 x = meso_vec3_madd(origin, dir, t);
+        meso_vec3 exit = meso_prism_layer_face_uvw(layer, meso_prism_layer_face(layer, p, slot), x);
+        meso_vec3 back = meso_prism_map(prism, mesh, depth, exit, -1);
+        worst_off = fmaxf(worst_off, meso_vec3_length(meso_vec3_sub(back, x)));
+    }
+    qsort(exits, valid, sizeof *exits, compare_floats);
+    float median = exits[valid / 2];
+    print_message("folded prisms: %zu of %zu; exits at t %g (least), %g (median), %g (most), "
+                  "mapped back within %g\n",
+                  layer->num_folded, valid, (double)exits[0], (double)median,
+                  (double)exits[valid - 1], (double)worst_off);
+    assert_int_equal(layer->num_folded, valid);
+    assert_true(median > 0.5f && median < 0.7f); /* the axis is 0.57 to 0.6 away */
+    assert_true(worst_off < 0.05f);
+    free(exits);
+    meso_prism_layer_destroy(layer);
+    meso_mesh_destroy(mesh);
+    meso_context_destroy(ctx);
+}
+
 static void test_layer_refuses_bad_input_naming_it(void **state) {
     meso_context *ctx = test_context(1);
     meso_mesh *mesh = make_shape(ctx, MESO_SHAPE_PLANE, 1);
@@ -411,6 +478,7 @@ int main(void) {
         cmocka_unit_test(test_exit_on_a_plane_is_exact),
         cmocka_unit_test(test_rays_along_fins_stay_in_their_prism),
         cmocka_unit_test(test_exit_and_face_uvw_match_the_scalar_computation),
+        cmocka_unit_test(test_folded_prisms_are_left_through_their_fins),
         cmocka_unit_test(test_layer_refuses_bad_input_naming_it),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
