@@ -388,6 +388,11 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
     if ((r = meso_prism_layer_create(ctx, object->mesh, ms->depth, object->name, &s->layer)) !=
         MESO_OK)
         goto fail;
+    if (s->layer->num_folded) /* docs/techniques/gdm.md, "Folded prisms" */
+        meso_log_info(ctx,
+                      "%s: gdm: the shell (depth %g) is deeper than the surface's curvature on %zu "
+                      "of %zu prisms: they fold, and the fins bound them",
+                      object->name, (double)ms->depth, s->layer->num_folded, s->layer->num_prisms);
     s->clear_w = -1.0f;
     if (s->heightfield ? !heightfield_clearances(s) || !heightfield_windows(s)
                        : !solid_grid(ctx, s)) {
