@@ -395,8 +395,7 @@ static int32_t edge_midpoint(const displace_tessellator *t, tess_scratch *s, tes
     if (s->num_nodes >= s->cap_nodes) return -1; /* cannot happen: one node per grid point */
     int32_t index = (int32_t)s->num_nodes++;
     displace_vertex *m = &s->nodes[index];
-    vertex_midpoint_uv(a, b, m);
-    m->texture_uv = displace_texture_uv(t->surface, m->uv);
+    vertex_midpoint_uv(a, b, m); /* texture_uv: by displace_vertex_finish, past the veto */
     if (t->tests && t->tests->veto) displace_vertex_texel(t->surface, m); /* for the veto only */
     m->key_b = sb / 2;
     m->key_c = sc / 2;

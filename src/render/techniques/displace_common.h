@@ -179,7 +179,7 @@ typedef struct displace_edge_tests {
      * transformed position) (may be NULL). */
     void (*vertex_hook)(const void *user, displace_vertex *vertex);
     /* Whether to reject m, the midpoint of the edge (a, b), before it is displaced: m has only
-     * its uv, texture_uv and texel (the recursion-limit tests need no more, so the work of
+     * its uv and texel (the recursion-limit tests need no more, so the work of wrapping,
      * interpolating and displacing rejected midpoints is saved). May be NULL. */
     bool (*veto)(const void *user, const displace_vertex *a, const displace_vertex *b,
                  const displace_vertex *m, uint64_t *counters);
