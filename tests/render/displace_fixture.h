@@ -282,4 +282,85 @@ static size_t fixture_count_open_edges(const meso_mesh *mesh) {
     return bad;
 }
 
+/* ---- Block shading ----------------------------------------------------------------------- */
+
+/* The rasterizer shades a geometry technique's blocks eight fragments at a time
+ * (displace_shade8.h): check the same colours, bit for bit, as its per-fragment shade, with a
+ * directional light and 2 x 2 PCF, a point light and one tap, and without shadows; fragments at
+ * several barycentrics of every triangle (lit, shadowed, at the map's edge) in blocks whose
+ * counts are not multiples of eight. `level_option` is the technique's subdivision level
+ * option, set to 5. */
+static void fixture_check_block_shading(const meso_technique *tech, const char *level_option) {
+    fixture f;
+    fixture_init(&f, 2);
+    fixture_heights(&f, 64, FIELD_CONSTANT, 1.0f);
+    for (int j = 0; j < 64; j++)
+        for (int i = 24; i < 40; i++) f.heights[j * 64 + i] = (float)((i * 7 + j * 3) % 11) / 10.0f;
+    f.object.mesostructure.depth = 0.3f;
+    fixture_plane(&f, 1);
+    fixture_set_option(&f, level_option, 5);
+    fixture_set_option(&f, "shadow_map_size", 256);
+    for (int config = 0; config < 3; config++) {
+        if (config == 0) {
+            f.scene.lights[0].direction = meso_vec3_normalize((meso_vec3){1.0f, 0.5f, 0.0f});
+        } else if (config == 1) {
+            f.scene.lights[0].type = MESO_LIGHT_POINT;
+            f.scene.lights[0].position = (meso_vec3){0.7f, 1.5f, 0.3f};
+            fixture_set_option(&f, "shadow_pcf", 0);
+        } else {
+            fixture_set_option(&f, "shadows", 0);
+        }
+        void *st = NULL;
+        const meso_mesh *mesh = fixture_geometry(&f, tech, &st);
+        size_t count = 3 * mesh->num_triangles;
+        meso_fragment *per_fragment = calloc(count, sizeof(meso_fragment));
+        meso_fragment *per_block = calloc(count, sizeof(meso_fragment));
+        assert_non_null(per_fragment);
+        assert_non_null(per_block);
+        const float weights[3][3] = {
+            {1.0f / 3.0f, 1.0f / 3.0f, 1.0f / 3.0f}, {0.8f, 0.1f, 0.1f}, {0.05f, 0.15f, 0.8f}};
+        for (size_t t = 0; t < mesh->num_triangles; t++) {
+            const uint32_t *i = &mesh->indices[t * 3];
+            for (int w = 0; w < 3; w++) {
+                const float *b = weights[w];
+                meso_fragment frag = {0};
+                frag.triangle = (uint32_t)t;
+                frag.b0 = b[0], frag.b1 = b[1], frag.b2 = b[2];
+                frag.position = meso_vec3_barycentric(mesh->positions[i[0]], mesh->positions[i[1]],
+                                                      mesh->positions[i[2]], b[0], b[1], b[2]);
+                frag.normal = meso_vec3_normalize(
+                    meso_vec3_barycentric(mesh->normals[i[0]], mesh->normals[i[1]],
+                                          mesh->normals[i[2]], b[0], b[1], b[2]));
+                frag.tangent = meso_vec3_barycentric(mesh->tangents[i[0]], mesh->tangents[i[1]],
+                                                     mesh->tangents[i[2]], b[0], b[1], b[2]);
+                frag.bitangent =
+                    meso_vec3_barycentric(mesh->bitangents[i[0]], mesh->bitangents[i[1]],
+                                          mesh->bitangents[i[2]], b[0], b[1], b[2]);
+                frag.uv = meso_vec2_barycentric(mesh->uvs[i[0]], mesh->uvs[i[1]], mesh->uvs[i[2]],
+                                                b[0], b[1], b[2]);
+                frag.depth = frag.out_depth = 1.0f;
+                per_fragment[3 * t + (size_t)w] = per_block[3 * t + (size_t)w] = frag;
+            }
+        }
+        tech->shade(st, &f.frame, &f.object, per_fragment, count);
+        /* through blocks (meso_technique_shade prefers shade_block), in uneven pieces */
+        for (size_t first = 0; first < count;) {
+            size_t n = count - first < 1021 ? count - first : 1021;
+            assert_int_equal(
+                meso_technique_shade(tech, st, &f.frame, &f.object, per_block + first, n), MESO_OK);
+            first += n;
+        }
+        size_t dark = 0;
+        for (size_t k = 0; k < count; k++) {
+            assert_memory_equal(&per_fragment[k].color, &per_block[k].color, sizeof(meso_vec3));
+            dark += per_fragment[k].color.x < 0.1f;
+        }
+        if (config < 2) assert_true(dark > 0); /* shadows were looked up */
+        free(per_fragment);
+        free(per_block);
+        tech->release(st);
+    }
+    fixture_deinit(&f);
+}
+
 #endif

@@ -323,6 +323,13 @@ static void test_tessellation_light_view_shadows_do_not_depend_on_the_camera(voi
     fixture_deinit(&f);
 }
 
+/* The rasterizer shades tessellation's blocks eight fragments at a time (displace_shade8.h):
+ * the same colours, bit for bit, as the per-fragment shade (displace_fixture.h). */
+static void test_tessellation_block_shading_matches_per_fragment(void **state) {
+    (void)state;
+    fixture_check_block_shading(technique, "max_level");
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_tessellation_sphere_has_no_cracks_for_every_test_combination),
@@ -332,6 +339,7 @@ int main(void) {
         cmocka_unit_test(test_tessellation_constant_height_field_inserts_nothing),
         cmocka_unit_test(test_tessellation_max_level_bounds_the_count),
         cmocka_unit_test(test_tessellation_output_does_not_depend_on_thread_count),
+        cmocka_unit_test(test_tessellation_block_shading_matches_per_fragment),
         cmocka_unit_test(test_tessellation_rejects_bad_options_naming_them),
         cmocka_unit_test(test_tessellation_shades_a_lit_flat_surface_unshadowed),
         cmocka_unit_test(test_tessellation_shadows_follow_a_turned_light),

@@ -395,8 +395,7 @@ static int32_t edge_midpoint(const displace_tessellator *t, tess_scratch *s, tes
     if (s->num_nodes >= s->cap_nodes) return -1; /* cannot happen: one node per grid point */
     int32_t index = (int32_t)s->num_nodes++;
     displace_vertex *m = &s->nodes[index];
-    vertex_midpoint_uv(a, b, m);
-    m->texture_uv = displace_texture_uv(t->surface, m->uv);
+    vertex_midpoint_uv(a, b, m); /* texture_uv: by displace_vertex_finish, past the veto */
     if (t->tests && t->tests->veto) displace_vertex_texel(t->surface, m); /* for the veto only */
     m->key_b = sb / 2;
     m->key_c = sc / 2;
@@ -508,13 +507,20 @@ typedef struct run_args {
 
 static void run_job(void *user, size_t index, int thread_index) {
     displace_tessellator *t = ((run_args *)user)->t;
-    tess_job *job = &t->jobs[index];
-    tess_scratch *s = &t->scratch[thread_index];
-    job->num_vertices = job->num_triangles = 0;
-    memset(&job->stats, 0, sizeof(job->stats));
-    job->result = MESO_OK;
-    for (size_t i = 0; i < job->count; i++)
-        if (!tessellate_triangle(t, s, job, job->first + i)) return;
+    /* Work on copies on this thread's stack, written back once at the end: the job records
+     * and the workers' scratch records lie side by side in arrays, and the counters and sizes
+     * written for every edge would otherwise share cache lines with the neighbouring job's
+     * (run at the same time on the other thread) or the other worker's: false sharing made two
+     * threads slower than one (docs/performance.md, tess-speed). */
+    tess_job job = t->jobs[index];
+    tess_scratch s = t->scratch[thread_index];
+    job.num_vertices = job.num_triangles = 0;
+    memset(&job.stats, 0, sizeof(job.stats));
+    job.result = MESO_OK;
+    for (size_t i = 0; i < job.count; i++)
+        if (!tessellate_triangle(t, &s, &job, job.first + i)) break;
+    t->jobs[index] = job;
+    t->scratch[thread_index] = s;
 }
 
 static void join_job(void *user, size_t index, int thread_index) {

@@ -69,17 +69,35 @@ static inline meso_vec2 displace_heightfield_gradient(const meso_heightfield *hf
                    _mm_set1_ps(0.5f));
     __m128 fx = _mm_floor_ps(x), fy = _mm_floor_ps(y);
     __m128 tx = _mm_sub_ps(x, fx), ty = _mm_sub_ps(y, fy);
-    int32_t ix[4], iy[4];
-    _mm_storeu_si128((__m128i *)ix, _mm_cvttps_epi32(fx));
-    _mm_storeu_si128((__m128i *)iy, _mm_cvttps_epi32(fy));
+    __m128i ixv = _mm_cvttps_epi32(fx), iyv = _mm_cvttps_epi32(fy);
     float h00[4], h10[4], h01[4], h11[4];
-    for (int k = 0; k < 4; k++) {
-        int i0, i1, j0, j1;
-        meso_heightfield_wrap_pair(hf->wrap, ix[k], hf->width, &i0, &i1);
-        meso_heightfield_wrap_pair(hf->wrap, iy[k], hf->height, &j0, &j1);
-        const float *row0 = hf->heights + (size_t)j0 * (size_t)hf->width;
-        const float *row1 = hf->heights + (size_t)j1 * (size_t)hf->width;
-        h00[k] = row0[i0], h10[k] = row0[i1], h01[k] = row1[i0], h11[k] = row1[i1];
+    /* every sample's texel and its right and lower neighbours inside the field (the common
+     * case): meso_heightfield_wrap_pair's first branch, the texel offsets four at a time */
+    __m128i inside =
+        _mm_and_si128(_mm_and_si128(_mm_cmpgt_epi32(ixv, _mm_set1_epi32(-1)),
+                                    _mm_cmplt_epi32(ixv, _mm_set1_epi32(hf->width - 1))),
+                      _mm_and_si128(_mm_cmpgt_epi32(iyv, _mm_set1_epi32(-1)),
+                                    _mm_cmplt_epi32(iyv, _mm_set1_epi32(hf->height - 1))));
+    if (_mm_movemask_ps(_mm_castsi128_ps(inside)) == 0xf) {
+        int32_t at[4];
+        _mm_storeu_si128((__m128i *)at,
+                         _mm_add_epi32(_mm_mullo_epi32(iyv, _mm_set1_epi32(hf->width)), ixv));
+        for (int k = 0; k < 4; k++) {
+            const float *p = hf->heights + at[k];
+            h00[k] = p[0], h10[k] = p[1], h01[k] = p[hf->width], h11[k] = p[hf->width + 1];
+        }
+    } else {
+        int32_t ix[4], iy[4];
+        _mm_storeu_si128((__m128i *)ix, ixv);
+        _mm_storeu_si128((__m128i *)iy, iyv);
+        for (int k = 0; k < 4; k++) {
+            int i0, i1, j0, j1;
+            meso_heightfield_wrap_pair(hf->wrap, ix[k], hf->width, &i0, &i1);
+            meso_heightfield_wrap_pair(hf->wrap, iy[k], hf->height, &j0, &j1);
+            const float *row0 = hf->heights + (size_t)j0 * (size_t)hf->width;
+            const float *row1 = hf->heights + (size_t)j1 * (size_t)hf->width;
+            h00[k] = row0[i0], h10[k] = row0[i1], h01[k] = row1[i0], h11[k] = row1[i1];
+        }
     }
     __m128 a = _mm_loadu_ps(h00), b = _mm_loadu_ps(h10);
     __m128 c = _mm_loadu_ps(h01), d = _mm_loadu_ps(h11);
@@ -161,7 +179,7 @@ typedef struct displace_edge_tests {
      * transformed position) (may be NULL). */
     void (*vertex_hook)(const void *user, displace_vertex *vertex);
     /* Whether to reject m, the midpoint of the edge (a, b), before it is displaced: m has only
-     * its uv, texture_uv and texel (the recursion-limit tests need no more, so the work of
+     * its uv and texel (the recursion-limit tests need no more, so the work of wrapping,
      * interpolating and displacing rejected midpoints is saved). May be NULL. */
     bool (*veto)(const void *user, const displace_vertex *a, const displace_vertex *b,
                  const displace_vertex *m, uint64_t *counters);
