@@ -98,36 +98,50 @@ static inline void interpolate_rows(const gdm_gi *gi, const meso_rtv_cell *cell,
                                     int chunks) {
 #pragma GCC unroll 8
     for (int j = 0; j < chunks; j++) w[j] = e[j] = v8_splat(0.0f);
+#pragma GCC unroll 8
     for (int c = 0; c < 8; c++)
         accumulate_rows(w, gi->weights + cell->corner[c] * (size_t)gi->stride,
                         cell->corner_weight[c], chunks);
+#pragma GCC unroll 4
     for (int v = 0; v < 4; v++)
         accumulate_rows(e, gi->eigen + (size_t)cell->view_index[v] * (size_t)gi->stride,
                         cell->view_weight[v], chunks);
 }
 
-/* meso_rtv_evaluate on the packed arrays: the same sums in another order, 8 wide (16 k is a
- * multiple of 8). Coefficient i's transfer is the sum over the eigenfunctions q of W E, in q's
- * order from 0 -- the sum the coefficient-major layout made one coefficient at a time, here
- * for 16 coefficients at once (the same additions per coefficient, so the same bits); the
- * colour is the sum over i in i's order, the three channels in the lanes of one vector
- * (radiance as radiance4 holds it: one load a coefficient). */
-static void evaluate(const gdm_gi *gi, meso_vec3 uvw, meso_vec3 view,
-                     const gi_v4f radiance[MESO_SH_COUNT], float out_rgb[3]) {
-    enum { MAX_CHUNKS = MESO_SH_COUNT * GI_MAX_EIGEN / 8, DEFAULT_CHUNKS = MESO_SH_COUNT * 4 / 8 };
-    meso_rtv_cell cell;
-    meso_rtv_cell_at(gi->rtv, uvw, view, &cell);
-    int chunks = gi->stride / 8, k = gi->rtv->num_eigen;
+/* The transfer vector at the cell, coefficients 0-7 and 8-15: coefficient i's is the sum over
+ * the eigenfunctions q of W E, in q's order from 0 -- the sum the coefficient-major layout made
+ * one coefficient at a time, here for 16 coefficients at once (the same additions per
+ * coefficient, so the same bits). Inline, so that with the default chunk count W and E stay in
+ * registers. */
+static inline void transfer(const gdm_gi *gi, const meso_rtv_cell *cell, int chunks, v8f *out_lo,
+                            v8f *out_hi) {
+    enum { MAX_CHUNKS = MESO_SH_COUNT * GI_MAX_EIGEN / 8 };
     v8f w[MAX_CHUNKS], e[MAX_CHUNKS];
-    if (chunks == DEFAULT_CHUNKS) /* the default 4 eigenfunctions, unrolled */
-        interpolate_rows(gi, &cell, w, e, DEFAULT_CHUNKS);
-    else
-        interpolate_rows(gi, &cell, w, e, chunks);
-    v8f f_lo = v8_splat(0.0f), f_hi = v8_splat(0.0f); /* coefficients 0-7, 8-15 */
-    for (int q = 0; q < k; q++) {
+    interpolate_rows(gi, cell, w, e, chunks);
+    v8f f_lo = v8_splat(0.0f), f_hi = v8_splat(0.0f);
+#pragma GCC unroll 4
+    for (int q = 0; 2 * q < chunks; q++) {
         f_lo += w[2 * q] * e[2 * q];
         f_hi += w[2 * q + 1] * e[2 * q + 1];
     }
+    *out_lo = f_lo, *out_hi = f_hi;
+}
+
+/* meso_rtv_evaluate on the packed arrays: the same sums in another order, 8 wide (16 k is a
+ * multiple of 8; transfer above); the colour is the sum over i in i's order, the three
+ * channels in the lanes of one vector (radiance as radiance4 holds it: one load a
+ * coefficient). */
+static void evaluate(const gdm_gi *gi, meso_vec3 uvw, meso_vec3 view,
+                     const gi_v4f radiance[MESO_SH_COUNT], float out_rgb[3]) {
+    enum { DEFAULT_CHUNKS = MESO_SH_COUNT * 4 / 8 };
+    meso_rtv_cell cell;
+    meso_rtv_cell_at(gi->rtv, uvw, view, &cell);
+    int chunks = gi->stride / 8;
+    v8f f_lo, f_hi;
+    if (chunks == DEFAULT_CHUNKS) /* the default 4 eigenfunctions, unrolled */
+        transfer(gi, &cell, DEFAULT_CHUNKS, &f_lo, &f_hi);
+    else
+        transfer(gi, &cell, chunks, &f_lo, &f_hi);
     float f[MESO_SH_COUNT];
     memcpy(f, &f_lo, sizeof f_lo);
     memcpy(f + 8, &f_hi, sizeof f_hi);
