@@ -173,18 +173,27 @@ static inline void radiance_interpolate(const float *radiance4, uint32_t i0, uin
 }
 
 /* meso_gi_radiance_add_interior (render_gi.h) on radiance4's layout: coefficient i's m the
- * same sum, each channel the same l[c] m added. */
+ * same sum (8 coefficients at a time), each channel the same l[c] m added. */
 static inline void radiance_add_interior(const float *interior, uint32_t i0, uint32_t i1,
                                          uint32_t i2, float b0, float b1, float b2,
                                          meso_vec3 interior_radiance,
                                          gi_v4f radiance[MESO_SH_COUNT]) {
-    gi_v4f l = {interior_radiance.x, interior_radiance.y, interior_radiance.z, 0.0f};
-    for (int i = 0; i < MESO_SH_COUNT; i++) {
-        float m = b0 * interior[(size_t)i0 * MESO_SH_COUNT + (size_t)i] +
-                  b1 * interior[(size_t)i1 * MESO_SH_COUNT + (size_t)i] +
-                  b2 * interior[(size_t)i2 * MESO_SH_COUNT + (size_t)i];
-        radiance[i] += l * (gi_v4f){m, m, m, m};
+    const float *a = interior + (size_t)i0 * MESO_SH_COUNT;
+    const float *b = interior + (size_t)i1 * MESO_SH_COUNT;
+    const float *c = interior + (size_t)i2 * MESO_SH_COUNT;
+    v8f w0 = v8_splat(b0), w1 = v8_splat(b1), w2 = v8_splat(b2);
+    float m[MESO_SH_COUNT];
+    for (int j = 0; j < MESO_SH_COUNT; j += 8) {
+        v8f x, y, z;
+        memcpy(&x, a + j, sizeof x);
+        memcpy(&y, b + j, sizeof y);
+        memcpy(&z, c + j, sizeof z);
+        v8f r = w0 * x + w1 * y + w2 * z;
+        memcpy(m + j, &r, sizeof r);
     }
+    gi_v4f l = {interior_radiance.x, interior_radiance.y, interior_radiance.z, 0.0f};
+#pragma GCC unroll 16
+    for (int i = 0; i < MESO_SH_COUNT; i++) radiance[i] += l * (gi_v4f){m[i], m[i], m[i], m[i]};
 }
 
 meso_result gdm_gi_create(meso_context *ctx, const meso_scene *scene, const meso_object *object,
