@@ -17,7 +17,9 @@ struct gdm_gi {
     meso_rtv *rtv;
     const meso_mesh *mesh;
     const meso_environment *environment;
-    float *radiance; /* per vertex: 3 x 16 incident radiance in the vertex's frame */
+    /* per vertex: 3 x 16 incident radiance in the vertex's frame (kept for the interior's
+     * radiance; NULL without an interior) */
+    float *radiance;
     /* the same per vertex as 16 x 4: coefficient i's three channels side by side (lane 3 0),
      * so that a hit's colour sums 16 four-lane products with no shuffles */
     float *radiance4;
@@ -242,6 +244,10 @@ meso_result gdm_gi_create(meso_context *ctx, const meso_scene *scene, const meso
             for (int i = 0; i < MESO_SH_COUNT; i++)
                 gi->radiance4[v * GI_RADIANCE4 + (size_t)i * GI_LANES4 + (size_t)c] =
                     gi->radiance[(v * GI_CHANNELS + (size_t)c) * MESO_SH_COUNT + (size_t)i];
+    if (!gi->interior) { /* the 3 x 16 layout is read only for the interior's radiance */
+        free(gi->radiance);
+        gi->radiance = NULL;
+    }
     gi->shell = desc->shell;
     gi->albedo = object->material.albedo;
     for (int k = 0; k < GI_INSIDE_DIRECTIONS; k++) {
@@ -276,7 +282,7 @@ size_t gdm_gi_memory(const gdm_gi *gi) {
     if (!gi) return 0;
     return 2 * (size_t)gi->rtv->compressed_bytes + /* the RTV and its packed copy */
            gi->mesh->num_vertices *
-               ((GI_CHANNELS + GI_LANES4 + (gi->interior ? 1 : 0)) * MESO_SH_COUNT * sizeof(float) +
+               ((GI_LANES4 + (gi->interior ? GI_CHANNELS + 1 : 0)) * MESO_SH_COUNT * sizeof(float) +
                 sizeof(meso_vec3));
 }
 
