@@ -102,24 +102,42 @@ static float periodic_difference(float a, float b) {
     return d - roundf(d);
 }
 
+/* A periodic lattice index and the next one: ((i % n) + n) % n and (that + 1) % n. A texture
+ * coordinate's fraction times n, less half a cell, floors to i in [-1, n - 1] (the fraction
+ * may round up to 1), where comparisons give the same indices as the divisions; anything else
+ * (a NaN's conversion) takes the divisions. A hit's cell took six integer divisions, slow on
+ * any x86. */
+static inline void wrap_index(int i, int n, int *out_i0, int *out_i1) {
+    int i0 = i >= 0 && i < n ? i : (i == -1 ? n - 1 : (i % n + n) % n);
+    *out_i0 = i0;
+    *out_i1 = i0 + 1 < n ? i0 + 1 : (i0 + 1) % n;
+}
+
 /* The 8 voxels around uvw (indices into [layers][height][width]) and their trilinear weights,
- * periodic in u and v: meso_rtv_cell_at's voxel half. */
+ * periodic in u and v: meso_rtv_cell_at's voxel half. Corner c's bits choose the upper voxel
+ * in x, y, z; its weight is (x factor * y factor) * z factor. */
 static void voxel_corners(const meso_rtv *rtv, meso_vec3 uvw, size_t corner[8], float weight[8]) {
     float x = (uvw.x - floorf(uvw.x)) * (float)rtv->width - 0.5f;
     float y = (1.0f - (uvw.y - floorf(uvw.y))) * (float)rtv->height - 0.5f;
     float z = meso_clampf(uvw.z, 0.0f, 1.0f) * (float)(rtv->layers - 1);
     float fx = floorf(x), fy = floorf(y), fz = floorf(z);
-    int i0 = ((int)fx % rtv->width + rtv->width) % rtv->width, i1 = (i0 + 1) % rtv->width;
-    int j0 = ((int)fy % rtv->height + rtv->height) % rtv->height, j1 = (j0 + 1) % rtv->height;
+    int i0, i1, j0, j1;
+    wrap_index((int)fx, rtv->width, &i0, &i1);
+    wrap_index((int)fy, rtv->height, &j0, &j1);
     int l0 = (int)fz < rtv->layers - 1 ? (int)fz : rtv->layers - 1;
     int l1 = l0 + 1 < rtv->layers ? l0 + 1 : l0;
-    for (int c = 0; c < 8; c++) {
-        int ii = c & 1 ? i1 : i0, jj = c & 2 ? j1 : j0, ll = c & 4 ? l1 : l0;
-        corner[c] =
-            ((size_t)ll * (size_t)rtv->height + (size_t)jj) * (size_t)rtv->width + (size_t)ii;
-        weight[c] = (c & 1 ? x - fx : 1.0f - (x - fx)) * (c & 2 ? y - fy : 1.0f - (y - fy)) *
-                    (c & 4 ? z - fz : 1.0f - (z - fz));
-    }
+    float ax0 = 1.0f - (x - fx), ax1 = x - fx, ay0 = 1.0f - (y - fy), ay1 = y - fy;
+    float az0 = 1.0f - (z - fz), az1 = z - fz;
+    size_t w = (size_t)rtv->width, plane = (size_t)rtv->height * w;
+    size_t c00 = (size_t)j0 * w + (size_t)i0, c10 = (size_t)j0 * w + (size_t)i1;
+    size_t c01 = (size_t)j1 * w + (size_t)i0, c11 = (size_t)j1 * w + (size_t)i1;
+    size_t lo = (size_t)l0 * plane, hi = (size_t)l1 * plane;
+    corner[0] = lo + c00, corner[1] = lo + c10, corner[2] = lo + c01, corner[3] = lo + c11;
+    corner[4] = hi + c00, corner[5] = hi + c10, corner[6] = hi + c01, corner[7] = hi + c11;
+    float xy00 = ax0 * ay0, xy10 = ax1 * ay0, xy01 = ax0 * ay1, xy11 = ax1 * ay1;
+    weight[0] = xy00 * az0, weight[1] = xy10 * az0, weight[2] = xy01 * az0;
+    weight[3] = xy11 * az0, weight[4] = xy00 * az1, weight[5] = xy10 * az1;
+    weight[6] = xy01 * az1, weight[7] = xy11 * az1;
 }
 
 /* A table's coefficients at the surface point nearest q: trilinear over the voxels, periodic in
@@ -454,7 +472,11 @@ void meso_rtv_cell_at(const meso_rtv *rtv, meso_vec3 uvw, meso_vec3 view, meso_r
     float p =
         (phi < 0.0f ? phi + 2.0f * (float)M_PI : phi) / (2.0f * (float)M_PI) * (float)rtv->num_phi;
     int t0 = (int)t, t1 = t0 + 1 < rtv->num_theta ? t0 + 1 : t0;
-    int p0 = (int)p % rtv->num_phi, p1 = (p0 + 1) % rtv->num_phi;
+    /* (int)p % num_phi and the next without divisions: p lies in [0, num_phi] (num_phi where
+     * phi + 2 pi rounds to 2 pi); a NaN's conversion takes the division as before */
+    int ip = (int)p, n = rtv->num_phi;
+    int p0 = ip >= 0 && ip < n ? ip : (ip == n ? 0 : ip % n);
+    int p1 = p0 + 1 < n ? p0 + 1 : (p0 + 1) % n;
     float tt = t - (float)t0, tp = p - floorf(p);
     out->view_index[0] = t0 * rtv->num_phi + p0, out->view_index[1] = t0 * rtv->num_phi + p1;
     out->view_index[2] = t1 * rtv->num_phi + p0, out->view_index[3] = t1 * rtv->num_phi + p1;

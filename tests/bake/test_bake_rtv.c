@@ -1,6 +1,6 @@
 /* The radiance transfer volume (bake_rtv.c): a flat surface against the closed form, a groove
  * shadowed and filled by interreflection, the SVD's error, the file round trip, corrupted files
- * refused, thread-count independence, bad descs. */
+ * refused, thread-count independence, bad descs, the cell a hit reads. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -320,6 +320,59 @@ static void test_rtv_bad_descs_are_refused(void **state) {
     meso_context_destroy(ctx);
 }
 
+/* The cell a hit reads, against its definition with integer divisions (the indices wrapped as
+ * ((i % n) + n) % n, the weights as products of the axes' factors): the same indices and the
+ * same bits at the wrap's edges -- a coordinate whose fraction rounds up to 1 (-1e-9), exact
+ * integers, negative and far tiles, the layers' clamp, views at phi = -pi and pi, one whose
+ * phi + 2 pi rounds to 2 pi (p = num_phi), grazing and straight-up views. */
+static void test_rtv_cell_matches_the_divisions(void **state) {
+    (void)state;
+    meso_rtv rtv = {.width = 32, .height = 16, .layers = 8, .num_theta = 4, .num_phi = 8};
+    const float coordinates[] = {-1e-9f, 0.0f,    1.0f,    0.5f,  -0.25f, 3.999999f,
+                                 -7.0f,  0.0156f, 0.9844f, 1e-9f, 12.5f,  -0.984375f};
+    const float depths[] = {-0.5f, 0.0f, 0.3f, 0.999f, 1.0f, 2.0f};
+    const meso_vec3 views[] = {{0, 0, 1},         {1, 0, 0},           {-1, -1e-8f, 0.1f},
+                               {-1, 1e-8f, 0.1f}, {1, -1e-8f, 0.1f},   {-1, 0, 0.01f},
+                               {0.6f, -0.8f, 0},  {0.3f, 0.4f, 0.866f}};
+    int checked = 0;
+    for (size_t a = 0; a < sizeof coordinates / sizeof *coordinates; a++)
+        for (size_t b = 0; b < sizeof coordinates / sizeof *coordinates; b++)
+            for (size_t c = 0; c < sizeof depths / sizeof *depths; c++)
+                for (size_t d = 0; d < sizeof views / sizeof *views; d++) {
+                    meso_vec3 uvw = {coordinates[a], coordinates[b], depths[c]};
+                    meso_rtv_cell cell;
+                    meso_rtv_cell_at(&rtv, uvw, views[d], &cell);
+                    float x = (uvw.x - floorf(uvw.x)) * (float)rtv.width - 0.5f;
+                    float y = (1.0f - (uvw.y - floorf(uvw.y))) * (float)rtv.height - 0.5f;
+                    float z = fminf(fmaxf(uvw.z, 0.0f), 1.0f) * (float)(rtv.layers - 1);
+                    float fx = floorf(x), fy = floorf(y), fz = floorf(z);
+                    int i0 = ((int)fx % rtv.width + rtv.width) % rtv.width;
+                    int j0 = ((int)fy % rtv.height + rtv.height) % rtv.height;
+                    int l0 = (int)fz < rtv.layers - 1 ? (int)fz : rtv.layers - 1;
+                    for (int k = 0; k < 8; k++) {
+                        int ii = k & 1 ? (i0 + 1) % rtv.width : i0;
+                        int jj = k & 2 ? (j0 + 1) % rtv.height : j0;
+                        int ll = k & 4 ? (l0 + 1 < rtv.layers ? l0 + 1 : l0) : l0;
+                        size_t corner =
+                            ((size_t)ll * (size_t)rtv.height + (size_t)jj) * (size_t)rtv.width +
+                            (size_t)ii;
+                        float weight = (k & 1 ? x - fx : 1.0f - (x - fx)) *
+                                       (k & 2 ? y - fy : 1.0f - (y - fy)) *
+                                       (k & 4 ? z - fz : 1.0f - (z - fz));
+                        assert_int_equal(cell.corner[k], corner);
+                        assert_memory_equal(&cell.corner_weight[k], &weight, sizeof weight);
+                    }
+                    float phi = atan2f(views[d].y, views[d].x);
+                    float p = (phi < 0.0f ? phi + 2.0f * (float)M_PI : phi) / (2.0f * (float)M_PI) *
+                              (float)rtv.num_phi;
+                    int p0 = (int)p % rtv.num_phi, p1 = (p0 + 1) % rtv.num_phi;
+                    assert_int_equal(cell.view_index[0] % rtv.num_phi, p0);
+                    assert_int_equal(cell.view_index[1] % rtv.num_phi, p1);
+                    checked++;
+                }
+    assert_int_equal(checked, 12 * 12 * 6 * 8);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_rtv_flat_surface_is_the_cosine_lobe),
@@ -328,6 +381,7 @@ int main(void) {
         cmocka_unit_test(test_rtv_file_round_trip_and_corruption),
         cmocka_unit_test(test_rtv_cache_returns_the_same_table),
         cmocka_unit_test(test_rtv_bad_descs_are_refused),
+        cmocka_unit_test(test_rtv_cell_matches_the_divisions),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

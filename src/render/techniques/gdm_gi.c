@@ -17,7 +17,12 @@ struct gdm_gi {
     meso_rtv *rtv;
     const meso_mesh *mesh;
     const meso_environment *environment;
-    float *radiance;     /* per vertex: 3 x 16 incident radiance in the vertex's frame */
+    /* per vertex: 3 x 16 incident radiance in the vertex's frame (kept for the interior's
+     * radiance; NULL without an interior) */
+    float *radiance;
+    /* the same per vertex as 16 x 4: coefficient i's three channels side by side (lane 3 0),
+     * so that a hit's colour sums 16 four-lane products with no shuffles */
+    float *radiance4;
     meso_vec3 *tangents; /* per vertex: the frame's unit T (meso_gi_vertex_tangent) */
     /* the RTV's arrays voxel-major and view-major, [voxel][k][16] and [view][k][16]: a hit
      * reads 8 + 4 runs of 16 k floats instead of 16 x (8 + 4) scattered ones (bake_rtv.h
@@ -74,6 +79,8 @@ static meso_result pack_rtv(meso_context *ctx, gdm_gi *gi, const char *name) {
 /* Four float lanes: one hit's three colour channels side by side (lane 3 unused). */
 typedef float gi_v4f __attribute__((vector_size(16)));
 
+enum { GI_LANES4 = 4, GI_RADIANCE4 = MESO_SH_COUNT * GI_LANES4 };
+
 /* acc[j] += weight x row[8 j .. 8 j + 7] for the chunks of a packed row, each lane as the
  * scalar multiply-add (-ffp-contract=off: no fused rounding). Inline, so that the default
  * chunk count (16 x 4 eigenfunctions / 8) unrolls into registers. */
@@ -93,59 +100,71 @@ static inline void interpolate_rows(const gdm_gi *gi, const meso_rtv_cell *cell,
                                     int chunks) {
 #pragma GCC unroll 8
     for (int j = 0; j < chunks; j++) w[j] = e[j] = v8_splat(0.0f);
+#pragma GCC unroll 8
     for (int c = 0; c < 8; c++)
         accumulate_rows(w, gi->weights + cell->corner[c] * (size_t)gi->stride,
                         cell->corner_weight[c], chunks);
+#pragma GCC unroll 4
     for (int v = 0; v < 4; v++)
         accumulate_rows(e, gi->eigen + (size_t)cell->view_index[v] * (size_t)gi->stride,
                         cell->view_weight[v], chunks);
 }
 
-/* meso_rtv_evaluate on the packed arrays: the same sums in another order, 8 wide (16 k is a
- * multiple of 8). Coefficient i's transfer is the sum over the eigenfunctions q of W E, in q's
- * order from 0 -- the sum the coefficient-major layout made one coefficient at a time, here
- * for 16 coefficients at once (the same additions per coefficient, so the same bits); the
- * colour is the sum over i in i's order, the three channels in the lanes of one vector. */
-static void evaluate(const gdm_gi *gi, meso_vec3 uvw, meso_vec3 view,
-                     const float radiance[GI_CHANNELS][MESO_SH_COUNT], float out_rgb[3]) {
-    enum { MAX_CHUNKS = MESO_SH_COUNT * GI_MAX_EIGEN / 8, DEFAULT_CHUNKS = MESO_SH_COUNT * 4 / 8 };
-    meso_rtv_cell cell;
-    meso_rtv_cell_at(gi->rtv, uvw, view, &cell);
-    int chunks = gi->stride / 8, k = gi->rtv->num_eigen;
+/* The transfer vector at the cell, coefficients 0-7 and 8-15: coefficient i's is the sum over
+ * the eigenfunctions q of W E, in q's order from 0 -- the sum the coefficient-major layout made
+ * one coefficient at a time, here for 16 coefficients at once (the same additions per
+ * coefficient, so the same bits). Inline, so that with the default chunk count W and E stay in
+ * registers. */
+static inline void transfer(const gdm_gi *gi, const meso_rtv_cell *cell, int chunks, v8f *out_lo,
+                            v8f *out_hi) {
+    enum { MAX_CHUNKS = MESO_SH_COUNT * GI_MAX_EIGEN / 8 };
     v8f w[MAX_CHUNKS], e[MAX_CHUNKS];
-    if (chunks == DEFAULT_CHUNKS) /* the default 4 eigenfunctions, unrolled */
-        interpolate_rows(gi, &cell, w, e, DEFAULT_CHUNKS);
-    else
-        interpolate_rows(gi, &cell, w, e, chunks);
-    v8f f_lo = v8_splat(0.0f), f_hi = v8_splat(0.0f); /* coefficients 0-7, 8-15 */
-    for (int q = 0; q < k; q++) {
+    interpolate_rows(gi, cell, w, e, chunks);
+    v8f f_lo = v8_splat(0.0f), f_hi = v8_splat(0.0f);
+#pragma GCC unroll 4
+    for (int q = 0; 2 * q < chunks; q++) {
         f_lo += w[2 * q] * e[2 * q];
         f_hi += w[2 * q + 1] * e[2 * q + 1];
     }
+    *out_lo = f_lo, *out_hi = f_hi;
+}
+
+/* meso_rtv_evaluate on the packed arrays: the same sums in another order, 8 wide (16 k is a
+ * multiple of 8; transfer above); the colour is the sum over i in i's order, the three
+ * channels in the lanes of one vector (radiance as radiance4 holds it: one load a
+ * coefficient). */
+static void evaluate(const gdm_gi *gi, meso_vec3 uvw, meso_vec3 view,
+                     const gi_v4f radiance[MESO_SH_COUNT], float out_rgb[3]) {
+    enum { DEFAULT_CHUNKS = MESO_SH_COUNT * 4 / 8 };
+    meso_rtv_cell cell;
+    meso_rtv_cell_at(gi->rtv, uvw, view, &cell);
+    int chunks = gi->stride / 8;
+    v8f f_lo, f_hi;
+    if (chunks == DEFAULT_CHUNKS) /* the default 4 eigenfunctions, unrolled */
+        transfer(gi, &cell, DEFAULT_CHUNKS, &f_lo, &f_hi);
+    else
+        transfer(gi, &cell, chunks, &f_lo, &f_hi);
     float f[MESO_SH_COUNT];
     memcpy(f, &f_lo, sizeof f_lo);
     memcpy(f + 8, &f_hi, sizeof f_hi);
     gi_v4f rgb = {0.0f, 0.0f, 0.0f, 0.0f};
 #pragma GCC unroll 16
-    for (int i = 0; i < MESO_SH_COUNT; i++) {
-        gi_v4f l = {radiance[0][i], radiance[1][i], radiance[2][i], 0.0f};
-        rgb += (gi_v4f){f[i], f[i], f[i], f[i]} * l;
-    }
+    for (int i = 0; i < MESO_SH_COUNT; i++) rgb += (gi_v4f){f[i], f[i], f[i], f[i]} * radiance[i];
     for (int c = 0; c < GI_CHANNELS; c++) out_rgb[c] = rgb[c] > 0.0f ? rgb[c] : 0.0f;
 }
 
-/* meso_gi_radiance_interpolate (render_gi.h) 8 coefficients at a time: each the same
- * b0 a + b1 b + b2 c, so the same bits. */
-static inline void radiance_interpolate(const float *radiance, uint32_t i0, uint32_t i1,
+/* meso_gi_radiance_interpolate (render_gi.h) on radiance4's layout, 8 floats at a time: each
+ * the same b0 a + b1 b + b2 c, so the same bits. */
+static inline void radiance_interpolate(const float *radiance4, uint32_t i0, uint32_t i1,
                                         uint32_t i2, float b0, float b1, float b2,
-                                        float out[GI_CHANNELS][MESO_SH_COUNT]) {
-    enum { N = GI_CHANNELS * MESO_SH_COUNT };
-    const float *a = radiance + (size_t)i0 * N, *b = radiance + (size_t)i1 * N;
-    const float *c = radiance + (size_t)i2 * N;
-    float *o = &out[0][0];
+                                        gi_v4f out[MESO_SH_COUNT]) {
+    const float *a = radiance4 + (size_t)i0 * GI_RADIANCE4;
+    const float *b = radiance4 + (size_t)i1 * GI_RADIANCE4;
+    const float *c = radiance4 + (size_t)i2 * GI_RADIANCE4;
+    float *o = (float *)out;
     v8f w0 = v8_splat(b0), w1 = v8_splat(b1), w2 = v8_splat(b2);
-#pragma GCC unroll 6
-    for (int j = 0; j < N; j += 8) {
+#pragma GCC unroll 8
+    for (int j = 0; j < GI_RADIANCE4; j += 8) {
         v8f x, y, z;
         memcpy(&x, a + j, sizeof x);
         memcpy(&y, b + j, sizeof y);
@@ -153,6 +172,30 @@ static inline void radiance_interpolate(const float *radiance, uint32_t i0, uint
         v8f r = w0 * x + w1 * y + w2 * z;
         memcpy(o + j, &r, sizeof r);
     }
+}
+
+/* meso_gi_radiance_add_interior (render_gi.h) on radiance4's layout: coefficient i's m the
+ * same sum (8 coefficients at a time), each channel the same l[c] m added. */
+static inline void radiance_add_interior(const float *interior, uint32_t i0, uint32_t i1,
+                                         uint32_t i2, float b0, float b1, float b2,
+                                         meso_vec3 interior_radiance,
+                                         gi_v4f radiance[MESO_SH_COUNT]) {
+    const float *a = interior + (size_t)i0 * MESO_SH_COUNT;
+    const float *b = interior + (size_t)i1 * MESO_SH_COUNT;
+    const float *c = interior + (size_t)i2 * MESO_SH_COUNT;
+    v8f w0 = v8_splat(b0), w1 = v8_splat(b1), w2 = v8_splat(b2);
+    float m[MESO_SH_COUNT];
+    for (int j = 0; j < MESO_SH_COUNT; j += 8) {
+        v8f x, y, z;
+        memcpy(&x, a + j, sizeof x);
+        memcpy(&y, b + j, sizeof y);
+        memcpy(&z, c + j, sizeof z);
+        v8f r = w0 * x + w1 * y + w2 * z;
+        memcpy(m + j, &r, sizeof r);
+    }
+    gi_v4f l = {interior_radiance.x, interior_radiance.y, interior_radiance.z, 0.0f};
+#pragma GCC unroll 16
+    for (int i = 0; i < MESO_SH_COUNT; i++) radiance[i] += l * (gi_v4f){m[i], m[i], m[i], m[i]};
 }
 
 meso_result gdm_gi_create(meso_context *ctx, const meso_scene *scene, const meso_object *object,
@@ -190,6 +233,21 @@ meso_result gdm_gi_create(meso_context *ctx, const meso_scene *scene, const meso
                                                     &gi->radiance, &gi->interior)
             : meso_gi_vertex_radiance(ctx, mesh, scene->environment, NULL, &gi->radiance);
     if (r != MESO_OK) goto fail;
+    gi->radiance4 =
+        calloc(mesh->num_vertices ? mesh->num_vertices * GI_RADIANCE4 : 1, sizeof *gi->radiance4);
+    if (!gi->radiance4) {
+        r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: gdm gi", object->name);
+        goto fail;
+    }
+    for (size_t v = 0; v < mesh->num_vertices; v++)
+        for (int c = 0; c < GI_CHANNELS; c++)
+            for (int i = 0; i < MESO_SH_COUNT; i++)
+                gi->radiance4[v * GI_RADIANCE4 + (size_t)i * GI_LANES4 + (size_t)c] =
+                    gi->radiance[(v * GI_CHANNELS + (size_t)c) * MESO_SH_COUNT + (size_t)i];
+    if (!gi->interior) { /* the 3 x 16 layout is read only for the interior's radiance */
+        free(gi->radiance);
+        gi->radiance = NULL;
+    }
     gi->shell = desc->shell;
     gi->albedo = object->material.albedo;
     for (int k = 0; k < GI_INSIDE_DIRECTIONS; k++) {
@@ -212,6 +270,7 @@ void gdm_gi_destroy(gdm_gi *gi) {
     if (!gi) return;
     meso_rtv_destroy(gi->rtv);
     free(gi->radiance);
+    free(gi->radiance4);
     free(gi->interior);
     free(gi->tangents);
     free(gi->weights);
@@ -223,7 +282,7 @@ size_t gdm_gi_memory(const gdm_gi *gi) {
     if (!gi) return 0;
     return 2 * (size_t)gi->rtv->compressed_bytes + /* the RTV and its packed copy */
            gi->mesh->num_vertices *
-               ((GI_CHANNELS + (gi->interior ? 1 : 0)) * MESO_SH_COUNT * sizeof(float) +
+               ((GI_LANES4 + (gi->interior ? GI_CHANNELS + 1 : 0)) * MESO_SH_COUNT * sizeof(float) +
                 sizeof(meso_vec3));
 }
 
@@ -293,11 +352,11 @@ static bool reflected_at(const gdm_gi *gi, const meso_frame *frame, const meso_f
     const uint32_t *v = hit->prism->vertices;
     float b[3];
     meso_prism_weights(hit->prism, (meso_vec2){hit->uvw.x, hit->uvw.y}, b);
-    float radiance[GI_CHANNELS][MESO_SH_COUNT];
-    radiance_interpolate(gi->radiance, v[0], v[1], v[2], b[0], b[1], b[2], radiance);
+    gi_v4f radiance[MESO_SH_COUNT];
+    radiance_interpolate(gi->radiance4, v[0], v[1], v[2], b[0], b[1], b[2], radiance);
     if (gi->interior) /* plus the interior's light from below the tangent plane */
-        meso_gi_radiance_add_interior(gi->interior, v[0], v[1], v[2], b[0], b[1], b[2],
-                                      gi->interior_radiance, radiance);
+        radiance_add_interior(gi->interior, v[0], v[1], v[2], b[0], b[1], b[2],
+                              gi->interior_radiance, radiance);
     meso_vec3 n = meso_vec3_normalize(meso_vec3_barycentric(
         mesh->normals[v[0]], mesh->normals[v[1]], mesh->normals[v[2]], b[0], b[1], b[2]));
     meso_vec3 t = meso_vec3_barycentric(gi->tangents[v[0]], gi->tangents[v[1]], gi->tangents[v[2]],
@@ -312,7 +371,10 @@ static bool reflected_at(const gdm_gi *gi, const meso_frame *frame, const meso_f
         return false;
     }
     if (view.z < 0.0f && gi->interior) {
-        meso_gi_reflected_from_below((const float(*)[MESO_SH_COUNT])radiance, out_rgb);
+        float channels[GI_CHANNELS][MESO_SH_COUNT];
+        for (int c = 0; c < GI_CHANNELS; c++)
+            for (int i = 0; i < MESO_SH_COUNT; i++) channels[c][i] = radiance[i][c];
+        meso_gi_reflected_from_below((const float(*)[MESO_SH_COUNT])channels, out_rgb);
         return false;
     }
     if (view.z < 0.0f) {
@@ -322,7 +384,7 @@ static bool reflected_at(const gdm_gi *gi, const meso_frame *frame, const meso_f
         out_rgb[0] = r[0], out_rgb[1] = g[0], out_rgb[2] = bl[0];
         return false;
     }
-    evaluate(gi, hit->uvw, view, (const float(*)[MESO_SH_COUNT])radiance, out_rgb);
+    evaluate(gi, hit->uvw, view, radiance, out_rgb);
     return true;
 }
 
