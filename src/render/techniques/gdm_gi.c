@@ -153,46 +153,39 @@ static void evaluate(const gdm_gi *gi, meso_vec3 uvw, meso_vec3 view,
     for (int c = 0; c < GI_CHANNELS; c++) out_rgb[c] = rgb[c] > 0.0f ? rgb[c] : 0.0f;
 }
 
-/* meso_gi_radiance_interpolate (render_gi.h) on radiance4's layout, 8 floats at a time: each
- * the same b0 a + b1 b + b2 c, so the same bits. */
-static inline void radiance_interpolate(const float *radiance4, uint32_t i0, uint32_t i1,
-                                        uint32_t i2, float b0, float b1, float b2,
-                                        gi_v4f out[MESO_SH_COUNT]) {
-    const float *a = radiance4 + (size_t)i0 * GI_RADIANCE4;
-    const float *b = radiance4 + (size_t)i1 * GI_RADIANCE4;
-    const float *c = radiance4 + (size_t)i2 * GI_RADIANCE4;
-    float *o = (float *)out;
+/* out = b0 a + b1 b + b2 c over n floats (a multiple of 8), 8 at a time: each element the
+ * same sum as the scalar one, so the same bits. */
+static inline void blend3(const float *a, const float *b, const float *c, float b0, float b1,
+                          float b2, float *out, int n) {
     v8f w0 = v8_splat(b0), w1 = v8_splat(b1), w2 = v8_splat(b2);
 #pragma GCC unroll 8
-    for (int j = 0; j < GI_RADIANCE4; j += 8) {
+    for (int j = 0; j < n; j += 8) {
         v8f x, y, z;
         memcpy(&x, a + j, sizeof x);
         memcpy(&y, b + j, sizeof y);
         memcpy(&z, c + j, sizeof z);
         v8f r = w0 * x + w1 * y + w2 * z;
-        memcpy(o + j, &r, sizeof r);
+        memcpy(out + j, &r, sizeof r);
     }
 }
 
+/* meso_gi_radiance_interpolate (render_gi.h) on radiance4's layout. */
+static inline void radiance_interpolate(const float *radiance4, uint32_t i0, uint32_t i1,
+                                        uint32_t i2, float b0, float b1, float b2,
+                                        gi_v4f out[MESO_SH_COUNT]) {
+    blend3(radiance4 + (size_t)i0 * GI_RADIANCE4, radiance4 + (size_t)i1 * GI_RADIANCE4,
+           radiance4 + (size_t)i2 * GI_RADIANCE4, b0, b1, b2, (float *)out, GI_RADIANCE4);
+}
+
 /* meso_gi_radiance_add_interior (render_gi.h) on radiance4's layout: coefficient i's m the
- * same sum (8 coefficients at a time), each channel the same l[c] m added. */
+ * same sum, each channel the same l[c] m added. */
 static inline void radiance_add_interior(const float *interior, uint32_t i0, uint32_t i1,
                                          uint32_t i2, float b0, float b1, float b2,
                                          meso_vec3 interior_radiance,
                                          gi_v4f radiance[MESO_SH_COUNT]) {
-    const float *a = interior + (size_t)i0 * MESO_SH_COUNT;
-    const float *b = interior + (size_t)i1 * MESO_SH_COUNT;
-    const float *c = interior + (size_t)i2 * MESO_SH_COUNT;
-    v8f w0 = v8_splat(b0), w1 = v8_splat(b1), w2 = v8_splat(b2);
     float m[MESO_SH_COUNT];
-    for (int j = 0; j < MESO_SH_COUNT; j += 8) {
-        v8f x, y, z;
-        memcpy(&x, a + j, sizeof x);
-        memcpy(&y, b + j, sizeof y);
-        memcpy(&z, c + j, sizeof z);
-        v8f r = w0 * x + w1 * y + w2 * z;
-        memcpy(m + j, &r, sizeof r);
-    }
+    blend3(interior + (size_t)i0 * MESO_SH_COUNT, interior + (size_t)i1 * MESO_SH_COUNT,
+           interior + (size_t)i2 * MESO_SH_COUNT, b0, b1, b2, m, MESO_SH_COUNT);
     gi_v4f l = {interior_radiance.x, interior_radiance.y, interior_radiance.z, 0.0f};
 #pragma GCC unroll 16
     for (int i = 0; i < MESO_SH_COUNT; i++) radiance[i] += l * (gi_v4f){m[i], m[i], m[i], m[i]};
