@@ -30,8 +30,8 @@
 
 #define RELIEF_LANES V8_LANES
 /* Groups of eight a technique hands meso_shade_batches_to_block at once: the shading's
- * per-object constants once a call (4 KB of inputs on the stack). */
-#define RELIEF_SHADE_GROUPS 4
+ * per-object constants once a call (8 KB of inputs on the stack). */
+#define RELIEF_SHADE_GROUPS 8
 
 /* ---- The height field, padded ------------------------------------------------------------- */
 
@@ -353,11 +353,23 @@ relief_search8_body(const relief_heights *m, const relief_batch *batches, int co
 
 static inline void relief_search8x2(const relief_heights *m, const relief_batch *batches, int count,
                                     int linear_steps, int binary_steps, v8f *out_t, int *out_hit) {
-    /* a constant count unrolls the loops over the batches: their state stays in registers */
-    if (count == 2)
-        relief_search8_body(m, batches, 2, linear_steps, binary_steps, out_t, out_hit);
-    else
-        relief_search8_body(m, batches, 1, linear_steps, binary_steps, out_t, out_hit);
+    /* A constant count unrolls the loops over the batches: their state stays in registers. The
+     * wrap as a constant too (a copy of the map whose `clamp` the compiler sees): the samples
+     * skip its test. */
+    relief_heights fixed = *m;
+    if (m->clamp) {
+        fixed.clamp = true;
+        if (count == 2)
+            relief_search8_body(&fixed, batches, 2, linear_steps, binary_steps, out_t, out_hit);
+        else
+            relief_search8_body(&fixed, batches, 1, linear_steps, binary_steps, out_t, out_hit);
+    } else {
+        fixed.clamp = false;
+        if (count == 2)
+            relief_search8_body(&fixed, batches, 2, linear_steps, binary_steps, out_t, out_hit);
+        else
+            relief_search8_body(&fixed, batches, 1, linear_steps, binary_steps, out_t, out_hit);
+    }
 }
 
 /* relief_search8x2 on one batch: writes t of the hit per lane, returns the bits of the lanes
@@ -387,10 +399,8 @@ typedef struct relief_shadow_batch {
  * search's error), and a light ray leaving it must not find it again. */
 #define RELIEF_SHADOW_BIAS 0.004f
 
-/* Self-shadowing by a second linear search toward the light (Policarpo & Oliveira 2006 §2.1):
- * blocked where a sample lies below the surface. Returns the bits of blocked lanes. */
-static inline int relief_shadow_search8(const relief_heights *m, const relief_shadow_batch *s,
-                                        int steps) {
+__attribute__((always_inline)) static inline int
+relief_shadow_search8_body(const relief_heights *m, const relief_shadow_batch *s, int steps) {
     int blocked = 0, pending = s->active_bits;
     float inv = 1.0f / (float)steps;
     /* Sample k = steps is on the mesh (d = 0): nothing is above it. */
@@ -403,6 +413,19 @@ static inline int relief_shadow_search8(const relief_heights *m, const relief_sh
         pending &= ~bits;
     }
     return blocked;
+}
+
+/* Self-shadowing by a second linear search toward the light (Policarpo & Oliveira 2006 §2.1):
+ * blocked where a sample lies below the surface. Returns the bits of blocked lanes. */
+static inline int relief_shadow_search8(const relief_heights *m, const relief_shadow_batch *s,
+                                        int steps) {
+    relief_heights fixed = *m; /* the wrap as a constant, as in relief_search8x2 */
+    if (m->clamp) {
+        fixed.clamp = true;
+        return relief_shadow_search8_body(&fixed, s, steps);
+    }
+    fixed.clamp = false;
+    return relief_shadow_search8_body(&fixed, s, steps);
 }
 
 /* The maximum mip-map of a height field (Tevs et al. 2008) with per-level tables for lookups
