@@ -766,7 +766,9 @@ static inline void relief_batch_setup(const relief_heights *m, const meso_object
     int enter = depth > 0.0f ? v8_mask_bits(cn < 0.0f) & l->frame_bits : 0;
     v8i on = v8_mask_from_bits(enter);
     v8f zero = v8_splat(0.0f);
-    memset(batch, 0, sizeof *batch);
+    /* every field is set below; these stay 0 without silhouettes (a memset of the whole
+     * batch cost more than the rest of the setup's stores) */
+    batch->qa = zero, batch->qb = zero, batch->b = zero, batch->lateral = zero;
     batch->count = l->count;
     relief_lanes_texel(m, l, &batch->x0, &batch->y0);
     cu = v8_select(on, cu, zero);
@@ -901,9 +903,12 @@ relief_shade_core(const relief_heights *m, const relief_tracer *tracer, relief_p
             relief_shadow_batch sb[2];
             int dark[2] = {0, 0}, any = 0;
             for (int g = 0; g < groups; ++g) {
-                memset(&sb[g], 0, sizeof sb[g]);
                 sb[g].count = n[g];
-                if (!params.shadows || !hit[g]) continue;
+                if (!params.shadows || !hit[g]) {
+                    memset(&sb[g], 0, sizeof sb[g]); /* no lane active */
+                    sb[g].count = n[g];
+                    continue;
+                }
                 const meso_light *light = &scene->lights[li];
                 v8vec3 L;
                 if (light->type == MESO_LIGHT_DIRECTIONAL) {
@@ -967,6 +972,10 @@ relief_shade_core(const relief_heights *m, const relief_tracer *tracer, relief_p
             in[g].bz = l[g].bitangent.z;
             if (block) { /* the colours when the pending groups are shaded */
                 pending_hit[pending_groups++] = hit[g];
+                if (hit[g] == 0xff) { /* eight fragments, none discarded */
+                    meso_block_store(block->out_depth, first, out_depth[g]);
+                    continue;
+                }
                 for (int k = 0; k < n[g]; ++k) {
                     size_t i = first + (size_t)k;
                     if (!(hit[g] >> k & 1)) /* the ray left the curved shell */
