@@ -661,10 +661,10 @@ static inline v8vec3 relief_normal8(const relief_lanes *l, float depth, v8f gu, 
                     v8_select(keep, l->normal.z, n.z * inv)};
 }
 
-/* relief_bump_lanes on lanes already loaded (relief_lanes_load, relief_lanes_load_block). */
-static inline void relief_bump_loaded_lanes(const relief_heights *m, const meso_frame *frame,
-                                            float depth, const relief_lanes *l, v8f *x, v8f *y,
-                                            meso_shade_batch *in) {
+/* relief_bump_loaded_lanes but for the lights' visibility, which a caller shading every light
+ * visible sets once for all its groups. */
+static inline void relief_bump_inputs(const relief_heights *m, float depth, const relief_lanes *l,
+                                      v8f *x, v8f *y, meso_shade_batch *in) {
     v8f gu, gv;
     relief_lanes_texel(m, l, x, y);
     relief_gradient8(m, *x, *y, &gu, &gv);
@@ -676,6 +676,13 @@ static inline void relief_bump_loaded_lanes(const relief_heights *m, const meso_
     in->u = l->u, in->v = l->v;
     in->tx = l->tangent.x, in->ty = l->tangent.y, in->tz = l->tangent.z;
     in->bx = l->bitangent.x, in->by = l->bitangent.y, in->bz = l->bitangent.z;
+}
+
+/* relief_bump_lanes on lanes already loaded (relief_lanes_load, relief_lanes_load_block). */
+static inline void relief_bump_loaded_lanes(const relief_heights *m, const meso_frame *frame,
+                                            float depth, const relief_lanes *l, v8f *x, v8f *y,
+                                            meso_shade_batch *in) {
+    relief_bump_inputs(m, depth, l, x, y, in);
     meso_shade_batch_all_visible(in, frame);
 }
 
