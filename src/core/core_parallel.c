@@ -6,29 +6,14 @@
  * 1 (docs/performance.md). Here the helpers sleep on a condition variable between loops, and
  * the calling thread works through the jobs itself, so it never waits for a helper that the
  * scheduler has not run yet: with every helper descheduled, a loop costs what it costs on one
- * thread plus one wake-up call.
- *
- * A thread out of work first checks for a while before it sleeps (POOL_SPIN_SECONDS): a helper
- * for the next loop, the caller for the helpers' last jobs. Waking a sleeping thread costs a
- * futex call and, on a virtual machine, the host's wake-up of a halted core, up to twice a loop,
- * while a 512x512 frame of the fast techniques lasts one to three milliseconds; frames drawn
- * back to back now mostly find their helper awake (docs/performance.md, "short frames"). The
- * check is short, bounded and yields the core, so a busy machine loses at most that much of a
- * core a loop, and an idle pool still sleeps. */
+ * thread plus one wake-up call. */
 #include <pthread.h>
-#include <sched.h>
 #include <stdatomic.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <time.h>
 
 #include "core_internal.h"
-
-/* How long a thread out of jobs checks for work before it sleeps: several times a wake-up's
- * latency, a small part of a frame of the fast techniques. */
-#define POOL_SPIN_SECONDS 100e-6
-/* Checks between two readings of the clock. */
-#define POOL_SPIN_CHECKS 64
 
 struct meso_pool {
     pthread_mutex_t lock;
@@ -37,10 +22,9 @@ struct meso_pool {
     pthread_mutex_t busy; /* held by the thread running a loop: one loop at a time */
     pthread_t *helpers;
     int num_helpers;
-    _Atomic bool stopping; /* also read without the lock by helpers waiting for a loop */
-    /* The current loop, written under `lock` before `generation` changes (which helpers also
-     * read without the lock while they wait for it to change). */
-    _Atomic uint32_t generation;
+    bool stopping;
+    /* The current loop, written under `lock` before `generation` changes. */
+    uint32_t generation;
     meso_job_fn fn;
     void *user;
     uint32_t num_jobs;
@@ -74,42 +58,12 @@ static void run_jobs(meso_pool *pool, uint32_t generation, meso_job_fn fn, void 
     }
 }
 
-/* True as soon as done(pool, arg) is, false if it is still not after POOL_SPIN_SECONDS: the
- * waiter then sleeps. */
-static bool spin_until(meso_pool *pool, bool (*done)(meso_pool *pool, uint32_t arg), uint32_t arg) {
-    double deadline = 0.0;
-    for (;;) {
-        for (int i = 0; i < POOL_SPIN_CHECKS; i++) {
-            if (done(pool, arg)) return true;
-#if defined(__x86_64__) || defined(__i386__)
-            __builtin_ia32_pause();
-#endif
-        }
-        double now = meso_time_seconds();
-        if (deadline == 0.0)
-            deadline = now + POOL_SPIN_SECONDS;
-        else if (now > deadline)
-            return false;
-        sched_yield(); /* on a machine busier than its cores, let others run */
-    }
-}
-
-static bool new_loop(meso_pool *pool, uint32_t seen) {
-    return atomic_load_explicit(&pool->generation, memory_order_relaxed) != seen ||
-           atomic_load_explicit(&pool->stopping, memory_order_relaxed);
-}
-
-static bool loop_finished(meso_pool *pool, uint32_t num_jobs) {
-    return atomic_load(&pool->finished) >= num_jobs;
-}
-
 static void *helper_main(void *arg) {
     helper_start start = *(helper_start *)arg;
     free(arg);
     meso_pool *pool = start.pool;
     uint32_t seen = 0;
     for (;;) {
-        spin_until(pool, new_loop, seen);
         pthread_mutex_lock(&pool->lock);
         while (!pool->stopping && pool->generation == seen)
             pthread_cond_wait(&pool->wake, &pool->lock);
@@ -156,8 +110,6 @@ static meso_pool *pool_create(int num_threads) {
     pthread_mutex_init(&pool->busy, NULL);
     atomic_init(&pool->ticket, 0);
     atomic_init(&pool->finished, 0);
-    atomic_init(&pool->generation, 0);
-    atomic_init(&pool->stopping, false);
     for (int i = 1; i < num_threads; i++) {
         helper_start *start = malloc(sizeof *start);
         if (!start) break;
@@ -207,7 +159,6 @@ void meso_parallel_for(meso_context *ctx, size_t num_jobs, meso_job_fn fn, void 
 
     run_jobs(pool, generation, fn, user, (uint32_t)num_jobs, 0);
 
-    spin_until(pool, loop_finished, (uint32_t)num_jobs);
     pthread_mutex_lock(&pool->lock);
     while (atomic_load(&pool->finished) < (uint32_t)num_jobs)
         pthread_cond_wait(&pool->done, &pool->lock);

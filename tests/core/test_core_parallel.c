@@ -143,39 +143,6 @@ static void test_helpers_sleep_between_loops(void **state) {
     meso_context_destroy(ctx);
 }
 
-typedef struct slow_counts {
-    _Atomic int runs[8];
-    _Atomic int off_caller; /* jobs a helper ran */
-} slow_counts;
-
-static void slow_job(void *user, size_t job, int thread) {
-    slow_counts *c = user;
-    struct timespec pause = {0, 1000 * 1000};
-    nanosleep(&pause, NULL);
-    atomic_fetch_add(&c->runs[job], 1);
-    if (thread != 0) atomic_fetch_add(&c->off_caller, 1);
-}
-
-/* Loops further apart than a helper's spin (core_parallel.c): the helpers have gone to sleep
- * and must be woken. Each job sleeps 1 ms, so in 20 loops of 8 jobs a woken helper takes some:
- * none would mean the wake-up after the spin is lost. */
-static void test_helpers_wake_after_their_spin(void **state) {
-    (void)state;
-    meso_context *ctx = test_context(2);
-    slow_counts c;
-    memset(&c, 0, sizeof c);
-    for (int loop = 0; loop < 20; loop++) {
-        struct timespec gap = {0, 5 * 1000 * 1000};
-        nanosleep(&gap, NULL);
-        meso_parallel_for(ctx, 8, slow_job, &c);
-        for (int j = 0; j < 8; j++)
-            if (atomic_load(&c.runs[j]) != loop + 1)
-                fail_msg("loop %d: job %d ran %d times in all", loop, j, atomic_load(&c.runs[j]));
-    }
-    assert_true(atomic_load(&c.off_caller) > 0);
-    meso_context_destroy(ctx);
-}
-
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_every_job_runs_once_on_a_valid_thread),
@@ -183,7 +150,6 @@ int main(void) {
         cmocka_unit_test(test_loops_from_two_threads_on_one_context),
         cmocka_unit_test(test_thread_count_changes_between_loops),
         cmocka_unit_test(test_helpers_sleep_between_loops),
-        cmocka_unit_test(test_helpers_wake_after_their_spin),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
