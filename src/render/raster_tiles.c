@@ -468,9 +468,12 @@ typedef struct tile_batch {
     meso_fragment_block *block;
     meso_fragment *scratch; /* the adapter's fragments (render_fragments.c) */
     uint32_t *pixels;       /* tile-buffer index of each fragment */
-    uint8_t *pending;       /* per tile sample: 1 while a fragment of the batch covers it */
-    float *color, *depth;   /* the tile's buffers (coverage: where depth < +inf, copy_coverage) */
-    size_t count;
+    /* per tile sample: 1 while a fragment of the batch covers it, for the batch's first
+     * `marked` fragments: the first triangle's samples are marked only when a second triangle
+     * joins the batch (in most tiles of a large triangle none does) */
+    uint8_t *pending;
+    float *color, *depth; /* the tile's buffers (coverage: where depth < +inf, copy_coverage) */
+    size_t count, marked;
     uint64_t shaded; /* fragments shaded in the tile so far */
 } tile_batch;
 
@@ -529,12 +532,13 @@ static void flush_batch(tile_batch *b) {
     }
     /* release the batch's samples: the whole mask at once when the batch is a large part of
      * the tile */
-    if (count * 8 > TILE_SAMPLES)
+    if (b->marked * 8 > TILE_SAMPLES)
         memset(b->pending, 0, TILE_SAMPLES);
     else
-        for (size_t i = 0; i < count; i++) b->pending[pixels[i]] = 0;
+        for (size_t i = 0; i < b->marked; i++) b->pending[pixels[i]] = 0;
     b->shaded += b->count;
     b->count = 0;
+    b->marked = 0;
 }
 
 static void draw_tile(void *user, size_t job, int thread_index) {
@@ -609,18 +613,24 @@ static void draw_tile(void *user, size_t job, int thread_index) {
             uint32_t *pixels = batch.pixels + batch.count;
             size_t n = cover_triangle(tri, x0, y0, x1, y1, tx0, ty0, depth, covered, pixels);
             if (!n) continue;
-            uint8_t repeats = 0;
-            for (size_t i = 0; i < n; i++) { /* a triangle covers a sample once */
-                repeats |= batch.pending[pixels[i]];
-                batch.pending[pixels[i]] = 1;
-            }
-            if (repeats) { /* test again against the depths the batch writes */
-                for (size_t i = 0; i < n; i++) batch.pending[pixels[i]] = 0;
-                flush_batch(&batch);
-                pixels = batch.pixels;
-                n = cover_triangle(tri, x0, y0, x1, y1, tx0, ty0, depth, covered, pixels);
-                for (size_t i = 0; i < n; i++) batch.pending[pixels[i]] = 1;
-                if (!n) continue;
+            if (batch.count) { /* the batch's first triangle repeats nothing */
+                for (size_t i = batch.marked; i < batch.count; i++)
+                    batch.pending[batch.pixels[i]] = 1;
+                batch.marked = batch.count;
+                uint8_t repeats = 0;
+                for (size_t i = 0; i < n; i++) { /* a triangle covers a sample once */
+                    repeats |= batch.pending[pixels[i]];
+                    batch.pending[pixels[i]] = 1;
+                }
+                batch.marked += n;
+                if (repeats) { /* test again against the depths the batch writes */
+                    for (size_t i = 0; i < n; i++) batch.pending[pixels[i]] = 0;
+                    batch.marked -= n;
+                    flush_batch(&batch);
+                    pixels = batch.pixels;
+                    n = cover_triangle(tri, x0, y0, x1, y1, tx0, ty0, depth, covered, pixels);
+                    if (!n) continue;
+                }
             }
             vertex_attributes va;
             load_attributes(mesh, tri->triangle, !(skip & MESO_FRAGMENT_SKIP_TANGENTS), &va);

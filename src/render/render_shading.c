@@ -298,9 +298,10 @@ void meso_shade_block(const meso_frame *frame, const meso_object *object, meso_f
     /* the tangents are read (and filled by the rasterizer for a technique that skips them)
      * only for a normal map */
     bool tangents = object->material.normal_map != NULL;
+    meso_shade_batch in;
+    meso_shade_batch_all_visible(&in, frame); /* once, not once a group */
     for (size_t first = 0; first < b->count; first += LANES) {
-        meso_shade_batch in;
-        meso_shade_batch_from_block(&in, frame, b, first, tangents);
+        meso_shade_batch_from_block(&in, b, first, tangents);
         int lanes = b->count - first < LANES ? (int)(b->count - first) : LANES;
         v8f r, g, bl;
         shade8(&c, &in, lanes, &r, &g, &bl);

@@ -44,11 +44,11 @@ static inline void meso_block_store(float *array, size_t first, v8f value) {
 }
 
 /* The shading inputs of lanes first..first+7 of a block as they are (position, normal, uv, and
- * with `tangents` the tangent and bitangent, which only a normal map reads), every light
- * visible. */
-static inline void meso_shade_batch_from_block(meso_shade_batch *in, const meso_frame *frame,
-                                               const meso_fragment_block *b, size_t first,
-                                               bool tangents) {
+ * with `tangents` the tangent and bitangent, which only a normal map reads); not the lights'
+ * visibility, which a caller shading every light visible sets once
+ * (meso_shade_batch_all_visible) for all its groups. */
+static inline void meso_shade_batch_from_block(meso_shade_batch *in, const meso_fragment_block *b,
+                                               size_t first, bool tangents) {
     in->px = meso_block_load(b->px, first), in->py = meso_block_load(b->py, first);
     in->pz = meso_block_load(b->pz, first);
     in->nx = meso_block_load(b->nx, first), in->ny = meso_block_load(b->ny, first);
@@ -60,7 +60,6 @@ static inline void meso_shade_batch_from_block(meso_shade_batch *in, const meso_
         in->bx = meso_block_load(b->bx, first), in->by = meso_block_load(b->by, first);
         in->bz = meso_block_load(b->bz, first);
     }
-    meso_shade_batch_all_visible(in, frame);
 }
 
 /* Shade lanes first..first+7 of `in` into the block's colours (lanes past count: padding). */

@@ -40,6 +40,8 @@ static void bump_shade_block(const void *state, const meso_frame *frame, const m
     const relief_heights *m = &s->heights;
     float depth = object->mesostructure.depth;
     meso_shade_batch in[RELIEF_SHADE_GROUPS];
+    /* no shadows: every light visible, set once a slot rather than once a group */
+    for (size_t g = 0; g < RELIEF_SHADE_GROUPS; g++) meso_shade_batch_all_visible(&in[g], frame);
     for (size_t first = 0; first < block->count; first += RELIEF_SHADE_GROUPS * RELIEF_LANES) {
         size_t groups = 0;
         for (size_t at = first; at < block->count && groups < RELIEF_SHADE_GROUPS;
@@ -48,7 +50,7 @@ static void bump_shade_block(const void *state, const meso_frame *frame, const m
             relief_lanes l;
             v8f x, y;
             relief_lanes_load_block(&l, frame, block, at);
-            relief_bump_loaded_lanes(m, frame, depth, &l, &x, &y, &in[groups]);
+            relief_bump_inputs(m, depth, &l, &x, &y, &in[groups]);
         }
         meso_shade_batches_to_block(frame, object, in, groups, block, first);
     }

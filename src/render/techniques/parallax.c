@@ -56,6 +56,9 @@ static void shade_block(const void *state, const meso_frame *frame, const meso_o
     const relief_heights *m = &s->heights;
     float depth = object->mesostructure.depth;
     meso_shade_batch batches[RELIEF_SHADE_GROUPS];
+    /* no shadows: every light visible, set once a slot rather than once a group */
+    for (size_t g = 0; g < RELIEF_SHADE_GROUPS; g++)
+        meso_shade_batch_all_visible(&batches[g], frame);
     size_t groups = 0, group_first = 0;
     for (size_t first = 0; first < block->count; first += RELIEF_LANES) {
         if (groups == RELIEF_SHADE_GROUPS) {
@@ -87,7 +90,6 @@ static void shade_block(const void *state, const meso_frame *frame, const meso_o
         in->u = l.u + uo, in->v = l.v + vo;
         in->tx = l.tangent.x, in->ty = l.tangent.y, in->tz = l.tangent.z;
         in->bx = l.bitangent.x, in->by = l.bitangent.y, in->bz = l.bitangent.z;
-        meso_shade_batch_all_visible(in, frame);
     }
     meso_shade_batches_to_block(frame, object, batches, groups, block, group_first);
 }

@@ -30,8 +30,8 @@
 
 #define RELIEF_LANES V8_LANES
 /* Groups of eight a technique hands meso_shade_batches_to_block at once: the shading's
- * per-object constants once a call (4 KB of inputs on the stack). */
-#define RELIEF_SHADE_GROUPS 4
+ * per-object constants once a call (8 KB of inputs on the stack). */
+#define RELIEF_SHADE_GROUPS 8
 
 /* ---- The height field, padded ------------------------------------------------------------- */
 
@@ -353,11 +353,23 @@ relief_search8_body(const relief_heights *m, const relief_batch *batches, int co
 
 static inline void relief_search8x2(const relief_heights *m, const relief_batch *batches, int count,
                                     int linear_steps, int binary_steps, v8f *out_t, int *out_hit) {
-    /* a constant count unrolls the loops over the batches: their state stays in registers */
-    if (count == 2)
-        relief_search8_body(m, batches, 2, linear_steps, binary_steps, out_t, out_hit);
-    else
-        relief_search8_body(m, batches, 1, linear_steps, binary_steps, out_t, out_hit);
+    /* A constant count unrolls the loops over the batches: their state stays in registers. The
+     * wrap as a constant too (a copy of the map whose `clamp` the compiler sees): the samples
+     * skip its test. */
+    relief_heights fixed = *m;
+    if (m->clamp) {
+        fixed.clamp = true;
+        if (count == 2)
+            relief_search8_body(&fixed, batches, 2, linear_steps, binary_steps, out_t, out_hit);
+        else
+            relief_search8_body(&fixed, batches, 1, linear_steps, binary_steps, out_t, out_hit);
+    } else {
+        fixed.clamp = false;
+        if (count == 2)
+            relief_search8_body(&fixed, batches, 2, linear_steps, binary_steps, out_t, out_hit);
+        else
+            relief_search8_body(&fixed, batches, 1, linear_steps, binary_steps, out_t, out_hit);
+    }
 }
 
 /* relief_search8x2 on one batch: writes t of the hit per lane, returns the bits of the lanes
@@ -387,10 +399,8 @@ typedef struct relief_shadow_batch {
  * search's error), and a light ray leaving it must not find it again. */
 #define RELIEF_SHADOW_BIAS 0.004f
 
-/* Self-shadowing by a second linear search toward the light (Policarpo & Oliveira 2006 §2.1):
- * blocked where a sample lies below the surface. Returns the bits of blocked lanes. */
-static inline int relief_shadow_search8(const relief_heights *m, const relief_shadow_batch *s,
-                                        int steps) {
+__attribute__((always_inline)) static inline int
+relief_shadow_search8_body(const relief_heights *m, const relief_shadow_batch *s, int steps) {
     int blocked = 0, pending = s->active_bits;
     float inv = 1.0f / (float)steps;
     /* Sample k = steps is on the mesh (d = 0): nothing is above it. */
@@ -403,6 +413,19 @@ static inline int relief_shadow_search8(const relief_heights *m, const relief_sh
         pending &= ~bits;
     }
     return blocked;
+}
+
+/* Self-shadowing by a second linear search toward the light (Policarpo & Oliveira 2006 §2.1):
+ * blocked where a sample lies below the surface. Returns the bits of blocked lanes. */
+static inline int relief_shadow_search8(const relief_heights *m, const relief_shadow_batch *s,
+                                        int steps) {
+    relief_heights fixed = *m; /* the wrap as a constant, as in relief_search8x2 */
+    if (m->clamp) {
+        fixed.clamp = true;
+        return relief_shadow_search8_body(&fixed, s, steps);
+    }
+    fixed.clamp = false;
+    return relief_shadow_search8_body(&fixed, s, steps);
 }
 
 /* The maximum mip-map of a height field (Tevs et al. 2008) with per-level tables for lookups
@@ -584,6 +607,26 @@ static inline void relief_lanes_load_block(relief_lanes *l, const meso_frame *fr
     relief_lanes_basis(l, frame);
 }
 
+/* The view vector along the fragments' unit tangent and bitangent, which the silhouettes' ray
+ * (relief_batch_setup), the turn of the normal (relief_curve_normal8) and every light's shadow
+ * ray read: worked out once a group of eight, not once a use (the same operations, so the same
+ * bits). */
+typedef struct relief_axes {
+    v8f tl, bl; /* |T|, |B| */
+    v8f vt, vb; /* V.T, V.B */
+    v8f x, y;   /* V.T / |T|, V.B / |B| (0 where the length is 0) */
+} relief_axes;
+
+static inline void relief_axes_init(const relief_lanes *l, relief_axes *a) {
+    v8f zero = v8_splat(0.0f);
+    a->tl = v8_sqrt(v8_dot(l->tangent, l->tangent));
+    a->bl = v8_sqrt(v8_dot(l->bitangent, l->bitangent));
+    a->vt = v8_dot(l->view, l->tangent);
+    a->vb = v8_dot(l->view, l->bitangent);
+    a->x = v8_select(a->tl > 0.0f, a->vt / a->tl, zero);
+    a->y = v8_select(a->bl > 0.0f, a->vb / a->bl, zero);
+}
+
 /* Texel-centre coordinates of the fragments' uv. */
 static inline void relief_lanes_texel(const relief_heights *m, const relief_lanes *l, v8f *x,
                                       v8f *y) {
@@ -618,10 +661,10 @@ static inline v8vec3 relief_normal8(const relief_lanes *l, float depth, v8f gu, 
                     v8_select(keep, l->normal.z, n.z * inv)};
 }
 
-/* relief_bump_lanes on lanes already loaded (relief_lanes_load, relief_lanes_load_block). */
-static inline void relief_bump_loaded_lanes(const relief_heights *m, const meso_frame *frame,
-                                            float depth, const relief_lanes *l, v8f *x, v8f *y,
-                                            meso_shade_batch *in) {
+/* relief_bump_loaded_lanes but for the lights' visibility, which a caller shading every light
+ * visible sets once for all its groups. */
+static inline void relief_bump_inputs(const relief_heights *m, float depth, const relief_lanes *l,
+                                      v8f *x, v8f *y, meso_shade_batch *in) {
     v8f gu, gv;
     relief_lanes_texel(m, l, x, y);
     relief_gradient8(m, *x, *y, &gu, &gv);
@@ -633,6 +676,13 @@ static inline void relief_bump_loaded_lanes(const relief_heights *m, const meso_
     in->u = l->u, in->v = l->v;
     in->tx = l->tangent.x, in->ty = l->tangent.y, in->tz = l->tangent.z;
     in->bx = l->bitangent.x, in->by = l->bitangent.y, in->bz = l->bitangent.z;
+}
+
+/* relief_bump_lanes on lanes already loaded (relief_lanes_load, relief_lanes_load_block). */
+static inline void relief_bump_loaded_lanes(const relief_heights *m, const meso_frame *frame,
+                                            float depth, const relief_lanes *l, v8f *x, v8f *y,
+                                            meso_shade_batch *in) {
+    relief_bump_inputs(m, depth, l, x, y, in);
     meso_shade_batch_all_visible(in, frame);
 }
 
@@ -660,16 +710,15 @@ static inline void relief_shade_store(const meso_frame *frame, const meso_object
  * by the rotation that takes N to it (small angle: n + (N_hit - N), renormalised). Flat
  * meshes (q = 0) keep n. Without it a sphere is shaded as if every hit faced the entry's
  * way: a uniform error over its lit side (docs/techniques/relief.md). */
-static inline v8vec3 relief_curve_normal8(const relief_lanes *l, const relief_batch *batch, v8f t,
-                                          v8vec3 n) {
-    v8f tl = v8_sqrt(v8_dot(l->tangent, l->tangent));
-    v8f bl = v8_sqrt(v8_dot(l->bitangent, l->bitangent));
+static inline v8vec3 relief_curve_normal8(const relief_lanes *l, const relief_axes *axes,
+                                          const relief_batch *batch, v8f t, v8vec3 n) {
+    v8f tl = axes->tl, bl = axes->bl;
     v8f zero = v8_splat(0.0f);
     v8f it = v8_select(tl > 0.0f, 1.0f / v8_select(tl > 0.0f, tl, v8_splat(1.0f)), zero);
     v8f ib = v8_select(bl > 0.0f, 1.0f / v8_select(bl > 0.0f, bl, v8_splat(1.0f)), zero);
     /* (x, y) of the hit from the entry, world units along T^ and B^; the turn 2 q (x, y) */
-    v8f sx = 2.0f * batch->qa * t * v8_dot(l->view, l->tangent) * it * it;
-    v8f sy = 2.0f * batch->qb * t * v8_dot(l->view, l->bitangent) * ib * ib;
+    v8f sx = 2.0f * batch->qa * t * axes->vt * it * it;
+    v8f sy = 2.0f * batch->qb * t * axes->vb * ib * ib;
     v8vec3 turned = {n.x + l->tangent.x * sx + l->bitangent.x * sy,
                      n.y + l->tangent.y * sx + l->bitangent.y * sy,
                      n.z + l->tangent.z * sx + l->bitangent.z * sy};
@@ -715,16 +764,18 @@ static inline v8f relief_lateral_scale(const relief_batch *b, v8f d) {
 /* The view rays of eight fragments (see the top of this file). */
 static inline void relief_batch_setup(const relief_heights *m, const meso_object *object,
                                       const meso_fragment *f, const meso_fragment_block *block,
-                                      size_t first, const relief_lanes *l, bool silhouettes,
-                                      bool curved_uv, relief_batch *batch, v8f *out_du,
-                                      v8f *out_dv) {
+                                      size_t first, const relief_lanes *l, const relief_axes *axes,
+                                      bool silhouettes, bool curved_uv, relief_batch *batch,
+                                      v8f *out_du, v8f *out_dv) {
     float depth = object->mesostructure.depth;
     int all = (1 << l->count) - 1;
     v8f cu = v8_dot(l->view, l->bn), cv = v8_dot(l->view, l->nt), cn = v8_dot(l->view, l->tb);
     int enter = depth > 0.0f ? v8_mask_bits(cn < 0.0f) & l->frame_bits : 0;
     v8i on = v8_mask_from_bits(enter);
     v8f zero = v8_splat(0.0f);
-    memset(batch, 0, sizeof *batch);
+    /* every field is set below; these stay 0 without silhouettes (a memset of the whole
+     * batch cost more than the rest of the setup's stores) */
+    batch->qa = zero, batch->qb = zero, batch->b = zero, batch->lateral = zero;
     batch->count = l->count;
     relief_lanes_texel(m, l, &batch->x0, &batch->y0);
     cu = v8_select(on, cu, zero);
@@ -737,10 +788,7 @@ static inline void relief_batch_setup(const relief_heights *m, const meso_object
     if (silhouettes && relief_quadrics8(object, f, block, first, l->count, &qa, &qb)) {
         batch->qa = qa;
         batch->qb = qb;
-        v8f tl = v8_sqrt(v8_dot(l->tangent, l->tangent));
-        v8f bl = v8_sqrt(v8_dot(l->bitangent, l->bitangent));
-        v8f x = v8_select(tl > 0.0f, v8_dot(l->view, l->tangent) / tl, zero);
-        v8f y = v8_select(bl > 0.0f, v8_dot(l->view, l->bitangent) / bl, zero);
+        v8f x = axes->x, y = axes->y;
         batch->b = v8_select(on, (qa * x * x + qb * y * y) * inv_depth, zero);
         if (curved_uv) { /* kappa depth / 2 along the ray, kept below 0.9 (relief_params) */
             v8f r2 = x * x + y * y;
@@ -762,10 +810,36 @@ static inline void relief_batch_setup(const relief_heights *m, const meso_object
     *out_dv = cv;
 }
 
+/* The colours of RELIEF_SHADE_GROUPS groups of a block at once (the shading's per-object
+ * constants once a call, not once a group): in[g] holds lanes first + 8g.., hit[g] the bits of
+ * its lanes that hit. The lanes that did not hit keep the colour they had, as the array path
+ * leaves a discarded fragment's. */
+static inline void relief_shade_groups_to_block(const meso_frame *frame, const meso_object *object,
+                                                const meso_shade_batch *in, const int *hit,
+                                                size_t groups, meso_fragment_block *block,
+                                                size_t first) {
+    v8f keep[RELIEF_SHADE_GROUPS][3];
+    for (size_t g = 0; g < groups; ++g) {
+        if (hit[g] == 0xff) continue;
+        size_t at = first + g * RELIEF_LANES;
+        keep[g][0] = meso_block_load(block->r, at), keep[g][1] = meso_block_load(block->g, at);
+        keep[g][2] = meso_block_load(block->b, at);
+    }
+    meso_shade_batches_to_block(frame, object, in, groups, block, first);
+    for (size_t g = 0; g < groups; ++g) {
+        if (hit[g] == 0xff) continue;
+        size_t at = first + g * RELIEF_LANES;
+        v8i on = v8_mask_from_bits(hit[g]);
+        meso_block_store(block->r, at, v8_select(on, meso_block_load(block->r, at), keep[g][0]));
+        meso_block_store(block->g, at, v8_select(on, meso_block_load(block->g, at), keep[g][1]));
+        meso_block_store(block->b, at, v8_select(on, meso_block_load(block->b, at), keep[g][2]));
+    }
+}
+
 /* Shade `count` fragments with a tracer, sixteen at a time (m: the map's size in texels for
  * the texel-centre coordinates, and the heights unless the tracer has its own normal) as two
  * batches of eight: view rays, hits, depth correction, the displaced normal at the hit,
- * self-shadows per light, meso_shade_batch8. The fragments are an array (`fragments`) or a
+ * self-shadows per light, the shading model. The fragments are an array (`fragments`) or a
  * block (`block`, the other NULL): the same lanes and arithmetic either way, so the same
  * images; a block saves the adapter's copies and reads the lanes as vectors. */
 __attribute__((always_inline)) static inline void
@@ -776,8 +850,20 @@ relief_shade_core(const relief_heights *m, const relief_tracer *tracer, relief_p
     int num_lights =
         scene->num_lights < MESO_SCENE_MAX_LIGHTS ? scene->num_lights : MESO_SCENE_MAX_LIGHTS;
     float depth = object->mesostructure.depth;
+    /* a block's shading inputs, shaded RELIEF_SHADE_GROUPS groups a call */
+    _Static_assert(RELIEF_SHADE_GROUPS % 2 == 0, "whole pairs of groups");
+    meso_shade_batch pending[RELIEF_SHADE_GROUPS];
+    int pending_hit[RELIEF_SHADE_GROUPS];
+    size_t pending_groups = 0, pending_first = 0;
     for (size_t start = 0; start < count; start += 2 * RELIEF_LANES) {
+        if (block && pending_groups == RELIEF_SHADE_GROUPS) {
+            relief_shade_groups_to_block(frame, object, pending, pending_hit, pending_groups, block,
+                                         pending_first);
+            pending_groups = 0;
+        }
+        if (!pending_groups) pending_first = start;
         relief_lanes l[2];
+        relief_axes axes[2];
         relief_batch batch[2];
         v8f du[2], dv[2], t[2], hx[2], hy[2], hd[2], out_depth[2], hit_u[2], hit_v[2];
         v8vec3 hit_pos[2], normal[2];
@@ -790,8 +876,10 @@ relief_shade_core(const relief_heights *m, const relief_tracer *tracer, relief_p
                 relief_lanes_load_block(&l[g], frame, block, first);
             else
                 relief_lanes_load(&l[g], frame, fragments + first, n[g]);
+            if (params.silhouettes || params.shadows) relief_axes_init(&l[g], &axes[g]);
             relief_batch_setup(m, object, block ? NULL : fragments + first, block, first, &l[g],
-                               params.silhouettes, params.curved_uv, &batch[g], &du[g], &dv[g]);
+                               &axes[g], params.silhouettes, params.curved_uv, &batch[g], &du[g],
+                               &dv[g]);
             groups = g + 1;
         }
         tracer->search(tracer->user, batch, groups, t, hit);
@@ -814,16 +902,20 @@ relief_shade_core(const relief_heights *m, const relief_tracer *tracer, relief_p
                 normal[g] = relief_normal8(&l[g], depth, gu, gv);
             }
             if (params.silhouettes)
-                normal[g] = relief_curve_normal8(&l[g], &batch[g], t[g], normal[g]);
+                normal[g] = relief_curve_normal8(&l[g], &axes[g], &batch[g], t[g], normal[g]);
         }
-        meso_shade_batch in[2];
+        meso_shade_batch local[2];
+        meso_shade_batch *in = block ? pending + pending_groups : local;
         for (int li = 0; li < num_lights; ++li) {
             relief_shadow_batch sb[2];
             int dark[2] = {0, 0}, any = 0;
             for (int g = 0; g < groups; ++g) {
-                memset(&sb[g], 0, sizeof sb[g]);
                 sb[g].count = n[g];
-                if (!params.shadows || !hit[g]) continue;
+                if (!params.shadows || !hit[g]) {
+                    memset(&sb[g], 0, sizeof sb[g]); /* no lane active */
+                    sb[g].count = n[g];
+                    continue;
+                }
                 const meso_light *light = &scene->lights[li];
                 v8vec3 L;
                 if (light->type == MESO_LIGHT_DIRECTIONAL) {
@@ -841,16 +933,13 @@ relief_shade_core(const relief_heights *m, const relief_tracer *tracer, relief_p
                  * 4 q hd depth)). On a convex mesh that can be so even for a light a little
                  * below the tangent plane (the band past the terminator the truth still
                  * lights); without a real positive root the surface itself blocks the light. */
-                v8f tl = v8_sqrt(v8_dot(l[g].tangent, l[g].tangent));
-                v8f bl = v8_sqrt(v8_dot(l[g].bitangent, l[g].bitangent));
+                v8f tl = axes[g].tl, bl = axes[g].bl;
                 v8f xl = v8_select(tl > 0.0f, v8_dot(L, l[g].tangent) / tl, v8_splat(0.0f));
                 v8f yl = v8_select(bl > 0.0f, v8_dot(L, l[g].bitangent) / bl, v8_splat(0.0f));
                 v8f q = batch[g].qa * xl * xl + batch[g].qb * yl * yl;
                 /* The light's elevation over the tangent plane at the hit, not at the entry:
                  * the hit lies t V away, where the curved surface has turned by 2 q. */
-                v8f xv = v8_select(tl > 0.0f, v8_dot(l[g].view, l[g].tangent) / tl, v8_splat(0.0f));
-                v8f yv =
-                    v8_select(bl > 0.0f, v8_dot(l[g].view, l[g].bitangent) / bl, v8_splat(0.0f));
+                v8f xv = axes[g].x, yv = axes[g].y;
                 ln += 2.0f * t[g] * (batch[g].qa * xv * xl + batch[g].qb * yv * yl);
                 v8f reach = hd[g] * depth;
                 v8f disc = ln * ln + 4.0f * q * reach;
@@ -888,20 +977,25 @@ relief_shade_core(const relief_heights *m, const relief_tracer *tracer, relief_p
             in[g].tx = l[g].tangent.x, in[g].ty = l[g].tangent.y, in[g].tz = l[g].tangent.z;
             in[g].bx = l[g].bitangent.x, in[g].by = l[g].bitangent.y;
             in[g].bz = l[g].bitangent.z;
+            if (block) { /* the colours when the pending groups are shaded */
+                pending_hit[pending_groups++] = hit[g];
+                if (hit[g] == 0xff) { /* eight fragments, none discarded */
+                    meso_block_store(block->out_depth, first, out_depth[g]);
+                    continue;
+                }
+                for (int k = 0; k < n[g]; ++k) {
+                    size_t i = first + (size_t)k;
+                    if (!(hit[g] >> k & 1)) /* the ray left the curved shell */
+                        block->discard[i] = 1;
+                    else
+                        block->out_depth[i] = out_depth[g][k];
+                }
+                continue;
+            }
             v8f r, gr, b;
             meso_shade_batch8(frame, object, &in[g], n[g], &r, &gr, &b);
             for (int k = 0; k < n[g]; ++k) {
                 bool discard = !(hit[g] >> k & 1); /* the ray left the curved shell */
-                if (block) {
-                    size_t i = first + (size_t)k;
-                    if (discard) {
-                        block->discard[i] = 1;
-                        continue;
-                    }
-                    block->out_depth[i] = out_depth[g][k];
-                    block->r[i] = r[k], block->g[i] = gr[k], block->b[i] = b[k];
-                    continue;
-                }
                 meso_fragment *f = fragments + first + (size_t)k;
                 if (discard) {
                     f->discard = true;
@@ -912,6 +1006,9 @@ relief_shade_core(const relief_heights *m, const relief_tracer *tracer, relief_p
             }
         }
     }
+    if (block && pending_groups)
+        relief_shade_groups_to_block(frame, object, pending, pending_hit, pending_groups, block,
+                                     pending_first);
 }
 
 static inline void relief_shade_fragments(const relief_heights *m, const relief_tracer *tracer,
