@@ -14,7 +14,8 @@ static const app_command_help info_help = {
         "Describe FILE on stdout, by its content and extension:\n"
         "  PNG          size, channels, bit depth and colour type, value range per channel\n"
         "  scene .json  image, camera, lights, objects (mesh counts, bounds, material,\n"
-        "               mesostructure kind/source/depth, technique and its options)\n"
+        "               mesostructure kind/source/depth, whether its shell folds,\n"
+        "               technique and its options)\n"
         "  mesh         .obj .ply .gltf .glb: vertices, triangles, UVs, bounds\n"
         "  .mesobake    kind, version, source hash, parameters, arrays with shapes and sizes\n"
         "A file that does not load is reported as by every command (exit status 2).",
@@ -150,6 +151,24 @@ static void print_mesostructure(const meso_mesostructure *m) {
     }
 }
 
+/* Whether the object's shell folds: where it is deeper than the surface's radius of curvature
+ * across a triangle, its prism turns over (meso_prism_layer.num_folded). The techniques and the
+ * reference disagree there, so a user choosing a depth should know (docs/techniques/gdm.md,
+ * "Folded prisms"). Silent when the layer cannot be made (no UVs: nothing draws a shell). */
+static void print_shell_folds(meso_context *ctx, const meso_object *o) {
+    if (o->mesostructure.kind == MESO_MESOSTRUCTURE_NONE || !o->mesh || !o->mesh->uvs) return;
+    meso_prism_layer *layer = NULL;
+    if (meso_prism_layer_create(ctx, o->mesh, o->mesostructure.depth, o->name, &layer) != MESO_OK)
+        return;
+    if (layer->num_folded)
+        printf("      shell: folds on %zu of %zu prisms (deeper than the surface's radius of "
+               "curvature there; techniques disagree there)\n",
+               layer->num_folded, layer->num_prisms);
+    else
+        printf("      shell: does not fold\n");
+    meso_prism_layer_destroy(layer);
+}
+
 static meso_result info_scene(meso_context *ctx, const char *path) {
     meso_scene *scene = NULL;
     meso_result result = meso_scene_load(ctx, path, &scene);
@@ -207,6 +226,7 @@ static meso_result info_scene(meso_context *ctx, const char *path) {
         if (o->mesh_material_note[0])
             printf("      material of the mesh file: %s\n", o->mesh_material_note);
         print_mesostructure(&o->mesostructure);
+        print_shell_folds(ctx, o);
         const meso_technique_info *t = meso_technique_find(o->technique);
         printf("      technique: %s", o->technique);
         if (t) printf(" (%s)", t->paper);

@@ -34,6 +34,19 @@ static char *read_text(const char *path) {
     return data;
 }
 
+/* meso info says whether an object's shell folds (docs/techniques/gdm.md, "Folded prisms"):
+ * the teapot's bricks, 0.02 deep, fold on its lid's flange; the plane's do not. */
+static void test_app_info_says_where_the_shell_folds(void **state) {
+    (void)state;
+    char out[16384], args[4096];
+    snprintf(args, sizeof(args), "info %s", MESO_SOURCE_DIR "/examples/bricks-teapot.json");
+    assert_int_equal(run_capture_stdout(args, out, sizeof(out)), 0);
+    if (!strstr(out, "shell: folds on 996 of 16256 prisms")) fail_msg("no folds in:\n%s", out);
+    snprintf(args, sizeof(args), "info %s", BRICKS);
+    assert_int_equal(run_capture_stdout(args, out, sizeof(out)), 0);
+    if (!strstr(out, "shell: does not fold")) fail_msg("folds in:\n%s", out);
+}
+
 static void test_app_bench_prints_table_and_writes_json(void **state) {
     (void)state;
     static char out[65536];
@@ -165,6 +178,7 @@ static void test_app_info_on_folder_is_bad_input(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_app_info_says_where_the_shell_folds),
         cmocka_unit_test(test_app_bench_prints_table_and_writes_json),
         cmocka_unit_test(test_app_bench_profile_reports_cost_per_pixel),
         cmocka_unit_test(test_app_bench_unknown_technique_is_usage_error),
