@@ -84,19 +84,23 @@ static meso_prism_plane plane_of(meso_vec3 p0, meso_vec3 p1, meso_vec3 p2) {
     return (meso_prism_plane){n, meso_vec3_dot(n, p0)};
 }
 
-static void set_face(meso_prism_layer *layer, size_t prism, int slot, uint32_t a, uint32_t b,
-                     uint32_t c) {
-    size_t face = meso_prism_layer_face(layer, prism, slot);
-    uint32_t *idx = layer->faces->indices + 3 * face;
-    idx[0] = a, idx[1] = b, idx[2] = c;
-    const meso_vec3 *p = layer->faces->positions;
-    meso_prism_plane pl = plane_of(p[a], p[b], p[c]);
+/* A face's plane, in `planes` and by component in `plane_lanes`. */
+static void store_plane(meso_prism_layer *layer, size_t prism, int slot, meso_prism_plane pl) {
     layer->planes[prism * MESO_PRISM_NUM_FACES + (size_t)slot] = pl;
     float *lanes = layer->plane_lanes + prism * 4 * MESO_PRISM_NUM_FACES + (size_t)slot;
     lanes[0] = pl.normal.x;
     lanes[MESO_PRISM_NUM_FACES] = pl.normal.y;
     lanes[2 * MESO_PRISM_NUM_FACES] = pl.normal.z;
     lanes[3 * MESO_PRISM_NUM_FACES] = pl.offset;
+}
+
+static void set_face(meso_prism_layer *layer, size_t prism, int slot, uint32_t a, uint32_t b,
+                     uint32_t c) {
+    size_t face = meso_prism_layer_face(layer, prism, slot);
+    uint32_t *idx = layer->faces->indices + 3 * face;
+    idx[0] = a, idx[1] = b, idx[2] = c;
+    const meso_vec3 *p = layer->faces->positions;
+    store_plane(layer, prism, slot, plane_of(p[a], p[b], p[c]));
 }
 
 /* Fin e of prism t over the edge (a, b) of its counter-clockwise base triangle: outward it is
@@ -129,10 +133,7 @@ static void extrude_fin(meso_prism_layer *layer, size_t prism, int e, uint32_t a
 
 /* A face whose plane no longer bounds its prism: the zero plane (meso_prism_plane). */
 static void unbind_face(meso_prism_layer *layer, size_t prism, int slot) {
-    layer->planes[prism * MESO_PRISM_NUM_FACES + (size_t)slot] =
-        (meso_prism_plane){{0.0f, 0.0f, 0.0f}, 0.0f};
-    float *lanes = layer->plane_lanes + prism * 4 * MESO_PRISM_NUM_FACES + (size_t)slot;
-    for (int c = 0; c < 4; c++) lanes[c * MESO_PRISM_NUM_FACES] = 0.0f;
+    store_plane(layer, prism, slot, (meso_prism_plane){{0.0f, 0.0f, 0.0f}, 0.0f});
 }
 
 /* Where the shell is deeper than the surface's radius of curvature across a triangle (a
@@ -149,7 +150,8 @@ static void unbind_face(meso_prism_layer *layer, size_t prism, int slot) {
 static bool unbind_folded_faces(meso_prism_layer *layer, size_t prism) {
     const meso_prism_plane *planes = layer->planes + prism * MESO_PRISM_NUM_FACES;
     const meso_vec3 *p = layer->faces->positions;
-    const uint32_t *top = layer->faces->indices + 3 * meso_prism_layer_face(layer, prism, 0);
+    const uint32_t *top =
+        layer->faces->indices + 3 * meso_prism_layer_face(layer, prism, MESO_PRISM_TOP);
     meso_vec3 centre =
         meso_vec3_scale(meso_vec3_add(meso_vec3_add(p[top[0]], p[top[1]]), p[top[2]]), 1.0f / 3.0f);
     bool folded = false;
