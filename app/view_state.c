@@ -5,7 +5,9 @@
 #include <math.h>
 #include <string.h>
 
-#define DEGREES (3.14159265358979323846 / 180.0)
+#include "meso/math.h"
+
+#define DEGREES (MESO_PI_D / 180.0)
 #define ORBIT_DEGREES_PER_PIXEL 0.4
 #define LIGHT_DEGREES_PER_PIXEL 0.4
 #define ZOOM_PER_STEP 0.9
@@ -92,7 +94,7 @@ view_camera view_camera_turntable(const view_camera *home, int frame, int count)
     if (count <= 0 || frame % count == 0) return camera; /* frame 0 is the scene's camera */
     view_vec3 up = normalize_or(home->up, (view_vec3){0, 1, 0});
     view_vec3 offset = sub(home->eye, home->target);
-    double angle = 2.0 * 3.14159265358979323846 * (double)frame / (double)count;
+    double angle = 2.0 * MESO_PI_D * (double)frame / (double)count;
     /* Rodrigues about up: the height along up is kept exactly, unlike the polar clamp */
     view_vec3 along = scale(up, dot(offset, up));
     view_vec3 across = sub(offset, along);

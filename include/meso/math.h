@@ -24,7 +24,11 @@ typedef struct meso_mat4 {
     float m[16];
 } meso_mat4;
 
+/* pi for float arithmetic, its reciprocal, and pi in double for the bakes and shapes computed in
+ * double (M_PI and M_1_PI are POSIX, not C; the float ones are the same bits as (float)M_PI). */
 #define MESO_PI 3.14159265358979323846f
+#define MESO_INV_PI 0.318309886183790671538f
+#define MESO_PI_D 3.14159265358979323846
 
 static inline meso_vec2 meso_vec2_make(float x, float y) { return (meso_vec2){x, y}; }
 static inline meso_vec3 meso_vec3_make(float x, float y, float z) { return (meso_vec3){x, y, z}; }

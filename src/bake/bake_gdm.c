@@ -16,8 +16,7 @@
 
 #include "bake_internal.h"
 
-#define PI 3.14159265358979323846
-#define TWO_PI 6.28318530717958647692
+#define TWO_PI (2.0 * MESO_PI_D)
 
 /* The solid's surface is extracted this many times finer than the voxels in every direction,
  * and at least SURFACE_MIN_CELLS_UV x SURFACE_MIN_CELLS_UV x SURFACE_MIN_CELLS_W cells a tile:
@@ -134,7 +133,7 @@ static meso_vec3 voxel_position(const meso_gdm_desc *d, int i, int j, int l) {
                        (float)l / (float)(d->layers - 1)};
 }
 static double theta_of(const meso_gdm_desc *d, int t) {
-    return ((double)t + 0.5) * PI / (double)d->num_theta;
+    return ((double)t + 0.5) * MESO_PI_D / (double)d->num_theta;
 }
 static double phi_of(const meso_gdm_desc *d, int p) { return (double)p * TWO_PI / d->num_phi; }
 static meso_vec3 direction_of(double theta, double phi) {
@@ -733,7 +732,7 @@ static lookup_axes axes_of(const meso_gdm_desc *d, meso_vec3 uvw, meso_vec3 dire
     float theta = acosf(cos_theta);
     float phi = length > 0.0f && isfinite(length) ? atan2f(direction.y, direction.x) : 0.0f;
     if (phi < 0.0f) phi += (float)TWO_PI;
-    a.theta = meso_axis_clamp(theta * (float)d->num_theta / (float)PI - 0.5f, d->num_theta);
+    a.theta = meso_axis_clamp(theta * (float)d->num_theta / MESO_PI - 0.5f, d->num_theta);
     a.phi = meso_axis_wrap(phi * (float)d->num_phi / (float)TWO_PI, d->num_phi);
     return a;
 }

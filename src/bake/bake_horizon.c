@@ -69,7 +69,7 @@ static void bake_row_aligned(horizon_job *w, int j, int thread_index) {
     float *best = w->scratch + (size_t)thread_index * (size_t)width;
     float *out = w->map->slopes + (size_t)j * (size_t)width * (size_t)n;
     for (int a = 0; a < n; ++a) {
-        double phi = 2.0 * M_PI * (double)a / (double)n;
+        double phi = 2.0 * MESO_PI_D * (double)a / (double)n;
         int dx = (int)lround(cos(phi)), dy = -(int)lround(sin(phi)); /* rows run against v */
         float len = sqrtf((float)(dx * dx + dy * dy));
         for (int i = 0; i < width; ++i)
@@ -184,7 +184,7 @@ meso_result meso_bake_horizon(meso_context *ctx, const meso_heightfield *heightf
     for (int k = 0; k < d.num_azimuths; ++k) {
         /* phi from +u toward +v; rows run against v (row 0 at the top). One unit of distance
          * is a texel of the larger side. */
-        double phi = 2.0 * M_PI * (double)k / (double)d.num_azimuths;
+        double phi = 2.0 * MESO_PI_D * (double)k / (double)d.num_azimuths;
         dir_x[k] = (float)(cos(phi) * (double)width / (double)side);
         dir_y[k] = (float)(-sin(phi) * (double)height / (double)side);
     }
@@ -228,7 +228,7 @@ float meso_horizon_map_slope(const meso_horizon_map *map, int i, int j, float ph
     j = j < 0 ? 0 : (j >= map->height ? map->height - 1 : j);
     const float *s = map->slopes + ((size_t)j * (size_t)map->width + (size_t)i) * (size_t)n;
     /* Max 1988 §2: linear interpolation between the two nearest azimuths. */
-    float a = phi * (float)n / (2.0f * (float)M_PI);
+    float a = phi * (float)n / (2.0f * MESO_PI);
     a -= (float)n * floorf(a / (float)n);
     int k0 = (int)a;
     k0 = k0 >= n ? n - 1 : k0;

@@ -201,7 +201,7 @@ static void response_at(const rtv_job *rj, const meso_rtv *rtv, const float *fir
         meso_vec3 hit;
         bool open = escapes(rj, p, w, &hit);
         if (!open && !first) continue;
-        float scale = rj->direction_weight * cosine * (float)M_1_PI;
+        float scale = rj->direction_weight * cosine * MESO_INV_PI;
         float basis[MESO_SH_COUNT];
         if (open) {
             meso_sh_basis(w, basis);
@@ -237,8 +237,8 @@ static void bake_row(void *user, size_t job, int thread_index) {
 
 /* The unit view direction (tangent frame, toward the viewer) of view (t, p). */
 static meso_vec3 view_direction(const meso_rtv *rtv, int t, int p) {
-    float theta = ((float)t + 0.5f) * 0.5f * (float)M_PI / (float)rtv->num_theta;
-    float phi = (float)p * 2.0f * (float)M_PI / (float)rtv->num_phi;
+    float theta = ((float)t + 0.5f) * 0.5f * MESO_PI / (float)rtv->num_theta;
+    float phi = (float)p * 2.0f * MESO_PI / (float)rtv->num_phi;
     return (meso_vec3){sinf(theta) * cosf(phi), sinf(theta) * sinf(phi), cosf(theta)};
 }
 
@@ -425,7 +425,7 @@ meso_result meso_bake_rtv(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv
                      : 256;
     rtv_job rj = {d,
                   direction,
-                  (float)(4.0 * M_PI / d.directions),
+                  (float)(4.0 * MESO_PI_D / d.directions),
                   0.5f / (float)texels,
                   NULL,
                   bounce ? first : rtv->coefficients,
@@ -466,11 +466,10 @@ void meso_rtv_destroy(meso_rtv *rtv) {
 void meso_rtv_cell_at(const meso_rtv *rtv, meso_vec3 uvw, meso_vec3 view, meso_rtv_cell *out) {
     voxel_corners(rtv, uvw, out->corner, out->corner_weight);
     float theta = acosf(meso_clampf(view.z, 0.0f, 1.0f));
-    float t = meso_clampf(theta / (0.5f * (float)M_PI) * (float)rtv->num_theta - 0.5f, 0.0f,
+    float t = meso_clampf(theta / (0.5f * MESO_PI) * (float)rtv->num_theta - 0.5f, 0.0f,
                           (float)(rtv->num_theta - 1));
     float phi = atan2f(view.y, view.x);
-    float p =
-        (phi < 0.0f ? phi + 2.0f * (float)M_PI : phi) / (2.0f * (float)M_PI) * (float)rtv->num_phi;
+    float p = (phi < 0.0f ? phi + 2.0f * MESO_PI : phi) / (2.0f * MESO_PI) * (float)rtv->num_phi;
     int t0 = (int)t, t1 = t0 + 1 < rtv->num_theta ? t0 + 1 : t0;
     /* (int)p % num_phi and the next without divisions: p lies in [0, num_phi] (num_phi where
      * phi + 2 pi rounds to 2 pi); a NaN's conversion takes the division as before */

@@ -7,8 +7,8 @@
 
 #include "bake_internal.h"
 
-#define HALF_PI 1.57079632679489661923
-#define TWO_PI 6.28318530717958647692
+#define HALF_PI (0.5 * MESO_PI_D)
+#define TWO_PI (2.0 * MESO_PI_D)
 
 struct meso_vdm {
     meso_vdm_desc desc; /* heightfield NULL */

@@ -12,12 +12,12 @@
 #include "meso/environment.h"
 #include "meso/image.h"
 
-#define TWO_PI 6.283185307179586
+#define TWO_PI (2.0 * MESO_PI_D)
 
 /* ---- Mapping ------------------------------------------------------------------------------ */
 
 meso_vec3 meso_environment_direction(float u, float v) {
-    double theta = M_PI * v, phi = TWO_PI * (u - 0.5);
+    double theta = MESO_PI_D * v, phi = TWO_PI * (u - 0.5);
     double s = sin(theta);
     return (meso_vec3){(float)(s * sin(phi)), (float)cos(theta), (float)(-s * cos(phi))};
 }
@@ -25,7 +25,7 @@ meso_vec3 meso_environment_direction(float u, float v) {
 meso_vec2 meso_environment_coordinates(meso_vec3 d) {
     float y = meso_clampf(d.y, -1.0f, 1.0f);
     float u = 0.5f + atan2f(d.x, -d.z) / (float)TWO_PI;
-    float v = acosf(y) / (float)M_PI;
+    float v = acosf(y) / MESO_PI;
     return (meso_vec2){u, v};
 }
 
@@ -41,7 +41,7 @@ static void texel_of(const meso_environment *env, meso_vec3 d, int *out_i, int *
 
 /* The solid angle of one texel of row j: the band's area split over the row's columns. */
 static double texel_solid_angle(int j, int width, int height) {
-    double c0 = cos(M_PI * j / height), c1 = cos(M_PI * (j + 1) / height);
+    double c0 = cos(MESO_PI_D * j / height), c1 = cos(MESO_PI_D * (j + 1) / height);
     return TWO_PI / width * (c0 - c1);
 }
 
@@ -91,7 +91,7 @@ meso_vec3 meso_environment_sample(const meso_environment *env, float u1, float u
         row_width > 0.0f ? meso_clampf((u1 - env->row_cdf[j]) / row_width, 0.0f, 1.0f) : 0.5f;
     float fx =
         column_width > 0.0f ? meso_clampf((u2 - columns[i]) / column_width, 0.0f, 1.0f) : 0.5f;
-    double c0 = cos(M_PI * j / h), c1 = cos(M_PI * (j + 1) / h);
+    double c0 = cos(MESO_PI_D * j / h), c1 = cos(MESO_PI_D * (j + 1) / h);
     double cos_theta = c0 + (c1 - c0) * fy;
     double sin_theta = sqrt(fmax(0.0, 1.0 - cos_theta * cos_theta));
     double phi = TWO_PI * ((i + fx) / w - 0.5);
@@ -412,7 +412,7 @@ meso_result meso_environment_create_sky(meso_context *ctx, const meso_sky_desc *
     meso_image *map = NULL;
     if ((r = meso_image_create(ctx, width, height, 3, &map))) return r;
     meso_vec3 sun = meso_vec3_normalize(d.sun_direction);
-    float sun_radius = d.sun_size_deg * (float)M_PI / 180.0f;
+    float sun_radius = d.sun_size_deg * MESO_PI / 180.0f;
     for (int j = 0; j < height; j++)
         for (int i = 0; i < width; i++) {
             meso_vec3 dir =
@@ -426,7 +426,7 @@ meso_result meso_environment_create_sky(meso_context *ctx, const meso_sky_desc *
                 float angle = acosf(meso_clampf(meso_vec3_dot(dir, sun), -1.0f, 1.0f));
                 if (!d.no_sun && angle < sun_radius)
                     c = meso_vec3_madd(c, d.sun_color,
-                                       0.5f * (1.0f + cosf((float)M_PI * angle / sun_radius)));
+                                       0.5f * (1.0f + cosf(MESO_PI * angle / sun_radius)));
             }
             float *p = meso_image_at(map, i, j);
             p[0] = c.x, p[1] = c.y, p[2] = c.z;

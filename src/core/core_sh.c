@@ -34,8 +34,8 @@ float meso_sh_evaluate(const float coefficients[MESO_SH_COUNT], meso_vec3 d) {
 
 float meso_sh_irradiance(const float radiance[MESO_SH_COUNT], meso_vec3 n) {
     /* the clamped cosine's zonal coefficients times sqrt(4 pi / (2l + 1)) (Funk-Hecke) */
-    static const float band_scale[MESO_SH_ORDER] = {(float)M_PI, (float)(2.0 * M_PI / 3.0),
-                                                    (float)(M_PI / 4.0), 0.0f};
+    static const float band_scale[MESO_SH_ORDER] = {MESO_PI, (float)(2.0 * MESO_PI_D / 3.0),
+                                                    (float)(MESO_PI_D / 4.0), 0.0f};
     float basis[MESO_SH_COUNT], sum = 0.0f;
     meso_sh_basis(n, basis);
     for (int l = 0; l < MESO_SH_ORDER; l++)

@@ -177,7 +177,7 @@ static meso_result make_angle_table(meso_context *ctx, int n, double **out_cos, 
         return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "shape: out of memory");
     }
     for (int k = 0; k < n; k++) {
-        double angle = 2.0 * M_PI * ((double)k / n - 0.5);
+        double angle = 2.0 * MESO_PI_D * ((double)k / n - 0.5);
         (*out_cos)[k] = cos(angle);
         (*out_sin)[k] = sin(angle);
     }
@@ -225,7 +225,7 @@ static void eval_sphere(const void *shape, int i, int j, double u, double v, mes
         *p = meso_vec3_make(0.0f, (float)(y * s->radius), 0.0f);
         return;
     }
-    double latitude = M_PI * (v - 0.5);
+    double latitude = MESO_PI_D * (v - 0.5);
     double c = cos(latitude), sy = sin(latitude);
     double nx = c * s->sin_lon[i], nz = c * s->cos_lon[i];
     *n = meso_vec3_normalize(meso_vec3_make((float)nx, (float)sy, (float)nz));
@@ -426,11 +426,11 @@ static int grid_rows(const meso_shape_desc *d) {
     case MESO_SHAPE_TORUS: /* tube cells as long as wide, on the tube's centre circle */
         return rounded_count(n * (double)d->minor_radius / d->size, 3);
     case MESO_SHAPE_CYLINDER:
-        return rounded_count(n * (double)d->height / (2.0 * M_PI * d->size), 1);
+        return rounded_count(n * (double)d->height / (2.0 * MESO_PI_D * d->size), 1);
     case MESO_SHAPE_VASE: {
         double length, max_radius, height;
         vase_measure(&length, &max_radius, &height);
-        int nv = rounded_count(n * length / (2.0 * M_PI * max_radius), 4);
+        int nv = rounded_count(n * length / (2.0 * MESO_PI_D * max_radius), 4);
         return nv > MAX_ROUND_SEGMENTS ? MAX_ROUND_SEGMENTS : nv;
     }
     default: /* plane: square cells; teapot: per patch side */

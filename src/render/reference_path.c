@@ -69,7 +69,7 @@ static meso_vec3 cosine_direction(meso_vec3 n, float u1, float u2) {
     float a = -1.0f / (sign + n.z), b = n.x * n.y * a;
     meso_vec3 t = {1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x};
     meso_vec3 s = {b, sign + n.y * n.y * a, -n.y};
-    float r = sqrtf(u1), phi = 6.28318530718f * u2;
+    float r = sqrtf(u1), phi = 2.0f * MESO_PI * u2;
     float x = r * cosf(phi), y = r * sinf(phi), z = sqrtf(fmaxf(0.0f, 1.0f - u1));
     return meso_vec3_normalize(meso_vec3_add(
         meso_vec3_add(meso_vec3_scale(t, x), meso_vec3_scale(s, y)), meso_vec3_scale(n, z)));
@@ -135,7 +135,7 @@ static meso_vec3 irradiance(const path_job *pj, const reference_hit *hit, int bo
         rtcInitIntersectContext(&context);
         if (cosine > 0.0f && meso_vec3_dot(ng, w) > 0.0f &&
             reference_unoccluded(pj->reference->scene, &context, hit->origin, w, INFINITY)) {
-            float pdf_cosine = cosine * (float)M_1_PI;
+            float pdf_cosine = cosine * MESO_INV_PI;
             float weight = pdf_light / (pdf_light + pdf_cosine);
             e = meso_vec3_madd(e, meso_environment_radiance(env, w), cosine / pdf_light * weight);
         }
@@ -150,13 +150,13 @@ static meso_vec3 irradiance(const path_job *pj, const reference_hit *hit, int bo
     reference_hit next;
     if (!reference_trace(pj->reference, &context, hit->origin, w, 0.0f, &next)) {
         if (env) {
-            float pdf_cosine = cosine * (float)M_1_PI;
+            float pdf_cosine = cosine * MESO_INV_PI;
             float weight = pdf_cosine / (pdf_cosine + meso_environment_pdf(env, w));
             /* L cos / pdf_cosine = L pi */
-            e = meso_vec3_madd(e, meso_environment_radiance(env, w), (float)M_PI * weight);
+            e = meso_vec3_madd(e, meso_environment_radiance(env, w), MESO_PI * weight);
         }
     } else if (bounces_left > 0) {
-        e = meso_vec3_madd(e, surface_radiance(pj, &next, bounces_left - 1, random), (float)M_PI);
+        e = meso_vec3_madd(e, surface_radiance(pj, &next, bounces_left - 1, random), MESO_PI);
     }
     return e;
 }
@@ -175,7 +175,7 @@ static meso_vec3 surface_radiance(const path_job *pj, const reference_hit *hit, 
             direct = meso_vec3_madd(direct, scene->lights[l].color, cosine * visibility[l]);
     }
     meso_vec3 e = irradiance(pj, hit, bounces_left, random);
-    return meso_vec3_mul(albedo_at(pj, hit), meso_vec3_madd(direct, e, (float)M_1_PI));
+    return meso_vec3_mul(albedo_at(pj, hit), meso_vec3_madd(direct, e, MESO_INV_PI));
 }
 
 /* ---- The RTV mode: GDM-GI's shading at the true hit (docs/techniques/gdm-gi.md) ------------ */
@@ -309,7 +309,7 @@ static void path_tile(void *user, size_t job, int thread_index) {
             for (int s = first; s < last; s++) {
                 path_random random = random_for(pixel, s);
                 meso_vec3 e = irradiance(pj, &hit, pj->bounces, &random);
-                meso_vec3 reflected = meso_vec3_scale(meso_vec3_mul(albedo, e), (float)M_1_PI);
+                meso_vec3 reflected = meso_vec3_scale(meso_vec3_mul(albedo, e), MESO_INV_PI);
                 sum[0] += reflected.x, sum[1] += reflected.y, sum[2] += reflected.z;
             }
         }

@@ -117,7 +117,7 @@ static inline void meso_gi_reflected_from_below(const float radiance[3][MESO_SH_
                                                 float out_rgb[3]) {
     for (int c = 0; c < 3; c++)
         out_rgb[c] =
-            fmaxf(0.0f, meso_sh_irradiance(radiance[c], (meso_vec3){0, 0, -1}) * (float)M_1_PI);
+            fmaxf(0.0f, meso_sh_irradiance(radiance[c], (meso_vec3){0, 0, -1}) * MESO_INV_PI);
 }
 
 #endif

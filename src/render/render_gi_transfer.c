@@ -142,7 +142,7 @@ meso_result meso_gi_vertex_radiance_through_shell(meso_context *ctx, const meso_
         goto done;
     }
     /* per direction: w L(d) Y_i(d), L from the environment's SH, clamped at 0 */
-    float weight = (float)(4.0 * M_PI / directions);
+    float weight = (float)(4.0 * MESO_PI_D / directions);
     for (int d = 0; d < directions; d++) {
         direction[d] = meso_gi_fibonacci_direction(d, directions);
         float y[MESO_SH_COUNT];
@@ -275,7 +275,7 @@ meso_vec3 meso_gi_interior_radiance(const meso_mesh *mesh, const float *radiance
         float rho = meso_clampf((&albedo.x)[ch], 0.0f, 1.0f);
         float sky = scene->environment ? 0.282095f * scene->environment->sh[ch][0] : 0.0f;
         float wall = tau < 1.0f ? rho * tau * (&e.x)[ch] /
-                                      ((float)M_PI * (1.0f - tau) * (1.0f - rho * (1.0f - tau)))
+                                      (MESO_PI * (1.0f - tau) * (1.0f - rho * (1.0f - tau)))
                                 : 0.0f;
         (&out.x)[ch] = (1.0f - tau) * wall + tau * fmaxf(sky, 0.0f);
     }

@@ -8,7 +8,7 @@
 
 #include "test_util.h"
 
-#define PI 3.14159265358979323846
+#define PI MESO_PI_D
 
 /* A small table: 16 x 16 x 8 voxels, 8 x 8 directions (the surface is still extracted at its
  * floor of 128 x 128 x 64 cells, as for the defaults). */

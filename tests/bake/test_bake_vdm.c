@@ -5,7 +5,7 @@
 
 #include "test_util.h"
 
-#define HALF_PI 1.57079632679489661923
+#define HALF_PI (0.5 * MESO_PI_D)
 
 /* A height field built by hand (no dependency on the mesostructure generators). */
 static meso_heightfield *make_heightfield(int width, int height) {
