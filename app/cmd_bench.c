@@ -1,6 +1,7 @@
 /* meso bench: median time per frame of techniques on scenes, and their thread scaling. */
 #include "app.h"
 #include "app_backend.h"
+#include "render_camera.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -36,6 +37,11 @@ static const app_command_help bench_help = {
         "table; --json writes the same numbers. --backend gl (or cpu,gl: both, side by side)\n"
         "times the GLSL shaders on OpenGL (docs/gpu.md), drawing and reading back the frame;\n"
         "the GL uses its own threads, so it has no one-thread column.\n\n"
+        "The camera stands still unless --orbit N turns it about its target by 1/N of a turn\n"
+        "every frame, warm-up frames included, from the scene's camera for each run (so both\n"
+        "thread counts see the same views): what a technique keeps from one frame to the next\n"
+        "while the view stays (tessellation's traversals, shadow maps of the camera's mesh)\n"
+        "then counts as it would in an animation.\n\n"
         "With --profile each row also gives the cost model of docs/performance.md, from the\n"
         "one-thread run: covered pixels of the frame, fragments shaded a covered pixel,\n"
         "nanoseconds and time-stamp-counter cycles a covered pixel, and for techniques whose\n"
@@ -44,7 +50,8 @@ static const app_command_help bench_help = {
     .examples = "  meso bench\n"
                 "  meso bench examples/bricks-plane.json --techniques relief,parallax --frames 10\n"
                 "  meso bench --size 256x256 --seconds 1 --json bench.json\n"
-                "  meso bench examples/bricks-plane.json --techniques relief --backend cpu,gl\n",
+                "  meso bench examples/bricks-plane.json --techniques relief --backend cpu,gl\n"
+                "  meso bench examples/bricks-teapot.json --techniques tessellation --orbit 120\n",
 };
 
 typedef struct bench_options {
@@ -57,6 +64,7 @@ typedef struct bench_options {
     app_settings settings; /* --set */
     const char *backends;  /* --backend: "cpu", "gl" or "cpu,gl" */
     const char *shader_dir;
+    int orbit; /* frames a turn of the camera about its target; 0: a still camera */
 } bench_options;
 
 typedef struct bench_row {
@@ -79,27 +87,42 @@ typedef struct bench_scene {
     meso_scene *scene;
 } bench_scene;
 
+/* With --orbit, the camera of the run's frame-th frame (warm-up frames counted): turned
+ * frame/orbit of a turn from the scene's own (app_render_orbit's turntable). */
+static void orbit_camera(meso_scene *scene, const meso_camera *home, const bench_options *o,
+                         int frame) {
+    if (o->orbit <= 0) return;
+    view_camera home_view = app_camera_to_view(home);
+    view_camera turned = view_camera_turntable(&home_view, frame, o->orbit);
+    scene->camera = frame % o->orbit == 0 ? *home : app_camera_from_view(&turned);
+}
+
 /* Time frames of a prepared renderer: the median in ms, frames counted in *out_frames. */
-static meso_result time_frames(app_renderer *renderer, meso_framebuffer *fb, const bench_options *o,
-                               double *times, double *cycles, double *out_ms, double *out_cycles,
-                               int *out_frames) {
+static meso_result time_frames(app_renderer *renderer, meso_framebuffer *fb, meso_scene *scene,
+                               const bench_options *o, double *times, double *cycles,
+                               double *out_ms, double *out_cycles, int *out_frames) {
+    const meso_camera home = scene->camera;
+    int frame = 0;
+    meso_result result = MESO_OK;
     double warmup_start = meso_time_seconds();
     for (int i = 0; i < WARMUP_FRAMES && meso_time_seconds() - warmup_start < WARMUP_SECONDS; i++) {
-        meso_result result = app_renderer_render(renderer, fb);
-        if (result != MESO_OK) return result;
+        orbit_camera(scene, &home, o, frame++);
+        result = app_renderer_render(renderer, fb);
+        if (result != MESO_OK) break;
     }
     int limit = o->frames > 0 ? o->frames : o->seconds > 0.0 ? MAX_FRAMES : DEFAULT_FRAMES;
     double seconds = o->seconds > 0.0 ? o->seconds : o->frames > 0 ? 0.0 : DEFAULT_SECONDS;
     double start = meso_time_seconds();
     int count = 0;
-    while (count < limit &&
+    while (result == MESO_OK && count < limit &&
            (count == 0 || seconds <= 0.0 || meso_time_seconds() - start < seconds)) {
+        orbit_camera(scene, &home, o, frame++);
         double t = meso_time_seconds();
 #if BENCH_HAS_TSC
         unsigned long long c = __rdtsc();
 #endif
-        meso_result result = app_renderer_render(renderer, fb);
-        if (result != MESO_OK) return result;
+        result = app_renderer_render(renderer, fb);
+        if (result != MESO_OK) break;
 #if BENCH_HAS_TSC
         cycles[count] = (double)(__rdtsc() - c);
 #else
@@ -107,6 +130,8 @@ static meso_result time_frames(app_renderer *renderer, meso_framebuffer *fb, con
 #endif
         times[count++] = 1000.0 * (meso_time_seconds() - t);
     }
+    scene->camera = home;
+    if (result != MESO_OK) return result;
     *out_ms = app_median(times, (size_t)count);
     *out_cycles = app_median(cycles, (size_t)count);
     *out_frames = count;
@@ -165,8 +190,8 @@ static meso_result bench_one(meso_context *ctx, const bench_scene *s, const char
     if (result == MESO_OK) {
         row->prepare_ms = 1000.0 * app_renderer_get_stats(&renderer).prepare_seconds;
         double frame_cycles;
-        result =
-            time_frames(&renderer, fb, o, times, cycles, &row->ms, &frame_cycles, &row->frames);
+        result = time_frames(&renderer, fb, s->scene, o, times, cycles, &row->ms, &frame_cycles,
+                             &row->frames);
         if (threads == 1 && !renderer.gl)
             row->ms_single = row->ms, row->cycles_single = frame_cycles;
     }
@@ -174,8 +199,8 @@ static meso_result bench_one(meso_context *ctx, const bench_scene *s, const char
     if (result == MESO_OK && threads > 1 && !renderer.gl) {
         int frames = 0;
         meso_context_set_num_threads(ctx, 1);
-        result = time_frames(&renderer, fb, o, times, cycles, &row->ms_single, &row->cycles_single,
-                             &frames);
+        result = time_frames(&renderer, fb, s->scene, o, times, cycles, &row->ms_single,
+                             &row->cycles_single, &frames);
         meso_context_set_num_threads(ctx, threads);
     }
     if (result == MESO_OK && o->profile) {
@@ -242,8 +267,8 @@ static meso_result write_json(meso_context *ctx, const char *path, const bench_r
     app_text_json_number(&json, load);
     app_text_printf(&json,
                     ",\n  \"threads\": %d,\n  \"width\": %d,\n  \"height\": %d,\n"
-                    "  \"warmup_frames\": %d,\n  \"runs\": [",
-                    threads, o->size.width, o->size.height, WARMUP_FRAMES);
+                    "  \"warmup_frames\": %d,\n  \"orbit\": %d,\n  \"runs\": [",
+                    threads, o->size.width, o->size.height, WARMUP_FRAMES, o->orbit);
     for (size_t i = 0; i < count; i++) {
         const bench_row *r = &rows[i];
         app_text_printf(&json, "%s\n    {\"scene\": ", i ? "," : "");
@@ -327,6 +352,9 @@ int meso_cmd_bench(int argc, char **argv) {
          0, 0},
         {"--shader-dir", NULL, APP_OPTION_STRING, &o.shader_dir, "DIR",
          "with --backend gl: read the shader files from DIR", "the built-in ones", 0, 0},
+        {"--orbit", NULL, APP_OPTION_INT, &o.orbit, "N",
+         "turn the camera about its target by 1/N of a turn every frame", "a still camera", 1,
+         1000000},
     };
     app_globals globals;
     const char *paths[MAX_SCENES];
@@ -370,13 +398,18 @@ int meso_cmd_bench(int argc, char **argv) {
     strftime(date, sizeof(date), "%Y-%m-%d %H:%M UTC", gmtime(&now));
     int threads = meso_context_num_threads(ctx);
     double load = app_load_average();
+    char orbit_text[64] = "a still camera";
+    if (o.orbit > 0)
+        snprintf(orbit_text, sizeof(orbit_text), "the camera turning 1/%d of a turn a frame",
+                 o.orbit);
     if (result == MESO_OK)
         printf("machine: %s; %d worker thread(s); load average %.2f at the start\n"
-               "%dx%d, %d warm-up frames, median of %s per run\n\n",
+               "%dx%d, %d warm-up frames, median of %s per run, %s\n\n",
                machine, threads, load, o.size.width, o.size.height, WARMUP_FRAMES,
                o.frames          ? "--frames frames"
                : o.seconds > 0.0 ? "--seconds of frames"
-                                 : "30 frames (at most 10 s)");
+                                 : "30 frames (at most 10 s)",
+               orbit_text);
 
     meso_progress *progress = NULL;
     if (result == MESO_OK)

@@ -1,4 +1,5 @@
 /* meso bench and meso info: what they print and write. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -114,6 +115,35 @@ static void test_app_bench_profile_reports_cost_per_pixel(void **state) {
     assert_true(steps == 66.0);
 }
 
+/* The covered pixels of the last frame bench's --profile reports for flat on bricks-plane. */
+static double bench_covered_pixels(const char *extra) {
+    static char out[65536];
+    char args[4096];
+    snprintf(args, sizeof(args),
+             "bench %s --techniques flat --frames 1 --size 64x48 --threads 1 --profile %s", BRICKS,
+             extra);
+    assert_int_equal(run_capture_stdout(args, out, sizeof(out)), 0);
+    const char *profile = strstr(out, "per covered pixel");
+    if (!profile) fail_msg("no profile table:\n%s", out);
+    const char *row = strstr(profile, "bricks-plane");
+    if (!row) fail_msg("no profile row:\n%s", out);
+    double covered = -1.0;
+    assert_int_equal(sscanf(row + strlen("bricks-plane"), " flat %lf", &covered), 1);
+    return covered;
+}
+
+/* --orbit N turns the camera 1/N of a turn a frame: the one-thread run's last frame (2 warm-up
+ * frames and 1 timed: the third) sees the square plane 45 degrees round with N = 16, so it
+ * covers other pixels; with N = 1 every frame is the scene's own view again. */
+static void test_app_bench_orbit_turns_the_camera(void **state) {
+    (void)state;
+    double still = bench_covered_pixels("");
+    assert_true(still > 0.0);
+    assert_true(bench_covered_pixels("--orbit 1") == still);
+    double turned = bench_covered_pixels("--orbit 16");
+    if (!(fabs(turned - still) > 10.0)) fail_msg("covered %g turned, %g still", turned, still);
+}
+
 static void test_app_bench_unknown_technique_is_usage_error(void **state) {
     (void)state;
     const char *err = NULL;
@@ -181,6 +211,7 @@ int main(void) {
         cmocka_unit_test(test_app_info_says_where_the_shell_folds),
         cmocka_unit_test(test_app_bench_prints_table_and_writes_json),
         cmocka_unit_test(test_app_bench_profile_reports_cost_per_pixel),
+        cmocka_unit_test(test_app_bench_orbit_turns_the_camera),
         cmocka_unit_test(test_app_bench_unknown_technique_is_usage_error),
         cmocka_unit_test(test_app_info_describes_scene_png_and_bake),
         cmocka_unit_test(test_app_info_on_folder_is_bad_input),
