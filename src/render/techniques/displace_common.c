@@ -4,6 +4,7 @@
 #include "displace_common.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -128,6 +129,31 @@ typedef struct tess_scratch {
     size_t cap_stack;
 } tess_scratch;
 
+/* A displaced midpoint remembered across runs (displace_tessellator_run): its inputs, what
+ * displace_vertex_finish and vertex_static derived from them, and the edge's decision with the
+ * end points' fields it read. */
+typedef struct tess_memo {
+    uint64_t key; /* base triangle and grid point (memo_key) */
+    /* the inputs, laid out as displace_vertex's base ... uv (compared as one block) */
+    meso_vec3 base, normal, tangent, bitangent;
+    meso_vec2 uv;
+    /* derived */
+    meso_vec2 texture_uv;
+    meso_vec3 unit_normal, position, surface_normal;
+    float height;
+    /* the decision's other inputs: a's and b's uv and surface normal, in the canonical order */
+    meso_vec2 uv_a, uv_b;
+    meso_vec3 surface_normal_a, surface_normal_b;
+    uint8_t decided, inserted;
+    uint8_t counters; /* bit c: the decision incremented counter c */
+} tess_memo;
+
+#define MEMO_INPUT_BYTES (4 * sizeof(meso_vec3) + sizeof(meso_vec2))
+_Static_assert(offsetof(displace_vertex, uv) - offsetof(displace_vertex, base) ==
+                       4 * sizeof(meso_vec3) &&
+                   offsetof(tess_memo, uv) - offsetof(tess_memo, base) == 4 * sizeof(meso_vec3),
+               "the inputs are one block of base, normal, tangent, bitangent, uv");
+
 typedef struct tess_job {
     size_t first, count; /* base triangles */
     size_t num_vertices, cap_vertices, num_triangles, cap_triangles;
@@ -137,6 +163,13 @@ typedef struct tess_job {
     size_t vertex_offset, triangle_offset; /* in the joined mesh */
     displace_tess_stats stats;
     meso_result result;
+    /* the remembered midpoints of this job's triangles: entries, and an open-addressing table
+     * of entry index + 1 (0: empty) with 2^memo_bits slots, at most half full */
+    tess_memo *memo;
+    uint32_t *memo_slots;
+    size_t num_memo;
+    int memo_bits;
+    size_t memo_used; /* entries read or written by the last run */
 } tess_job;
 
 struct displace_tessellator {
@@ -214,6 +247,8 @@ fail:
 }
 
 static void job_free(tess_job *job) {
+    free(job->memo);
+    free(job->memo_slots);
     free(job->positions);
     free(job->normals);
     free(job->tangents);
@@ -250,9 +285,13 @@ size_t displace_tessellator_memory(const displace_tessellator *t) {
     size_t bytes = sizeof(*t) + t->surface->base->num_vertices * sizeof(displace_vertex) +
                    t->cap_vertices * (4 * sizeof(meso_vec3) + sizeof(meso_vec2)) +
                    t->cap_triangles * 3 * sizeof(uint32_t);
-    for (size_t j = 0; j < t->num_jobs; j++)
+    for (size_t j = 0; j < t->num_jobs; j++) {
         bytes += t->jobs[j].cap_vertices * (4 * sizeof(meso_vec3) + sizeof(meso_vec2)) +
                  t->jobs[j].cap_triangles * 3 * sizeof(uint32_t);
+        if (t->jobs[j].memo_slots) /* half as many entries as slots */
+            bytes +=
+                ((size_t)1 << t->jobs[j].memo_bits) * (sizeof(uint32_t) + sizeof(tess_memo) / 2);
+    }
     size_t side = (size_t)t->n + 1;
     for (int i = 0; i < t->num_threads; i++)
         bytes += t->scratch[i].cap_nodes * sizeof(displace_vertex) + side * side * 8;
@@ -316,6 +355,70 @@ static bool emit_triangle(tess_scratch *s, tess_job *job, const tess_entry *e) {
     return true;
 }
 
+/* ---- Midpoints remembered across runs ---------------------------------------------------- */
+
+/* grid coordinates are at most 2^DISPLACE_MAX_LEVEL: 11 bits each */
+static uint64_t memo_key(size_t triangle, int32_t kb, int32_t kc) {
+    return ((uint64_t)triangle << 22) | ((uint64_t)kb << 11) | (uint64_t)kc;
+}
+
+/* The slot holding key, or the empty slot where it would go (the table is never full). */
+static uint32_t *memo_slot(const tess_job *job, uint64_t key) {
+    size_t mask = ((size_t)1 << job->memo_bits) - 1;
+    size_t i = (size_t)((key * 0x9E3779B97F4A7C15ull) >> (64 - job->memo_bits));
+    for (;;) {
+        uint32_t e = job->memo_slots[i];
+        if (e == 0 || job->memo[e - 1].key == key) return &job->memo_slots[i];
+        i = (i + 1) & mask;
+    }
+}
+
+static tess_memo *memo_find(const tess_job *job, uint64_t key) {
+    if (!job->memo_slots) return NULL;
+    uint32_t e = *memo_slot(job, key);
+    return e ? &job->memo[e - 1] : NULL;
+}
+
+/* Twice the slots, the entries rehashed; false when out of memory (the job then remembers no
+ * more: the memo is a shortcut, not needed for the result). */
+static bool memo_grow(tess_job *job) {
+    int bits = job->memo_slots ? job->memo_bits + 1 : 12;
+    if (bits > 31) return false;
+    size_t slots = (size_t)1 << bits;
+    tess_memo *memo = realloc(job->memo, slots / 2 * sizeof(*memo));
+    if (!memo) return false;
+    job->memo = memo;
+    uint32_t *table = calloc(slots, sizeof(*table));
+    if (!table) return false;
+    free(job->memo_slots);
+    job->memo_slots = table;
+    job->memo_bits = bits;
+    for (size_t e = 0; e < job->num_memo; e++) *memo_slot(job, job->memo[e].key) = (uint32_t)e + 1;
+    return true;
+}
+
+/* The entry for key, made (undecided) if there is none; NULL when out of memory. */
+static tess_memo *memo_store(tess_job *job, uint64_t key) {
+    if (!job->memo_slots || (job->num_memo + 1) * 2 > ((size_t)1 << job->memo_bits))
+        if (!memo_grow(job)) return NULL;
+    uint32_t *slot = memo_slot(job, key);
+    if (*slot) return &job->memo[*slot - 1];
+    tess_memo *e = &job->memo[job->num_memo++];
+    e->key = key;
+    *slot = (uint32_t)job->num_memo;
+    return e;
+}
+
+/* At a run's start: forget everything when the entries outgrow twice what the last run used (a
+ * moving camera leaves midpoints behind that it may never reach again). */
+static void memo_trim(tess_job *job) {
+    if (job->memo_slots && job->num_memo > 2 * job->memo_used + 4096) {
+        job->num_memo = 0;
+        memset(job->memo_slots, 0, ((size_t)1 << job->memo_bits) * sizeof(*job->memo_slots));
+    }
+    job->memo_used = 0;
+}
+
 static int32_t node_at(tess_scratch *s, int32_t n, int32_t kb, int32_t kc) {
     size_t cell = (size_t)kb * ((size_t)n + 1) + (size_t)kc;
     return s->stamp[cell] == s->current ? s->grid[cell] : -1;
@@ -370,8 +473,71 @@ static bool reserve_node(const displace_tessellator *t, tess_scratch *s, tess_jo
     return true;
 }
 
+/* m's derived fields and the decision on its edge: remembered from an earlier run when m's
+ * inputs (and for the decision a's and b's fields it reads) are bit for bit the same, else
+ * computed and remembered. a and b in the canonical order. */
+static void midpoint_derive(const displace_tessellator *t, tess_job *job, size_t triangle,
+                            const displace_vertex *a, const displace_vertex *b,
+                            displace_vertex *m) {
+    const displace_edge_tests *tests = t->tests;
+    uint64_t key = memo_key(triangle, m->key_b, m->key_c);
+    tess_memo *e = memo_find(job, key);
+    bool known = e && memcmp(&e->base, &m->base, MEMO_INPUT_BYTES) == 0;
+    if (known) {
+        m->texture_uv = e->texture_uv;
+        m->unit_normal = e->unit_normal;
+        m->height = e->height;
+        m->position = e->position;
+        m->surface_normal = e->surface_normal;
+    } else {
+        /* "Displace midpoint", "Calculate surface normal" */
+        displace_vertex_finish(t->surface, m);
+        m->surface_normal = m->unit_normal;
+        if (tests && tests->vertex_static) tests->vertex_static(tests->user, m);
+    }
+    /* "Transform midpoint": the frame's */
+    m->clip = (meso_vec4){0, 0, 0, 1};
+    if (tests && tests->vertex_hook) tests->vertex_hook(tests->user, m);
+    bool view_independent = tests && tests->view_independent_insert;
+    if (known && view_independent && e->decided && memcmp(&e->uv_a, &a->uv, sizeof(a->uv)) == 0 &&
+        memcmp(&e->uv_b, &b->uv, sizeof(b->uv)) == 0 &&
+        memcmp(&e->surface_normal_a, &a->surface_normal, sizeof(meso_vec3)) == 0 &&
+        memcmp(&e->surface_normal_b, &b->surface_normal, sizeof(meso_vec3)) == 0) {
+        m->inserted = (int8_t)e->inserted;
+        for (int c = 0; c < DISPLACE_NUM_COUNTERS; c++)
+            job->stats.counters[c] += (uint64_t)((e->counters >> c) & 1u);
+        job->memo_used++;
+        return;
+    }
+    uint64_t before[DISPLACE_NUM_COUNTERS];
+    memcpy(before, job->stats.counters, sizeof(before));
+    m->inserted = decide(t, a, b, m, job) ? 1 : 0;
+    if (!known && !(e = memo_store(job, key))) return;
+    job->memo_used++;
+    if (!known) {
+        memcpy(&e->base, &m->base, MEMO_INPUT_BYTES);
+        e->texture_uv = m->texture_uv;
+        e->unit_normal = m->unit_normal;
+        e->height = m->height;
+        e->position = m->position;
+        e->surface_normal = m->surface_normal;
+        e->decided = 0;
+    }
+    if (view_independent) {
+        e->uv_a = a->uv;
+        e->uv_b = b->uv;
+        e->surface_normal_a = a->surface_normal;
+        e->surface_normal_b = b->surface_normal;
+        e->inserted = (uint8_t)m->inserted;
+        e->counters = 0;
+        for (int c = 0; c < DISPLACE_NUM_COUNTERS; c++)
+            if (job->stats.counters[c] != before[c]) e->counters |= (uint8_t)(1u << c);
+        e->decided = 1;
+    }
+}
+
 static int32_t edge_midpoint(const displace_tessellator *t, tess_scratch *s, tess_job *job,
-                             int32_t p, int32_t q) {
+                             size_t triangle, int32_t p, int32_t q) {
     /* before taking pointers into the node array: growing it moves it */
     if (!reserve_node(t, s, job)) return -1;
     const displace_vertex *a = &s->nodes[p], *b = &s->nodes[q];
@@ -406,13 +572,7 @@ static int32_t edge_midpoint(const displace_tessellator *t, tess_scratch *s, tes
     order_edge(&a, &b);
     if (!vetoed(t, a, b, m, job)) {
         vertex_midpoint_frame(a, b, m); /* commutative sums: the order does not matter */
-        /* "Displace midpoint", "Transform midpoint", "Calculate surface normal" */
-        displace_vertex_finish(t->surface, m);
-        m->surface_normal = m->unit_normal;
-        m->clip = (meso_vec4){0, 0, 0, 1};
-        if (t->tests && t->tests->vertex_static) t->tests->vertex_static(t->tests->user, m);
-        if (t->tests && t->tests->vertex_hook) t->tests->vertex_hook(t->tests->user, m);
-        m->inserted = decide(t, a, b, m, job) ? 1 : 0;
+        midpoint_derive(t, job, triangle, a, b, m);
     }
     node_store(s, t->n, index);
     return m->inserted ? index : -1;
@@ -465,7 +625,7 @@ static bool tessellate_triangle(const displace_tessellator *t, tess_scratch *s, 
         int32_t m[3];
         int present = 0;
         for (int k = 0; k < 3; k++) {
-            m[k] = edge_midpoint(t, s, job, e.v[k], e.v[(k + 1) % 3]);
+            m[k] = edge_midpoint(t, s, job, triangle, e.v[k], e.v[(k + 1) % 3]);
             present += m[k] >= 0;
         }
         if (job->result != MESO_OK) return false;
@@ -517,6 +677,7 @@ static void run_job(void *user, size_t index, int thread_index) {
     job.num_vertices = job.num_triangles = 0;
     memset(&job.stats, 0, sizeof(job.stats));
     job.result = MESO_OK;
+    memo_trim(&job);
     for (size_t i = 0; i < job.count; i++)
         if (!tessellate_triangle(t, &s, &job, job.first + i)) break;
     t->jobs[index] = job;

@@ -189,6 +189,11 @@ typedef struct displace_edge_tests {
     bool (*insert)(const void *user, const displace_vertex *a, const displace_vertex *b,
                    const displace_vertex *m, uint64_t *counters);
     const void *user;
+    /* true: insert reads only uv, texture_uv and surface_normal of a and b and the fields of m
+     * vertex_static and displace_vertex_finish set (none of the frame's), and increments each
+     * counter at most once; the tessellator then keeps a displaced midpoint's derived fields
+     * and its decision across runs (displace_tessellator_run) */
+    bool view_independent_insert;
 } displace_edge_tests;
 
 typedef struct displace_tess_stats {
@@ -206,7 +211,15 @@ typedef struct displace_tessellator displace_tessellator;
 meso_result displace_tessellator_create(meso_context *ctx, const displace_surface *surface,
                                         int max_level, displace_tessellator **out_tessellator);
 /* Tessellate every base triangle (in parallel, fixed jobs: byte-identical for any thread
- * count). *out_mesh is owned by the tessellator and valid until the next run. */
+ * count). *out_mesh is owned by the tessellator and valid until the next run.
+ *
+ * Across runs (frames) the tessellator remembers, per base triangle and grid point, each
+ * displaced midpoint's inputs (its interpolated fields: base, normal, tangent, bitangent, uv)
+ * and what was derived from them (displace_vertex_finish and vertex_static: both pure functions
+ * of those inputs); with view_independent_insert also the decision and the end points' fields
+ * it read. A midpoint whose inputs are bit for bit the remembered ones takes the remembered
+ * results instead of computing them again: the same bits as computing them, so the same mesh,
+ * for any camera. Only vetoes and the vertex hook (the frame's transform) run again. */
 meso_result displace_tessellator_run(meso_context *ctx, displace_tessellator *tessellator,
                                      const displace_edge_tests *tests, const meso_mesh **out_mesh,
                                      displace_tess_stats *out_stats);
