@@ -48,6 +48,13 @@ meso_vec2 displace_gradient(const displace_surface *surface, meso_vec2 uv) {
     return displace_heightfield_gradient(surface->heightfield, t.x, t.y);
 }
 
+/* DESIGN.md: P' = P - (1 - h) depth N, N the normalised interpolated vertex normal */
+static meso_vec3 displaced_position(const displace_surface *surface,
+                                    const displace_vertex *vertex) {
+    return meso_vec3_madd(vertex->base, vertex->unit_normal,
+                          -(1.0f - vertex->height) * surface->depth);
+}
+
 void displace_vertex_finish(const displace_surface *surface, displace_vertex *vertex) {
     vertex->texture_uv = displace_texture_uv(surface, vertex->uv);
     vertex->unit_normal = meso_vec3_normalize(vertex->normal);
@@ -55,9 +62,7 @@ void displace_vertex_finish(const displace_surface *surface, displace_vertex *ve
                          ? meso_heightfield_sample(surface->heightfield, vertex->texture_uv.x,
                                                    vertex->texture_uv.y)
                          : 1.0f;
-    /* DESIGN.md: P' = P - (1 - h) depth N, N the normalised interpolated vertex normal */
-    vertex->position = meso_vec3_madd(vertex->base, vertex->unit_normal,
-                                      -(1.0f - vertex->height) * surface->depth);
+    vertex->position = displaced_position(surface, vertex);
 }
 
 int displace_texel_level(const displace_surface *surface, int max_level) {
@@ -137,9 +142,9 @@ typedef struct tess_memo {
     /* the inputs, laid out as displace_vertex's base ... uv (compared as one block) */
     meso_vec3 base, normal, tangent, bitangent;
     meso_vec2 uv;
-    /* derived */
-    meso_vec2 texture_uv;
-    meso_vec3 unit_normal, position, surface_normal;
+    /* derived (texture_uv and position are computed again from these: cheap, and a fifth of
+     * the bytes) */
+    meso_vec3 unit_normal, surface_normal;
     float height;
     /* the decision's other inputs: a's and b's uv and surface normal, in the canonical order */
     meso_vec2 uv_a, uv_b;
@@ -167,7 +172,7 @@ typedef struct tess_job {
      * of entry index + 1 (0: empty) with 2^memo_bits slots, at most half full */
     tess_memo *memo;
     uint32_t *memo_slots;
-    size_t num_memo;
+    size_t num_memo, cap_memo;
     int memo_bits;
     size_t memo_used; /* entries read or written by the last run */
 } tess_job;
@@ -288,9 +293,9 @@ size_t displace_tessellator_memory(const displace_tessellator *t) {
     for (size_t j = 0; j < t->num_jobs; j++) {
         bytes += t->jobs[j].cap_vertices * (4 * sizeof(meso_vec3) + sizeof(meso_vec2)) +
                  t->jobs[j].cap_triangles * 3 * sizeof(uint32_t);
-        if (t->jobs[j].memo_slots) /* half as many entries as slots */
-            bytes +=
-                ((size_t)1 << t->jobs[j].memo_bits) * (sizeof(uint32_t) + sizeof(tess_memo) / 2);
+        if (t->jobs[j].memo_slots)
+            bytes += ((size_t)1 << t->jobs[j].memo_bits) * sizeof(uint32_t) +
+                     t->jobs[j].cap_memo * sizeof(tess_memo);
     }
     size_t side = (size_t)t->n + 1;
     for (int i = 0; i < t->num_threads; i++)
@@ -381,14 +386,10 @@ static tess_memo *memo_find(const tess_job *job, uint64_t key) {
 
 /* Twice the slots, the entries rehashed; false when out of memory (the job then remembers no
  * more: the memo is a shortcut, not needed for the result). */
-static bool memo_grow(tess_job *job) {
+static bool memo_grow_slots(tess_job *job) {
     int bits = job->memo_slots ? job->memo_bits + 1 : 12;
     if (bits > 31) return false;
-    size_t slots = (size_t)1 << bits;
-    tess_memo *memo = realloc(job->memo, slots / 2 * sizeof(*memo));
-    if (!memo) return false;
-    job->memo = memo;
-    uint32_t *table = calloc(slots, sizeof(*table));
+    uint32_t *table = calloc((size_t)1 << bits, sizeof(*table));
     if (!table) return false;
     free(job->memo_slots);
     job->memo_slots = table;
@@ -400,9 +401,16 @@ static bool memo_grow(tess_job *job) {
 /* The entry for key, made (undecided) if there is none; NULL when out of memory. */
 static tess_memo *memo_store(tess_job *job, uint64_t key) {
     if (!job->memo_slots || (job->num_memo + 1) * 2 > ((size_t)1 << job->memo_bits))
-        if (!memo_grow(job)) return NULL;
+        if (!memo_grow_slots(job)) return NULL;
     uint32_t *slot = memo_slot(job, key);
     if (*slot) return &job->memo[*slot - 1];
+    if (job->num_memo == job->cap_memo) { /* by a quarter: the entries are most of the bytes */
+        size_t cap = job->cap_memo < 1024 ? 1024 : job->cap_memo + job->cap_memo / 4;
+        tess_memo *grown = realloc(job->memo, cap * sizeof(*grown));
+        if (!grown) return NULL;
+        job->memo = grown;
+        job->cap_memo = cap;
+    }
     tess_memo *e = &job->memo[job->num_memo++];
     e->key = key;
     *slot = (uint32_t)job->num_memo;
@@ -483,11 +491,11 @@ static void midpoint_derive(const displace_tessellator *t, tess_job *job, size_t
     uint64_t key = memo_key(triangle, m->key_b, m->key_c);
     tess_memo *e = memo_find(job, key);
     bool known = e && memcmp(&e->base, &m->base, MEMO_INPUT_BYTES) == 0;
-    if (known) {
-        m->texture_uv = e->texture_uv;
+    if (known) { /* displace_vertex_finish's results, the two cheap ones computed again */
+        m->texture_uv = displace_texture_uv(t->surface, m->uv);
         m->unit_normal = e->unit_normal;
         m->height = e->height;
-        m->position = e->position;
+        m->position = displaced_position(t->surface, m);
         m->surface_normal = e->surface_normal;
     } else {
         /* "Displace midpoint", "Calculate surface normal" */
@@ -516,10 +524,8 @@ static void midpoint_derive(const displace_tessellator *t, tess_job *job, size_t
     job->memo_used++;
     if (!known) {
         memcpy(&e->base, &m->base, MEMO_INPUT_BYTES);
-        e->texture_uv = m->texture_uv;
         e->unit_normal = m->unit_normal;
         e->height = m->height;
-        e->position = m->position;
         e->surface_normal = m->surface_normal;
         e->decided = 0;
     }
