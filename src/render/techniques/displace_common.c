@@ -124,11 +124,50 @@ typedef struct tess_entry {
     int32_t depth;
 } tess_entry;
 
+/* A veto asked during a traversal: the nodes it read and its answer. */
+typedef struct tess_asked {
+    int32_t a, b, m;
+    int32_t vetoed;
+} tess_asked;
+
+/* What a replay of a traversal reads of a node: the vertex hook's inputs (of a displaced node)
+ * and the texel (of every node, for the recursion-limit test). */
+typedef struct tess_record_node {
+    meso_vec3 position, unit_normal;
+    int64_t texel_i, texel_j;
+    int32_t displaced;
+} tess_record_node;
+
+/* One base triangle's last traversal (displace_tessellator_run), in one block: its nodes, the
+ * vetoes in order, its output (vertices, indices from 0, each triangle's recursion depth). */
+typedef struct tess_record {
+    bool valid;
+    void *block;
+    size_t cap_bytes;
+    size_t num_nodes, num_asked, num_vertices, num_triangles;
+    tess_record_node *nodes;
+    tess_asked *asked;
+    meso_vec3 *positions, *normals, *tangents, *bitangents;
+    meso_vec2 *uvs;
+    uint32_t *indices;
+    uint8_t *depths;
+    uint64_t counters[DISPLACE_NUM_COUNTERS]; /* what the traversal added */
+    uint64_t grid_limited;
+    size_t memo_used;
+} tess_record;
+
 typedef struct tess_scratch {
     displace_vertex *nodes;
     size_t num_nodes, cap_nodes;
-    int32_t *grid;   /* (n+1)^2 node index per grid point ... */
-    uint32_t *stamp; /* ... valid when stamp == current (no clearing per triangle) */
+    /* the traversal being recorded: the vetoes asked and the depths of the emitted triangles */
+    bool recording;
+    tess_asked *asked;
+    size_t num_asked, cap_asked;
+    uint8_t *depths;
+    size_t num_depths, cap_depths;
+    bool record_failed; /* out of memory while logging: do not keep this traversal */
+    int32_t *grid;      /* (n+1)^2 node index per grid point ... */
+    uint32_t *stamp;    /* ... valid when stamp == current (no clearing per triangle) */
     uint32_t current;
     tess_entry *stack;
     size_t cap_stack;
@@ -174,7 +213,8 @@ typedef struct tess_job {
     uint32_t *memo_slots;
     size_t num_memo, cap_memo;
     int memo_bits;
-    size_t memo_used; /* entries read or written by the last run */
+    size_t memo_used;     /* entries read or written by the last run */
+    tess_record *records; /* count, one a base triangle (NULL until the first replayable run) */
 } tess_job;
 
 struct displace_tessellator {
@@ -252,6 +292,9 @@ fail:
 }
 
 static void job_free(tess_job *job) {
+    if (job->records)
+        for (size_t i = 0; i < job->count; i++) free(job->records[i].block);
+    free(job->records);
     free(job->memo);
     free(job->memo_slots);
     free(job->positions);
@@ -268,6 +311,8 @@ void displace_tessellator_destroy(displace_tessellator *t) {
         for (int i = 0; i < t->num_threads; i++) {
             free(t->scratch[i].nodes);
             free(t->scratch[i].grid);
+            free(t->scratch[i].asked);
+            free(t->scratch[i].depths);
             free(t->scratch[i].stamp);
             free(t->scratch[i].stack);
         }
@@ -293,6 +338,8 @@ size_t displace_tessellator_memory(const displace_tessellator *t) {
     for (size_t j = 0; j < t->num_jobs; j++) {
         bytes += t->jobs[j].cap_vertices * (4 * sizeof(meso_vec3) + sizeof(meso_vec2)) +
                  t->jobs[j].cap_triangles * 3 * sizeof(uint32_t);
+        if (t->jobs[j].records)
+            for (size_t i = 0; i < t->jobs[j].count; i++) bytes += t->jobs[j].records[i].cap_bytes;
         if (t->jobs[j].memo_slots)
             bytes += ((size_t)1 << t->jobs[j].memo_bits) * sizeof(uint32_t) +
                      t->jobs[j].cap_memo * sizeof(tess_memo);
@@ -356,7 +403,21 @@ static bool emit_triangle(tess_scratch *s, tess_job *job, const tess_entry *e) {
         job->indices[job->num_triangles * 3 + (size_t)k] = v->out_index;
     }
     job->num_triangles++;
-    job->stats.per_depth[e->depth < DISPLACE_MAX_DEPTH ? e->depth : DISPLACE_MAX_DEPTH - 1]++;
+    int depth = e->depth < DISPLACE_MAX_DEPTH ? e->depth : DISPLACE_MAX_DEPTH - 1;
+    job->stats.per_depth[depth]++;
+    if (s->recording) {
+        if (s->num_depths == s->cap_depths) {
+            size_t cap = s->cap_depths ? 2 * s->cap_depths : 1024;
+            uint8_t *grown = realloc(s->depths, cap);
+            if (!grown) {
+                s->record_failed = true;
+                return true;
+            }
+            s->depths = grown;
+            s->cap_depths = cap;
+        }
+        s->depths[s->num_depths++] = (uint8_t)depth;
+    }
     return true;
 }
 
@@ -450,11 +511,26 @@ static inline void order_edge(const displace_vertex **a, const displace_vertex *
     }
 }
 
-/* a and b in the canonical order (order_edge) */
-static bool vetoed(const displace_tessellator *t, const displace_vertex *a,
+/* a and b in the canonical order (order_edge); logged while recording */
+static bool vetoed(const displace_tessellator *t, tess_scratch *s, const displace_vertex *a,
                    const displace_vertex *b, const displace_vertex *m, tess_job *job) {
     if (!t->tests || !t->tests->veto) return false;
-    return t->tests->veto(t->tests->user, a, b, m, job->stats.counters);
+    bool answer = t->tests->veto(t->tests->user, a, b, m, job->stats.counters);
+    if (s->recording) {
+        if (s->num_asked == s->cap_asked) {
+            size_t cap = s->cap_asked ? 2 * s->cap_asked : 1024;
+            tess_asked *grown = realloc(s->asked, cap * sizeof(*grown));
+            if (!grown) {
+                s->record_failed = true;
+                return answer;
+            }
+            s->asked = grown;
+            s->cap_asked = cap;
+        }
+        s->asked[s->num_asked++] = (tess_asked){(int32_t)(a - s->nodes), (int32_t)(b - s->nodes),
+                                                (int32_t)(m - s->nodes), answer};
+    }
+    return answer;
 }
 
 /* a and b in the canonical order (order_edge) */
@@ -562,7 +638,8 @@ static int32_t edge_midpoint(const displace_tessellator *t, tess_scratch *s, tes
          * different refinement branches). Decide for this edge with the stored vertex: it is
          * interior to the base triangle, so no neighbour depends on it; the answer is a
          * function of the records only (a vetoed vertex was never displaced: no). */
-        return m->inserted && !vetoed(t, a, b, m, job) && decide(t, a, b, m, job) ? existing : -1;
+        return m->inserted && !vetoed(t, s, a, b, m, job) && decide(t, a, b, m, job) ? existing
+                                                                                     : -1;
     }
     if (s->num_nodes >= s->cap_nodes) return -1; /* cannot happen: one node per grid point */
     int32_t index = (int32_t)s->num_nodes++;
@@ -575,8 +652,10 @@ static int32_t edge_midpoint(const displace_tessellator *t, tess_scratch *s, tes
     m->parent_b = hi;
     m->out_index = UINT32_MAX;
     m->inserted = 0;
+    m->displaced = 0;
     order_edge(&a, &b);
-    if (!vetoed(t, a, b, m, job)) {
+    if (!vetoed(t, s, a, b, m, job)) {
+        m->displaced = 1;
         vertex_midpoint_frame(a, b, m); /* commutative sums: the order does not matter */
         midpoint_derive(t, job, triangle, a, b, m);
     }
@@ -605,8 +684,8 @@ static float base_distance2(const tess_scratch *s, int32_t p, int32_t q) {
     return meso_vec3_dot(d, d);
 }
 
-static bool tessellate_triangle(const displace_tessellator *t, tess_scratch *s, tess_job *job,
-                                size_t triangle) {
+static bool traverse_triangle(const displace_tessellator *t, tess_scratch *s, tess_job *job,
+                              size_t triangle) {
     const meso_mesh *base = t->surface->base;
     if (++s->current == 0) { /* stamp wrapped: clear once every 2^32 triangles */
         memset(s->stamp, 0, ((size_t)t->n + 1) * ((size_t)t->n + 1) * sizeof(*s->stamp));
@@ -667,6 +746,163 @@ static bool tessellate_triangle(const displace_tessellator *t, tess_scratch *s, 
     return true;
 }
 
+/* ---- Replaying a base triangle's last traversal ------------------------------------------- */
+
+static bool replayable(const displace_tessellator *t) {
+    return t->tests && t->tests->view_independent_insert && t->tests->veto;
+}
+
+/* Carve the record's block into its arrays for the sizes set (8-byte aligned pieces). */
+static bool record_layout(tess_record *r) {
+    size_t sizes[10] = {r->num_nodes * sizeof(tess_record_node),
+                        r->num_asked * sizeof(tess_asked),
+                        r->num_vertices * sizeof(meso_vec3),
+                        r->num_vertices * sizeof(meso_vec3),
+                        r->num_vertices * sizeof(meso_vec3),
+                        r->num_vertices * sizeof(meso_vec3),
+                        r->num_vertices * sizeof(meso_vec2),
+                        r->num_triangles * 3 * sizeof(uint32_t),
+                        r->num_triangles,
+                        0};
+    size_t total = 0;
+    for (int k = 0; k < 9; k++) total += (sizes[k] + 7) & ~(size_t)7;
+    if (total > r->cap_bytes) {
+        void *grown = realloc(r->block, total);
+        if (!grown) return false;
+        r->block = grown;
+        r->cap_bytes = total;
+    }
+    char *p = r->block;
+    void **parts[9] = {(void **)&r->nodes,   (void **)&r->asked,    (void **)&r->positions,
+                       (void **)&r->normals, (void **)&r->tangents, (void **)&r->bitangents,
+                       (void **)&r->uvs,     (void **)&r->indices,  (void **)&r->depths};
+    for (int k = 0; k < 9; k++) {
+        *parts[k] = p;
+        p += (sizes[k] + 7) & ~(size_t)7;
+    }
+    return true;
+}
+
+/* Keep the traversal just made: nodes, the vetoes asked, the output from vertex v0 and
+ * triangle t0 of the job, and what it added to the statistics. */
+static void record_traversal(tess_record *r, const tess_scratch *s, const tess_job *job, size_t v0,
+                             size_t t0, const uint64_t *counters_before,
+                             uint64_t grid_limited_before, size_t memo_used_before) {
+    r->valid = false;
+    if (s->record_failed) return;
+    r->num_nodes = s->num_nodes;
+    r->num_asked = s->num_asked;
+    r->num_vertices = job->num_vertices - v0;
+    r->num_triangles = job->num_triangles - t0;
+    if (!record_layout(r)) return;
+    for (size_t i = 0; i < s->num_nodes; i++) {
+        const displace_vertex *v = &s->nodes[i];
+        tess_record_node *n = &r->nodes[i];
+        n->displaced = v->displaced;
+        n->texel_i = v->texel_i;
+        n->texel_j = v->texel_j;
+        if (v->displaced) {
+            n->position = v->position;
+            n->unit_normal = v->unit_normal;
+        }
+    }
+    memcpy(r->asked, s->asked, s->num_asked * sizeof(*s->asked));
+    size_t nv = r->num_vertices;
+    memcpy(r->positions, job->positions + v0, nv * sizeof(meso_vec3));
+    memcpy(r->normals, job->normals + v0, nv * sizeof(meso_vec3));
+    memcpy(r->tangents, job->tangents + v0, nv * sizeof(meso_vec3));
+    memcpy(r->bitangents, job->bitangents + v0, nv * sizeof(meso_vec3));
+    memcpy(r->uvs, job->uvs + v0, nv * sizeof(meso_vec2));
+    for (size_t i = 0; i < r->num_triangles * 3; i++)
+        r->indices[i] = job->indices[t0 * 3 + i] - (uint32_t)v0;
+    memcpy(r->depths, s->depths, r->num_triangles);
+    for (int c = 0; c < DISPLACE_NUM_COUNTERS; c++)
+        r->counters[c] = job->stats.counters[c] - counters_before[c];
+    r->grid_limited = job->stats.grid_limited - grid_limited_before;
+    r->memo_used = job->memo_used - memo_used_before;
+    r->valid = true;
+}
+
+/* Ask the recorded vetoes again of this run's transformed nodes; when every answer is the
+ * recorded one, append the recorded output and statistics (what the traversal would give) and
+ * return true. False leaves the job as it was, for a traversal. */
+static bool replay_traversal(const displace_tessellator *t, tess_scratch *s, tess_job *job,
+                             const tess_record *r) {
+    const displace_edge_tests *tests = t->tests;
+    if (job->num_triangles + r->num_triangles > MESO_MESH_MAX_TRIANGLES) return false;
+    if (r->num_nodes > s->cap_nodes) {
+        displace_vertex *grown = realloc(s->nodes, r->num_nodes * sizeof(*grown));
+        if (!grown) return false;
+        s->nodes = grown;
+        s->cap_nodes = r->num_nodes;
+    }
+    if (!job_reserve_vertices(job, r->num_vertices) ||
+        !job_reserve_triangles(job, r->num_triangles))
+        return false;
+    for (size_t i = 0; i < r->num_nodes; i++) {
+        const tess_record_node *n = &r->nodes[i];
+        displace_vertex *v = &s->nodes[i];
+        v->texel_i = n->texel_i;
+        v->texel_j = n->texel_j;
+        if (n->displaced) {
+            v->position = n->position;
+            v->unit_normal = n->unit_normal;
+            v->clip = (meso_vec4){0, 0, 0, 1};
+            if (tests->vertex_hook) tests->vertex_hook(tests->user, v);
+        }
+    }
+    uint64_t before[DISPLACE_NUM_COUNTERS];
+    memcpy(before, job->stats.counters, sizeof(before));
+    for (size_t k = 0; k < r->num_asked; k++) {
+        const tess_asked *q = &r->asked[k];
+        bool answer = tests->veto(tests->user, &s->nodes[q->a], &s->nodes[q->b], &s->nodes[q->m],
+                                  job->stats.counters);
+        if (answer != (q->vetoed != 0)) {
+            memcpy(job->stats.counters, before, sizeof(before));
+            return false;
+        }
+    }
+    /* the vetoes added what they added in the traversal: the recorded totals replace them */
+    for (int c = 0; c < DISPLACE_NUM_COUNTERS; c++)
+        job->stats.counters[c] = before[c] + r->counters[c];
+    job->stats.grid_limited += r->grid_limited;
+    job->memo_used += r->memo_used;
+    for (size_t i = 0; i < r->num_triangles; i++) job->stats.per_depth[r->depths[i]]++;
+    size_t v0 = job->num_vertices, nv = r->num_vertices;
+    memcpy(job->positions + v0, r->positions, nv * sizeof(meso_vec3));
+    memcpy(job->normals + v0, r->normals, nv * sizeof(meso_vec3));
+    memcpy(job->tangents + v0, r->tangents, nv * sizeof(meso_vec3));
+    memcpy(job->bitangents + v0, r->bitangents, nv * sizeof(meso_vec3));
+    memcpy(job->uvs + v0, r->uvs, nv * sizeof(meso_vec2));
+    uint32_t *out = job->indices + job->num_triangles * 3;
+    for (size_t i = 0; i < r->num_triangles * 3; i++) out[i] = r->indices[i] + (uint32_t)v0;
+    job->num_vertices += nv;
+    job->num_triangles += r->num_triangles;
+    return true;
+}
+
+/* One base triangle: replayed when its record still holds, else traversed (and recorded). */
+static bool tessellate_triangle(const displace_tessellator *t, tess_scratch *s, tess_job *job,
+                                size_t triangle) {
+    tess_record *r = job->records ? &job->records[triangle - job->first] : NULL;
+    if (r && r->valid && replay_traversal(t, s, job, r)) return true;
+    size_t v0 = job->num_vertices, t0 = job->num_triangles, memo_used = job->memo_used;
+    uint64_t counters[DISPLACE_NUM_COUNTERS], grid_limited = job->stats.grid_limited;
+    memcpy(counters, job->stats.counters, sizeof(counters));
+    s->recording = r != NULL;
+    s->record_failed = false;
+    s->num_asked = s->num_depths = 0;
+    bool ok = traverse_triangle(t, s, job, triangle);
+    s->recording = false;
+    if (r) {
+        if (ok)
+            record_traversal(r, s, job, v0, t0, counters, grid_limited, memo_used);
+        else
+            r->valid = false;
+    }
+    return ok;
+}
+
 typedef struct run_args {
     displace_tessellator *t;
 } run_args;
@@ -684,6 +920,7 @@ static void run_job(void *user, size_t index, int thread_index) {
     memset(&job.stats, 0, sizeof(job.stats));
     job.result = MESO_OK;
     memo_trim(&job);
+    if (replayable(t) && !job.records) job.records = calloc(job.count, sizeof(*job.records));
     for (size_t i = 0; i < job.count; i++)
         if (!tessellate_triangle(t, &s, &job, job.first + i)) break;
     t->jobs[index] = job;
@@ -746,6 +983,7 @@ meso_result displace_tessellator_run(meso_context *ctx, displace_tessellator *t,
             v->parent_a = v->parent_b = -1;
             v->out_index = UINT32_MAX;
             v->inserted = 1;
+            v->displaced = 1;
             if (tests && tests->vertex_static) tests->vertex_static(tests->user, v);
         }
         t->corners_ready = true;
