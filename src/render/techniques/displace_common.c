@@ -124,19 +124,18 @@ typedef struct tess_entry {
     int32_t depth;
 } tess_entry;
 
-/* A veto asked during a traversal: the nodes it read and its answer. */
+/* A veto asked during a traversal: the nodes it read and its answer (the top bit of
+ * m_vetoed; node indices are below 2^31). */
 typedef struct tess_asked {
-    int32_t a, b, m;
-    int32_t vetoed;
+    int32_t a, b;
+    uint32_t m_vetoed;
 } tess_asked;
 
-/* What a replay of a traversal reads of a node: the vertex hook's inputs (of a displaced node)
- * and the texel (of every node, for the recursion-limit test). */
-typedef struct tess_record_node {
+/* What a replay reads of a displaced node besides its texel: the vertex hook's inputs. */
+typedef struct tess_record_hooked {
+    int32_t node;
     meso_vec3 position, unit_normal;
-    int64_t texel_i, texel_j;
-    int32_t displaced;
-} tess_record_node;
+} tess_record_hooked;
 
 /* One base triangle's last traversal (displace_tessellator_run), in one block: its nodes, the
  * vetoes in order, its output (vertices, indices from 0, each triangle's recursion depth). */
@@ -144,8 +143,10 @@ typedef struct tess_record {
     bool valid;
     void *block;
     size_t cap_bytes;
-    size_t num_nodes, num_asked, num_vertices, num_triangles;
-    tess_record_node *nodes;
+    /* kept small: a replay streams through every record each frame */
+    size_t num_nodes, num_hooked, num_asked, num_vertices, num_triangles;
+    int32_t *texels; /* each node's texel_i, texel_j (the recursion-limit test's) */
+    tess_record_hooked *hooked;
     tess_asked *asked;
     meso_vec3 *positions, *normals, *tangents, *bitangents;
     meso_vec2 *uvs;
@@ -527,8 +528,9 @@ static bool vetoed(const displace_tessellator *t, tess_scratch *s, const displac
             s->asked = grown;
             s->cap_asked = cap;
         }
-        s->asked[s->num_asked++] = (tess_asked){(int32_t)(a - s->nodes), (int32_t)(b - s->nodes),
-                                                (int32_t)(m - s->nodes), answer};
+        s->asked[s->num_asked++] =
+            (tess_asked){(int32_t)(a - s->nodes), (int32_t)(b - s->nodes),
+                         (uint32_t)(m - s->nodes) | (answer ? 0x80000000u : 0u)};
     }
     return answer;
 }
@@ -754,18 +756,14 @@ static bool replayable(const displace_tessellator *t) {
 
 /* Carve the record's block into its arrays for the sizes set (8-byte aligned pieces). */
 static bool record_layout(tess_record *r) {
-    size_t sizes[10] = {r->num_nodes * sizeof(tess_record_node),
-                        r->num_asked * sizeof(tess_asked),
-                        r->num_vertices * sizeof(meso_vec3),
-                        r->num_vertices * sizeof(meso_vec3),
-                        r->num_vertices * sizeof(meso_vec3),
-                        r->num_vertices * sizeof(meso_vec3),
-                        r->num_vertices * sizeof(meso_vec2),
-                        r->num_triangles * 3 * sizeof(uint32_t),
-                        r->num_triangles,
-                        0};
+    size_t sizes[10] = {
+        r->num_nodes * 2 * sizeof(int32_t),      r->num_hooked * sizeof(tess_record_hooked),
+        r->num_asked * sizeof(tess_asked),       r->num_vertices * sizeof(meso_vec3),
+        r->num_vertices * sizeof(meso_vec3),     r->num_vertices * sizeof(meso_vec3),
+        r->num_vertices * sizeof(meso_vec3),     r->num_vertices * sizeof(meso_vec2),
+        r->num_triangles * 3 * sizeof(uint32_t), r->num_triangles};
     size_t total = 0;
-    for (int k = 0; k < 9; k++) total += (sizes[k] + 7) & ~(size_t)7;
+    for (int k = 0; k < 10; k++) total += (sizes[k] + 7) & ~(size_t)7;
     if (total > r->cap_bytes) {
         void *grown = realloc(r->block, total);
         if (!grown) return false;
@@ -773,10 +771,11 @@ static bool record_layout(tess_record *r) {
         r->cap_bytes = total;
     }
     char *p = r->block;
-    void **parts[9] = {(void **)&r->nodes,   (void **)&r->asked,    (void **)&r->positions,
-                       (void **)&r->normals, (void **)&r->tangents, (void **)&r->bitangents,
-                       (void **)&r->uvs,     (void **)&r->indices,  (void **)&r->depths};
-    for (int k = 0; k < 9; k++) {
+    void **parts[10] = {(void **)&r->texels,     (void **)&r->hooked,  (void **)&r->asked,
+                        (void **)&r->positions,  (void **)&r->normals, (void **)&r->tangents,
+                        (void **)&r->bitangents, (void **)&r->uvs,     (void **)&r->indices,
+                        (void **)&r->depths};
+    for (int k = 0; k < 10; k++) {
         *parts[k] = p;
         p += (sizes[k] + 7) & ~(size_t)7;
     }
@@ -791,20 +790,25 @@ static void record_traversal(tess_record *r, const tess_scratch *s, const tess_j
     r->valid = false;
     if (s->record_failed) return;
     r->num_nodes = s->num_nodes;
+    r->num_hooked = 0;
+    for (size_t i = 0; i < s->num_nodes; i++) {
+        const displace_vertex *v = &s->nodes[i];
+        if (v->texel_i < INT32_MIN || v->texel_i > INT32_MAX || v->texel_j < INT32_MIN ||
+            v->texel_j > INT32_MAX)
+            return; /* uv beyond 2^31 texels: not kept in 32 bits, so not replayed */
+        r->num_hooked += v->displaced ? 1 : 0;
+    }
     r->num_asked = s->num_asked;
     r->num_vertices = job->num_vertices - v0;
     r->num_triangles = job->num_triangles - t0;
     if (!record_layout(r)) return;
+    size_t hooked = 0;
     for (size_t i = 0; i < s->num_nodes; i++) {
         const displace_vertex *v = &s->nodes[i];
-        tess_record_node *n = &r->nodes[i];
-        n->displaced = v->displaced;
-        n->texel_i = v->texel_i;
-        n->texel_j = v->texel_j;
-        if (v->displaced) {
-            n->position = v->position;
-            n->unit_normal = v->unit_normal;
-        }
+        r->texels[2 * i] = (int32_t)v->texel_i;
+        r->texels[2 * i + 1] = (int32_t)v->texel_j;
+        if (v->displaced)
+            r->hooked[hooked++] = (tess_record_hooked){(int32_t)i, v->position, v->unit_normal};
     }
     memcpy(r->asked, s->asked, s->num_asked * sizeof(*s->asked));
     size_t nv = r->num_vertices;
@@ -840,24 +844,23 @@ static bool replay_traversal(const displace_tessellator *t, tess_scratch *s, tes
         !job_reserve_triangles(job, r->num_triangles))
         return false;
     for (size_t i = 0; i < r->num_nodes; i++) {
-        const tess_record_node *n = &r->nodes[i];
-        displace_vertex *v = &s->nodes[i];
-        v->texel_i = n->texel_i;
-        v->texel_j = n->texel_j;
-        if (n->displaced) {
-            v->position = n->position;
-            v->unit_normal = n->unit_normal;
-            v->clip = (meso_vec4){0, 0, 0, 1};
-            if (tests->vertex_hook) tests->vertex_hook(tests->user, v);
-        }
+        s->nodes[i].texel_i = r->texels[2 * i];
+        s->nodes[i].texel_j = r->texels[2 * i + 1];
+    }
+    for (size_t i = 0; i < r->num_hooked; i++) {
+        displace_vertex *v = &s->nodes[r->hooked[i].node];
+        v->position = r->hooked[i].position;
+        v->unit_normal = r->hooked[i].unit_normal;
+        v->clip = (meso_vec4){0, 0, 0, 1};
+        if (tests->vertex_hook) tests->vertex_hook(tests->user, v);
     }
     uint64_t before[DISPLACE_NUM_COUNTERS];
     memcpy(before, job->stats.counters, sizeof(before));
     for (size_t k = 0; k < r->num_asked; k++) {
         const tess_asked *q = &r->asked[k];
-        bool answer = tests->veto(tests->user, &s->nodes[q->a], &s->nodes[q->b], &s->nodes[q->m],
-                                  job->stats.counters);
-        if (answer != (q->vetoed != 0)) {
+        bool answer = tests->veto(tests->user, &s->nodes[q->a], &s->nodes[q->b],
+                                  &s->nodes[q->m_vetoed & 0x7fffffffu], job->stats.counters);
+        if (answer != ((q->m_vetoed >> 31) != 0)) {
             memcpy(job->stats.counters, before, sizeof(before));
             return false;
         }
