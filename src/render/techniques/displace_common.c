@@ -475,6 +475,7 @@ static tess_memo *memo_store(tess_job *job, uint64_t key) {
     }
     tess_memo *e = &job->memo[job->num_memo++];
     e->key = key;
+    e->decided = 0;
     *slot = (uint32_t)job->num_memo;
     return e;
 }
@@ -566,8 +567,11 @@ static void midpoint_derive(const displace_tessellator *t, tess_job *job, size_t
                             const displace_vertex *a, const displace_vertex *b,
                             displace_vertex *m) {
     const displace_edge_tests *tests = t->tests;
+    bool view_independent = tests && tests->view_independent_insert;
     uint64_t key = memo_key(triangle, m->key_b, m->key_c);
-    tess_memo *e = memo_find(job, key);
+    /* kept only for tests that declare their insert view-independent: the others (`displacement`
+     * without tests tessellates once) would keep what no frame reads again */
+    tess_memo *e = view_independent ? memo_find(job, key) : NULL;
     bool known = e && memcmp(&e->base, &m->base, MEMO_INPUT_BYTES) == 0;
     if (known) { /* displace_vertex_finish's results, the two cheap ones computed again */
         m->texture_uv = displace_texture_uv(t->surface, m->uv);
@@ -584,8 +588,7 @@ static void midpoint_derive(const displace_tessellator *t, tess_job *job, size_t
     /* "Transform midpoint": the frame's */
     m->clip = (meso_vec4){0, 0, 0, 1};
     if (tests && tests->vertex_hook) tests->vertex_hook(tests->user, m);
-    bool view_independent = tests && tests->view_independent_insert;
-    if (known && view_independent && e->decided && memcmp(&e->uv_a, &a->uv, sizeof(a->uv)) == 0 &&
+    if (known && e->decided && memcmp(&e->uv_a, &a->uv, sizeof(a->uv)) == 0 &&
         memcmp(&e->uv_b, &b->uv, sizeof(b->uv)) == 0 &&
         memcmp(&e->surface_normal_a, &a->surface_normal, sizeof(meso_vec3)) == 0 &&
         memcmp(&e->surface_normal_b, &b->surface_normal, sizeof(meso_vec3)) == 0) {
@@ -598,6 +601,7 @@ static void midpoint_derive(const displace_tessellator *t, tess_job *job, size_t
     uint64_t before[DISPLACE_NUM_COUNTERS];
     memcpy(before, job->stats.counters, sizeof(before));
     m->inserted = decide(t, a, b, m, job) ? 1 : 0;
+    if (!view_independent) return;
     if (!known && !(e = memo_store(job, key))) return;
     job->memo_used++;
     if (!known) {
@@ -605,19 +609,16 @@ static void midpoint_derive(const displace_tessellator *t, tess_job *job, size_t
         e->unit_normal = m->unit_normal;
         e->height = m->height;
         e->surface_normal = m->surface_normal;
-        e->decided = 0;
     }
-    if (view_independent) {
-        e->uv_a = a->uv;
-        e->uv_b = b->uv;
-        e->surface_normal_a = a->surface_normal;
-        e->surface_normal_b = b->surface_normal;
-        e->inserted = (uint8_t)m->inserted;
-        e->counters = 0;
-        for (int c = 0; c < DISPLACE_NUM_COUNTERS; c++)
-            if (job->stats.counters[c] != before[c]) e->counters |= (uint8_t)(1u << c);
-        e->decided = 1;
-    }
+    e->uv_a = a->uv;
+    e->uv_b = b->uv;
+    e->surface_normal_a = a->surface_normal;
+    e->surface_normal_b = b->surface_normal;
+    e->inserted = (uint8_t)m->inserted;
+    e->counters = 0;
+    for (int c = 0; c < DISPLACE_NUM_COUNTERS; c++)
+        if (job->stats.counters[c] != before[c]) e->counters |= (uint8_t)(1u << c);
+    e->decided = 1;
 }
 
 static int32_t edge_midpoint(const displace_tessellator *t, tess_scratch *s, tess_job *job,
