@@ -598,10 +598,13 @@ static void midpoint_derive(const displace_tessellator *t, tess_job *job, size_t
         job->memo_used++;
         return;
     }
+    if (!view_independent) {
+        m->inserted = decide(t, a, b, m, job) ? 1 : 0;
+        return;
+    }
     uint64_t before[DISPLACE_NUM_COUNTERS];
     memcpy(before, job->stats.counters, sizeof(before));
     m->inserted = decide(t, a, b, m, job) ? 1 : 0;
-    if (!view_independent) return;
     if (!known && !(e = memo_store(job, key))) return;
     job->memo_used++;
     if (!known) {
