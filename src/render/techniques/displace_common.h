@@ -216,15 +216,15 @@ meso_result displace_tessellator_create(meso_context *ctx, const displace_surfac
 /* Tessellate every base triangle (in parallel, fixed jobs: byte-identical for any thread
  * count). *out_mesh is owned by the tessellator and valid until the next run.
  *
- * Across runs (frames) the tessellator remembers, per base triangle and grid point, each
- * displaced midpoint's inputs (its interpolated fields: base, normal, tangent, bitangent, uv)
- * and what was derived from them (displace_vertex_finish and vertex_static: both pure functions
- * of those inputs); with view_independent_insert also the decision and the end points' fields
- * it read. A midpoint whose inputs are bit for bit the remembered ones takes the remembered
- * results instead of computing them again: the same bits as computing them, so the same mesh,
- * for any camera. Only vetoes and the vertex hook (the frame's transform) run again.
+ * With tests->view_independent_insert, the tessellator remembers across runs (frames), per
+ * base triangle and grid point, each displaced midpoint's inputs (its interpolated fields:
+ * base, normal, tangent, bitangent, uv), what was derived from them (displace_vertex_finish and
+ * vertex_static: both pure functions of those inputs), and the decision with the end points'
+ * fields it read. A midpoint whose inputs are bit for bit the remembered ones takes the
+ * remembered results instead of computing them again: the same bits as computing them, so the
+ * same mesh, for any camera. Only vetoes and the vertex hook (the frame's transform) run again.
  *
- * It also records each base triangle's last traversal: its vertices' positions and texels, the
+ * It then also records each base triangle's last traversal: its vertices' positions and texels, the
  * vetoes asked in order with their answers, and its output. A traversal is a function of the
  * answers (everything else it reads is the same every run), so when every recorded veto,
  * asked again of this run's transformed vertices, answers as recorded, the traversal would
