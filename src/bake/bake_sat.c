@@ -123,12 +123,38 @@ static void box_range(float x, float radius, int *lo, int *hi) {
     *hi = b;
 }
 
+/* box_range for x and radius its clamps leave unchanged: the same indices without them */
+static inline void box_range_unclamped(float x, float radius, int *lo, int *hi) {
+    int a = (int)ceilf(x - radius - 0.5f), b = (int)floorf(x + radius - 0.5f) + 1;
+    if (b <= a) {
+        a = (int)floorf(x);
+        b = a + 1;
+    }
+    *lo = a;
+    *hi = b;
+}
+
 float meso_sat_box_average(const meso_sat *sat, float u, float v, float radius) {
     int i0, i1, j0, j1;
-    if (!isfinite(u) || !isfinite(v)) return 0.0f;
     /* texel space: column x = u W, row y = (1 - v) H (row 0 at the top, DESIGN.md) */
-    box_range(u * (float)sat->width, radius, &i0, &i1);
-    box_range((1.0f - v) * (float)sat->height, radius, &j0, &j1);
+    float x = u * (float)sat->width, y = (1.0f - v) * (float)sat->height;
+    /* The common case, a point of the field and a box inside it (the tessellator's area test
+     * calls this three times an edge): box_range's clamps change nothing, neither wrap mode
+     * moves or clips the box, and the sum and the count are the general path's, in its order
+     * (the same bits, one table read a corner instead of the calls below). */
+    if (x >= 0.0f && x <= (float)sat->width && y >= 0.0f && y <= (float)sat->height &&
+        radius >= 0.0f && radius <= 1.0e6f) {
+        box_range_unclamped(x, radius, &i0, &i1);
+        box_range_unclamped(y, radius, &j0, &j1);
+        if (i0 >= 0 && j0 >= 0 && i1 <= sat->width && j1 <= sat->height) {
+            double sum =
+                table(sat, i1, j1) - table(sat, i0, j1) - table(sat, i1, j0) + table(sat, i0, j0);
+            return (float)(sum / ((double)(i1 - i0) * (double)(j1 - j0)));
+        }
+    }
+    if (!isfinite(u) || !isfinite(v)) return 0.0f;
+    box_range(x, radius, &i0, &i1);
+    box_range(y, radius, &j0, &j1);
     double count = meso_sat_box_count(sat, i0, j0, i1, j1);
     if (count <= 0.0) {
         /* clamp mode, box entirely outside: the nearest edge texel */

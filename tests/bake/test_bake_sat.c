@@ -104,6 +104,60 @@ static void test_bake_sat_average_takes_the_box_of_texel_centres_around_the_poin
     meso_context_destroy(ctx);
 }
 
+/* The box of meso_sat_box_average by its definition (texel centres k + 0.5 within radius of x,
+ * at least the texel holding x), for points and radii well inside the limits. */
+static void definition_range(float x, float radius, int *lo, int *hi) {
+    *lo = (int)ceilf(x - radius - 0.5f);
+    *hi = (int)floorf(x + radius - 0.5f) + 1;
+    if (*hi <= *lo) {
+        *lo = (int)floorf(x);
+        *hi = *lo + 1;
+    }
+}
+
+/* The average's shortcut for boxes inside the field returns the bits of the general path
+ * (meso_sat_box_sum / meso_sat_box_count in doubles), for boxes inside, touching the border and
+ * crossing it, in both wrap modes (the tessellator's area test relies on the same bits). */
+static void check_average_bits(meso_wrap wrap) {
+    meso_context *ctx = test_context(1);
+    float storage[37 * 23];
+    meso_heightfield hf = make_field(37, 23, wrap, storage);
+    meso_sat *sat = NULL;
+    assert_int_equal(meso_bake_sat(ctx, &hf, &sat), MESO_OK);
+    int inside = 0, outside = 0;
+    for (int k = 0; k < 4000; k++) {
+        float u = (float)(next_random() % 20001) / 20000.0f * 1.2f - 0.1f;
+        float v = (float)(next_random() % 20001) / 20000.0f * 1.2f - 0.1f;
+        float radius = (float)(next_random() % 1601) / 100.0f;
+        float x = u * 37.0f, y = (1.0f - v) * 23.0f;
+        int i0, i1, j0, j1;
+        definition_range(x, radius, &i0, &i1);
+        definition_range(y, radius, &j0, &j1);
+        double count = meso_sat_box_count(sat, i0, j0, i1, j1);
+        if (count <= 0.0) continue; /* clamp, box outside: the nearest texel (tested above) */
+        float expected = (float)(meso_sat_box_sum(sat, i0, j0, i1, j1) / count);
+        float got = meso_sat_box_average(sat, u, v, radius);
+        assert_memory_equal(&got, &expected, sizeof(float));
+        if (i0 >= 0 && j0 >= 0 && i1 <= 37 && j1 <= 23)
+            inside++;
+        else
+            outside++;
+    }
+    assert_true(inside > 100 && outside > 100); /* both paths were taken */
+    meso_sat_destroy(sat);
+    meso_context_destroy(ctx);
+}
+
+static void test_bake_sat_average_has_the_bits_of_sum_over_count_repeat(void **state) {
+    (void)state;
+    check_average_bits(MESO_WRAP_REPEAT);
+}
+
+static void test_bake_sat_average_has_the_bits_of_sum_over_count_clamp(void **state) {
+    (void)state;
+    check_average_bits(MESO_WRAP_CLAMP);
+}
+
 static void test_bake_sat_rejects_empty_and_oversized_fields(void **state) {
     (void)state;
     meso_context *ctx = test_context(1);
@@ -129,6 +183,8 @@ int main(void) {
         cmocka_unit_test(test_bake_sat_box_sums_equal_brute_force_clamp),
         cmocka_unit_test(test_bake_sat_average_of_a_constant_field_is_the_constant),
         cmocka_unit_test(test_bake_sat_average_takes_the_box_of_texel_centres_around_the_point),
+        cmocka_unit_test(test_bake_sat_average_has_the_bits_of_sum_over_count_repeat),
+        cmocka_unit_test(test_bake_sat_average_has_the_bits_of_sum_over_count_clamp),
         cmocka_unit_test(test_bake_sat_rejects_empty_and_oversized_fields),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -178,6 +178,56 @@ static void test_tessellation_output_does_not_depend_on_thread_count(void **stat
     fixture_deinit(&two);
 }
 
+static void assert_same_mesh(const meso_mesh *a, const meso_mesh *b) {
+    assert_int_equal(a->num_triangles, b->num_triangles);
+    assert_int_equal(a->num_vertices, b->num_vertices);
+    size_t n = a->num_vertices;
+    assert_memory_equal(a->positions, b->positions, n * sizeof(meso_vec3));
+    assert_memory_equal(a->normals, b->normals, n * sizeof(meso_vec3));
+    assert_memory_equal(a->tangents, b->tangents, n * sizeof(meso_vec3));
+    assert_memory_equal(a->bitangents, b->bitangents, n * sizeof(meso_vec3));
+    assert_memory_equal(a->uvs, b->uvs, n * sizeof(meso_vec2));
+    assert_memory_equal(a->indices, b->indices, a->num_triangles * 3 * sizeof(uint32_t));
+}
+
+/* The tessellator remembers displaced midpoints and their edges' decisions across frames
+ * (displace_tessellator_run): a state that has drawn other views first must draw the mesh of a
+ * fresh state, bit for bit, and the same view twice the same mesh. */
+static void test_tessellation_kept_midpoints_give_the_fresh_mesh(void **state) {
+    (void)state;
+    const meso_vec3 eyes[3] = {{0.0f, 1.5f, 3.5f}, {2.0f, 0.5f, 2.0f}, {-0.5f, 2.5f, 1.5f}};
+    fixture kept;
+    fixture_init(&kept, 2);
+    fixture_torus(&kept, 12, 8);
+    set_tests(&kept, 1, 1, 1, 1);
+    fixture_set_option(&kept, "normal_threshold", 0.05);
+    fixture_set_option(&kept, "area_threshold", 0.01);
+    void *kept_state = NULL;
+    const meso_mesh *mesh = fixture_geometry(&kept, technique, &kept_state);
+    for (int e = 1; e < 3; e++) {
+        fixture fresh;
+        fixture_init(&fresh, 1);
+        fixture_torus(&fresh, 12, 8);
+        set_tests(&fresh, 1, 1, 1, 1);
+        fixture_set_option(&fresh, "normal_threshold", 0.05);
+        fixture_set_option(&fresh, "area_threshold", 0.01);
+        fresh.scene.camera.eye = eyes[e];
+        void *fresh_state = NULL;
+        const meso_mesh *expected = fixture_geometry(&fresh, technique, &fresh_state);
+        kept.scene.camera.eye = eyes[e];
+        meso_frame_init(&kept.frame, &kept.scene, kept.scene.width, kept.scene.height);
+        for (int repeat = 0; repeat < 2; repeat++) {
+            assert_int_equal(technique->geometry(kept.ctx, kept_state, &kept.frame, &mesh),
+                             MESO_OK);
+            assert_same_mesh(mesh, expected);
+        }
+        technique->release(fresh_state);
+        fixture_deinit(&fresh);
+    }
+    technique->release(kept_state);
+    fixture_deinit(&kept);
+}
+
 static void test_tessellation_rejects_bad_options_naming_them(void **state) {
     (void)state;
     fixture f;
@@ -339,6 +389,7 @@ int main(void) {
         cmocka_unit_test(test_tessellation_constant_height_field_inserts_nothing),
         cmocka_unit_test(test_tessellation_max_level_bounds_the_count),
         cmocka_unit_test(test_tessellation_output_does_not_depend_on_thread_count),
+        cmocka_unit_test(test_tessellation_kept_midpoints_give_the_fresh_mesh),
         cmocka_unit_test(test_tessellation_block_shading_matches_per_fragment),
         cmocka_unit_test(test_tessellation_rejects_bad_options_naming_them),
         cmocka_unit_test(test_tessellation_shades_a_lit_flat_surface_unshadowed),

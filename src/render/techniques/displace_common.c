@@ -4,6 +4,7 @@
 #include "displace_common.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -47,6 +48,13 @@ meso_vec2 displace_gradient(const displace_surface *surface, meso_vec2 uv) {
     return displace_heightfield_gradient(surface->heightfield, t.x, t.y);
 }
 
+/* DESIGN.md: P' = P - (1 - h) depth N, N the normalised interpolated vertex normal */
+static meso_vec3 displaced_position(const displace_surface *surface,
+                                    const displace_vertex *vertex) {
+    return meso_vec3_madd(vertex->base, vertex->unit_normal,
+                          -(1.0f - vertex->height) * surface->depth);
+}
+
 void displace_vertex_finish(const displace_surface *surface, displace_vertex *vertex) {
     vertex->texture_uv = displace_texture_uv(surface, vertex->uv);
     vertex->unit_normal = meso_vec3_normalize(vertex->normal);
@@ -54,9 +62,7 @@ void displace_vertex_finish(const displace_surface *surface, displace_vertex *ve
                          ? meso_heightfield_sample(surface->heightfield, vertex->texture_uv.x,
                                                    vertex->texture_uv.y)
                          : 1.0f;
-    /* DESIGN.md: P' = P - (1 - h) depth N, N the normalised interpolated vertex normal */
-    vertex->position = meso_vec3_madd(vertex->base, vertex->unit_normal,
-                                      -(1.0f - vertex->height) * surface->depth);
+    vertex->position = displaced_position(surface, vertex);
 }
 
 int displace_texel_level(const displace_surface *surface, int max_level) {
@@ -118,15 +124,80 @@ typedef struct tess_entry {
     int32_t depth;
 } tess_entry;
 
+/* A veto asked during a traversal: the nodes it read and its answer (the top bit of
+ * m_vetoed; node indices are below 2^31). */
+typedef struct tess_asked {
+    int32_t a, b;
+    uint32_t m_vetoed;
+} tess_asked;
+
+/* What a replay reads of a displaced node besides its texel: the vertex hook's inputs. */
+typedef struct tess_record_hooked {
+    int32_t node;
+    meso_vec3 position, unit_normal;
+} tess_record_hooked;
+
+/* One base triangle's last traversal (displace_tessellator_run), in one block: its nodes, the
+ * vetoes in order, its output (vertices, indices from 0, each triangle's recursion depth). */
+typedef struct tess_record {
+    bool valid;
+    void *block;
+    size_t cap_bytes;
+    /* kept small: a replay streams through every record each frame */
+    size_t num_nodes, num_hooked, num_asked, num_vertices, num_triangles;
+    int32_t *texels; /* each node's texel_i, texel_j (the recursion-limit test's) */
+    tess_record_hooked *hooked;
+    tess_asked *asked;
+    meso_vec3 *positions, *normals, *tangents, *bitangents;
+    meso_vec2 *uvs;
+    uint32_t *indices;
+    uint8_t *depths;
+    uint64_t counters[DISPLACE_NUM_COUNTERS]; /* what the traversal added */
+    uint64_t grid_limited;
+    size_t memo_used;
+} tess_record;
+
 typedef struct tess_scratch {
     displace_vertex *nodes;
     size_t num_nodes, cap_nodes;
-    int32_t *grid;   /* (n+1)^2 node index per grid point ... */
-    uint32_t *stamp; /* ... valid when stamp == current (no clearing per triangle) */
+    /* the traversal being recorded: the vetoes asked and the depths of the emitted triangles */
+    bool recording;
+    tess_asked *asked;
+    size_t num_asked, cap_asked;
+    uint8_t *depths;
+    size_t num_depths, cap_depths;
+    bool record_failed; /* out of memory while logging: do not keep this traversal */
+    int32_t *grid;      /* (n+1)^2 node index per grid point ... */
+    uint32_t *stamp;    /* ... valid when stamp == current (no clearing per triangle) */
     uint32_t current;
     tess_entry *stack;
     size_t cap_stack;
 } tess_scratch;
+
+/* A displaced midpoint remembered across runs (displace_tessellator_run): its inputs, what
+ * displace_vertex_finish and vertex_static derived from them, and the edge's decision with the
+ * end points' fields it read. */
+typedef struct tess_memo {
+    uint64_t key; /* base triangle and grid point (memo_key) */
+    /* the inputs, laid out as displace_vertex's base ... uv (compared as one block) */
+    meso_vec3 base, normal, tangent, bitangent;
+    meso_vec2 uv;
+    /* derived (texture_uv and position are computed again from these: cheap, and a fifth of
+     * the bytes) */
+    meso_vec3 unit_normal, surface_normal;
+    float height;
+    /* the decision's other inputs: a's and b's uv and surface normal, in the canonical order */
+    meso_vec2 uv_a, uv_b;
+    meso_vec3 surface_normal_a, surface_normal_b;
+    uint8_t decided, inserted;
+    uint8_t counters; /* bit c: the decision incremented counter c */
+} tess_memo;
+
+#define MEMO_INPUT_BYTES (4 * sizeof(meso_vec3) + sizeof(meso_vec2))
+_Static_assert(offsetof(displace_vertex, uv) - offsetof(displace_vertex, base) ==
+                       4 * sizeof(meso_vec3) &&
+                   offsetof(tess_memo, uv) - offsetof(tess_memo, base) == 4 * sizeof(meso_vec3),
+               "the inputs are one block of base, normal, tangent, bitangent, uv");
 
 typedef struct tess_job {
     size_t first, count; /* base triangles */
@@ -137,6 +208,14 @@ typedef struct tess_job {
     size_t vertex_offset, triangle_offset; /* in the joined mesh */
     displace_tess_stats stats;
     meso_result result;
+    /* the remembered midpoints of this job's triangles: entries, and an open-addressing table
+     * of entry index + 1 (0: empty) with 2^memo_bits slots, at most half full */
+    tess_memo *memo;
+    uint32_t *memo_slots;
+    size_t num_memo, cap_memo;
+    int memo_bits;
+    size_t memo_used;     /* entries read or written by the last run */
+    tess_record *records; /* count, one a base triangle (NULL until the first replayable run) */
 } tess_job;
 
 struct displace_tessellator {
@@ -214,6 +293,11 @@ fail:
 }
 
 static void job_free(tess_job *job) {
+    if (job->records)
+        for (size_t i = 0; i < job->count; i++) free(job->records[i].block);
+    free(job->records);
+    free(job->memo);
+    free(job->memo_slots);
     free(job->positions);
     free(job->normals);
     free(job->tangents);
@@ -228,6 +312,8 @@ void displace_tessellator_destroy(displace_tessellator *t) {
         for (int i = 0; i < t->num_threads; i++) {
             free(t->scratch[i].nodes);
             free(t->scratch[i].grid);
+            free(t->scratch[i].asked);
+            free(t->scratch[i].depths);
             free(t->scratch[i].stamp);
             free(t->scratch[i].stack);
         }
@@ -250,9 +336,15 @@ size_t displace_tessellator_memory(const displace_tessellator *t) {
     size_t bytes = sizeof(*t) + t->surface->base->num_vertices * sizeof(displace_vertex) +
                    t->cap_vertices * (4 * sizeof(meso_vec3) + sizeof(meso_vec2)) +
                    t->cap_triangles * 3 * sizeof(uint32_t);
-    for (size_t j = 0; j < t->num_jobs; j++)
+    for (size_t j = 0; j < t->num_jobs; j++) {
         bytes += t->jobs[j].cap_vertices * (4 * sizeof(meso_vec3) + sizeof(meso_vec2)) +
                  t->jobs[j].cap_triangles * 3 * sizeof(uint32_t);
+        if (t->jobs[j].records)
+            for (size_t i = 0; i < t->jobs[j].count; i++) bytes += t->jobs[j].records[i].cap_bytes;
+        if (t->jobs[j].memo_slots)
+            bytes += ((size_t)1 << t->jobs[j].memo_bits) * sizeof(uint32_t) +
+                     t->jobs[j].cap_memo * sizeof(tess_memo);
+    }
     size_t side = (size_t)t->n + 1;
     for (int i = 0; i < t->num_threads; i++)
         bytes += t->scratch[i].cap_nodes * sizeof(displace_vertex) + side * side * 8;
@@ -312,8 +404,90 @@ static bool emit_triangle(tess_scratch *s, tess_job *job, const tess_entry *e) {
         job->indices[job->num_triangles * 3 + (size_t)k] = v->out_index;
     }
     job->num_triangles++;
-    job->stats.per_depth[e->depth < DISPLACE_MAX_DEPTH ? e->depth : DISPLACE_MAX_DEPTH - 1]++;
+    int depth = e->depth < DISPLACE_MAX_DEPTH ? e->depth : DISPLACE_MAX_DEPTH - 1;
+    job->stats.per_depth[depth]++;
+    if (s->recording) {
+        if (s->num_depths == s->cap_depths) {
+            size_t cap = s->cap_depths ? 2 * s->cap_depths : 1024;
+            uint8_t *grown = realloc(s->depths, cap);
+            if (!grown) {
+                s->record_failed = true;
+                return true;
+            }
+            s->depths = grown;
+            s->cap_depths = cap;
+        }
+        s->depths[s->num_depths++] = (uint8_t)depth;
+    }
     return true;
+}
+
+/* ---- Midpoints remembered across runs ---------------------------------------------------- */
+
+/* grid coordinates are at most 2^DISPLACE_MAX_LEVEL: 11 bits each */
+static uint64_t memo_key(size_t triangle, int32_t kb, int32_t kc) {
+    return ((uint64_t)triangle << 22) | ((uint64_t)kb << 11) | (uint64_t)kc;
+}
+
+/* The slot holding key, or the empty slot where it would go (the table is never full). */
+static uint32_t *memo_slot(const tess_job *job, uint64_t key) {
+    size_t mask = ((size_t)1 << job->memo_bits) - 1;
+    size_t i = (size_t)((key * 0x9E3779B97F4A7C15ull) >> (64 - job->memo_bits));
+    for (;;) {
+        uint32_t e = job->memo_slots[i];
+        if (e == 0 || job->memo[e - 1].key == key) return &job->memo_slots[i];
+        i = (i + 1) & mask;
+    }
+}
+
+static tess_memo *memo_find(const tess_job *job, uint64_t key) {
+    if (!job->memo_slots) return NULL;
+    uint32_t e = *memo_slot(job, key);
+    return e ? &job->memo[e - 1] : NULL;
+}
+
+/* Twice the slots, the entries rehashed; false when out of memory (the job then remembers no
+ * more: the memo is a shortcut, not needed for the result). */
+static bool memo_grow_slots(tess_job *job) {
+    int bits = job->memo_slots ? job->memo_bits + 1 : 12;
+    if (bits > 31) return false;
+    uint32_t *table = calloc((size_t)1 << bits, sizeof(*table));
+    if (!table) return false;
+    free(job->memo_slots);
+    job->memo_slots = table;
+    job->memo_bits = bits;
+    for (size_t e = 0; e < job->num_memo; e++) *memo_slot(job, job->memo[e].key) = (uint32_t)e + 1;
+    return true;
+}
+
+/* The entry for key, made (undecided) if there is none; NULL when out of memory. */
+static tess_memo *memo_store(tess_job *job, uint64_t key) {
+    if (!job->memo_slots || (job->num_memo + 1) * 2 > ((size_t)1 << job->memo_bits))
+        if (!memo_grow_slots(job)) return NULL;
+    uint32_t *slot = memo_slot(job, key);
+    if (*slot) return &job->memo[*slot - 1];
+    if (job->num_memo == job->cap_memo) { /* by a quarter: the entries are most of the bytes */
+        size_t cap = job->cap_memo < 1024 ? 1024 : job->cap_memo + job->cap_memo / 4;
+        tess_memo *grown = realloc(job->memo, cap * sizeof(*grown));
+        if (!grown) return NULL;
+        job->memo = grown;
+        job->cap_memo = cap;
+    }
+    tess_memo *e = &job->memo[job->num_memo++];
+    e->key = key;
+    e->decided = 0;
+    *slot = (uint32_t)job->num_memo;
+    return e;
+}
+
+/* At a run's start: forget everything when the entries outgrow twice what the last run used (a
+ * moving camera leaves midpoints behind that it may never reach again). */
+static void memo_trim(tess_job *job) {
+    if (job->memo_slots && job->num_memo > 2 * job->memo_used + 4096) {
+        job->num_memo = 0;
+        memset(job->memo_slots, 0, ((size_t)1 << job->memo_bits) * sizeof(*job->memo_slots));
+    }
+    job->memo_used = 0;
 }
 
 static int32_t node_at(tess_scratch *s, int32_t n, int32_t kb, int32_t kc) {
@@ -339,11 +513,27 @@ static inline void order_edge(const displace_vertex **a, const displace_vertex *
     }
 }
 
-/* a and b in the canonical order (order_edge) */
-static bool vetoed(const displace_tessellator *t, const displace_vertex *a,
+/* a and b in the canonical order (order_edge); logged while recording */
+static bool vetoed(const displace_tessellator *t, tess_scratch *s, const displace_vertex *a,
                    const displace_vertex *b, const displace_vertex *m, tess_job *job) {
     if (!t->tests || !t->tests->veto) return false;
-    return t->tests->veto(t->tests->user, a, b, m, job->stats.counters);
+    bool answer = t->tests->veto(t->tests->user, a, b, m, job->stats.counters);
+    if (s->recording) {
+        if (s->num_asked == s->cap_asked) {
+            size_t cap = s->cap_asked ? 2 * s->cap_asked : 1024;
+            tess_asked *grown = realloc(s->asked, cap * sizeof(*grown));
+            if (!grown) {
+                s->record_failed = true;
+                return answer;
+            }
+            s->asked = grown;
+            s->cap_asked = cap;
+        }
+        s->asked[s->num_asked++] =
+            (tess_asked){(int32_t)(a - s->nodes), (int32_t)(b - s->nodes),
+                         (uint32_t)(m - s->nodes) | (answer ? 0x80000000u : 0u)};
+    }
+    return answer;
 }
 
 /* a and b in the canonical order (order_edge) */
@@ -370,8 +560,72 @@ static bool reserve_node(const displace_tessellator *t, tess_scratch *s, tess_jo
     return true;
 }
 
+/* m's derived fields and the decision on its edge: remembered from an earlier run when m's
+ * inputs (and for the decision a's and b's fields it reads) are bit for bit the same, else
+ * computed and remembered. a and b in the canonical order. */
+static void midpoint_derive(const displace_tessellator *t, tess_job *job, size_t triangle,
+                            const displace_vertex *a, const displace_vertex *b,
+                            displace_vertex *m) {
+    const displace_edge_tests *tests = t->tests;
+    bool view_independent = tests && tests->view_independent_insert;
+    uint64_t key = memo_key(triangle, m->key_b, m->key_c);
+    /* kept only for tests that declare their insert view-independent: the others (`displacement`
+     * without tests tessellates once) would keep what no frame reads again */
+    tess_memo *e = view_independent ? memo_find(job, key) : NULL;
+    bool known = e && memcmp(&e->base, &m->base, MEMO_INPUT_BYTES) == 0;
+    if (known) { /* displace_vertex_finish's results, the two cheap ones computed again */
+        m->texture_uv = displace_texture_uv(t->surface, m->uv);
+        m->unit_normal = e->unit_normal;
+        m->height = e->height;
+        m->position = displaced_position(t->surface, m);
+        m->surface_normal = e->surface_normal;
+    } else {
+        /* "Displace midpoint", "Calculate surface normal" */
+        displace_vertex_finish(t->surface, m);
+        m->surface_normal = m->unit_normal;
+        if (tests && tests->vertex_static) tests->vertex_static(tests->user, m);
+    }
+    /* "Transform midpoint": the frame's */
+    m->clip = (meso_vec4){0, 0, 0, 1};
+    if (tests && tests->vertex_hook) tests->vertex_hook(tests->user, m);
+    if (known && e->decided && memcmp(&e->uv_a, &a->uv, sizeof(a->uv)) == 0 &&
+        memcmp(&e->uv_b, &b->uv, sizeof(b->uv)) == 0 &&
+        memcmp(&e->surface_normal_a, &a->surface_normal, sizeof(meso_vec3)) == 0 &&
+        memcmp(&e->surface_normal_b, &b->surface_normal, sizeof(meso_vec3)) == 0) {
+        m->inserted = (int8_t)e->inserted;
+        for (int c = 0; c < DISPLACE_NUM_COUNTERS; c++)
+            job->stats.counters[c] += (uint64_t)((e->counters >> c) & 1u);
+        job->memo_used++;
+        return;
+    }
+    if (!view_independent) {
+        m->inserted = decide(t, a, b, m, job) ? 1 : 0;
+        return;
+    }
+    uint64_t before[DISPLACE_NUM_COUNTERS];
+    memcpy(before, job->stats.counters, sizeof(before));
+    m->inserted = decide(t, a, b, m, job) ? 1 : 0;
+    if (!known && !(e = memo_store(job, key))) return;
+    job->memo_used++;
+    if (!known) {
+        memcpy(&e->base, &m->base, MEMO_INPUT_BYTES);
+        e->unit_normal = m->unit_normal;
+        e->height = m->height;
+        e->surface_normal = m->surface_normal;
+    }
+    e->uv_a = a->uv;
+    e->uv_b = b->uv;
+    e->surface_normal_a = a->surface_normal;
+    e->surface_normal_b = b->surface_normal;
+    e->inserted = (uint8_t)m->inserted;
+    e->counters = 0;
+    for (int c = 0; c < DISPLACE_NUM_COUNTERS; c++)
+        if (job->stats.counters[c] != before[c]) e->counters |= (uint8_t)(1u << c);
+    e->decided = 1;
+}
+
 static int32_t edge_midpoint(const displace_tessellator *t, tess_scratch *s, tess_job *job,
-                             int32_t p, int32_t q) {
+                             size_t triangle, int32_t p, int32_t q) {
     /* before taking pointers into the node array: growing it moves it */
     if (!reserve_node(t, s, job)) return -1;
     const displace_vertex *a = &s->nodes[p], *b = &s->nodes[q];
@@ -390,7 +644,8 @@ static int32_t edge_midpoint(const displace_tessellator *t, tess_scratch *s, tes
          * different refinement branches). Decide for this edge with the stored vertex: it is
          * interior to the base triangle, so no neighbour depends on it; the answer is a
          * function of the records only (a vetoed vertex was never displaced: no). */
-        return m->inserted && !vetoed(t, a, b, m, job) && decide(t, a, b, m, job) ? existing : -1;
+        return m->inserted && !vetoed(t, s, a, b, m, job) && decide(t, a, b, m, job) ? existing
+                                                                                     : -1;
     }
     if (s->num_nodes >= s->cap_nodes) return -1; /* cannot happen: one node per grid point */
     int32_t index = (int32_t)s->num_nodes++;
@@ -403,16 +658,12 @@ static int32_t edge_midpoint(const displace_tessellator *t, tess_scratch *s, tes
     m->parent_b = hi;
     m->out_index = UINT32_MAX;
     m->inserted = 0;
+    m->displaced = 0;
     order_edge(&a, &b);
-    if (!vetoed(t, a, b, m, job)) {
+    if (!vetoed(t, s, a, b, m, job)) {
+        m->displaced = 1;
         vertex_midpoint_frame(a, b, m); /* commutative sums: the order does not matter */
-        /* "Displace midpoint", "Transform midpoint", "Calculate surface normal" */
-        displace_vertex_finish(t->surface, m);
-        m->surface_normal = m->unit_normal;
-        m->clip = (meso_vec4){0, 0, 0, 1};
-        if (t->tests && t->tests->vertex_static) t->tests->vertex_static(t->tests->user, m);
-        if (t->tests && t->tests->vertex_hook) t->tests->vertex_hook(t->tests->user, m);
-        m->inserted = decide(t, a, b, m, job) ? 1 : 0;
+        midpoint_derive(t, job, triangle, a, b, m);
     }
     node_store(s, t->n, index);
     return m->inserted ? index : -1;
@@ -439,8 +690,8 @@ static float base_distance2(const tess_scratch *s, int32_t p, int32_t q) {
     return meso_vec3_dot(d, d);
 }
 
-static bool tessellate_triangle(const displace_tessellator *t, tess_scratch *s, tess_job *job,
-                                size_t triangle) {
+static bool traverse_triangle(const displace_tessellator *t, tess_scratch *s, tess_job *job,
+                              size_t triangle) {
     const meso_mesh *base = t->surface->base;
     if (++s->current == 0) { /* stamp wrapped: clear once every 2^32 triangles */
         memset(s->stamp, 0, ((size_t)t->n + 1) * ((size_t)t->n + 1) * sizeof(*s->stamp));
@@ -465,7 +716,7 @@ static bool tessellate_triangle(const displace_tessellator *t, tess_scratch *s, 
         int32_t m[3];
         int present = 0;
         for (int k = 0; k < 3; k++) {
-            m[k] = edge_midpoint(t, s, job, e.v[k], e.v[(k + 1) % 3]);
+            m[k] = edge_midpoint(t, s, job, triangle, e.v[k], e.v[(k + 1) % 3]);
             present += m[k] >= 0;
         }
         if (job->result != MESO_OK) return false;
@@ -501,6 +752,164 @@ static bool tessellate_triangle(const displace_tessellator *t, tess_scratch *s, 
     return true;
 }
 
+/* ---- Replaying a base triangle's last traversal ------------------------------------------- */
+
+static bool replayable(const displace_tessellator *t) {
+    return t->tests && t->tests->view_independent_insert && t->tests->veto;
+}
+
+/* Carve the record's block into its arrays for the sizes set (8-byte aligned pieces). */
+static bool record_layout(tess_record *r) {
+    size_t sizes[10] = {
+        r->num_nodes * 2 * sizeof(int32_t),      r->num_hooked * sizeof(tess_record_hooked),
+        r->num_asked * sizeof(tess_asked),       r->num_vertices * sizeof(meso_vec3),
+        r->num_vertices * sizeof(meso_vec3),     r->num_vertices * sizeof(meso_vec3),
+        r->num_vertices * sizeof(meso_vec3),     r->num_vertices * sizeof(meso_vec2),
+        r->num_triangles * 3 * sizeof(uint32_t), r->num_triangles};
+    size_t total = 0;
+    for (int k = 0; k < 10; k++) total += (sizes[k] + 7) & ~(size_t)7;
+    if (total > r->cap_bytes) {
+        void *grown = realloc(r->block, total);
+        if (!grown) return false;
+        r->block = grown;
+        r->cap_bytes = total;
+    }
+    char *p = r->block;
+    void **parts[10] = {(void **)&r->texels,     (void **)&r->hooked,  (void **)&r->asked,
+                        (void **)&r->positions,  (void **)&r->normals, (void **)&r->tangents,
+                        (void **)&r->bitangents, (void **)&r->uvs,     (void **)&r->indices,
+                        (void **)&r->depths};
+    for (int k = 0; k < 10; k++) {
+        *parts[k] = p;
+        p += (sizes[k] + 7) & ~(size_t)7;
+    }
+    return true;
+}
+
+/* Keep the traversal just made: nodes, the vetoes asked, the output from vertex v0 and
+ * triangle t0 of the job, and what it added to the statistics. */
+static void record_traversal(tess_record *r, const tess_scratch *s, const tess_job *job, size_t v0,
+                             size_t t0, const uint64_t *counters_before,
+                             uint64_t grid_limited_before, size_t memo_used_before) {
+    r->valid = false;
+    if (s->record_failed) return;
+    r->num_nodes = s->num_nodes;
+    r->num_hooked = 0;
+    for (size_t i = 0; i < s->num_nodes; i++) {
+        const displace_vertex *v = &s->nodes[i];
+        if (v->texel_i < INT32_MIN || v->texel_i > INT32_MAX || v->texel_j < INT32_MIN ||
+            v->texel_j > INT32_MAX)
+            return; /* uv beyond 2^31 texels: not kept in 32 bits, so not replayed */
+        r->num_hooked += v->displaced ? 1 : 0;
+    }
+    r->num_asked = s->num_asked;
+    r->num_vertices = job->num_vertices - v0;
+    r->num_triangles = job->num_triangles - t0;
+    if (!record_layout(r)) return;
+    size_t hooked = 0;
+    for (size_t i = 0; i < s->num_nodes; i++) {
+        const displace_vertex *v = &s->nodes[i];
+        r->texels[2 * i] = (int32_t)v->texel_i;
+        r->texels[2 * i + 1] = (int32_t)v->texel_j;
+        if (v->displaced)
+            r->hooked[hooked++] = (tess_record_hooked){(int32_t)i, v->position, v->unit_normal};
+    }
+    memcpy(r->asked, s->asked, s->num_asked * sizeof(*s->asked));
+    size_t nv = r->num_vertices;
+    memcpy(r->positions, job->positions + v0, nv * sizeof(meso_vec3));
+    memcpy(r->normals, job->normals + v0, nv * sizeof(meso_vec3));
+    memcpy(r->tangents, job->tangents + v0, nv * sizeof(meso_vec3));
+    memcpy(r->bitangents, job->bitangents + v0, nv * sizeof(meso_vec3));
+    memcpy(r->uvs, job->uvs + v0, nv * sizeof(meso_vec2));
+    for (size_t i = 0; i < r->num_triangles * 3; i++)
+        r->indices[i] = job->indices[t0 * 3 + i] - (uint32_t)v0;
+    memcpy(r->depths, s->depths, r->num_triangles);
+    for (int c = 0; c < DISPLACE_NUM_COUNTERS; c++)
+        r->counters[c] = job->stats.counters[c] - counters_before[c];
+    r->grid_limited = job->stats.grid_limited - grid_limited_before;
+    r->memo_used = job->memo_used - memo_used_before;
+    r->valid = true;
+}
+
+/* Ask the recorded vetoes again of this run's transformed nodes; when every answer is the
+ * recorded one, append the recorded output and statistics (what the traversal would give) and
+ * return true. False leaves the job as it was, for a traversal. */
+static bool replay_traversal(const displace_tessellator *t, tess_scratch *s, tess_job *job,
+                             const tess_record *r) {
+    const displace_edge_tests *tests = t->tests;
+    if (job->num_triangles + r->num_triangles > MESO_MESH_MAX_TRIANGLES) return false;
+    if (r->num_nodes > s->cap_nodes) {
+        displace_vertex *grown = realloc(s->nodes, r->num_nodes * sizeof(*grown));
+        if (!grown) return false;
+        s->nodes = grown;
+        s->cap_nodes = r->num_nodes;
+    }
+    if (!job_reserve_vertices(job, r->num_vertices) ||
+        !job_reserve_triangles(job, r->num_triangles))
+        return false;
+    for (size_t i = 0; i < r->num_nodes; i++) {
+        s->nodes[i].texel_i = r->texels[2 * i];
+        s->nodes[i].texel_j = r->texels[2 * i + 1];
+    }
+    for (size_t i = 0; i < r->num_hooked; i++) {
+        displace_vertex *v = &s->nodes[r->hooked[i].node];
+        v->position = r->hooked[i].position;
+        v->unit_normal = r->hooked[i].unit_normal;
+        v->clip = (meso_vec4){0, 0, 0, 1};
+        if (tests->vertex_hook) tests->vertex_hook(tests->user, v);
+    }
+    uint64_t before[DISPLACE_NUM_COUNTERS];
+    memcpy(before, job->stats.counters, sizeof(before));
+    for (size_t k = 0; k < r->num_asked; k++) {
+        const tess_asked *q = &r->asked[k];
+        bool answer = tests->veto(tests->user, &s->nodes[q->a], &s->nodes[q->b],
+                                  &s->nodes[q->m_vetoed & 0x7fffffffu], job->stats.counters);
+        if (answer != ((q->m_vetoed >> 31) != 0)) {
+            memcpy(job->stats.counters, before, sizeof(before));
+            return false;
+        }
+    }
+    /* the vetoes added what they added in the traversal: the recorded totals replace them */
+    for (int c = 0; c < DISPLACE_NUM_COUNTERS; c++)
+        job->stats.counters[c] = before[c] + r->counters[c];
+    job->stats.grid_limited += r->grid_limited;
+    job->memo_used += r->memo_used;
+    for (size_t i = 0; i < r->num_triangles; i++) job->stats.per_depth[r->depths[i]]++;
+    size_t v0 = job->num_vertices, nv = r->num_vertices;
+    memcpy(job->positions + v0, r->positions, nv * sizeof(meso_vec3));
+    memcpy(job->normals + v0, r->normals, nv * sizeof(meso_vec3));
+    memcpy(job->tangents + v0, r->tangents, nv * sizeof(meso_vec3));
+    memcpy(job->bitangents + v0, r->bitangents, nv * sizeof(meso_vec3));
+    memcpy(job->uvs + v0, r->uvs, nv * sizeof(meso_vec2));
+    uint32_t *out = job->indices + job->num_triangles * 3;
+    for (size_t i = 0; i < r->num_triangles * 3; i++) out[i] = r->indices[i] + (uint32_t)v0;
+    job->num_vertices += nv;
+    job->num_triangles += r->num_triangles;
+    return true;
+}
+
+/* One base triangle: replayed when its record still holds, else traversed (and recorded). */
+static bool tessellate_triangle(const displace_tessellator *t, tess_scratch *s, tess_job *job,
+                                size_t triangle) {
+    tess_record *r = job->records ? &job->records[triangle - job->first] : NULL;
+    if (r && r->valid && replay_traversal(t, s, job, r)) return true;
+    size_t v0 = job->num_vertices, t0 = job->num_triangles, memo_used = job->memo_used;
+    uint64_t counters[DISPLACE_NUM_COUNTERS], grid_limited = job->stats.grid_limited;
+    memcpy(counters, job->stats.counters, sizeof(counters));
+    s->recording = r != NULL;
+    s->record_failed = false;
+    s->num_asked = s->num_depths = 0;
+    bool ok = traverse_triangle(t, s, job, triangle);
+    s->recording = false;
+    if (r) {
+        if (ok)
+            record_traversal(r, s, job, v0, t0, counters, grid_limited, memo_used);
+        else
+            r->valid = false;
+    }
+    return ok;
+}
+
 typedef struct run_args {
     displace_tessellator *t;
 } run_args;
@@ -517,6 +926,8 @@ static void run_job(void *user, size_t index, int thread_index) {
     job.num_vertices = job.num_triangles = 0;
     memset(&job.stats, 0, sizeof(job.stats));
     job.result = MESO_OK;
+    memo_trim(&job);
+    if (replayable(t) && !job.records) job.records = calloc(job.count, sizeof(*job.records));
     for (size_t i = 0; i < job.count; i++)
         if (!tessellate_triangle(t, &s, &job, job.first + i)) break;
     t->jobs[index] = job;
@@ -579,6 +990,7 @@ meso_result displace_tessellator_run(meso_context *ctx, displace_tessellator *t,
             v->parent_a = v->parent_b = -1;
             v->out_index = UINT32_MAX;
             v->inserted = 1;
+            v->displaced = 1;
             if (tests && tests->vertex_static) tests->vertex_static(tests->user, v);
         }
         t->corners_ready = true;

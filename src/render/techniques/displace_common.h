@@ -141,6 +141,7 @@ typedef struct displace_vertex {
     int32_t parent_a, parent_b; /* the edge this vertex halves (-1: a corner) */
     uint32_t out_index;         /* index in the job's output, UINT32_MAX until emitted */
     int8_t inserted;            /* the decision on its edge */
+    int8_t displaced;           /* past the veto (or a corner): displaced and hooked */
 } displace_vertex;
 
 /* Compute the derived fields from the interpolated ones. */
@@ -189,6 +190,13 @@ typedef struct displace_edge_tests {
     bool (*insert)(const void *user, const displace_vertex *a, const displace_vertex *b,
                    const displace_vertex *m, uint64_t *counters);
     const void *user;
+    /* true: insert reads only uv, texture_uv and surface_normal of a and b and the fields of m
+     * vertex_static and displace_vertex_finish set (none of the frame's), and increments each
+     * counter at most once; vertex_hook reads only position and unit_normal; veto reads only
+     * the texels and what vertex_hook writes. The tessellator then keeps a displaced
+     * midpoint's derived fields and its decision across runs, and replays a base triangle
+     * whose vetoes all answer as in its last traversal (displace_tessellator_run). */
+    bool view_independent_insert;
 } displace_edge_tests;
 
 typedef struct displace_tess_stats {
@@ -206,7 +214,22 @@ typedef struct displace_tessellator displace_tessellator;
 meso_result displace_tessellator_create(meso_context *ctx, const displace_surface *surface,
                                         int max_level, displace_tessellator **out_tessellator);
 /* Tessellate every base triangle (in parallel, fixed jobs: byte-identical for any thread
- * count). *out_mesh is owned by the tessellator and valid until the next run. */
+ * count). *out_mesh is owned by the tessellator and valid until the next run.
+ *
+ * With tests->view_independent_insert, the tessellator remembers across runs (frames), per
+ * base triangle and grid point, each displaced midpoint's inputs (its interpolated fields:
+ * base, normal, tangent, bitangent, uv), what was derived from them (displace_vertex_finish and
+ * vertex_static: both pure functions of those inputs), and the decision with the end points'
+ * fields it read. A midpoint whose inputs are bit for bit the remembered ones takes the
+ * remembered results instead of computing them again: the same bits as computing them, so the
+ * same mesh, for any camera. Only vetoes and the vertex hook (the frame's transform) run again.
+ *
+ * It then also records each base triangle's last traversal: its vertices' positions and texels, the
+ * vetoes asked in order with their answers, and its output. A traversal is a function of the
+ * answers (everything else it reads is the same every run), so when every recorded veto,
+ * asked again of this run's transformed vertices, answers as recorded, the traversal would
+ * repeat itself exactly: the recorded output is appended instead (the same bits). The first
+ * veto that answers otherwise makes the triangle traverse again and be recorded anew. */
 meso_result displace_tessellator_run(meso_context *ctx, displace_tessellator *tessellator,
                                      const displace_edge_tests *tests, const meso_mesh **out_mesh,
                                      displace_tess_stats *out_stats);

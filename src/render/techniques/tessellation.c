@@ -325,8 +325,8 @@ static meso_result light_view_shadows(meso_context *ctx, tessellation_state *s,
                           .directional = directional,
                           .toward = directional ? meso_vec3_normalize(light->direction)
                                                 : (meso_vec3){0, 0, 0}};
-        displace_edge_tests tests = {tests_vertex_static, tests_vertex, tests_veto, tests_insert,
-                                     &ft};
+        displace_edge_tests tests = {tests_vertex_static, tests_vertex, tests_veto,
+                                     tests_insert,        &ft,          true};
         const meso_mesh *mesh = NULL;
         r = displace_tessellator_run(ctx, tessellator, &tests, &mesh, &s->shadow_stats);
         if (r == MESO_OK) r = displace_shadows_draw_light(ctx, &s->shadows, scene, l, mesh, &map);
@@ -353,7 +353,8 @@ static meso_result tessellation_geometry(meso_context *ctx, void *state, const m
                       .height = (float)frame->height,
                       .z_near = frame->z_near,
                       .view_threshold = s->view_threshold};
-    displace_edge_tests tests = {tests_vertex_static, tests_vertex, tests_veto, tests_insert, &ft};
+    displace_edge_tests tests = {tests_vertex_static, tests_vertex, tests_veto,
+                                 tests_insert,        &ft,          true};
     double start = meso_time_seconds();
     s->mesh = NULL;
     meso_result r = displace_tessellator_run(ctx, s->tessellator, &tests, &s->mesh, &s->stats);
