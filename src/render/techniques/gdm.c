@@ -799,7 +799,7 @@ static float refine_hit(const gdm_state *s, ray_probe probe, float d, float dt, 
          * distance bounds already decide */
         float wanted = ceilf(8.0f * dt / window);
         int probes = wanted > 8.0f ? (wanted < (float)GDM_PROBES ? (int)wanted : GDM_PROBES) : 8;
-        int first = ray_probe_below(&probe, dt, probes) + 1;
+        int first = s->heightfield ? ray_probe_below(&probe, dt, probes) + 1 : 1;
         if (first > 1) lo = dt * (float)(first - 1) / (float)probes; /* as the loop leaves it */
         for (int k = first; k <= probes && hi < 0.0f; k++) {
             /* the last probe exactly at the exit: dt k / k rounds below dt for most k, and a
