@@ -6,19 +6,7 @@
  * 1 (docs/performance.md). Here the helpers sleep on a condition variable between loops, and
  * the calling thread works through the jobs itself, so it never waits for a helper that the
  * scheduler has not run yet: with every helper descheduled, a loop costs what it costs on one
- * thread plus one wake-up call.
- *
- * A thread out of work looks for a short while before it sleeps (POOL_SPIN_SECONDS): a helper
- * for the next loop, the caller for its helpers' last jobs. A frame is two loops back to back
- * (the rasterizer's set-up, then its tiles) a few microseconds apart, and waking a sleeping
- * thread costs a futex call and, on a virtual machine, the host's wake-up of a halted core:
- * measured on the 2-core machine, 21-26 us before the helper took its first job of a loop and
- * 13-14 us of the caller waiting at a loop's end, about 75 us of a 1.3 ms frame
- * (docs/performance.md, issue 16, "the short frames' thread scaling"). The look is plain loads of
- * the loop's ticket, without `pause` (which exits to the host on a virtual machine) or system
- * calls, and short, so a machine busy with other programs loses at most that much of a core a loop,
- * and an idle pool still sleeps. Each thread also counts the jobs it finished once, when it runs
- * out, not after every job: one write to the line the threads share per thread and loop. */
+ * thread plus one wake-up call. */
 #include <pthread.h>
 #include <stdatomic.h>
 #include <stdint.h>
@@ -26,12 +14,6 @@
 #include <time.h>
 
 #include "core_internal.h"
-
-/* How long a thread out of jobs looks for work before it sleeps: above the gap between a
- * frame's two loops and a helper's last job, small against a frame of the fast techniques. */
-#define POOL_SPIN_SECONDS 40e-6
-/* Loads between two readings of the clock. */
-#define POOL_SPIN_CHECKS 32
 
 struct meso_pool {
     pthread_mutex_t lock;
@@ -57,51 +39,23 @@ typedef struct helper_start {
     int thread_index;
 } helper_start;
 
-/* Claim and run jobs of loop `generation` until none is left, then count them as finished
- * (the last thread to do so wakes the caller). */
+/* Claim and run jobs of loop `generation` until none is left. */
 static void run_jobs(meso_pool *pool, uint32_t generation, meso_job_fn fn, void *user,
                      uint32_t num_jobs, int thread_index) {
-    uint32_t ran = 0;
     for (;;) {
         uint64_t ticket = atomic_load(&pool->ticket);
         uint32_t job;
         do {
             job = (uint32_t)ticket;
-            if ((uint32_t)(ticket >> 32) != generation || job >= num_jobs) goto out;
+            if ((uint32_t)(ticket >> 32) != generation || job >= num_jobs) return;
         } while (!atomic_compare_exchange_weak(&pool->ticket, &ticket, ticket + 1));
         fn(user, job, thread_index);
-        ++ran;
-    }
-out:
-    if (ran && atomic_fetch_add(&pool->finished, ran) + ran == num_jobs) {
-        pthread_mutex_lock(&pool->lock);
-        pthread_cond_signal(&pool->done);
-        pthread_mutex_unlock(&pool->lock);
-    }
-}
-
-/* Look for up to POOL_SPIN_SECONDS until done() holds; true if it does. */
-static bool spin_until(bool (*done)(meso_pool *, uint32_t), meso_pool *pool, uint32_t value) {
-    double until = 0.0;
-    for (uint32_t i = 0;; ++i) {
-        if (done(pool, value)) return true;
-        if (i % POOL_SPIN_CHECKS == 0) {
-            double now = meso_time_seconds();
-            if (i == 0)
-                until = now + POOL_SPIN_SECONDS;
-            else if (now > until)
-                return false;
+        if (atomic_fetch_add(&pool->finished, 1) + 1 == num_jobs) {
+            pthread_mutex_lock(&pool->lock);
+            pthread_cond_signal(&pool->done);
+            pthread_mutex_unlock(&pool->lock);
         }
     }
-}
-
-/* A loop other than `seen` has started (the ticket's generation is written last). */
-static bool loop_started(meso_pool *pool, uint32_t seen) {
-    return (uint32_t)(atomic_load_explicit(&pool->ticket, memory_order_acquire) >> 32) != seen;
-}
-
-static bool jobs_finished(meso_pool *pool, uint32_t num_jobs) {
-    return atomic_load_explicit(&pool->finished, memory_order_acquire) >= num_jobs;
 }
 
 static void *helper_main(void *arg) {
@@ -110,8 +64,6 @@ static void *helper_main(void *arg) {
     meso_pool *pool = start.pool;
     uint32_t seen = 0;
     for (;;) {
-        /* The loop's parameters are read under the lock either way. */
-        spin_until(loop_started, pool, seen);
         pthread_mutex_lock(&pool->lock);
         while (!pool->stopping && pool->generation == seen)
             pthread_cond_wait(&pool->wake, &pool->lock);
@@ -207,12 +159,10 @@ void meso_parallel_for(meso_context *ctx, size_t num_jobs, meso_job_fn fn, void 
 
     run_jobs(pool, generation, fn, user, (uint32_t)num_jobs, 0);
 
-    if (!spin_until(jobs_finished, pool, (uint32_t)num_jobs)) {
-        pthread_mutex_lock(&pool->lock);
-        while (atomic_load(&pool->finished) < (uint32_t)num_jobs)
-            pthread_cond_wait(&pool->done, &pool->lock);
-        pthread_mutex_unlock(&pool->lock);
-    }
+    pthread_mutex_lock(&pool->lock);
+    while (atomic_load(&pool->finished) < (uint32_t)num_jobs)
+        pthread_cond_wait(&pool->done, &pool->lock);
+    pthread_mutex_unlock(&pool->lock);
     pthread_mutex_unlock(&pool->busy);
 }
 
