@@ -193,24 +193,24 @@ static void assert_same_mesh(const meso_mesh *a, const meso_mesh *b) {
 /* The tessellator remembers displaced midpoints and their edges' decisions across frames
  * (displace_tessellator_run): a state that has drawn other views first must draw the mesh of a
  * fresh state, bit for bit, and the same view twice the same mesh. */
+static void kept_midpoints_fixture(fixture *f, int threads) {
+    fixture_init(f, threads);
+    fixture_torus(f, 12, 8);
+    set_tests(f, 1, 1, 1, 1);
+    fixture_set_option(f, "normal_threshold", 0.05);
+    fixture_set_option(f, "area_threshold", 0.01);
+}
+
 static void test_tessellation_kept_midpoints_give_the_fresh_mesh(void **state) {
     (void)state;
     const meso_vec3 eyes[3] = {{0.0f, 1.5f, 3.5f}, {2.0f, 0.5f, 2.0f}, {-0.5f, 2.5f, 1.5f}};
     fixture kept;
-    fixture_init(&kept, 2);
-    fixture_torus(&kept, 12, 8);
-    set_tests(&kept, 1, 1, 1, 1);
-    fixture_set_option(&kept, "normal_threshold", 0.05);
-    fixture_set_option(&kept, "area_threshold", 0.01);
+    kept_midpoints_fixture(&kept, 2);
     void *kept_state = NULL;
     const meso_mesh *mesh = fixture_geometry(&kept, technique, &kept_state);
     for (int e = 1; e < 3; e++) {
         fixture fresh;
-        fixture_init(&fresh, 1);
-        fixture_torus(&fresh, 12, 8);
-        set_tests(&fresh, 1, 1, 1, 1);
-        fixture_set_option(&fresh, "normal_threshold", 0.05);
-        fixture_set_option(&fresh, "area_threshold", 0.01);
+        kept_midpoints_fixture(&fresh, 1);
         fresh.scene.camera.eye = eyes[e];
         void *fresh_state = NULL;
         const meso_mesh *expected = fixture_geometry(&fresh, technique, &fresh_state);

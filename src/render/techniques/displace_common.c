@@ -380,6 +380,21 @@ static bool job_reserve_triangles(tess_job *job, size_t extra) {
     return true;
 }
 
+/* A traversal's log (the vetoes asked, the triangles' depths) with room for one more entry:
+ * log itself, or log doubled when full; NULL when out of memory, log then stays as it was and
+ * the traversal is not kept (record_failed: a record is a shortcut, not needed for the result). */
+static void *record_room(tess_scratch *s, void *log, size_t *cap, size_t count, size_t size) {
+    if (count < *cap) return log;
+    size_t grown_cap = *cap ? 2 * *cap : 1024;
+    void *grown = realloc(log, grown_cap * size);
+    if (!grown) {
+        s->record_failed = true;
+        return NULL;
+    }
+    *cap = grown_cap;
+    return grown;
+}
+
 static bool emit_triangle(tess_scratch *s, tess_job *job, const tess_entry *e) {
     if (job->num_triangles >= MESO_MESH_MAX_TRIANGLES) {
         job->result = MESO_ERROR_LIMIT;
@@ -406,17 +421,11 @@ static bool emit_triangle(tess_scratch *s, tess_job *job, const tess_entry *e) {
     job->num_triangles++;
     int depth = e->depth < DISPLACE_MAX_DEPTH ? e->depth : DISPLACE_MAX_DEPTH - 1;
     job->stats.per_depth[depth]++;
-    if (s->recording) {
-        if (s->num_depths == s->cap_depths) {
-            size_t cap = s->cap_depths ? 2 * s->cap_depths : 1024;
-            uint8_t *grown = realloc(s->depths, cap);
-            if (!grown) {
-                s->record_failed = true;
-                return true;
-            }
-            s->depths = grown;
-            s->cap_depths = cap;
-        }
+    uint8_t *depths =
+        s->recording ? record_room(s, s->depths, &s->cap_depths, s->num_depths, sizeof(*s->depths))
+                     : NULL;
+    if (depths) {
+        s->depths = depths;
         s->depths[s->num_depths++] = (uint8_t)depth;
     }
     return true;
@@ -518,17 +527,11 @@ static bool vetoed(const displace_tessellator *t, tess_scratch *s, const displac
                    const displace_vertex *b, const displace_vertex *m, tess_job *job) {
     if (!t->tests || !t->tests->veto) return false;
     bool answer = t->tests->veto(t->tests->user, a, b, m, job->stats.counters);
-    if (s->recording) {
-        if (s->num_asked == s->cap_asked) {
-            size_t cap = s->cap_asked ? 2 * s->cap_asked : 1024;
-            tess_asked *grown = realloc(s->asked, cap * sizeof(*grown));
-            if (!grown) {
-                s->record_failed = true;
-                return answer;
-            }
-            s->asked = grown;
-            s->cap_asked = cap;
-        }
+    tess_asked *asked =
+        s->recording ? record_room(s, s->asked, &s->cap_asked, s->num_asked, sizeof(*s->asked))
+                     : NULL;
+    if (asked) {
+        s->asked = asked;
         s->asked[s->num_asked++] =
             (tess_asked){(int32_t)(a - s->nodes), (int32_t)(b - s->nodes),
                          (uint32_t)(m - s->nodes) | (answer ? 0x80000000u : 0u)};
