@@ -817,16 +817,19 @@ static void record_traversal(tess_record *r, const tess_scratch *s, const tess_j
         if (v->displaced)
             r->hooked[hooked++] = (tess_record_hooked){(int32_t)i, v->position, v->unit_normal};
     }
-    memcpy(r->asked, s->asked, s->num_asked * sizeof(*s->asked));
+    /* empty logs and outputs may have no arrays yet (NULL), which memcpy must not be given */
+    if (s->num_asked) memcpy(r->asked, s->asked, s->num_asked * sizeof(*s->asked));
     size_t nv = r->num_vertices;
-    memcpy(r->positions, job->positions + v0, nv * sizeof(meso_vec3));
-    memcpy(r->normals, job->normals + v0, nv * sizeof(meso_vec3));
-    memcpy(r->tangents, job->tangents + v0, nv * sizeof(meso_vec3));
-    memcpy(r->bitangents, job->bitangents + v0, nv * sizeof(meso_vec3));
-    memcpy(r->uvs, job->uvs + v0, nv * sizeof(meso_vec2));
+    if (nv) {
+        memcpy(r->positions, job->positions + v0, nv * sizeof(meso_vec3));
+        memcpy(r->normals, job->normals + v0, nv * sizeof(meso_vec3));
+        memcpy(r->tangents, job->tangents + v0, nv * sizeof(meso_vec3));
+        memcpy(r->bitangents, job->bitangents + v0, nv * sizeof(meso_vec3));
+        memcpy(r->uvs, job->uvs + v0, nv * sizeof(meso_vec2));
+    }
     for (size_t i = 0; i < r->num_triangles * 3; i++)
         r->indices[i] = job->indices[t0 * 3 + i] - (uint32_t)v0;
-    memcpy(r->depths, s->depths, r->num_triangles);
+    if (r->num_triangles) memcpy(r->depths, s->depths, r->num_triangles);
     for (int c = 0; c < DISPLACE_NUM_COUNTERS; c++)
         r->counters[c] = job->stats.counters[c] - counters_before[c];
     r->grid_limited = job->stats.grid_limited - grid_limited_before;
@@ -879,13 +882,15 @@ static bool replay_traversal(const displace_tessellator *t, tess_scratch *s, tes
     job->memo_used += r->memo_used;
     for (size_t i = 0; i < r->num_triangles; i++) job->stats.per_depth[r->depths[i]]++;
     size_t v0 = job->num_vertices, nv = r->num_vertices;
-    memcpy(job->positions + v0, r->positions, nv * sizeof(meso_vec3));
-    memcpy(job->normals + v0, r->normals, nv * sizeof(meso_vec3));
-    memcpy(job->tangents + v0, r->tangents, nv * sizeof(meso_vec3));
-    memcpy(job->bitangents + v0, r->bitangents, nv * sizeof(meso_vec3));
-    memcpy(job->uvs + v0, r->uvs, nv * sizeof(meso_vec2));
-    uint32_t *out = job->indices + job->num_triangles * 3;
-    for (size_t i = 0; i < r->num_triangles * 3; i++) out[i] = r->indices[i] + (uint32_t)v0;
+    if (nv) { /* (an empty output may have no arrays yet) */
+        memcpy(job->positions + v0, r->positions, nv * sizeof(meso_vec3));
+        memcpy(job->normals + v0, r->normals, nv * sizeof(meso_vec3));
+        memcpy(job->tangents + v0, r->tangents, nv * sizeof(meso_vec3));
+        memcpy(job->bitangents + v0, r->bitangents, nv * sizeof(meso_vec3));
+        memcpy(job->uvs + v0, r->uvs, nv * sizeof(meso_vec2));
+    }
+    for (size_t i = 0; i < r->num_triangles * 3; i++)
+        job->indices[job->num_triangles * 3 + i] = r->indices[i] + (uint32_t)v0;
     job->num_vertices += nv;
     job->num_triangles += r->num_triangles;
     return true;
