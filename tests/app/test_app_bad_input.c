@@ -234,6 +234,8 @@ static void test_app_usage_errors_exit_2(void **state) {
     expect_bad_input(args, "-o");
     snprintf(args, sizeof(args), "render %s -o %s --size 0x10", scene, out_png());
     expect_bad_input(args, "--size");
+    snprintf(args, sizeof(args), "bench %s --orbit 0", scene); /* a turn in 0 frames */
+    expect_bad_input(args, "bench: --orbit: '0' is not an integer in 1..1000000");
     expect_bad_input("nosuchcommand", "nosuchcommand");
     expect_bad_input("info", "info");
     snprintf(args, sizeof(args), "info %s", test_path(test_temp_dir(), "full.png.unknown"));
