@@ -761,31 +761,44 @@ static bool replayable(const displace_tessellator *t) {
     return t->tests && t->tests->view_independent_insert && t->tests->veto;
 }
 
-/* Carve the record's block into its arrays for the sizes set (8-byte aligned pieces). */
+/* A record's part of `bytes`, rounded up to 8 so that every part of the block is aligned. */
+static size_t record_part_bytes(size_t bytes) { return (bytes + 7) & ~(size_t)7; }
+
+/* The part at *cursor, the cursor moved past it. */
+static void *record_carve(char **cursor, size_t bytes) {
+    void *part = *cursor;
+    *cursor += record_part_bytes(bytes);
+    return part;
+}
+
+/* The record's block (grown when too small) cut into its arrays for its counts. A record has
+ * at least a triangle's three corners as nodes, so the block is never empty. */
 static bool record_layout(tess_record *r) {
-    size_t sizes[10] = {
-        r->num_nodes * 2 * sizeof(int32_t),      r->num_hooked * sizeof(tess_record_hooked),
-        r->num_asked * sizeof(tess_asked),       r->num_vertices * sizeof(meso_vec3),
-        r->num_vertices * sizeof(meso_vec3),     r->num_vertices * sizeof(meso_vec3),
-        r->num_vertices * sizeof(meso_vec3),     r->num_vertices * sizeof(meso_vec2),
-        r->num_triangles * 3 * sizeof(uint32_t), r->num_triangles};
-    size_t total = 0;
-    for (int k = 0; k < 10; k++) total += (sizes[k] + 7) & ~(size_t)7;
+    size_t texels = r->num_nodes * 2 * sizeof(int32_t);
+    size_t hooked = r->num_hooked * sizeof(tess_record_hooked);
+    size_t asked = r->num_asked * sizeof(tess_asked);
+    size_t vec3s = r->num_vertices * sizeof(meso_vec3), uvs = r->num_vertices * sizeof(meso_vec2);
+    size_t indices = r->num_triangles * 3 * sizeof(uint32_t), depths = r->num_triangles;
+    size_t total = record_part_bytes(texels) + record_part_bytes(hooked) +
+                   record_part_bytes(asked) + 4 * record_part_bytes(vec3s) +
+                   record_part_bytes(uvs) + record_part_bytes(indices) + record_part_bytes(depths);
     if (total > r->cap_bytes) {
         void *grown = realloc(r->block, total);
         if (!grown) return false;
         r->block = grown;
         r->cap_bytes = total;
     }
-    char *p = r->block;
-    void **parts[10] = {(void **)&r->texels,     (void **)&r->hooked,  (void **)&r->asked,
-                        (void **)&r->positions,  (void **)&r->normals, (void **)&r->tangents,
-                        (void **)&r->bitangents, (void **)&r->uvs,     (void **)&r->indices,
-                        (void **)&r->depths};
-    for (int k = 0; k < 10; k++) {
-        *parts[k] = p;
-        p += (sizes[k] + 7) & ~(size_t)7;
-    }
+    char *cursor = r->block;
+    r->texels = record_carve(&cursor, texels);
+    r->hooked = record_carve(&cursor, hooked);
+    r->asked = record_carve(&cursor, asked);
+    r->positions = record_carve(&cursor, vec3s);
+    r->normals = record_carve(&cursor, vec3s);
+    r->tangents = record_carve(&cursor, vec3s);
+    r->bitangents = record_carve(&cursor, vec3s);
+    r->uvs = record_carve(&cursor, uvs);
+    r->indices = record_carve(&cursor, indices);
+    r->depths = record_carve(&cursor, depths);
     return true;
 }
 
