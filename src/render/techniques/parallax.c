@@ -77,7 +77,7 @@ static void shade_block(const void *state, const meso_frame *frame, const meso_o
         v8i on = v8_mask_from_bits(depth > 0.0f ? v8_mask_bits(cn < 0.0f) & l.frame_bits : 0);
         v8f scale = v8_select(on, depth / v8_select(on, along, v8_splat(1.0f)), v8_splat(0.0f));
         /* §3.2: the depth read at the unshifted coordinates stands for the shifted point's. */
-        v8f d = 1.0f - relief_sample8(m, x, y);
+        v8f d = 1.0f - relief_sample8_loads(m, x, y);
         v8f uo = cu * scale * d, vo = cv * scale * d;
         v8f gu, gv;
         relief_gradient8(m, x + uo * (float)m->width, y - vo * (float)m->height, &gu, &gv);
