@@ -6,25 +6,13 @@
 
 static inline v8i sel_i(v8i mask, v8i a, v8i b) { return (a & mask) | (b & ~mask); }
 
-/* base[index[k]] and base[index[k] + 1] per lane: with AVX2 two 64-bit gathers of four lanes
- * each, half the elements of two 32-bit gathers (relief_gather_pairs8 does the same for
- * heights); the same codes. */
-static inline void gather_code_pairs(const int32_t *base, v8i index, v8i *left, v8i *right) {
-#if defined(__AVX2__)
-    /* lanes 0, 1, 4, 5 in the first gather, 2, 3, 6, 7 in the second: the shuffles below put
-     * every lane back in its place */
-    __m256i order = _mm256_permute4x64_epi64((__m256i)index, 0xd8);
-    const long long *pairs = (const long long *)(const void *)base;
-    __m256 lo =
-        _mm256_castsi256_ps(_mm256_i32gather_epi64(pairs, _mm256_castsi256_si128(order), 4));
-    __m256 hi =
-        _mm256_castsi256_ps(_mm256_i32gather_epi64(pairs, _mm256_extracti128_si256(order, 1), 4));
-    *left = (v8i)_mm256_shuffle_ps(lo, hi, 0x88);
-    *right = (v8i)_mm256_shuffle_ps(lo, hi, 0xdd);
-#else
-    *left = v8i_gather(base, index);
-    *right = v8i_gather(base + 1, index);
-#endif
+/* base[index[k]] and base[index[k] + 1] per lane, the codes of a texel and its right neighbour:
+ * v8_load_pairs (one 8-byte load a lane; before, two 64-bit gathers of four lanes each); the
+ * same codes. */
+static inline void load_code_pairs(const int32_t *base, v8i index, v8i *left, v8i *right) {
+    v8f l, r;
+    v8_load_pairs((const float *)(const void *)base, index, &l, &r);
+    *left = (v8i)l, *right = (v8i)r;
 }
 
 /* The colour map at eight uvs: bilinear between texel centres at level 0 with the texture's
@@ -77,8 +65,8 @@ static inline __attribute__((always_inline)) void sample_color_map(const meso_te
         if (v8_mask_bits(i1 == i0 + 1) == 0xff) {
             /* each texel's right neighbour is the next code of its row (every lane but at a
              * wrap or clamp column): both from one 64-bit gather */
-            gather_code_pairs(codes, row0 + i0, &a, &b);
-            gather_code_pairs(codes, row1 + i0, &c, &d);
+            load_code_pairs(codes, row0 + i0, &a, &b);
+            load_code_pairs(codes, row1 + i0, &c, &d);
         } else {
             a = v8i_gather(codes, row0 + i0), b = v8i_gather(codes, row0 + i1);
             c = v8i_gather(codes, row1 + i0), d = v8i_gather(codes, row1 + i1);

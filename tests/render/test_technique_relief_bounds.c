@@ -2,7 +2,9 @@
  * every bilinear sample relief_sample8 can read inside a box, on repeated power-of-two fields,
  * repeated fields of other sizes (boxes across the tile's seam included) and clamped ones, and
  * is tight away from a peak; relief_shadow_clear8 only clears lanes whose shadow search finds
- * nothing, so skipping their search cannot change an image. */
+ * nothing, so skipping their search cannot change an image. The lookups that read texels by
+ * loads instead of gathers (relief_gradient8's 4 x 4 block, relief_sample8_loads,
+ * v8_load_pairs) give the bits of relief_sample8 and of plain indexing. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -168,6 +170,55 @@ static void test_shadow_clear_only_lanes_the_search_finds_lit(void **state) {
     assert_true(cleared > lanes / 10);
 }
 
+/* relief_gradient8 against its definition by relief_sample8 (central differences one texel
+ * apart) and relief_sample8_loads against relief_sample8, bit for bit: groups whose eight lanes
+ * lie well inside the field (the loads' paths of an AVX2 build) and groups anywhere in three
+ * tiles either way (wraps, clamped borders: the gathers' paths). v8_load_pairs against plain
+ * indexing. */
+static void test_loaded_lookups_match_the_gathers(void **state) {
+    (void)state;
+    int sizes[3][2] = {{64, 64}, {48, 40}, {64, 64}};
+    meso_wrap wraps[3] = {MESO_WRAP_REPEAT, MESO_WRAP_REPEAT, MESO_WRAP_CLAMP};
+    for (int f = 0; f < 3; ++f) {
+        bounds_case c;
+        case_init(&c, sizes[f][0], sizes[f][1], wraps[f], false, 31u + (uint32_t)f);
+        const relief_heights *m = &c.heights;
+        float w = (float)m->width, h = (float)m->height;
+        uint32_t rng = 777u;
+        for (int trial = 0; trial < 4000; ++trial) {
+            bool inside = trial % 2 == 0;
+            v8f x, y;
+            for (int k = 0; k < 8; ++k) {
+                x[k] = inside ? 2.0f + (w - 5.0f) * random_unit(&rng)
+                              : (6.0f * random_unit(&rng) - 3.0f) * w;
+                y[k] = inside ? 2.0f + (h - 5.0f) * random_unit(&rng)
+                              : (6.0f * random_unit(&rng) - 3.0f) * h;
+            }
+            if (trial % 7 == 0) x[3] = floorf(x[3]), y[5] = floorf(y[5]); /* on texel centres */
+            v8f gu, gv;
+            relief_gradient8(m, x, y, &gu, &gv);
+            v8f want_gu =
+                (relief_sample8(m, x + 1.0f, y) - relief_sample8(m, x - 1.0f, y)) * (0.5f * w);
+            v8f want_gv =
+                (relief_sample8(m, x, y - 1.0f) - relief_sample8(m, x, y + 1.0f)) * (0.5f * h);
+            assert_memory_equal(&gu, &want_gu, sizeof gu);
+            assert_memory_equal(&gv, &want_gv, sizeof gv);
+            v8f loaded = relief_sample8_loads(m, x, y), gathered = relief_sample8(m, x, y);
+            assert_memory_equal(&loaded, &gathered, sizeof loaded);
+        }
+        v8i index;
+        for (int k = 0; k < 8; ++k)
+            index[k] = (int32_t)(next_random(&rng) % (uint32_t)(m->stride * m->height));
+        v8f left, right;
+        v8_load_pairs(m->padded, index, &left, &right);
+        for (int k = 0; k < 8; ++k) {
+            assert_true(left[k] == m->padded[index[k]]);
+            assert_true(right[k] == m->padded[index[k] + 1]);
+        }
+        case_deinit(&c);
+    }
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_box_max_bounds_every_sample_repeat_power_of_two),
@@ -175,6 +226,7 @@ int main(void) {
         cmocka_unit_test(test_box_max_bounds_every_sample_clamp),
         cmocka_unit_test(test_box_max_is_tight_away_from_a_peak),
         cmocka_unit_test(test_shadow_clear_only_lanes_the_search_finds_lit),
+        cmocka_unit_test(test_loaded_lookups_match_the_gathers),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

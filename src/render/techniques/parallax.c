@@ -59,6 +59,8 @@ static void shade_block(const void *state, const meso_frame *frame, const meso_o
     /* no shadows: every light visible, set once a slot rather than once a group */
     for (size_t g = 0; g < RELIEF_SHADE_GROUPS; g++)
         meso_shade_batch_all_visible(&batches[g], frame);
+    /* the shading reads the tangents for a normal map only (meso_shade_batch) */
+    bool tangents = object->material.normal_map != NULL;
     size_t groups = 0, group_first = 0;
     for (size_t first = 0; first < block->count; first += RELIEF_LANES) {
         if (groups == RELIEF_SHADE_GROUPS) {
@@ -77,7 +79,7 @@ static void shade_block(const void *state, const meso_frame *frame, const meso_o
         v8i on = v8_mask_from_bits(depth > 0.0f ? v8_mask_bits(cn < 0.0f) & l.frame_bits : 0);
         v8f scale = v8_select(on, depth / v8_select(on, along, v8_splat(1.0f)), v8_splat(0.0f));
         /* §3.2: the depth read at the unshifted coordinates stands for the shifted point's. */
-        v8f d = 1.0f - relief_sample8(m, x, y);
+        v8f d = 1.0f - relief_sample8_loads(m, x, y);
         v8f uo = cu * scale * d, vo = cv * scale * d;
         v8f gu, gv;
         relief_gradient8(m, x + uo * (float)m->width, y - vo * (float)m->height, &gu, &gv);
@@ -88,8 +90,10 @@ static void shade_block(const void *state, const meso_frame *frame, const meso_o
         in->px = l.position.x, in->py = l.position.y, in->pz = l.position.z;
         in->nx = normal.x, in->ny = normal.y, in->nz = normal.z;
         in->u = l.u + uo, in->v = l.v + vo;
-        in->tx = l.tangent.x, in->ty = l.tangent.y, in->tz = l.tangent.z;
-        in->bx = l.bitangent.x, in->by = l.bitangent.y, in->bz = l.bitangent.z;
+        if (tangents) {
+            in->tx = l.tangent.x, in->ty = l.tangent.y, in->tz = l.tangent.z;
+            in->bx = l.bitangent.x, in->by = l.bitangent.y, in->bz = l.bitangent.z;
+        }
     }
     meso_shade_batches_to_block(frame, object, batches, groups, block, group_first);
 }

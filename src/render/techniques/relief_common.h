@@ -145,6 +145,8 @@ static inline v8f relief_sample8(const relief_heights *m, v8f x, v8f y) {
  * transpose, no gather. */
 static inline void relief_load_quads8(const float *base, v8i index, v8f out[4]) {
     __m256 q[4];
+    /* unrolled: as a loop GCC kept q on the stack */
+#pragma GCC unroll 4
     for (int k = 0; k < 4; k++) {
         __m128 lo = _mm_loadu_ps(base + index[k]), hi = _mm_loadu_ps(base + index[k + 4]);
         q[k] = _mm256_insertf128_ps(_mm256_castps128_ps256(lo), hi, 1);
@@ -156,6 +158,21 @@ static inline void relief_load_quads8(const float *base, v8i index, v8f out[4]) 
     out[2] = (v8f)_mm256_shuffle_ps(t1, t3, 0x44), out[3] = (v8f)_mm256_shuffle_ps(t1, t3, 0xee);
 }
 #endif
+
+/* relief_sample8 with the texel pairs read by loads (v8_load_pairs), not gathers: the same
+ * texels, so the same bits. For a lookup outside a search's dependent chain, where the loads
+ * cost less time than the gathers (parallax's unshifted depth, issue 16); inside a chain the
+ * index extraction would lengthen it (not measured). */
+static inline v8f relief_sample8_loads(const relief_heights *m, v8f x, v8f y) {
+    v8i i, j;
+    v8f tx, ty;
+    relief_texel8(m, x, y, &i, &j, &tx, &ty);
+    v8i index = j * m->stride + i;
+    v8f h00, h10, h01, h11;
+    v8_load_pairs(m->padded, index, &h00, &h10);
+    v8_load_pairs(m->padded + m->stride, index, &h01, &h11);
+    return relief_bilinear8(h00, h10, h01, h11, tx, ty);
+}
 
 /* relief_sample8 at (x + 1, y) in *right and (x - 1, y) in *left, with the same bits. Both read
  * rows j and j + 1; where every lane's two texel pairs are the four texels from i - 1 on (no
@@ -637,6 +654,40 @@ static inline void relief_lanes_texel(const relief_heights *m, const relief_lane
 /* The gradient (dh/du, dh/dv) at texel-centre coordinates: meso_heightfield_gradient's
  * central differences one texel apart, eight at once. */
 static inline void relief_gradient8(const relief_heights *m, v8f x, v8f y, v8f *gu, v8f *gv) {
+#if defined(__AVX2__)
+    /* The four samples read texels of the 4 x 4 block from (i - 1, j - 1): (x +- 1, y) rows j
+     * and j + 1, (x, y - 1) rows j - 1 and j, (x, y + 1) rows j + 1 and j + 2, every one in the
+     * columns i - 1 .. i + 2. Where no lane wraps inside that block, four 16-byte loads a lane
+     * read it all instead of two quad loads and eight pair gathers; the same texels and
+     * fractions, so the same bits (the gathers were a fifth of parallax's time, issue 16). */
+    v8i ir, jr, il, jl, iu, ju, id, jd;
+    v8f txr, tyr, txl, tyl, txu, tyu, txd, tyd;
+    relief_texel8(m, x + 1.0f, y, &ir, &jr, &txr, &tyr);
+    relief_texel8(m, x - 1.0f, y, &il, &jl, &txl, &tyl);
+    relief_texel8(m, x, y - 1.0f, &iu, &ju, &txu, &tyu);
+    relief_texel8(m, x, y + 1.0f, &id, &jd, &txd, &tyd);
+    v8i column = il + 1;
+    /* the padded field holds columns and rows 0..width and 0..height */
+    v8i inside =
+        (il <= v8i_splat(m->width - 3)) & (jl >= v8i_splat(1)) & (jl <= v8i_splat(m->height - 2));
+    v8i unwrapped = (ir == il + 2) & (jr == jl) & (iu == column) & (id == column) & (ju == jl - 1) &
+                    (jd == jl + 1);
+    if (v8_mask_bits(inside & unwrapped) == 0xff) {
+        v8i index = (jl - 1) * m->stride + il;
+        v8f above[4], row0[4], row1[4], below[4];
+        relief_load_quads8(m->padded, index, above);
+        relief_load_quads8(m->padded + m->stride, index, row0);
+        relief_load_quads8(m->padded + 2 * m->stride, index, row1);
+        relief_load_quads8(m->padded + 3 * m->stride, index, below);
+        v8f right = relief_bilinear8(row0[2], row0[3], row1[2], row1[3], txr, tyr);
+        v8f left = relief_bilinear8(row0[0], row0[1], row1[0], row1[1], txl, tyl);
+        v8f up = relief_bilinear8(above[1], above[2], row0[1], row0[2], txu, tyu);
+        v8f down = relief_bilinear8(row1[1], row1[2], below[1], below[2], txd, tyd);
+        *gu = (right - left) * (0.5f * (float)m->width);
+        *gv = (up - down) * (0.5f * (float)m->height);
+        return;
+    }
+#endif
     v8f right, left;
     relief_sample8_beside(m, x, y, &right, &left);
     *gu = (right - left) * (0.5f * (float)m->width);
