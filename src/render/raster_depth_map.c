@@ -60,14 +60,48 @@ static void depth_tile(void *user, size_t job, int thread_index) {
     }
 }
 
-meso_result meso_raster_depth_map(meso_context *ctx, const meso_mesh *mesh,
-                                  meso_mat4 view_projection, int width, int height, float *depth) {
+struct meso_raster_depth_scratch {
+    raster_bins bins;
+};
+
+size_t meso_raster_depth_scratch_memory(const meso_raster_depth_scratch *scratch) {
+    if (!scratch) return 0;
+    const raster_bins *bins = &scratch->bins;
+    size_t bytes = sizeof(*scratch) + (size_t)bins->meshes_capacity * sizeof(raster_mesh) +
+                   bins->chunks_capacity * sizeof(raster_chunk);
+    for (size_t i = 0; i < bins->chunks_capacity; i++) {
+        const raster_chunk *c = &bins->chunks[i];
+        bytes += c->capacity * sizeof(raster_triangle) +
+                 (c->tile_start_capacity + c->entries_capacity) * sizeof(uint32_t);
+    }
+    return bytes;
+}
+
+void meso_raster_depth_scratch_destroy(meso_raster_depth_scratch *scratch) {
+    if (!scratch) return;
+    raster_bins_release(&scratch->bins);
+    free(scratch);
+}
+
+meso_result meso_raster_depth_map(meso_context *ctx, meso_raster_depth_scratch **scratch,
+                                  const meso_mesh *mesh, meso_mat4 view_projection, int width,
+                                  int height, float *depth) {
     if (!mesh || !depth || width <= 0 || height <= 0) {
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "depth map: invalid arguments (%d x %d)", width, height);
     }
-    raster_bins bins;
-    memset(&bins, 0, sizeof(bins));
+    meso_raster_depth_scratch local;
+    memset(&local, 0, sizeof(local));
+    meso_raster_depth_scratch *kept = &local;
+    if (scratch) {
+        if (!*scratch) {
+            *scratch = calloc(1, sizeof(**scratch));
+            if (!*scratch)
+                return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "depth map: scratch");
+        }
+        kept = *scratch;
+    }
+    raster_bins *bins = &kept->bins;
     raster_setup_desc desc = {.view_projection = view_projection,
                               .width = width,
                               .height = height,
@@ -80,14 +114,14 @@ meso_result meso_raster_depth_map(meso_context *ctx, const meso_mesh *mesh,
     /* the setup's AVX2 copy where the techniques run theirs: 8 triangles at a time */
     meso_result r = (strcmp(meso_technique_isa(), "avx2") == 0
                          ? raster_bins_build_avx2
-                         : raster_bins_build)(ctx, &bins, meshes, NULL, 1, &desc);
+                         : raster_bins_build)(ctx, bins, meshes, NULL, 1, &desc);
 #else
-    meso_result r = raster_bins_build(ctx, &bins, meshes, NULL, 1, &desc);
+    meso_result r = raster_bins_build(ctx, bins, meshes, NULL, 1, &desc);
 #endif
     if (r == MESO_OK) {
-        depth_job dj = {&bins, depth};
-        meso_parallel_for(ctx, (size_t)bins.tiles_x * (size_t)bins.tiles_y, depth_tile, &dj);
+        depth_job dj = {bins, depth};
+        meso_parallel_for(ctx, (size_t)bins->tiles_x * (size_t)bins->tiles_y, depth_tile, &dj);
     }
-    raster_bins_release(&bins);
+    if (kept == &local) raster_bins_release(bins);
     return r;
 }

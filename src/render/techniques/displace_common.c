@@ -783,10 +783,14 @@ static bool record_layout(tess_record *r) {
                    record_part_bytes(asked) + 4 * record_part_bytes(vec3s) +
                    record_part_bytes(uvs) + record_part_bytes(indices) + record_part_bytes(depths);
     if (total > r->cap_bytes) {
-        void *grown = realloc(r->block, total);
-        if (!grown) return false;
-        r->block = grown;
-        r->cap_bytes = total;
+        /* the whole block is written anew: a fresh one, not realloc's copy of the old (a moving
+         * camera re-records most triangles a frame, a few bytes larger each time), with an
+         * eighth to spare for the next growth */
+        size_t cap = total + total / 8;
+        free(r->block);
+        r->block = malloc(cap);
+        r->cap_bytes = r->block ? cap : 0;
+        if (!r->block) return false;
     }
     char *cursor = r->block;
     r->texels = record_carve(&cursor, texels);
@@ -1165,8 +1169,8 @@ meso_result displace_shadows_draw_light(meso_context *ctx, displace_shadows *sha
     out->depth = depth;
     out->active = false;
     if (mesh->num_triangles == 0) return MESO_OK;
-    meso_result r =
-        meso_raster_depth_map(ctx, mesh, map->view_projection, (int)size, (int)size, depth);
+    meso_result r = meso_raster_depth_map(ctx, shadows->keep_raster ? &shadows->raster : NULL, mesh,
+                                          map->view_projection, (int)size, (int)size, depth);
     if (r != MESO_OK) return r;
     out->active = true;
     return MESO_OK;
@@ -1249,10 +1253,19 @@ void displace_shadows_visibility(const displace_shadows *shadows, const meso_sce
     }
 }
 
+size_t displace_shadows_memory(const displace_shadows *shadows) {
+    size_t maps = shadows->depth ? (size_t)shadows->depth_lights * (size_t)shadows->options.size *
+                                       (size_t)shadows->options.size * sizeof(float)
+                                 : 0;
+    return maps + meso_raster_depth_scratch_memory(shadows->raster);
+}
+
 void displace_shadows_release(displace_shadows *shadows) {
     if (!shadows) return;
     free(shadows->depth);
     shadows->depth = NULL;
+    meso_raster_depth_scratch_destroy(shadows->raster);
+    shadows->raster = NULL;
     shadows->depth_lights = 0;
     shadows->num_lights = 0;
 }
