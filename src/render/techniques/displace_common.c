@@ -193,6 +193,8 @@ typedef struct tess_memo {
     uint8_t counters; /* bit c: the decision incremented counter c */
 } tess_memo;
 
+#define MEMO_PAGE_BITS 10 /* 1,024 entries (about 150 kB) a page */
+#define MEMO_PAGE_ENTRIES ((size_t)1 << MEMO_PAGE_BITS)
 #define MEMO_INPUT_BYTES (4 * sizeof(meso_vec3) + sizeof(meso_vec2))
 _Static_assert(offsetof(displace_vertex, uv) - offsetof(displace_vertex, base) ==
                        4 * sizeof(meso_vec3) &&
@@ -208,11 +210,13 @@ typedef struct tess_job {
     size_t vertex_offset, triangle_offset; /* in the joined mesh */
     displace_tess_stats stats;
     meso_result result;
-    /* the remembered midpoints of this job's triangles: entries, and an open-addressing table
-     * of entry index + 1 (0: empty) with 2^memo_bits slots, at most half full */
-    tess_memo *memo;
+    /* the remembered midpoints of this job's triangles: entries in pages of MEMO_PAGE_ENTRIES
+     * (memo_entry), and an open-addressing table of entry index + 1 (0: empty) with
+     * 2^memo_bits slots, at most half full */
+    tess_memo **memo_pages;
+    size_t num_memo_pages, cap_memo_pages;
     uint32_t *memo_slots;
-    size_t num_memo, cap_memo;
+    size_t num_memo, cap_memo; /* cap_memo: num_memo_pages * MEMO_PAGE_ENTRIES */
     int memo_bits;
     size_t memo_used;     /* entries read or written by the last run */
     tess_record *records; /* count, one a base triangle (NULL until the first replayable run) */
@@ -296,7 +300,8 @@ static void job_free(tess_job *job) {
     if (job->records)
         for (size_t i = 0; i < job->count; i++) free(job->records[i].block);
     free(job->records);
-    free(job->memo);
+    for (size_t i = 0; i < job->num_memo_pages; i++) free(job->memo_pages[i]);
+    free(job->memo_pages);
     free(job->memo_slots);
     free(job->positions);
     free(job->normals);
@@ -343,7 +348,8 @@ size_t displace_tessellator_memory(const displace_tessellator *t) {
             for (size_t i = 0; i < t->jobs[j].count; i++) bytes += t->jobs[j].records[i].cap_bytes;
         if (t->jobs[j].memo_slots)
             bytes += ((size_t)1 << t->jobs[j].memo_bits) * sizeof(uint32_t) +
-                     t->jobs[j].cap_memo * sizeof(tess_memo);
+                     t->jobs[j].cap_memo * sizeof(tess_memo) +
+                     t->jobs[j].cap_memo_pages * sizeof(tess_memo *);
     }
     size_t side = (size_t)t->n + 1;
     for (int i = 0; i < t->num_threads; i++)
@@ -438,13 +444,20 @@ static uint64_t memo_key(size_t triangle, int32_t kb, int32_t kc) {
     return ((uint64_t)triangle << 22) | ((uint64_t)kb << 11) | (uint64_t)kc;
 }
 
+/* Entry e of the job's memo. The entries live in pages that never move: a moving camera adds
+ * midpoints every frame, and one growing array was copied by realloc each time it grew (about a
+ * tenth of a moving bricks-teapot frame's instructions, docs/performance.md). */
+static inline tess_memo *memo_entry(const tess_job *job, size_t e) {
+    return &job->memo_pages[e >> MEMO_PAGE_BITS][e & (MEMO_PAGE_ENTRIES - 1)];
+}
+
 /* The slot holding key, or the empty slot where it would go (the table is never full). */
 static uint32_t *memo_slot(const tess_job *job, uint64_t key) {
     size_t mask = ((size_t)1 << job->memo_bits) - 1;
     size_t i = (size_t)((key * 0x9E3779B97F4A7C15ull) >> (64 - job->memo_bits));
     for (;;) {
         uint32_t e = job->memo_slots[i];
-        if (e == 0 || job->memo[e - 1].key == key) return &job->memo_slots[i];
+        if (e == 0 || memo_entry(job, e - 1)->key == key) return &job->memo_slots[i];
         i = (i + 1) & mask;
     }
 }
@@ -452,7 +465,7 @@ static uint32_t *memo_slot(const tess_job *job, uint64_t key) {
 static tess_memo *memo_find(const tess_job *job, uint64_t key) {
     if (!job->memo_slots) return NULL;
     uint32_t e = *memo_slot(job, key);
-    return e ? &job->memo[e - 1] : NULL;
+    return e ? memo_entry(job, e - 1) : NULL;
 }
 
 /* Twice the slots, the entries rehashed; false when out of memory (the job then remembers no
@@ -465,7 +478,8 @@ static bool memo_grow_slots(tess_job *job) {
     free(job->memo_slots);
     job->memo_slots = table;
     job->memo_bits = bits;
-    for (size_t e = 0; e < job->num_memo; e++) *memo_slot(job, job->memo[e].key) = (uint32_t)e + 1;
+    for (size_t e = 0; e < job->num_memo; e++)
+        *memo_slot(job, memo_entry(job, e)->key) = (uint32_t)e + 1;
     return true;
 }
 
@@ -474,15 +488,21 @@ static tess_memo *memo_store(tess_job *job, uint64_t key) {
     if (!job->memo_slots || (job->num_memo + 1) * 2 > ((size_t)1 << job->memo_bits))
         if (!memo_grow_slots(job)) return NULL;
     uint32_t *slot = memo_slot(job, key);
-    if (*slot) return &job->memo[*slot - 1];
-    if (job->num_memo == job->cap_memo) { /* by a quarter: the entries are most of the bytes */
-        size_t cap = job->cap_memo < 1024 ? 1024 : job->cap_memo + job->cap_memo / 4;
-        tess_memo *grown = realloc(job->memo, cap * sizeof(*grown));
-        if (!grown) return NULL;
-        job->memo = grown;
-        job->cap_memo = cap;
+    if (*slot) return memo_entry(job, *slot - 1);
+    if (job->num_memo == job->cap_memo) { /* one more page: the entries already made stay */
+        if (job->num_memo_pages == job->cap_memo_pages) {
+            size_t cap = job->cap_memo_pages ? 2 * job->cap_memo_pages : 16;
+            tess_memo **grown = realloc(job->memo_pages, cap * sizeof(*grown));
+            if (!grown) return NULL;
+            job->memo_pages = grown;
+            job->cap_memo_pages = cap;
+        }
+        tess_memo *page = malloc(MEMO_PAGE_ENTRIES * sizeof(*page));
+        if (!page) return NULL;
+        job->memo_pages[job->num_memo_pages++] = page;
+        job->cap_memo += MEMO_PAGE_ENTRIES;
     }
-    tess_memo *e = &job->memo[job->num_memo++];
+    tess_memo *e = memo_entry(job, job->num_memo++);
     e->key = key;
     e->decided = 0;
     *slot = (uint32_t)job->num_memo;
