@@ -201,6 +201,15 @@ _Static_assert(offsetof(displace_vertex, uv) - offsetof(displace_vertex, base) =
                    offsetof(tess_memo, uv) - offsetof(tess_memo, base) == 4 * sizeof(meso_vec3),
                "the inputs are one block of base, normal, tangent, bitangent, uv");
 
+/* A slot of a job's memo table: entry index + 1 (0: empty), and 32 bits of the key's hash that
+ * the slot's position does not use, so that a probe passing another key's slot mostly skips
+ * reading that entry (a cache miss each: the memo's look-ups were an eighth of a moving
+ * bricks-teapot frame's time, docs/performance.md). */
+typedef struct tess_memo_slot {
+    uint32_t entry;
+    uint32_t tag;
+} tess_memo_slot;
+
 typedef struct tess_job {
     size_t first, count; /* base triangles */
     size_t num_vertices, cap_vertices, num_triangles, cap_triangles;
@@ -215,7 +224,7 @@ typedef struct tess_job {
      * 2^memo_bits slots, at most half full */
     tess_memo **memo_pages;
     size_t num_memo_pages, cap_memo_pages;
-    uint32_t *memo_slots;
+    tess_memo_slot *memo_slots;
     size_t num_memo, cap_memo; /* cap_memo: num_memo_pages * MEMO_PAGE_ENTRIES */
     int memo_bits;
     size_t memo_used;     /* entries read or written by the last run */
@@ -347,7 +356,7 @@ size_t displace_tessellator_memory(const displace_tessellator *t) {
         if (t->jobs[j].records)
             for (size_t i = 0; i < t->jobs[j].count; i++) bytes += t->jobs[j].records[i].cap_bytes;
         if (t->jobs[j].memo_slots)
-            bytes += ((size_t)1 << t->jobs[j].memo_bits) * sizeof(uint32_t) +
+            bytes += ((size_t)1 << t->jobs[j].memo_bits) * sizeof(tess_memo_slot) +
                      t->jobs[j].cap_memo * sizeof(tess_memo) +
                      t->jobs[j].cap_memo_pages * sizeof(tess_memo *);
     }
@@ -452,19 +461,28 @@ static inline tess_memo *memo_entry(const tess_job *job, size_t e) {
 }
 
 /* The slot holding key, or the empty slot where it would go (the table is never full). */
-static uint32_t *memo_slot(const tess_job *job, uint64_t key) {
+static inline uint64_t memo_hash(uint64_t key) { return key * 0x9E3779B97F4A7C15ull; }
+
+/* The slot of a key's hash: its position from the top bits (at most 31 of them), its tag the
+ * low 32. */
+static inline uint32_t memo_tag(uint64_t hash) { return (uint32_t)hash; }
+
+static tess_memo_slot *memo_slot(const tess_job *job, uint64_t key) {
     size_t mask = ((size_t)1 << job->memo_bits) - 1;
-    size_t i = (size_t)((key * 0x9E3779B97F4A7C15ull) >> (64 - job->memo_bits));
+    uint64_t hash = memo_hash(key);
+    uint32_t tag = memo_tag(hash);
+    size_t i = (size_t)(hash >> (64 - job->memo_bits));
     for (;;) {
-        uint32_t e = job->memo_slots[i];
-        if (e == 0 || memo_entry(job, e - 1)->key == key) return &job->memo_slots[i];
+        const tess_memo_slot *slot = &job->memo_slots[i];
+        if (slot->entry == 0 || (slot->tag == tag && memo_entry(job, slot->entry - 1)->key == key))
+            return &job->memo_slots[i];
         i = (i + 1) & mask;
     }
 }
 
 static tess_memo *memo_find(const tess_job *job, uint64_t key) {
     if (!job->memo_slots) return NULL;
-    uint32_t e = *memo_slot(job, key);
+    uint32_t e = memo_slot(job, key)->entry;
     return e ? memo_entry(job, e - 1) : NULL;
 }
 
@@ -473,13 +491,15 @@ static tess_memo *memo_find(const tess_job *job, uint64_t key) {
 static bool memo_grow_slots(tess_job *job) {
     int bits = job->memo_slots ? job->memo_bits + 1 : 12;
     if (bits > 31) return false;
-    uint32_t *table = calloc((size_t)1 << bits, sizeof(*table));
+    tess_memo_slot *table = calloc((size_t)1 << bits, sizeof(*table));
     if (!table) return false;
     free(job->memo_slots);
     job->memo_slots = table;
     job->memo_bits = bits;
-    for (size_t e = 0; e < job->num_memo; e++)
-        *memo_slot(job, memo_entry(job, e)->key) = (uint32_t)e + 1;
+    for (size_t e = 0; e < job->num_memo; e++) {
+        uint64_t key = memo_entry(job, e)->key;
+        *memo_slot(job, key) = (tess_memo_slot){(uint32_t)e + 1, memo_tag(memo_hash(key))};
+    }
     return true;
 }
 
@@ -487,8 +507,8 @@ static bool memo_grow_slots(tess_job *job) {
 static tess_memo *memo_store(tess_job *job, uint64_t key) {
     if (!job->memo_slots || (job->num_memo + 1) * 2 > ((size_t)1 << job->memo_bits))
         if (!memo_grow_slots(job)) return NULL;
-    uint32_t *slot = memo_slot(job, key);
-    if (*slot) return memo_entry(job, *slot - 1);
+    tess_memo_slot *slot = memo_slot(job, key);
+    if (slot->entry) return memo_entry(job, slot->entry - 1);
     if (job->num_memo == job->cap_memo) { /* one more page: the entries already made stay */
         if (job->num_memo_pages == job->cap_memo_pages) {
             size_t cap = job->cap_memo_pages ? 2 * job->cap_memo_pages : 16;
@@ -505,7 +525,7 @@ static tess_memo *memo_store(tess_job *job, uint64_t key) {
     tess_memo *e = memo_entry(job, job->num_memo++);
     e->key = key;
     e->decided = 0;
-    *slot = (uint32_t)job->num_memo;
+    *slot = (tess_memo_slot){(uint32_t)job->num_memo, memo_tag(memo_hash(key))};
     return e;
 }
 
