@@ -193,7 +193,7 @@ typedef struct tess_memo {
     uint8_t counters; /* bit c: the decision incremented counter c */
 } tess_memo;
 
-#define MEMO_PAGE_BITS 10 /* 1,024 entries (about 150 kB) a page */
+#define MEMO_PAGE_BITS 10 /* 1,024 entries (139 kB) a page */
 #define MEMO_PAGE_ENTRIES ((size_t)1 << MEMO_PAGE_BITS)
 #define MEMO_INPUT_BYTES (4 * sizeof(meso_vec3) + sizeof(meso_vec2))
 _Static_assert(offsetof(displace_vertex, uv) - offsetof(displace_vertex, base) ==
@@ -203,7 +203,7 @@ _Static_assert(offsetof(displace_vertex, uv) - offsetof(displace_vertex, base) =
 
 /* A slot of a job's memo table: entry index + 1 (0: empty), and 32 bits of the key's hash that
  * the slot's position does not use, so that a probe passing another key's slot mostly skips
- * reading that entry (a cache miss each: the memo's look-ups were an eighth of a moving
+ * reading that entry (a cache miss each: the memo's look-ups were 9-13 % of a moving
  * bricks-teapot frame's time, docs/performance.md). */
 typedef struct tess_memo_slot {
     uint32_t entry;
