@@ -233,6 +233,44 @@ static void test_raster_nearer_surface_wins_in_any_order(void **state) {
     meso_context_destroy(ctx);
 }
 
+/* Options make the renderer draw a copy of the scene (with them in its objects); the camera and
+ * the lights the caller changes between frames must still reach it (meso bench --orbit --set
+ * drew a still camera). */
+static void test_renderer_with_options_follows_the_moving_camera(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    test_scene ts;
+    test_scene_init(&ts, 48, 48);
+    test_scene_add(&ts, test_shape(ctx, MESO_SHAPE_SPHERE, 0.6f, 24, (meso_vec3){0.3f, 0, 0}),
+                   "flat");
+    meso_option options[1] = {{"relief", "linear_steps", 16}};
+    meso_renderer *with = NULL, *without = NULL;
+    assert_int_equal(meso_renderer_create(ctx, &ts.scene,
+                                          &(meso_render_desc){.options = options, .num_options = 1},
+                                          &with),
+                     MESO_OK);
+    assert_int_equal(meso_renderer_create(ctx, &ts.scene, &(meso_render_desc){0}, &without),
+                     MESO_OK);
+    meso_framebuffer *first = NULL, *a = NULL, *b = NULL;
+    assert_int_equal(meso_framebuffer_create(ctx, 48, 48, &first), MESO_OK);
+    assert_int_equal(meso_framebuffer_create(ctx, 48, 48, &a), MESO_OK);
+    assert_int_equal(meso_framebuffer_create(ctx, 48, 48, &b), MESO_OK);
+    assert_int_equal(meso_renderer_render(with, first), MESO_OK);
+    ts.scene.camera.eye.x += 1.0f; /* the caller turns the camera */
+    assert_int_equal(meso_renderer_render(with, a), MESO_OK);
+    assert_int_equal(meso_renderer_render(without, b), MESO_OK);
+    assert_memory_equal(a->color, b->color, 48 * 48 * 3 * sizeof(float));
+    assert_memory_equal(a->coverage, b->coverage, 48 * 48 * sizeof(float));
+    assert_true(memcmp(first->coverage, a->coverage, 48 * 48 * sizeof(float)) != 0);
+    meso_framebuffer_destroy(first);
+    meso_framebuffer_destroy(a);
+    meso_framebuffer_destroy(b);
+    meso_renderer_destroy(with);
+    meso_renderer_destroy(without);
+    test_scene_free(&ts);
+    meso_context_destroy(ctx);
+}
+
 static void test_raster_supersampling_averages_the_fine_grid(void **state) {
     (void)state;
     meso_context *ctx = test_context(2);
@@ -987,6 +1025,7 @@ int main(void) {
         cmocka_unit_test(test_raster_wireframe_draws_edges),
         cmocka_unit_test(test_raster_depth_map_is_thread_independent_and_bounded),
         cmocka_unit_test(test_raster_depth_map_kept_scratch_draws_the_same),
+        cmocka_unit_test(test_renderer_with_options_follows_the_moving_camera),
         cmocka_unit_test(test_raster_block_and_fragment_techniques_see_the_same_fragments),
         cmocka_unit_test(test_raster_skipped_fields_leave_the_read_ones_as_they_were),
         cmocka_unit_test(test_flat_block_matches_shade_point),
