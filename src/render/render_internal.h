@@ -278,13 +278,27 @@ static inline meso_vec3 meso_displaced_normal(meso_vec3 normal, meso_vec3 tangen
 
 /* ---- Rasterizer hooks for techniques ------------------------------------------------------ */
 
+/* The set-up triangles and tile lists of meso_raster_depth_map, kept from one call to the next
+ * (the buffers only grow): a shadow map redrawn every frame from a new mesh then reuses pages
+ * already touched instead of having the kernel zero fresh ones (issue 16, moving camera).
+ * Opaque; made by the first meso_raster_depth_map given a pointer to NULL. */
+typedef struct meso_raster_depth_scratch meso_raster_depth_scratch;
+
 /* Rasterize `mesh` (all triangles, both faces) with `view_projection` into a depth-only target
  * of width x height samples, for shadow maps: depth[j * width + i] receives the smallest
  * z_ndc * 0.5 + 0.5 of the triangles covering sample centre (i + 0.5, j + 0.5) (row 0 at the
  * top, +y up in NDC), and +INFINITY where none does. Same fill rule and clipping as the colour
- * rasterizer; parallel over tiles; byte-identical for any thread count. */
-meso_result meso_raster_depth_map(meso_context *ctx, const meso_mesh *mesh,
-                                  meso_mat4 view_projection, int width, int height, float *depth);
+ * rasterizer; parallel over tiles; byte-identical for any thread count.
+ * scratch   NULL: the buffers are allocated and freed within the call. Else *scratch (NULL the
+ *           first time: created here) holds them after the call, for the next; the caller frees
+ *           it with meso_raster_depth_scratch_destroy. Not shared between concurrent calls. */
+meso_result meso_raster_depth_map(meso_context *ctx, meso_raster_depth_scratch **scratch,
+                                  const meso_mesh *mesh, meso_mat4 view_projection, int width,
+                                  int height, float *depth);
+/* Bytes held by the scratch (0 for NULL). */
+size_t meso_raster_depth_scratch_memory(const meso_raster_depth_scratch *scratch);
+/* Frees the scratch; NULL does nothing. */
+void meso_raster_depth_scratch_destroy(meso_raster_depth_scratch *scratch);
 
 /* ---- Back ends ---------------------------------------------------------------------------- */
 

@@ -17,7 +17,8 @@ struct meso_renderer {
     const meso_scene *scene;
     meso_scene *scene_view;
     meso_object *view_objects;
-    int n; /* supersampling: n x n samples a pixel */
+    const meso_scene *source; /* the caller's scene: the view's camera and lights each frame */
+    int n;                    /* supersampling: n x n samples a pixel */
     bool wireframe;
     bool progress; /* report each frame's progress */
     bool use_reference;
@@ -201,6 +202,7 @@ meso_result meso_renderer_create(meso_context *ctx, const meso_scene *scene,
     if (!rd) goto oom;
     rd->ctx = ctx;
     rd->avx2 = strcmp(meso_technique_isa(), "avx2") == 0;
+    rd->source = scene;
     if (d.num_options > 0) {
         if ((r = make_scene_view(ctx, scene, &d, rd)) != MESO_OK) goto fail;
         scene = rd->scene_view;
@@ -357,6 +359,15 @@ meso_result meso_renderer_render(meso_renderer *renderer, meso_framebuffer *fb) 
                               "render: %d x %d pixels with %d x %d samples exceed the limit of "
                               "%d samples a side, 2^30 in all",
                               fb->width, fb->height, n, n, RASTER_MAX_TARGET_SIDE);
+    }
+    if (rd->scene_view) {
+        /* the caller moves the camera or turns a light between frames (meso bench --orbit, the
+         * viewer): the view copied at creation takes them, its objects (with the options) stay */
+        meso_object *objects = rd->scene_view->objects;
+        int num_objects = rd->scene_view->num_objects;
+        *rd->scene_view = *rd->source;
+        rd->scene_view->objects = objects;
+        rd->scene_view->num_objects = num_objects;
     }
     double start = meso_time_seconds();
     meso_frame frame;

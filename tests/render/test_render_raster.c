@@ -233,6 +233,44 @@ static void test_raster_nearer_surface_wins_in_any_order(void **state) {
     meso_context_destroy(ctx);
 }
 
+/* Options make the renderer draw a copy of the scene (with them in its objects); the camera and
+ * the lights the caller changes between frames must still reach it (meso bench --orbit --set
+ * drew a still camera). */
+static void test_renderer_with_options_follows_the_moving_camera(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    test_scene ts;
+    test_scene_init(&ts, 48, 48);
+    test_scene_add(&ts, test_shape(ctx, MESO_SHAPE_SPHERE, 0.6f, 24, (meso_vec3){0.3f, 0, 0}),
+                   "flat");
+    meso_option options[1] = {{"relief", "linear_steps", 16}};
+    meso_renderer *with = NULL, *without = NULL;
+    assert_int_equal(meso_renderer_create(ctx, &ts.scene,
+                                          &(meso_render_desc){.options = options, .num_options = 1},
+                                          &with),
+                     MESO_OK);
+    assert_int_equal(meso_renderer_create(ctx, &ts.scene, &(meso_render_desc){0}, &without),
+                     MESO_OK);
+    meso_framebuffer *first = NULL, *a = NULL, *b = NULL;
+    assert_int_equal(meso_framebuffer_create(ctx, 48, 48, &first), MESO_OK);
+    assert_int_equal(meso_framebuffer_create(ctx, 48, 48, &a), MESO_OK);
+    assert_int_equal(meso_framebuffer_create(ctx, 48, 48, &b), MESO_OK);
+    assert_int_equal(meso_renderer_render(with, first), MESO_OK);
+    ts.scene.camera.eye.x += 1.0f; /* the caller turns the camera */
+    assert_int_equal(meso_renderer_render(with, a), MESO_OK);
+    assert_int_equal(meso_renderer_render(without, b), MESO_OK);
+    assert_memory_equal(a->color, b->color, 48 * 48 * 3 * sizeof(float));
+    assert_memory_equal(a->coverage, b->coverage, 48 * 48 * sizeof(float));
+    assert_true(memcmp(first->coverage, a->coverage, 48 * 48 * sizeof(float)) != 0);
+    meso_framebuffer_destroy(first);
+    meso_framebuffer_destroy(a);
+    meso_framebuffer_destroy(b);
+    meso_renderer_destroy(with);
+    meso_renderer_destroy(without);
+    test_scene_free(&ts);
+    meso_context_destroy(ctx);
+}
+
 static void test_raster_supersampling_averages_the_fine_grid(void **state) {
     (void)state;
     meso_context *ctx = test_context(2);
@@ -353,6 +391,45 @@ static void test_raster_wireframe_draws_edges(void **state) {
     meso_context_destroy(ctx);
 }
 
+/* Buffers kept between draws (a shadow map redrawn each frame) give the maps of fresh ones, after
+ * a larger mesh and after a smaller one, and are counted in the memory. */
+static void test_raster_depth_map_kept_scratch_draws_the_same(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    meso_mesh *fine = test_shape(ctx, MESO_SHAPE_SPHERE, 0.7f, 48, (meso_vec3){0});
+    meso_mesh *coarse = test_shape(ctx, MESO_SHAPE_SPHERE, 0.5f, 12, (meso_vec3){0.1f, 0, 0});
+    test_scene ts;
+    test_scene_init(&ts, 70, 70);
+    meso_frame frame;
+    meso_frame_init(&frame, &ts.scene, 70, 70);
+    size_t bytes = 70 * 70 * sizeof(float);
+    float *fresh = malloc(bytes), *kept = malloc(bytes);
+    meso_raster_depth_scratch *scratch = NULL;
+    assert_int_equal(meso_raster_depth_scratch_memory(scratch), 0);
+    const meso_mesh *order[3] = {fine, coarse, fine};
+    for (int i = 0; i < 3; i++) {
+        assert_int_equal(
+            meso_raster_depth_map(ctx, NULL, order[i], frame.view_projection, 70, 70, fresh),
+            MESO_OK);
+        memset(kept, 0, bytes);
+        assert_int_equal(
+            meso_raster_depth_map(ctx, &scratch, order[i], frame.view_projection, 70, 70, kept),
+            MESO_OK);
+        assert_non_null(scratch);
+        assert_memory_equal(fresh, kept, bytes);
+        assert_true(meso_raster_depth_scratch_memory(scratch) >
+                    order[i]->num_triangles / 4 * sizeof(float));
+    }
+    meso_raster_depth_scratch_destroy(scratch);
+    meso_raster_depth_scratch_destroy(NULL);
+    free(fresh);
+    free(kept);
+    meso_mesh_destroy(fine);
+    meso_mesh_destroy(coarse);
+    test_scene_free(&ts);
+    meso_context_destroy(ctx);
+}
+
 static void test_raster_depth_map_is_thread_independent_and_bounded(void **state) {
     (void)state;
     meso_context *ctx = test_context(1);
@@ -362,9 +439,11 @@ static void test_raster_depth_map_is_thread_independent_and_bounded(void **state
     meso_frame frame;
     meso_frame_init(&frame, &ts.scene, 50, 50);
     float *a = malloc(50 * 50 * sizeof(float)), *b = malloc(50 * 50 * sizeof(float));
-    assert_int_equal(meso_raster_depth_map(ctx, sphere, frame.view_projection, 50, 50, a), MESO_OK);
+    assert_int_equal(meso_raster_depth_map(ctx, NULL, sphere, frame.view_projection, 50, 50, a),
+                     MESO_OK);
     meso_context_set_num_threads(ctx, 3);
-    assert_int_equal(meso_raster_depth_map(ctx, sphere, frame.view_projection, 50, 50, b), MESO_OK);
+    assert_int_equal(meso_raster_depth_map(ctx, NULL, sphere, frame.view_projection, 50, 50, b),
+                     MESO_OK);
     assert_memory_equal(a, b, 50 * 50 * sizeof(float));
     int covered = 0;
     for (int i = 0; i < 50 * 50; i++) {
@@ -945,6 +1024,8 @@ int main(void) {
         cmocka_unit_test(test_raster_fragments_lie_on_the_frame_rays),
         cmocka_unit_test(test_raster_wireframe_draws_edges),
         cmocka_unit_test(test_raster_depth_map_is_thread_independent_and_bounded),
+        cmocka_unit_test(test_raster_depth_map_kept_scratch_draws_the_same),
+        cmocka_unit_test(test_renderer_with_options_follows_the_moving_camera),
         cmocka_unit_test(test_raster_block_and_fragment_techniques_see_the_same_fragments),
         cmocka_unit_test(test_raster_skipped_fields_leave_the_read_ones_as_they_were),
         cmocka_unit_test(test_flat_block_matches_shade_point),

@@ -193,11 +193,22 @@ typedef struct tess_memo {
     uint8_t counters; /* bit c: the decision incremented counter c */
 } tess_memo;
 
+#define MEMO_PAGE_BITS 10 /* 1,024 entries (139 kB) a page */
+#define MEMO_PAGE_ENTRIES ((size_t)1 << MEMO_PAGE_BITS)
 #define MEMO_INPUT_BYTES (4 * sizeof(meso_vec3) + sizeof(meso_vec2))
 _Static_assert(offsetof(displace_vertex, uv) - offsetof(displace_vertex, base) ==
                        4 * sizeof(meso_vec3) &&
                    offsetof(tess_memo, uv) - offsetof(tess_memo, base) == 4 * sizeof(meso_vec3),
                "the inputs are one block of base, normal, tangent, bitangent, uv");
+
+/* A slot of a job's memo table: entry index + 1 (0: empty), and 32 bits of the key's hash that
+ * the slot's position does not use, so that a probe passing another key's slot mostly skips
+ * reading that entry (a cache miss each: the memo's look-ups were 9-13 % of a moving
+ * bricks-teapot frame's time, docs/performance.md). */
+typedef struct tess_memo_slot {
+    uint32_t entry;
+    uint32_t tag;
+} tess_memo_slot;
 
 typedef struct tess_job {
     size_t first, count; /* base triangles */
@@ -208,11 +219,13 @@ typedef struct tess_job {
     size_t vertex_offset, triangle_offset; /* in the joined mesh */
     displace_tess_stats stats;
     meso_result result;
-    /* the remembered midpoints of this job's triangles: entries, and an open-addressing table
-     * of entry index + 1 (0: empty) with 2^memo_bits slots, at most half full */
-    tess_memo *memo;
-    uint32_t *memo_slots;
-    size_t num_memo, cap_memo;
+    /* the remembered midpoints of this job's triangles: entries in pages of MEMO_PAGE_ENTRIES
+     * (memo_entry), and an open-addressing table of entry index + 1 (0: empty) with
+     * 2^memo_bits slots, at most half full */
+    tess_memo **memo_pages;
+    size_t num_memo_pages, cap_memo_pages;
+    tess_memo_slot *memo_slots;
+    size_t num_memo, cap_memo; /* cap_memo: num_memo_pages * MEMO_PAGE_ENTRIES */
     int memo_bits;
     size_t memo_used;     /* entries read or written by the last run */
     tess_record *records; /* count, one a base triangle (NULL until the first replayable run) */
@@ -296,7 +309,8 @@ static void job_free(tess_job *job) {
     if (job->records)
         for (size_t i = 0; i < job->count; i++) free(job->records[i].block);
     free(job->records);
-    free(job->memo);
+    for (size_t i = 0; i < job->num_memo_pages; i++) free(job->memo_pages[i]);
+    free(job->memo_pages);
     free(job->memo_slots);
     free(job->positions);
     free(job->normals);
@@ -342,8 +356,9 @@ size_t displace_tessellator_memory(const displace_tessellator *t) {
         if (t->jobs[j].records)
             for (size_t i = 0; i < t->jobs[j].count; i++) bytes += t->jobs[j].records[i].cap_bytes;
         if (t->jobs[j].memo_slots)
-            bytes += ((size_t)1 << t->jobs[j].memo_bits) * sizeof(uint32_t) +
-                     t->jobs[j].cap_memo * sizeof(tess_memo);
+            bytes += ((size_t)1 << t->jobs[j].memo_bits) * sizeof(tess_memo_slot) +
+                     t->jobs[j].cap_memo * sizeof(tess_memo) +
+                     t->jobs[j].cap_memo_pages * sizeof(tess_memo *);
     }
     size_t side = (size_t)t->n + 1;
     for (int i = 0; i < t->num_threads; i++)
@@ -438,21 +453,37 @@ static uint64_t memo_key(size_t triangle, int32_t kb, int32_t kc) {
     return ((uint64_t)triangle << 22) | ((uint64_t)kb << 11) | (uint64_t)kc;
 }
 
+/* Entry e of the job's memo. The entries live in pages that never move: a moving camera adds
+ * midpoints every frame, and one growing array was copied by realloc each time it grew (about a
+ * tenth of a moving bricks-teapot frame's instructions, docs/performance.md). */
+static inline tess_memo *memo_entry(const tess_job *job, size_t e) {
+    return &job->memo_pages[e >> MEMO_PAGE_BITS][e & (MEMO_PAGE_ENTRIES - 1)];
+}
+
 /* The slot holding key, or the empty slot where it would go (the table is never full). */
-static uint32_t *memo_slot(const tess_job *job, uint64_t key) {
+static inline uint64_t memo_hash(uint64_t key) { return key * 0x9E3779B97F4A7C15ull; }
+
+/* The slot of a key's hash: its position from the top bits (at most 31 of them), its tag the
+ * low 32. */
+static inline uint32_t memo_tag(uint64_t hash) { return (uint32_t)hash; }
+
+static tess_memo_slot *memo_slot(const tess_job *job, uint64_t key) {
     size_t mask = ((size_t)1 << job->memo_bits) - 1;
-    size_t i = (size_t)((key * 0x9E3779B97F4A7C15ull) >> (64 - job->memo_bits));
+    uint64_t hash = memo_hash(key);
+    uint32_t tag = memo_tag(hash);
+    size_t i = (size_t)(hash >> (64 - job->memo_bits));
     for (;;) {
-        uint32_t e = job->memo_slots[i];
-        if (e == 0 || job->memo[e - 1].key == key) return &job->memo_slots[i];
+        const tess_memo_slot *slot = &job->memo_slots[i];
+        if (slot->entry == 0 || (slot->tag == tag && memo_entry(job, slot->entry - 1)->key == key))
+            return &job->memo_slots[i];
         i = (i + 1) & mask;
     }
 }
 
 static tess_memo *memo_find(const tess_job *job, uint64_t key) {
     if (!job->memo_slots) return NULL;
-    uint32_t e = *memo_slot(job, key);
-    return e ? &job->memo[e - 1] : NULL;
+    uint32_t e = memo_slot(job, key)->entry;
+    return e ? memo_entry(job, e - 1) : NULL;
 }
 
 /* Twice the slots, the entries rehashed; false when out of memory (the job then remembers no
@@ -460,12 +491,15 @@ static tess_memo *memo_find(const tess_job *job, uint64_t key) {
 static bool memo_grow_slots(tess_job *job) {
     int bits = job->memo_slots ? job->memo_bits + 1 : 12;
     if (bits > 31) return false;
-    uint32_t *table = calloc((size_t)1 << bits, sizeof(*table));
+    tess_memo_slot *table = calloc((size_t)1 << bits, sizeof(*table));
     if (!table) return false;
     free(job->memo_slots);
     job->memo_slots = table;
     job->memo_bits = bits;
-    for (size_t e = 0; e < job->num_memo; e++) *memo_slot(job, job->memo[e].key) = (uint32_t)e + 1;
+    for (size_t e = 0; e < job->num_memo; e++) {
+        uint64_t key = memo_entry(job, e)->key;
+        *memo_slot(job, key) = (tess_memo_slot){(uint32_t)e + 1, memo_tag(memo_hash(key))};
+    }
     return true;
 }
 
@@ -473,19 +507,25 @@ static bool memo_grow_slots(tess_job *job) {
 static tess_memo *memo_store(tess_job *job, uint64_t key) {
     if (!job->memo_slots || (job->num_memo + 1) * 2 > ((size_t)1 << job->memo_bits))
         if (!memo_grow_slots(job)) return NULL;
-    uint32_t *slot = memo_slot(job, key);
-    if (*slot) return &job->memo[*slot - 1];
-    if (job->num_memo == job->cap_memo) { /* by a quarter: the entries are most of the bytes */
-        size_t cap = job->cap_memo < 1024 ? 1024 : job->cap_memo + job->cap_memo / 4;
-        tess_memo *grown = realloc(job->memo, cap * sizeof(*grown));
-        if (!grown) return NULL;
-        job->memo = grown;
-        job->cap_memo = cap;
+    tess_memo_slot *slot = memo_slot(job, key);
+    if (slot->entry) return memo_entry(job, slot->entry - 1);
+    if (job->num_memo == job->cap_memo) { /* one more page: the entries already made stay */
+        if (job->num_memo_pages == job->cap_memo_pages) {
+            size_t cap = job->cap_memo_pages ? 2 * job->cap_memo_pages : 16;
+            tess_memo **grown = realloc(job->memo_pages, cap * sizeof(*grown));
+            if (!grown) return NULL;
+            job->memo_pages = grown;
+            job->cap_memo_pages = cap;
+        }
+        tess_memo *page = malloc(MEMO_PAGE_ENTRIES * sizeof(*page));
+        if (!page) return NULL;
+        job->memo_pages[job->num_memo_pages++] = page;
+        job->cap_memo += MEMO_PAGE_ENTRIES;
     }
-    tess_memo *e = &job->memo[job->num_memo++];
+    tess_memo *e = memo_entry(job, job->num_memo++);
     e->key = key;
     e->decided = 0;
-    *slot = (uint32_t)job->num_memo;
+    *slot = (tess_memo_slot){(uint32_t)job->num_memo, memo_tag(memo_hash(key))};
     return e;
 }
 
@@ -783,10 +823,14 @@ static bool record_layout(tess_record *r) {
                    record_part_bytes(asked) + 4 * record_part_bytes(vec3s) +
                    record_part_bytes(uvs) + record_part_bytes(indices) + record_part_bytes(depths);
     if (total > r->cap_bytes) {
-        void *grown = realloc(r->block, total);
-        if (!grown) return false;
-        r->block = grown;
-        r->cap_bytes = total;
+        /* the whole block is written anew: a fresh one, not realloc's copy of the old (a moving
+         * camera re-records most triangles a frame, a few bytes larger each time), with an
+         * eighth to spare for the next growth */
+        size_t cap = total + total / 8;
+        free(r->block);
+        r->block = malloc(cap);
+        r->cap_bytes = r->block ? cap : 0;
+        if (!r->block) return false;
     }
     char *cursor = r->block;
     r->texels = record_carve(&cursor, texels);
@@ -1165,8 +1209,8 @@ meso_result displace_shadows_draw_light(meso_context *ctx, displace_shadows *sha
     out->depth = depth;
     out->active = false;
     if (mesh->num_triangles == 0) return MESO_OK;
-    meso_result r =
-        meso_raster_depth_map(ctx, mesh, map->view_projection, (int)size, (int)size, depth);
+    meso_result r = meso_raster_depth_map(ctx, shadows->keep_raster ? &shadows->raster : NULL, mesh,
+                                          map->view_projection, (int)size, (int)size, depth);
     if (r != MESO_OK) return r;
     out->active = true;
     return MESO_OK;
@@ -1249,10 +1293,19 @@ void displace_shadows_visibility(const displace_shadows *shadows, const meso_sce
     }
 }
 
+size_t displace_shadows_memory(const displace_shadows *shadows) {
+    size_t maps = shadows->depth ? (size_t)shadows->depth_lights * (size_t)shadows->options.size *
+                                       (size_t)shadows->options.size * sizeof(float)
+                                 : 0;
+    return maps + meso_raster_depth_scratch_memory(shadows->raster);
+}
+
 void displace_shadows_release(displace_shadows *shadows) {
     if (!shadows) return;
     free(shadows->depth);
     shadows->depth = NULL;
+    meso_raster_depth_scratch_destroy(shadows->raster);
+    shadows->raster = NULL;
     shadows->depth_lights = 0;
     shadows->num_lights = 0;
 }

@@ -271,7 +271,12 @@ typedef struct displace_shadows {
     displace_light_map lights[MESO_SCENE_MAX_LIGHTS];
     float *depth; /* depth_lights * size * size, owned */
     int depth_lights;
-    double seconds; /* time of the last render */
+    /* Set by a technique whose maps are redrawn frame after frame (tessellation's camera mesh
+     * under a moving camera): the rasterizer's buffers are then kept in `raster` between
+     * draws; otherwise they are freed after each draw. */
+    bool keep_raster;
+    meso_raster_depth_scratch *raster; /* owned */
+    double seconds;                    /* time of the last render */
     /* the scene's lights the maps were drawn for (displace_shadows_current) */
     bool drawn;
     int drawn_num_lights;
@@ -311,6 +316,8 @@ meso_result displace_shadows_render(meso_context *ctx, displace_shadows *shadows
 void displace_shadows_visibility(const displace_shadows *shadows, const meso_scene *scene,
                                  meso_vec3 position, meso_vec3 normal, meso_vec3 face_normal,
                                  float *visibility);
+/* Bytes held: the maps and the kept rasterizer buffers. */
+size_t displace_shadows_memory(const displace_shadows *shadows);
 void displace_shadows_release(displace_shadows *shadows);
 
 /* ---- Shading ------------------------------------------------------------------------------ */

@@ -307,9 +307,7 @@ static size_t displacement_memory(const void *state) {
     if (!s) return 0;
     return displace_tessellator_memory(s->tessellator) + s->num_clusters * sizeof(cluster_bounds) +
            (s->mesh ? s->mesh->num_triangles * 3 * sizeof(uint32_t) : 0) +
-           (s->shadows.depth ? (size_t)s->shadows.depth_lights * (size_t)s->shadows.options.size *
-                                   (size_t)s->shadows.options.size * sizeof(float)
-                             : 0);
+           displace_shadows_memory(&s->shadows);
 }
 
 const meso_technique meso_technique_displacement = {

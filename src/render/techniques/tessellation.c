@@ -259,6 +259,9 @@ static meso_result tessellation_prepare(meso_context *ctx, const meso_scene *sce
         goto fail;
     if ((r = displace_tessellator_create(ctx, &s->surface, s->max_level, &s->tessellator)))
         goto fail;
+    /* the camera's mesh is new whenever the camera moves, and its map with it: keep the
+     * rasterizer's buffers (the light's own tessellation draws its map once) */
+    s->shadows.keep_raster = !s->shadow_tessellation;
     *out_state = s;
     return MESO_OK;
 fail:
@@ -426,10 +429,7 @@ static size_t tessellation_memory(const void *state) {
     size_t bytes = displace_tessellator_memory(s->tessellator);
     if (s->sat)
         bytes += ((size_t)s->sat->width + 1) * ((size_t)s->sat->height + 1) * sizeof(double);
-    if (s->shadows.depth)
-        bytes += (size_t)s->shadows.depth_lights * (size_t)s->shadows.options.size *
-                 (size_t)s->shadows.options.size * sizeof(float);
-    return bytes;
+    return bytes + displace_shadows_memory(&s->shadows);
 }
 
 const meso_technique meso_technique_tessellation = {
