@@ -142,8 +142,9 @@ static const meso_technique_option gdm_option_table[] = {
                     gdm_options, gi_resolution),
     MESO_OPTION_ROW(MESO_OPTION_INT, gi_layers, 2, 64, 8, "gi: RTV voxels in depth (w)",
                     gdm_options, gi_layers),
-    MESO_OPTION_ROW(MESO_OPTION_INT, gi_eigen, 1, 32, 4,
-                    "gi: RTV eigenfunctions kept per coefficient (§4.1; at most the 32 views)",
+    MESO_OPTION_ROW(MESO_OPTION_INT, gi_eigen, 1, 32, 3,
+                    "gi: RTV eigenfunctions used per coefficient (§4.1; at most the 32 views; "
+                    "the bake keeps at least 4)",
                     gdm_options, gi_eigen),
 };
 
@@ -451,7 +452,9 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
         (r = gdm_gi_create(ctx, scene, object,
                            &(gdm_gi_desc){.resolution = options.gi_resolution,
                                           .layers = options.gi_layers,
-                                          .eigen = options.gi_eigen,
+                                          /* renders with fewer share the bake of 4 */
+                                          .eigen = options.gi_eigen > 4 ? options.gi_eigen : 4,
+                                          .used_eigen = options.gi_eigen,
                                           .shell = options.gi_inside_sky ? s->shell : NULL},
                            &s->gi)) != MESO_OK)
         goto fail;
