@@ -44,7 +44,10 @@
 //   u_gi_resolution, u_gi_layers, u_gi_eigen (GDM-GI: drawn on the CPU only; the GL refuses
 //   gi 1 in a scene with an environment, where it would apply), bool u_macro_shadows and
 //   u_gi_inside_sky (the CPU's shadows through the whole shell, gdm_shell_shadow.c: not read
-//   here; the GL's shadows are the slab-local ones, the CPU's with macro_shadows 0).
+//   here; the GL's shadows are the slab-local ones, the CPU's with macro_shadows 0), bool
+//   u_clear_top_walk (of that walk: not read) and bool u_refine_secant (the CPU's secant step
+//   at the end of a height field's refinement: not read here, the GL bisects u_refine_steps
+//   times, the CPU's refine_secant 0).
 
 uniform bool u_compressed;
 uniform int u_eigenmaps;
@@ -64,6 +67,8 @@ uniform int u_gi_layers;
 uniform int u_gi_eigen;
 uniform bool u_macro_shadows;
 uniform bool u_gi_inside_sky;
+uniform bool u_clear_top_walk;
+uniform bool u_refine_secant;
 
 uniform samplerBuffer u_gdm_weights;
 uniform samplerBuffer u_gdm_eigen;

@@ -393,6 +393,53 @@ static void test_height_field_matches_relief_exact_on_a_plane(void **state) {
     meso_context_destroy(ctx);
 }
 
+/* refine_secant: a height field's hit ends with a secant step through the bracket's two
+ * samples in place of the last two bisections; on the plane of bumps its depths are as close
+ * to relief_exact's as the bisections' (mean |difference| in view depth, covered pixels). */
+static void test_secant_step_is_as_close_as_the_bisections(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    test_scene ts;
+    test_scene_init(&ts, 64, 64);
+    ts.scene.camera = (meso_camera){{0.3f, 0.8f, 0.9f}, {0, -0.05f, -0.1f}, {0, 1, 0}, 40.0f};
+    meso_object *o = test_scene_add(
+        &ts, test_shape(ctx, MESO_SHAPE_PLANE, 4.0f, 1, (meso_vec3){0, 0, 0}), "gdm");
+    meso_mesh_scale_uvs(o->mesh, (meso_vec2){2.0f, 2.0f});
+    assert_int_equal(meso_mesh_compute_tangents(ctx, o->mesh), MESO_OK);
+    o->mesostructure.kind = MESO_MESOSTRUCTURE_HEIGHT_FIELD;
+    o->mesostructure.height_field = bumps(ctx, 64);
+    o->mesostructure.depth = 0.1f;
+    meso_framebuffer *exact = render(ctx, &ts.scene, "relief_exact", NULL, 0);
+    double error[2];
+    bool same = true;
+    meso_framebuffer *fb[2];
+    for (int secant = 0; secant < 2; secant++) {
+        meso_option options[NUM_SMALL_BAKE + 1];
+        memcpy(options, small_bake, sizeof small_bake);
+        options[NUM_SMALL_BAKE] = (meso_option){"gdm", "refine_secant", secant};
+        fb[secant] = render(ctx, &ts.scene, "gdm", options, NUM_SMALL_BAKE + 1);
+        double sum = 0.0;
+        size_t n = 0;
+        for (size_t p = 0; p < 64 * 64; p++) {
+            if (!(fb[secant]->coverage[p] > 0.0f && exact->coverage[p] > 0.0f)) continue;
+            sum += fabs((double)fb[secant]->depth[p] - exact->depth[p]);
+            n++;
+        }
+        assert_true(n > 3000);
+        error[secant] = sum / (double)n;
+    }
+    for (size_t p = 0; p < 64 * 64; p++) same = same && fb[0]->depth[p] == fb[1]->depth[p];
+    print_message("mean depth error against relief_exact: bisections %.3g, secant %.3g\n", error[0],
+                  error[1]);
+    assert_false(same); /* the option changes the hits */
+    assert_true(error[1] <= 1.05 * error[0]);
+    meso_framebuffer_destroy(fb[0]);
+    meso_framebuffer_destroy(fb[1]);
+    meso_framebuffer_destroy(exact);
+    test_scene_free(&ts);
+    meso_context_destroy(ctx);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_lookup_atan2_is_within_3e7_radians),
@@ -404,6 +451,7 @@ int main(void) {
         cmocka_unit_test(test_slab_solid_equals_the_translated_base_mesh),
         cmocka_unit_test(test_open_border_cut_is_closed_in_gdm_and_the_reference),
         cmocka_unit_test(test_height_field_matches_relief_exact_on_a_plane),
+        cmocka_unit_test(test_secant_step_is_as_close_as_the_bisections),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

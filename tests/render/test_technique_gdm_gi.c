@@ -88,6 +88,35 @@ static void test_bricks_agree_with_the_rtv_at_the_true_hits_and_shadow_the_sky(v
     meso_context_destroy(ctx);
 }
 
+/* gi_eigen below the bake's 4 reads the first eigenfunctions of that bake (an SVD's
+ * truncation): other bits than all 4, the same light within 1 %. */
+static void test_gi_eigen_uses_the_first_eigenfunctions_of_the_bake(void **state) {
+    (void)state;
+    meso_context *ctx = test_context(2);
+    meso_scene *scene = plane_scene(ctx, 24, default_sky_and_sun, bricks, 0.7f);
+    meso_framebuffer *fb[2];
+    for (int k = 0; k < 2; k++) {
+        meso_option options[5] = {{"gdm", "resolution", 32},
+                                  {"gdm", "layers", 16},
+                                  {"gdm", "num_theta", 8},
+                                  {"gdm", "num_phi", 16},
+                                  {"gdm", "gi_eigen", 3 + k}};
+        meso_render_desc desc = {.options = options, .num_options = 5};
+        fb[k] = NULL;
+        assert_int_equal(meso_render_scene(ctx, scene, &desc, &fb[k]), MESO_OK);
+    }
+    size_t pixels = 24 * 24;
+    double a = gi_mean_covered(fb[0], NULL), b = gi_mean_covered(fb[1], NULL);
+    print_message("bricks: gi_eigen 3 %.4f, 4 %.4f\n", a, b);
+    assert_false(same_bits(fb[0]->color, fb[1]->color, 3 * pixels));
+    assert_true(same_bits(fb[0]->depth, fb[1]->depth, pixels)); /* the colour only */
+    assert_float_equal(a, b, (float)(0.01 * b));
+    meso_framebuffer_destroy(fb[0]);
+    meso_framebuffer_destroy(fb[1]);
+    meso_scene_destroy(scene);
+    meso_context_destroy(ctx);
+}
+
 static void test_gi_off_or_without_a_sky_is_gdm_bit_for_bit(void **state) {
     (void)state;
     meso_context *ctx = test_context(2);
@@ -128,6 +157,7 @@ int main(void) {
         cmocka_unit_test(test_flat_slab_under_a_gi_uniform_sky_reflects_the_irradiance),
         cmocka_unit_test(test_bricks_agree_with_the_rtv_at_the_true_hits_and_shadow_the_sky),
         cmocka_unit_test(test_gi_off_or_without_a_sky_is_gdm_bit_for_bit),
+        cmocka_unit_test(test_gi_eigen_uses_the_first_eigenfunctions_of_the_bake),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

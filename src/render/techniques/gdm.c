@@ -18,6 +18,7 @@
 
 #define GDM_DEPTH_BUCKETS 1024 /* gdm_geometry's sort */
 #define GDM_WINDOW_LEVELS 7    /* height fields' window maxima: up to 64 texels a side */
+#define GDM_WINDOW_FIRST 2     /* the least level window_bound reads (its boxes: 4 texels) */
 /* solids' distance grid (solid_grid): nodes a side in u and v, and in w (both slab faces), so
  * that a probe is at most ~0.009 (u, v, w) units from a node */
 #define GDM_GRID_SIDE 128
@@ -56,14 +57,17 @@ typedef struct gdm_state {
     float *prism_clear, clear_w, map_max;
     /* height fields: level L at texel (i, j) the highest texel of the window
      * [i, i + 2^L) x [j, j + 2^L), wrapped or clamped as the map samples (window_bound) */
-    float *window_max;
+    uint16_t *window_max; /* from level GDM_WINDOW_FIRST on, rounded up by window_unit */
+    float window_unit;
     int window_levels;
     /* solids: meso_solid_distance at the nodes (i, j, l) / (GDM_GRID_SIDE, GDM_GRID_SIDE,
      * GDM_GRID_LAYERS - 1), [l][j][i]; NULL for height fields */
     float *grid;
     int num_eigen;
     bool raw, shadows, baked_normals; /* baked_normals: the "normals" option resolved */
+    bool skip_clear_tops;             /* the clear_top_walk option off */
     int refine_steps, shadow_steps;
+    bool refine_secant;  /* refine_hit ends with a secant step (height fields) */
     float shadow_bias;   /* voxels off the surface */
     meso_vec3 voxel;     /* a voxel's sides in texture units */
     float refine_window; /* texture units: 3 layers */
@@ -76,7 +80,7 @@ typedef struct gdm_options {
     bool compressed, shadows;
     int normals, eigenmaps, resolution, layers, num_theta, num_phi, refine_steps, shadow_steps;
     float shadow_bias, hit_margin;
-    bool gi, macro_shadows, gi_inside_sky;
+    bool gi, macro_shadows, gi_inside_sky, clear_top_walk, refine_secant;
     int gi_resolution, gi_layers, gi_eigen;
 } gdm_options;
 
@@ -116,11 +120,21 @@ static const meso_technique_option gdm_option_table[] = {
                     "beyond the paper: check the hit (and a shadow) on the mesostructure and "
                     "bisect this many times; 0: the paper's d < |T_out - T_in| and d_L",
                     gdm_options, refine_steps),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, refine_secant, 0, 1, 1,
+                    "with refine_steps >= 2, height fields: the last two bisections replaced by "
+                    "one secant step through the bracket's two samples; 0: bisections only",
+                    gdm_options, refine_secant),
     MESO_OPTION_ROW(MESO_OPTION_BOOL, macro_shadows, 0, 1, 1,
                     "beyond the paper: a light that leaves the slab is followed through the "
                     "rest of the shell, GDM-tested in every prism it enters (a solid's light "
                     "toward the bottom too); 0: the slab only, a light toward its bottom blocked",
                     gdm_options, macro_shadows),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, clear_top_walk, 0, 1, 0,
+                    "with macro_shadows: a light the slab finds clear is followed through the "
+                    "rest of the shell from every prism; 0: not from a prism whose top has every "
+                    "vertex of the shell behind it (a convex base mesh's), where it leaves the "
+                    "shell through the tops",
+                    gdm_options, clear_top_walk),
     MESO_OPTION_ROW(MESO_OPTION_BOOL, gi, 0, 1, 1,
                     "where the scene has an environment: its light through the radiance "
                     "transfer volume (shadowed, interreflected; docs/techniques/gdm-gi.md); "
@@ -135,8 +149,9 @@ static const meso_technique_option gdm_option_table[] = {
                     gdm_options, gi_resolution),
     MESO_OPTION_ROW(MESO_OPTION_INT, gi_layers, 2, 64, 8, "gi: RTV voxels in depth (w)",
                     gdm_options, gi_layers),
-    MESO_OPTION_ROW(MESO_OPTION_INT, gi_eigen, 1, 32, 4,
-                    "gi: RTV eigenfunctions kept per coefficient (§4.1; at most the 32 views)",
+    MESO_OPTION_ROW(MESO_OPTION_INT, gi_eigen, 1, 32, 3,
+                    "gi: RTV eigenfunctions used per coefficient (§4.1; at most the 32 views; "
+                    "the bake keeps at least 4)",
                     gdm_options, gi_eigen),
 };
 
@@ -247,20 +262,31 @@ static inline int window_index(meso_wrap wrap, int i, int n) {
 /* The windows' maxima (window_max), level by level: a window of 2^(L+1) is four of 2^L. A
  * box of texels n wide then needs one read at the level with 2^L >= n, where the prism's
  * clearance (its whole UV triangle) is too coarse: bumps-sphere's prisms near the poles span
- * a wide UV box. false: out of memory. */
+ * a wide UV box. Kept from level GDM_WINDOW_FIRST on (window_bound reads no lower one) as
+ * 16-bit multiples of window_unit rounded up: a bound only proves a segment outside, which the
+ * probes would find anyway (the same images), and a looser one by 1/65535 of the map's
+ * highest texel proves about as many. As floats, all levels, the maxima took 7 MB for a 512²
+ * map, read at random: 6 % of bark-cylinder's cycles went to that read (perf). false: out of
+ * memory. */
 static bool heightfield_windows(gdm_state *s) {
     const meso_heightfield *hf = s->heightfield;
     int width = hf->width, height = hf->height, longest = width > height ? width : height;
     int levels = 1;
     while (levels < GDM_WINDOW_LEVELS && (1 << (levels - 1)) < longest) levels++;
     size_t plane = (size_t)width * (size_t)height;
-    s->window_max = malloc((size_t)levels * plane * sizeof(float));
-    if (!s->window_max) return false;
+    int kept = levels > GDM_WINDOW_FIRST ? levels - GDM_WINDOW_FIRST : 0;
+    float *maxima = malloc(2 * plane * sizeof(float)); /* a level and the one below */
+    s->window_max = malloc((kept ? (size_t)kept * plane : 1) * sizeof(uint16_t));
+    if (!maxima || !s->window_max) {
+        free(maxima);
+        return false;
+    }
     s->window_levels = levels;
-    memcpy(s->window_max, hf->heights, plane * sizeof(float));
+    s->window_unit = (s->map_max > 0.0f ? s->map_max : 1.0f) / 65535.0f;
+    memcpy(maxima, hf->heights, plane * sizeof(float));
     for (int level = 1; level < levels; level++) {
-        const float *below = s->window_max + (size_t)(level - 1) * plane;
-        float *out = s->window_max + (size_t)level * plane;
+        const float *below = maxima + (size_t)((level - 1) & 1) * plane;
+        float *out = maxima + (size_t)(level & 1) * plane;
         int step = 1 << (level - 1);
         for (int j = 0; j < height; j++) {
             const float *r0 = below + (size_t)j * (size_t)width;
@@ -272,7 +298,17 @@ static bool heightfield_windows(gdm_state *s) {
                     fmaxf(fmaxf(r0[i], r0[i1]), fmaxf(r1[i], r1[i1]));
             }
         }
+        if (level < GDM_WINDOW_FIRST) continue;
+        uint16_t *stored = s->window_max + (size_t)(level - GDM_WINDOW_FIRST) * plane;
+        for (size_t t = 0; t < plane; t++) {
+            /* the least multiple of the unit, as window_bound computes it, not below h */
+            float h = out[t], q = ceilf(h / s->window_unit);
+            q = q > 0.0f ? (q < 65535.0f ? q : 65535.0f) : 0.0f;
+            while (q < 65535.0f && q * s->window_unit < h) q += 1.0f;
+            stored[t] = (uint16_t)q;
+        }
     }
+    free(maxima);
     return true;
 }
 
@@ -294,7 +330,9 @@ static inline float window_bound(const gdm_state *s, float u0, float u1, float v
     int i = window_index(hf->wrap, (int)x0, hf->width);
     int j = window_index(hf->wrap, (int)y0, hf->height);
     size_t plane = (size_t)hf->width * (size_t)hf->height;
-    return s->window_max[(size_t)level * plane + (size_t)j * (size_t)hf->width + (size_t)i];
+    uint16_t q = s->window_max[(size_t)(level - GDM_WINDOW_FIRST) * plane +
+                               (size_t)j * (size_t)hf->width + (size_t)i];
+    return (float)q * s->window_unit;
 }
 
 /* One layer of nodes of the solid's distance grid. */
@@ -365,6 +403,8 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
     s->shadows = options.shadows;
     s->baked_normals = options.normals == 1 || (options.normals == 0 && desc.solid);
     s->refine_steps = options.refine_steps;
+    s->skip_clear_tops = !options.clear_top_walk;
+    s->refine_secant = options.refine_secant;
     s->shadow_steps = options.shadow_steps;
     /* The table's d next to the surface is blended with the solid voxels' 0: read from the
      * table alone, a shadow ray must start well off it; probed on the mesostructure (the
@@ -443,7 +483,9 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
         (r = gdm_gi_create(ctx, scene, object,
                            &(gdm_gi_desc){.resolution = options.gi_resolution,
                                           .layers = options.gi_layers,
-                                          .eigen = options.gi_eigen,
+                                          /* renders with fewer share the bake of 4 */
+                                          .eigen = options.gi_eigen > 4 ? options.gi_eigen : 4,
+                                          .used_eigen = options.gi_eigen,
                                           .shell = options.gi_inside_sky ? s->shell : NULL},
                            &s->gi)) != MESO_OK)
         goto fail;
@@ -812,12 +854,27 @@ static float refine_hit(const gdm_state *s, ray_probe probe, float d, float dt, 
         }
         if (hi < 0.0f) return -1.0f;
     }
-    for (int k = 0; k < s->refine_steps; k++) {
-        float mid = 0.5f * (lo + hi);
-        if (INSIDE(mid))
-            hi = mid;
-        else
-            lo = mid;
+    /* a height field's last two bisections replaced by one secant step (refine_secant) */
+    bool secant = s->refine_secant && s->heightfield && s->refine_steps >= 2;
+    int bisections = secant ? s->refine_steps - 2 : s->refine_steps;
+    for (int pass = 0; pass < 2; pass++) {
+        for (int k = 0; k < bisections; k++) {
+            float mid = 0.5f * (lo + hi);
+            if (INSIDE(mid))
+                hi = mid;
+            else
+                lo = mid;
+        }
+        if (!secant) break;
+        /* Both ends sampled (not proven by a bound): their |f| scale times (1 - h) - w, on a
+         * scale that is the same along the path, and f is nearly linear over a bracket a
+         * sixteenth of the window wide: the crossing where the line through them is zero,
+         * two dependent samples fewer than bisecting on (docs/techniques/gdm.md). */
+        if (probe.x[0] == lo && probe.x[1] == hi) {
+            float sum = probe.radius[0] + probe.radius[1];
+            if (sum > 0.0f && isfinite(sum)) return lo + (hi - lo) * (probe.radius[0] / sum);
+        }
+        bisections = 2, secant = false; /* else the two bisections after all */
     }
 #undef INSIDE
     return 0.5f * (lo + hi); /* the bracket's middle: half its width off, either way */
@@ -1063,7 +1120,13 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
             if (s->shell && (through_floor || (blocked && !border_entry)))
                 blocked =
                     !gdm_shell_light_visible_at(s->shell, prism_index, hit, &point, l, false, true);
-            else if (s->shell && !blocked)
+            /* A light the slab finds clear is walked on past the slab; not from a prism whose
+             * top has the whole shell behind it (clear_top_walk 0): the ray leaves the shell
+             * through a top before the flat slab's end on a convex mesh, and that walk only
+             * crossed prisms untested (bark-cylinder: 60 k walks a frame, 5 % of its
+             * instructions, the same image; docs/techniques/gdm.md, "clear_top_walk"). */
+            else if (s->shell && !blocked &&
+                     !(s->skip_clear_tops && gdm_shell_top_clear(s->shell, prism_index)))
                 blocked =
                     !gdm_shell_light_visible_at(s->shell, prism_index, hit, &point, l, true, false);
         }
@@ -1128,9 +1191,10 @@ static size_t gdm_memory(const void *state) {
            s->layer->faces->num_triangles * (4 * sizeof(uint32_t) + sizeof(float)) +
            gdm_gi_memory(s->gi) + gdm_shell_memory(s->shell) +
            (s->grid ? (size_t)GDM_GRID_LAYERS * GDM_GRID_SIDE * GDM_GRID_SIDE * sizeof(float) : 0) +
-           (s->window_max ? (size_t)s->window_levels * (size_t)s->heightfield->width *
-                                (size_t)s->heightfield->height * sizeof(float)
-                          : 0);
+           (s->window_max && s->window_levels > GDM_WINDOW_FIRST
+                ? (size_t)(s->window_levels - GDM_WINDOW_FIRST) * (size_t)s->heightfield->width *
+                      (size_t)s->heightfield->height * sizeof(uint16_t)
+                : 0);
 }
 
 const meso_technique meso_technique_gdm = {

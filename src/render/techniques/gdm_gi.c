@@ -30,6 +30,7 @@ struct gdm_gi {
      * coefficients fill two vectors (evaluate's sums over the eigenfunctions, 16 at once) */
     float *weights, *eigen;
     int stride; /* 16 k */
+    int chunks; /* 8-float chunks of a row read: 2 a used eigenfunction (gdm_gi_desc.used_eigen) */
     /* this frame's scene and frame with the environment removed (the direct part: constant
      * ambient, lights, specular), and with ambient 1 and nothing else (the albedo) */
     meso_scene direct_scene, albedo_scene;
@@ -135,13 +136,15 @@ static inline void transfer(const gdm_gi *gi, const meso_rtv_cell *cell, int chu
  * coefficient). */
 static void evaluate(const gdm_gi *gi, meso_vec3 uvw, meso_vec3 view,
                      const gi_v4f radiance[MESO_SH_COUNT], float out_rgb[3]) {
-    enum { DEFAULT_CHUNKS = MESO_SH_COUNT * 4 / 8 };
+    enum { CHUNKS_3 = MESO_SH_COUNT * 3 / 8, CHUNKS_4 = MESO_SH_COUNT * 4 / 8 };
     meso_rtv_cell cell;
     meso_rtv_cell_at(gi->rtv, uvw, view, &cell);
-    int chunks = gi->stride / 8;
+    int chunks = gi->chunks;
     v8f f_lo, f_hi;
-    if (chunks == DEFAULT_CHUNKS) /* the default 4 eigenfunctions, unrolled */
-        transfer(gi, &cell, DEFAULT_CHUNKS, &f_lo, &f_hi);
+    if (chunks == CHUNKS_3) /* the default 3 eigenfunctions, unrolled */
+        transfer(gi, &cell, CHUNKS_3, &f_lo, &f_hi);
+    else if (chunks == CHUNKS_4) /* the bake's default 4 */
+        transfer(gi, &cell, CHUNKS_4, &f_lo, &f_hi);
     else
         transfer(gi, &cell, chunks, &f_lo, &f_hi);
     float f[MESO_SH_COUNT];
@@ -219,6 +222,9 @@ meso_result gdm_gi_create(meso_context *ctx, const meso_scene *scene, const meso
         .eigen = desc->eigen};
     if ((r = meso_rtv_bake_cached(ctx, &rtv_desc, &gi->rtv)) != MESO_OK) goto fail;
     if ((r = pack_rtv(ctx, gi, object->name)) != MESO_OK) goto fail;
+    gi->chunks = gi->stride / 8;
+    if (desc->used_eigen > 0 && desc->used_eigen < gi->rtv->num_eigen)
+        gi->chunks = 2 * desc->used_eigen;
     gi->open_fraction = meso_gi_open_fraction(ms);
     gi->interior_num_lights = -1;
     r = gi->open_fraction > 0.0f

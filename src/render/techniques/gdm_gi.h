@@ -27,6 +27,9 @@ typedef struct gdm_gi gdm_gi;
 /* The RTV's bake resolution (zero fields: bake_rtv.h's defaults). */
 typedef struct gdm_gi_desc {
     int resolution, layers, eigen;
+    /* eigenfunctions used at render time, the first ones of the bake's `eigen` (an SVD's
+     * truncation: the same as a bake of that many); 0 or more than eigen: all */
+    int used_eigen;
     /* gdm's shadows through the shell, borrowed (outliving the gi); set: a hit seen from
      * inside the base mesh takes the sky through the shell (gi_inside_sky); NULL: the light
      * from below the tangent plane (a solid's open shell) or else the unshadowed SH ambient */

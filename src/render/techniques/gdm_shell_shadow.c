@@ -511,6 +511,10 @@ bool gdm_shell_face_is_seam(const gdm_shell *shell, size_t face) {
     return shell && shell->fin_twin && shell->fin_twin[face] != NO_TWIN;
 }
 
+bool gdm_shell_top_clear(const gdm_shell *shell, size_t prism) {
+    return shell && shell->top_clear && shell->top_clear[prism];
+}
+
 size_t gdm_shell_prism_index(const gdm_shell *shell, const meso_prism *prism) {
     return (size_t)(prism - shell->desc.layer->prisms);
 }

@@ -97,6 +97,10 @@ size_t gdm_prism_tops_clear(meso_context *ctx, const meso_prism_layer *layer, ui
  * than a top, a bottom or a fin on an open border? false without the twin table. Pure. */
 bool gdm_shell_face_is_seam(const gdm_shell *shell, size_t face);
 
+/* Is prism `prism`'s top clear (gdm_prism_tops_clear: every vertex of the layer behind or on
+ * its top plane, so a ray leaving through that top meets no prism again)? false where not
+ * proven or without the proof. Pure. */
+bool gdm_shell_top_clear(const gdm_shell *shell, size_t prism);
 /* The index of one of the layer's prisms (a pointer into layer->prisms). Pure. */
 size_t gdm_shell_prism_index(const gdm_shell *shell, const meso_prism *prism);
 
