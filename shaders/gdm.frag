@@ -45,9 +45,8 @@
 //   gi 1 in a scene with an environment, where it would apply), bool u_macro_shadows and
 //   u_gi_inside_sky (the CPU's shadows through the whole shell, gdm_shell_shadow.c: not read
 //   here; the GL's shadows are the slab-local ones, the CPU's with macro_shadows 0), bool
-//   u_clear_top_walk (of that walk: not read) and bool u_refine_secant (the CPU's secant step
-//   at the end of a height field's refinement: not read here, the GL bisects u_refine_steps
-//   times, the CPU's refine_secant 0).
+//   u_clear_top_walk (of that walk: not read; it changes no image) and bool u_refine_secant
+//   (true: a height field's refinement ends with a secant step, as the CPU's).
 
 uniform bool u_compressed;
 uniform int u_eigenmaps;
@@ -351,12 +350,14 @@ vec3 gdm_texture_direction(gdm_frame f, vec3 x) {
 
 vec3 gdm_tile_point(vec3 uvw) { return vec3(uvw.x - floor(uvw.x), uvw.y - floor(uvw.y), uvw.z); }
 
-// Inside the solid: (1 - h) - w <= 0 for a height field, the distance <= 0 for a solid.
-bool gdm_inside(vec3 p) {
-    float f = u_gdm_heightfield ? (1.0 - meso_height_at(meso_height_texel(p.xy))) - p.z
-                                : meso_solid_distance(gdm_tile_point(p));
-    return f <= 0.0;
+// The mesostructure's function at p: (1 - h) - w for a height field, the distance for a solid;
+// inside where it is <= 0.
+float gdm_function(vec3 p) {
+    return u_gdm_heightfield ? (1.0 - meso_height_at(meso_height_texel(p.xy))) - p.z
+                             : meso_solid_distance(gdm_tile_point(p));
 }
+
+bool gdm_inside(vec3 p) { return gdm_function(p) <= 0.0; }
 
 // Solid where a ray leaves the slab's bottom at t (height fields: always).
 bool gdm_floor_is_solid(vec3 t) {
@@ -370,6 +371,18 @@ bool gdm_floor_is_solid(vec3 t) {
 // The view ray's path through its prism (gdm.c shade_one): t_in + x vt + x (dt - x) bow.
 vec3 gdm_path(vec3 t_in, vec3 vt, vec3 bow, float dt, float x) {
     return t_in + vt * x + bow * (x * (dt - x));
+}
+
+// `steps` halvings of the bracket [lo, hi] (lo outside, hi inside).
+void gdm_bisect(vec3 t_in, vec3 vt, vec3 bow, float dt, bool solid_floor, int steps,
+                inout float lo, inout float hi) {
+    for (int k = 0; k < steps; ++k) {
+        float mid = 0.5 * (lo + hi);
+        if ((solid_floor && mid >= dt) || gdm_inside(gdm_path(t_in, vt, bow, dt, mid)))
+            hi = mid;
+        else
+            lo = mid;
+    }
 }
 
 float gdm_refine_hit(vec3 t_in, vec3 vt, vec3 bow, float d, float dt, bool solid_floor,
@@ -398,12 +411,19 @@ float gdm_refine_hit(vec3 t_in, vec3 vt, vec3 bow, float d, float dt, bool solid
         }
         if (hi < 0.0) return -1.0;
     }
-    for (int k = 0; k < u_refine_steps; ++k) {
-        float mid = 0.5 * (lo + hi);
-        if ((solid_floor && mid >= dt) || gdm_inside(gdm_path(t_in, vt, bow, dt, mid)))
-            hi = mid;
-        else
-            lo = mid;
+    // gdm.c: a height field's last two bisections replaced by one secant step through the
+    // bracket's ends where both are samples (an end the solid floor decides is not)
+    bool secant = u_refine_secant && u_gdm_heightfield && u_refine_steps >= 2;
+    gdm_bisect(t_in, vt, bow, dt, solid_floor, secant ? u_refine_steps - 2 : u_refine_steps, lo,
+               hi);
+    if (secant) {
+        bool hi_floor = solid_floor && hi >= dt;
+        float f_lo = gdm_function(gdm_path(t_in, vt, bow, dt, lo));
+        float f_hi = hi_floor ? 0.0 : gdm_function(gdm_path(t_in, vt, bow, dt, hi));
+        float span = f_lo - f_hi; // f_lo > 0 >= f_hi
+        if (!hi_floor && f_lo > 0.0 && f_hi <= 0.0 && span > 0.0 && !isinf(span))
+            return lo + (hi - lo) * (f_lo / span);
+        gdm_bisect(t_in, vt, bow, dt, solid_floor, 2, lo, hi); // else the two bisections
     }
     return 0.5 * (lo + hi);
 }
