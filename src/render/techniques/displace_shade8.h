@@ -18,10 +18,9 @@
 /* Groups of eight shaded by one call of the shading model (its per-object constants once). */
 #define DISPLACE_SHADE_GROUPS 8
 
-/* base[index[k]] per lane by eight scalar loads. Not the AVX2 gather (v8_gather): on the
- * 2-core AMD EPYC box the gathers made a one-thread displacement frame 10-20 % slower
- * (bricks-plane 55 -> 45 ms, bumps-sphere 24.4 -> 21.7 ms with these loads instead;
- * docs/performance.md), although callgrind counts a gather as one instruction. */
+/* base[index[k]] per lane by eight scalar loads. Not the AVX2 gather (v8_gather): on an AMD
+ * EPYC the gathers made a one-thread displacement frame slower than these loads (meso bench),
+ * although callgrind counts a gather as one instruction. */
 static inline v8f displace_gather8(const float *base, v8i index) {
     v8f r;
     for (int k = 0; k < V8_LANES; ++k) r[k] = base[index[k]];
