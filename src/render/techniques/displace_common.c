@@ -454,8 +454,8 @@ static uint64_t memo_key(size_t triangle, int32_t kb, int32_t kc) {
 }
 
 /* Entry e of the job's memo. The entries live in pages that never move: a moving camera adds
- * midpoints every frame, and one growing array was copied by realloc each time it grew (about a
- * tenth of a moving bricks-teapot frame's instructions, docs/performance.md). */
+ * midpoints every frame, and one growing array would be copied by realloc each time it grew (a
+ * visible part of a moving bricks-teapot frame's instructions). */
 static inline tess_memo *memo_entry(const tess_job *job, size_t e) {
     return &job->memo_pages[e >> MEMO_PAGE_BITS][e & (MEMO_PAGE_ENTRIES - 1)];
 }
@@ -985,7 +985,7 @@ static void run_job(void *user, size_t index, int thread_index) {
      * and the workers' scratch records lie side by side in arrays, and the counters and sizes
      * written for every edge would otherwise share cache lines with the neighbouring job's
      * (run at the same time on the other thread) or the other worker's: false sharing made two
-     * threads slower than one (docs/performance.md, tess-speed). */
+     * threads slower than one. */
     tess_job job = t->jobs[index];
     tess_scratch s = t->scratch[thread_index];
     job.num_vertices = job.num_triangles = 0;

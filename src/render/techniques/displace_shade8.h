@@ -2,9 +2,9 @@
  * blocks (render_internal.h, meso_fragment_block): the height field's gradient, the displaced
  * normal, the face normal, the shadow maps' 2 x 2 percentage-closer lookup and the shading
  * model, each lane with the scalar code's operations in its order (-ffp-contract=off), so the
- * bits are the same. Before, a displacement frame went through the per-fragment adapter: every
- * fragment copied out of the block and back, its gradient and shadow lookup one at a time, the
- * shading model re-gathered from the copies (about a quarter of a frame, docs/performance.md).
+ * bits are the same. Through the per-fragment adapter every fragment would be copied out of the
+ * block and back, its gradient and shadow lookup taken one at a time, and the shading model's
+ * inputs gathered again from the copies: a large part of a displacement frame.
  *
  * Static inline, for the technique files: a portable build compiles them twice (baseline and
  * AVX2, CMakeLists.txt), so this code runs on single AVX instructions where the CPU has them. */

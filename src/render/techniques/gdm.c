@@ -1138,8 +1138,8 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
 /* A block of fragments (render_internal.h): each one's ray through its prism (shade_one, on a
  * meso_fragment holding the inputs it reads), then the hits of up to 64 fragments shaded
  * together 8-wide; misses draw nothing. Read straight from the block's arrays: through the
- * per-fragment adapter every field of every fragment was copied out and back (bumps-sphere:
- * 306 k fragments, three in four of them misses). Each fragment's result is its own, so the
+ * per-fragment adapter every field of every fragment would be copied out and back, and most
+ * fragments are misses. Each fragment's result is its own, so the
  * same bits as shading it alone. */
 static void gdm_shade_block(const void *state, const meso_frame *frame, const meso_object *object,
                             meso_fragment_block *block) {
