@@ -5,7 +5,8 @@ BUILD_CLANG ?= build-clang
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps build demo test test-asan test-clang bench install clean format format-check
+.PHONY: all deps build demo test test-asan test-clang bench install clean format format-check \
+	docs-check
 
 all: build
 
@@ -47,6 +48,11 @@ bench: build
 # make install PREFIX=/opt/meso (default: the build's CMAKE_INSTALL_PREFIX, /usr/local)
 install: build
 	cmake --install $(BUILD) $(if $(PREFIX),--prefix $(PREFIX))
+
+# Every relative link and #anchor of README.md, CONTRIBUTING.md and docs/ resolves (ctest runs it
+# too, as docs_check).
+docs-check:
+	/usr/bin/python3 scripts/docs-check.py
 
 format:
 	clang-format -i $$(git ls-files '*.c' '*.h')

@@ -1,7 +1,7 @@
 /* The meso program: what its subcommands share (app.c, app_compare_all.c).
  *
  * Every subcommand is `int meso_cmd_<name>(int argc, char **argv)` with argv[0] the command's
- * name, and returns an exit status (DESIGN.md): 0 success, 2 bad input or usage, 1 anything
+ * name, and returns an exit status (docs/design.md): 0 success, 2 bad input or usage, 1 anything
  * else. A failing command prints exactly one line to stderr, "meso: <message>", where the
  * message is the library's last error (it names the file and the reason) or a usage message.
  * The program uses only the public API, <meso/meso.h>.

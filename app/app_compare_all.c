@@ -1,7 +1,7 @@
 /* Render one scene with every technique and the reference, time the frames and compare each
  * image against the ground truth: shared by `meso render --techniques` and `meso demo`.
  *
- * Metrics compare LINEAR colour with both coverage masks (DESIGN.md, "Measuring against the
+ * Metrics compare LINEAR colour with both coverage masks (docs/design.md, "Measuring against the
  * truth"): PSNR over the whole image and over the pixels both cover, SSIM and coverage IoU. */
 #include "app.h"
 
@@ -93,7 +93,7 @@ static void render_run(meso_context *ctx, const app_compare_all_desc *desc, cons
     }
     meso_renderer *renderer = NULL;
     meso_framebuffer *fb = NULL;
-    /* Mixed scenes (issue 9 item 5): the objects this technique cannot draw are drawn with
+    /* Mixed scenes: the objects this technique cannot draw are drawn with
      * their own scene technique, and the note says which. */
     meso_render_desc render_desc = {.technique = technique, .samples = samples, .fallback = true};
     if (desc->settings) {

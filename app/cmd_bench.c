@@ -19,8 +19,8 @@
 #define MAX_SCENES 64
 #define MAX_TECHNIQUES 64
 /* Without --frames or --seconds a run times at least 30 frames and at least 1 s, and stops at
- * 10 s: 30 frames of a 1-2 ms frame last 30-60 ms, and their median swung by 1.5x between
- * runs on a quiet 2-core machine (docs/performance.md, "Running the benchmark"). */
+ * 10 s: 30 frames of a millisecond frame last a few tens of ms, too short for a median that
+ * repeats between runs (docs/performance.md, "How to measure"). */
 #define DEFAULT_FRAMES 30
 #define DEFAULT_MIN_SECONDS 1.0
 #define DEFAULT_SECONDS 10.0

@@ -292,7 +292,7 @@ static bool upload(viewer *v, const float *rgb, int width, int height, bool line
     if (SDL_LockTexture(v->texture, NULL, &data, &pitch) != 0) return false;
     upload_job job = {v, rgb, data, pitch, width, height, linear};
     /* Serial on purpose: on the shared 2-core box a parallel loop here waited for a descheduled
-     * worker (12 ms median at 800x600 against 2.6 ms on one thread). */
+     * worker, several times longer than one thread takes. */
     for (size_t block = 0; block < (size_t)(height + UPLOAD_ROWS - 1) / UPLOAD_ROWS; block++)
         upload_rows(&job, block, 0);
     SDL_UnlockTexture(v->texture);
@@ -804,7 +804,7 @@ static bool open_window(viewer *v) {
      * whose teardown took 2 s. SDL_RENDER_DRIVER in the environment still wins. */
     SDL_SetHintWithPriority(SDL_HINT_RENDER_DRIVER, "software", SDL_HINT_DEFAULT);
     /* and the window surface is the video driver's own (X11: shared memory), not a texture of
-     * a GL renderer again (16 ms a frame at 800x600 through llvmpipe) */
+     * a GL renderer again (slow through llvmpipe) */
     SDL_SetHintWithPriority(SDL_HINT_FRAMEBUFFER_ACCELERATION, "0", SDL_HINT_DEFAULT);
     v->window = SDL_CreateWindow("meso view", SDL_WINDOWPOS_UNDEFINED, SDL_WINDOWPOS_UNDEFINED,
                                  v->window_width, v->window_height, SDL_WINDOW_RESIZABLE);

@@ -8,7 +8,7 @@
  * given as characters ('a'..'z', '0'..'9', '\t', 27 for Escape, '+', '-'), which is also what
  * SDL2's keycodes are for those keys.
  *
- * Conventions (DESIGN.md): right-handed, y up by default (the camera's `up`), angles in
+ * Conventions (docs/design.md): right-handed, y up by default (the camera's `up`), angles in
  * degrees where the scene uses them. Every function is pure apart from writing its state
  * argument, and thread-compatible (one state, one thread).
  */

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Writes examples/assets/chainmail-tile.obj: one tile of chain mail as a closed mesh in the
-unit box (DESIGN.md's tile conventions: x, y -> u, v, periodic; z -> 1 - w, z = 1 on the mesh).
+unit box (docs/design.md's tile conventions: x, y -> u, v, periodic; z -> 1 - w, z = 1 on the mesh).
 Two rings of radius 0.4 tilted 60 degrees in opposite senses about x, one at the tile's
 centre, one at its corner, so neighbouring rings overlap as in chain mail without touching
 (their centre lines stay 0.176 apart, more than two tube radii of 0.07). The corner ring (it

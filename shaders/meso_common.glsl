@@ -1,7 +1,7 @@
 // meso_common.glsl: what every meso fragment shader shares (GLSL 3.30 core). A technique's
 // fragment shader is `#version 330 core` + this file + (for the relief family)
 // meso_relief.glsl + the technique's file, in that order; the technique's first line names
-// the files it needs. Conventions (meso's DESIGN.md):
+// the files it needs. Conventions (docs/design.md):
 //   - World space, right-handed, y up; everything here is in world units.
 //   - Texture space: image column i <-> u = (i + 0.5) / W, image row j (row 0 = the top row of
 //     the file) <-> v = 1 - (j + 0.5) / H. Lookups use texel-centre coordinates

@@ -1,7 +1,7 @@
 /* meso isosurfaces: the surface of a solid mesostructure extracted in texture space.
  *
  * Overview
- *   The reference tracer (issue 3) needs a solid's surface as real triangles. This bake samples
+ *   The reference tracer needs a solid's surface as real triangles. This bake samples
  *   the solid's signed distance on a regular grid over one tile (u, v in [0,1], w in [0,1])
  *   and extracts the zero level set by dual contouring (Ju et al. 2002): one vertex per cell
  *   the surface crosses, where the planes through its edges' zero crossings (found on the field

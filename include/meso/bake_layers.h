@@ -17,7 +17,7 @@
  * Layout
  *   depth, normal_x, normal_y: width * height * num_layers floats, texel-major (the layers of a
  *   texel are consecutive, like the paper's RGBA texels), row 0 at the top: texel (i, j) is
- *   u = (i + 0.5) / width, v = 1 - (j + 0.5) / height (DESIGN.md). count: layers per texel.
+ *   u = (i + 0.5) / width, v = 1 - (j + 0.5) / height (docs/design.md). count: layers per texel.
  *   With format U8 the values are rounded to 8 bits (depth d -> round(255 d), normal
  *   component n -> round(127.5 (n + 1))) and held as the floats those bytes decode to, so a
  *   map read back from a file is bit-identical to the one baked.

@@ -1,5 +1,5 @@
 /* The radiance transfer volume (GDM paper §3.2 and §4.1, after Sloan et al. 2003's bi-scale
- * radiance transfer; issue 17 item 3).
+ * radiance transfer).
  *
  * Overview
  *   For every voxel (x, y, z) of the mesostructure volume, 16 SH coefficients T_i of the

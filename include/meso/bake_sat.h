@@ -50,7 +50,7 @@ typedef struct meso_sat {
 /* Build the summed-area table of `heightfield` (its wrap mode is kept).
  * Returns MESO_OK, MESO_ERROR_INVALID_ARGUMENT (NULL or empty field), MESO_ERROR_LIMIT (more
  * than MESO_SAT_MAX_TEXELS texels, before allocating), MESO_ERROR_OUT_OF_MEMORY; *out_sat is
- * NULL on failure. Single-threaded (linear time: ~1 ms for 512 x 512). */
+ * NULL on failure. Single-threaded (linear time). */
 meso_result meso_bake_sat(meso_context *ctx, const meso_heightfield *heightfield,
                           meso_sat **out_sat);
 void meso_sat_destroy(meso_sat *sat);

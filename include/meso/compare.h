@@ -1,6 +1,6 @@
 /* meso compare: image metrics against a reference, false-colour differences, labelled sheets.
  *
- * Metrics (DESIGN.md, "Measuring against the truth"): PSNR over the whole image and over the
+ * Metrics (docs/design.md, "Measuring against the truth"): PSNR over the whole image and over the
  * pixels both images cover, RMSE, SSIM (Wang et al. 2004; Gaussian window, sigma 1.5, 11x11,
  * on luminance), maximum absolute error, coverage IoU and the pixels covered by one image only.
  * Values are compared as given (callers compare linear images for the papers' numbers); the

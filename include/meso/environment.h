@@ -1,4 +1,4 @@
-/* meso environments: distant light from every direction (GDM paper §3.2, issue 17).
+/* meso environments: distant light from every direction (GDM paper §3.2).
  *
  * An environment is an equirectangular map of linear RGB radiance, from a Radiance .hdr file
  * (read with stb_image) or an OpenEXR file (the OpenEXR library), or made from a procedural

@@ -5,7 +5,7 @@
  * released by meso_mesh_destroy. Every array has num_vertices entries (indices: 3 per
  * triangle); optional arrays are NULL until computed.
  *
- * Conventions (DESIGN.md)
+ * Conventions (docs/design.md)
  *   Texture space is OpenGL's. tangents[i] = dP/du and bitangents[i] = dP/dv at vertex i, with
  *   their magnitudes (world units per unit of u or v), made orthogonal to the vertex normal;
  *   T x B points along N for unmirrored UVs. Normals are unit and outward.

@@ -5,7 +5,7 @@
  * hidden behind accessors (docs/design.md). Values are whatever the producer put there: PNG
  * loading maps 0..max to 0..1 without colour conversion; renderers write linear RGB.
  *
- * Texture space follows OpenGL (DESIGN.md): texel column i <-> u = (i+0.5)/W, row j (0 = top)
+ * Texture space follows OpenGL (docs/design.md): texel column i <-> u = (i+0.5)/W, row j (0 = top)
  * <-> v = 1 - (j+0.5)/H.
  *
  * Limits: MESO_IMAGE_MAX_SIDE pixels a side and MESO_IMAGE_MAX_PIXELS pixels in all, checked

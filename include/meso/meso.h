@@ -13,7 +13,7 @@
  *   render.h         framebuffers, techniques, renderers (rasterizer and reference)
  *   compare.h        metrics, difference images, sheets
  *   gl.h             the OpenGL back end (GLSL shaders, headless EGL)
- * Conventions: docs/design.md and DESIGN.md. Errors: see core.h.
+ * Conventions: docs/design.md. Errors: see core.h.
  */
 #ifndef MESO_MESO_H
 #define MESO_MESO_H

@@ -1,6 +1,6 @@
 /* meso mesostructure sources: height fields and solids.
  *
- * Height field (DESIGN.md): h(u, v) in [0, 1]; 1 lies on the mesh, 0 at -depth. Stored as a
+ * Height field (docs/design.md): h(u, v) in [0, 1]; 1 lies on the mesh, 0 at -depth. Stored as a
  * grid of width x height texels, row 0 at the top of the image (v = 1 - (j+0.5)/H), sampled
  * bilinearly between texel centres with repeat or clamp-to-edge wrapping.
  *
@@ -121,7 +121,7 @@ static inline void meso_heightfield_wrap_pair(meso_wrap wrap, int i, int n, int 
     }
 }
 
-/* h(u, v): bilinear between texel centres (DESIGN.md). */
+/* h(u, v): bilinear between texel centres (docs/design.md). */
 static inline float meso_heightfield_sample(const meso_heightfield *hf, float u, float v) {
     float x = u * (float)hf->width - 0.5f;
     float y = (1.0f - v) * (float)hf->height - 0.5f;
@@ -176,7 +176,7 @@ const char *meso_solid_kind_name(meso_solid_kind kind);
 
 meso_result meso_solid_create_procedural(meso_context *ctx, const meso_solid_desc *desc,
                                          meso_solid **out_solid);
-/* A solid from a closed triangle mesh of one tile (DESIGN.md: x, y -> u, v, periodic: the
+/* A solid from a closed triangle mesh of one tile (docs/design.md: x, y -> u, v, periodic: the
  * mesh may cross the tile's border and continues in the neighbouring tiles; z -> 1 - w, its
  * top at z = 1 on the mesh), converted once to signed distances on a grid of `resolution`^3
  * nodes (0: 96) with Embree: the sign by ray parity along z, the magnitude by closest-point

@@ -6,7 +6,7 @@
  * Overview
  *   Base triangle t with vertices P_i, unit vertex normals N_i and texture coordinates uv_i
  *   (uv_scale applied) is extruded into a prism: its top is the triangle itself (w = 0), its
- *   bottom the triangle of P_i - depth N_i (w = 1), DESIGN.md's "depth runs inward". A point
+ *   bottom the triangle of P_i - depth N_i (w = 1), docs/design.md's "depth runs inward". A point
  *   (u, v, w) of the prism's texture volume, (u, v) inside the UV triangle, is the object-space
  *   point  sum_i b_i(u, v) (P_i - w depth N_i),  b the barycentric weights of (u, v) in the UV
  *   triangle (meso_prism_map). Its three sides ("fins") are bilinear patches; each is drawn as

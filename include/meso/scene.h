@@ -1,4 +1,4 @@
-/* meso scenes: the JSON scene file (DESIGN.md, docs/scene-format.md) as an immutable struct.
+/* meso scenes: the JSON scene file (docs/design.md, docs/scene-format.md) as an immutable struct.
  *
  * Loading resolves everything a renderer needs: meshes are built or imported, transformed to
  * world space, validated, given UVs scaled by uv_scale, tangents, curvature and quadrics;

@@ -6,8 +6,8 @@
  * has a zero crossing, found on the field from the edge's lower node toward its higher one (so
  * neighbouring cells agree), and the field's normal there; the vertex is the least-squares
  * meeting point of those planes, weakly pulled toward the crossings' mean and kept in the cell.
- * The mean alone (surface nets, used until 2026-12-02) cut sharp edges by up to a cell, which on
- * grid-vase's bars kept the reference 33 dB from a finer one (docs/reference.md); cells one
+ * The mean alone (surface nets) cuts sharp edges by up to a cell, which on grid-vase's bars
+ * kept the reference visibly off a finer one (docs/reference.md); cells one
  * step below u = 0 and v = 0 are copies of the last cells shifted by -1, so
  * a tile's border quads use exactly the vertices the neighbouring tile uses; (3) for every
  * grid edge that changes sign, one quad (two triangles) through the vertices of the four cells

@@ -1,7 +1,7 @@
 /* The min-max (maximum mip-map) pyramid of a height field: Tevs, Ihrke, Seidel 2008, "Maximum
  * mipmaps for fast, accurate, and scalable dynamic height field rendering" (I3D), §3. Level 0
  * bounds each bilinear patch by its four corner texels, so the bound is exact for the bilinear
- * surface meso samples (DESIGN.md: bilinear between texel centres). See bake_minmax.h. */
+ * surface meso samples (docs/design.md: bilinear between texel centres). See bake_minmax.h. */
 #include <stdlib.h>
 #include <string.h>
 

@@ -136,7 +136,7 @@ static inline void box_range_unclamped(float x, float radius, int *lo, int *hi) 
 
 float meso_sat_box_average(const meso_sat *sat, float u, float v, float radius) {
     int i0, i1, j0, j1;
-    /* texel space: column x = u W, row y = (1 - v) H (row 0 at the top, DESIGN.md) */
+    /* texel space: column x = u W, row y = (1 - v) H (row 0 at the top, docs/design.md) */
     float x = u * (float)sat->width, y = (1.0f - v) * (float)sat->height;
     /* The common case, a point of the field and a box inside it (the tessellator's area test
      * calls this three times an edge): box_range's clamps change nothing, neither wrap mode

@@ -1,6 +1,6 @@
 /* Atomic file writes, output checks and whole-file reads.
  *
- * Outputs are all-or-nothing (DESIGN.md, "Nothing lost"): a file is written unnamed
+ * Outputs are all-or-nothing (docs/design.md, "Nothing lost"): a file is written unnamed
  * (O_TMPFILE) or under a temporary name beside the destination and renamed into place only
  * when complete. Temporary names that exist are kept in a small registry so that a signal
  * handler can remove them (meso_atomic_file_remove_temporaries); with O_TMPFILE a name exists

@@ -190,7 +190,7 @@ static meso_vec4 lerp4(meso_vec4 a, meso_vec4 b, float t) {
 }
 
 static meso_vec4 sample_level(const meso_image *level, meso_vec2 uv, meso_wrap wrap, bool nearest) {
-    /* Texel centres: u = (i + 0.5) / W, v = 1 - (j + 0.5) / H (DESIGN.md). */
+    /* Texel centres: u = (i + 0.5) / W, v = 1 - (j + 0.5) / H (docs/design.md). */
     float x = uv.x * (float)level->width - 0.5f;
     float y = (1.0f - uv.y) * (float)level->height - 0.5f;
     if (nearest) return fetch(level, (int)floorf(x + 0.5f), (int)floorf(y + 0.5f), wrap);

@@ -2,8 +2,8 @@
  *
  * Why not OpenMP: libgomp's idle threads spin (OMP_WAIT_POLICY is read once, before main, and
  * cannot be changed by a library), so on a machine busy with other programs the spinning
- * helpers took the cores the working threads needed: 2 threads drew a frame 2-4x slower than
- * 1 (docs/performance.md). Here the helpers sleep on a condition variable between loops, and
+ * helpers took the cores the working threads needed: 2 threads drew a frame several times
+ * slower than 1. Here the helpers sleep on a condition variable between loops, and
  * the calling thread works through the jobs itself, so it never waits for a helper that the
  * scheduler has not run yet: with every helper descheduled, a loop costs what it costs on one
  * thread plus one wake-up call. */

@@ -1,7 +1,7 @@
 /* Mesh import through assimp's C API: OBJ, PLY, glTF and whatever else assimp reads.
  *
  * Every triangle mesh of the file is placed by its node's accumulated transform and joined
- * into one meso_mesh. UV channel 0 is kept as assimp gives it (OpenGL convention, DESIGN.md:
+ * into one meso_mesh. UV channel 0 is kept as assimp gives it (OpenGL convention, docs/design.md:
  * nothing is flipped). The result goes through meso_mesh_validate, so errors and the
  * degenerate-triangle warning name the file.
  */

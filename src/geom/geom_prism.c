@@ -143,8 +143,8 @@ static void unbind_face(meso_prism_layer *layer, size_t prism, int slot) {
  * bow tie, its two triangles facing opposite ways. Such a plane puts the whole top outside it:
  * a ray entering through the top left the prism at once (t = 0; the texture-space segment then
  * ran from the top to another face's (u, v, w) of the same point, and the hit on it lay beside
- * the ray: on weave-teapot 15 % of the prisms fold, and they made 58 % of gdm's squared error
- * against its truth). Those planes are unbound: the fold's remaining faces, which cross before
+ * the ray: on weave-teapot the folded prisms made most of gdm's squared error against its
+ * truth). Those planes are unbound: the fold's remaining faces, which cross before
  * the fold's depth, bound the ray. A bow tie's other triangle bounds its fin alone (convex: the
  * nearer of a bound and an unbound plane). Returns whether the prism folds. */
 static bool unbind_folded_faces(meso_prism_layer *layer, size_t prism) {

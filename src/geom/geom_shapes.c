@@ -5,7 +5,7 @@
  * vertices are bit-identical copies and the surface is closed by position. The longitude
  * lambda = 2 pi (u - 1/2) puts the u seam at the back (-z), away from the default camera, and
  * makes dP/du point toward +x at the front, so T x B = N with B = dP/dv pointing "up" the
- * surface (DESIGN.md: T x B along N for unmirrored UVs).
+ * surface (docs/design.md: T x B along N for unmirrored UVs).
  */
 #include <math.h>
 #include <stdlib.h>
@@ -201,7 +201,7 @@ typedef struct plane_shape {
 static void eval_plane(const void *shape, int i, int j, double u, double v, meso_vec3 *p,
                        meso_vec3 *n) {
     const plane_shape *s = shape;
-    /* DESIGN.md: P(u,v) = (-s/2 + u s, 0, s/2 - v s), so the height map reads like the image
+    /* docs/design.md: P(u,v) = (-s/2 + u s, 0, s/2 - v s), so the height map reads like the image
      * when seen from above with -z up. */
     *p = meso_vec3_make((float)(-0.5 * s->size + u * s->size), 0.0f,
                         (float)(0.5 * s->size - v * s->size));

@@ -1,6 +1,6 @@
 /* Tangent frames: per-vertex dP/du and dP/dv from the triangles' UV gradients.
  *
- * DESIGN.md: T = dP/du, B = dP/dv with their magnitudes (world units per unit of u or v), made
+ * docs/design.md: T = dP/du, B = dP/dv with their magnitudes (world units per unit of u or v), made
  * orthogonal to the vertex normal; T x B points along N for unmirrored UVs and against it for
  * mirrored ones (the sign is kept, never forced).
  */

@@ -5,7 +5,7 @@
  * rotation that keeps the spout at +x and the handle at -x. Each patch is a 4x4 grid of control
  * points, row r and column c; P(s, t) with s along the rows and t along the columns. For every
  * patch of this data dP/dt x dP/ds points out of the pot, so UVs (u, v) = (1 - t, 1 - s) give
- * T x B = N (DESIGN.md) and, on the body, v grows upward.
+ * T x B = N (docs/design.md) and, on the body, v grows upward.
  *
  * No cracks: neighbouring patches share their border control points, and the evaluation below
  * returns bit-identical positions for a shared border whichever patch evaluates it (exact

@@ -407,9 +407,10 @@ meso_result meso_gl_export_textures(meso_context *ctx, const meso_scene *scene,
     if (r != MESO_OK) return r;
     cJSON *manifest = cJSON_CreateObject();
     cJSON_AddStringToObject(manifest, "scene", scene->path);
-    cJSON_AddStringToObject(manifest, "conventions",
-                            "DESIGN.md: texture space u right, v up (row 0 of every file at v = "
-                            "1); heights inward (1 on the mesh); shaders/ document every uniform");
+    cJSON_AddStringToObject(
+        manifest, "conventions",
+        "docs/design.md: texture space u right, v up (row 0 of every file at v = "
+        "1); heights inward (1 on the mesh); shaders/ document every uniform");
     cJSON *objects = cJSON_AddArrayToObject(manifest, "objects");
     for (int i = 0; i < scene->num_objects && r == MESO_OK; i++)
         r = export_object_textures(ctx, scene, i, &d, dir, objects);

@@ -87,7 +87,8 @@ meso_result meso_heightfield_create_from_image(meso_context *ctx, const meso_ima
          * Alpha is ignored. */
         float value =
             channels >= 3 ? 0.2126f * pixel[0] + 0.7152f * pixel[1] + 0.0722f * pixel[2] : pixel[0];
-        /* Heights live in [0, 1] (DESIGN.md); a float image may hold anything, NaN included. */
+        /* Heights live in [0, 1] (docs/design.md); a float image may hold anything, NaN included.
+         */
         hf->heights[k] = isfinite(value) ? meso_clampf(value, 0.0f, 1.0f) : 0.0f;
     }
     meso_heightfield_update_hash(hf);

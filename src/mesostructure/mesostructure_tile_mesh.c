@@ -1,4 +1,4 @@
-/* Solids from the user's tile meshes (issue 9 item 1; DESIGN.md's tile conventions): a closed
+/* Solids from the user's tile meshes (docs/design.md's tile conventions): a closed
  * triangle mesh of one tile, x, y -> u, v (periodic), z -> 1 - w, turned once into signed
  * distances on a grid, the representation every consumer (the multilayer bake, the
  * reference's isosurface) reads through meso_solid_distance.

@@ -199,7 +199,7 @@ static void setup_triangle(const raster_setup_desc *desc, const snapped_triangle
     out->min_x = bx0, out->max_x = bx1, out->min_y = by0, out->max_y = by1;
     out->triangle = triangle;
     /* The loops over the three edges unrolled: their % 3 indexing and loop counters were a
-     * quarter of this function's instructions (issue 16). */
+     * quarter of this function's instructions. */
 #pragma GCC unroll 3
     for (int k = 0; k < 3; k++) {
         out->x[k] = (int32_t)X[k];
@@ -373,7 +373,7 @@ static void setup_source_triangle(const raster_bins *bins, const raster_mesh *rm
 /* ---- Eight source triangles at a time ----------------------------------------------------- */
 
 /* With AVX2 only: compiled for SSE2 (a portable build's baseline), the 8-wide code costs more
- * instructions than the one-triangle path (bricks-plane displacement +11 %, docs/rasterizer.md):
+ * instructions than the one-triangle path (docs/rasterizer.md):
  * no 64-bit or 32-bit lane minimum, no packed double rounding, every vector split in pairs. */
 #if defined(__AVX2__)
 

@@ -307,7 +307,7 @@ static size_t cover_triangle(const raster_triangle *tri, int x0, int y0, int x1,
     v4l offset_lo[3], offset_hi[3];
     int64_t step_group[3];
     /* unrolled: the loop's (k + 1) % 3 and its indexing were a tenth of the coverage of a
-     * sphere's small triangles (issue 16) */
+     * sphere's small triangles */
 #pragma GCC unroll 3
     for (int k = 0; k < 3; k++) {
         int a = (k + 1) % 3;
@@ -420,13 +420,13 @@ static void mark_edges(const raster_triangle *tri, int tx0, int ty0, int tx1, in
 }
 
 /* Copy n floats to the target. Plain stores (memcpy), not non-temporal ones: with the tile
- * pass in the AVX2 copy, _mm256_stream_ps made an empty 512^2 frame 0.27-0.33 ms against
- * 0.15-0.24 ms for memcpy (meso bench, 5 interleaved runs, issue 16; docs/performance.md): the
- * next frame and the image conversion read the target back from the cache. */
+ * pass in the AVX2 copy, _mm256_stream_ps made an empty frame slower than memcpy (meso bench,
+ * interleaved runs): the next frame and the image conversion read the target back from the cache.
+ */
 static inline void copy_floats(float *dst, const float *src, size_t n) {
 #if defined(__AVX__)
     /* Inline 32-byte moves: rows of a tile are 128-384 bytes, where the library call's
-     * dispatch and the PLT cost as much as the copy (2-3% of a flat frame, perf, issue 16). */
+     * dispatch and the PLT cost as much as the copy (perf). */
     size_t i = 0;
     for (; i + 8 <= n; i += 8) _mm256_storeu_ps(dst + i, _mm256_loadu_ps(src + i));
     for (; i < n; i++) dst[i] = src[i];

@@ -1,5 +1,5 @@
 /* The reference tracer: the true micro-geometry of every object as real triangles, ray traced
- * with Embree 3 (issue 3). It is the ground truth every technique is measured against.
+ * with Embree 3. It is the ground truth every technique is measured against.
  *
  * Geometry: objects without mesostructure trace their mesh; height fields are displaced into
  * micro-triangles (reference_heightfield.c); solids are extracted in texture space and mapped
@@ -384,7 +384,7 @@ void reference_surface_at(const reference_object *ref, unsigned primitive, float
         mesh->normals[bt[0]], mesh->normals[bt[1]], mesh->normals[bt[2]], b[0], b[1], b[2]));
     *out_uv = uv;
     if (out_base) {
-        /* a height field's hit lies on its surface: w = 1 - h (DESIGN.md) */
+        /* a height field's hit lies on its surface: w = 1 - h (docs/design.md) */
         if (ref->kind == REFERENCE_HEIGHT_FIELD)
             w = 1.0f - meso_heightfield_sample(ref->object->mesostructure.height_field, uv.x, uv.y);
         *out_base = (reference_base){base, {b[0], b[1], b[2]}, w};

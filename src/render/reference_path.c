@@ -1,4 +1,4 @@
-/* The path-traced reference (issue 17 item 5): the truth under an environment and with
+/* The path-traced reference: the truth under an environment and with
  * interreflection, over the same micro-geometry the direct-light reference traces.
  *
  * A pixel is the direct-light reference's colour (the shared shading model with hard shadows:

@@ -1,7 +1,7 @@
 /* The reference tracer's solids: the solid's texture-space isosurface (bake_isosurface.c)
  * mapped into the shell prism of every base triangle.
  *
- * Mapping (issue 3, GDM §3.1's shell): meso_prism_map (meso/prism.h, src/geom/geom_prism.c),
+ * Mapping (GDM §3.1's shell): meso_prism_map (meso/prism.h, src/geom/geom_prism.c),
  * the one definition the gdm technique uses too: a point (u, v, w) inside base triangle t's
  * prism goes to sum_i b_i(u, v) (P_i - w depth N_i), b the barycentric weights of (u, v) in
  * the triangle's UV triangle (uv_scale applied, tiles repeat with period 1).

@@ -1,4 +1,4 @@
-/* The environment's light in the shared shading model, eight normals at a time (issue 17).
+/* The environment's light in the shared shading model, eight normals at a time.
  *
  * Where a scene has an environment, the model's ambient term becomes ambient + E(n) / pi, with
  * E(n) the environment's irradiance at the shading normal n from its spherical-harmonic

@@ -1,7 +1,7 @@
-/* Bi-scale radiance transfer, macro scale (GDM paper §3.2 after Sloan et al. 2003; issue 17
- * item 2): the environment's light arriving at each vertex of the base mesh, including the
- * base mesh's own occlusion, as spherical harmonics in the vertex's tangent frame, ready to be
- * dotted with the meso-scale response (the radiance transfer volume) at a GDM hit.
+/* Bi-scale radiance transfer, macro scale (GDM paper §3.2 after Sloan et al. 2003): the
+ * environment's light arriving at each vertex of the base mesh, including the base mesh's own
+ * occlusion, as spherical harmonics in the vertex's tangent frame, ready to be dotted with the
+ * meso-scale response (the radiance transfer volume) at a GDM hit.
  *
  * What is computed: for vertex v with position P, unit normal N and tangent frame (T, B, N)
  * (T from dP/du made orthogonal to N, B = N x T), the coefficients

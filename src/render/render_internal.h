@@ -60,7 +60,7 @@ typedef struct meso_fragment {
     bool discard;    /* preset false; true: nothing is drawn (silhouettes) */
 } meso_fragment;
 
-/* A block of fragments in structure-of-arrays form (issue 16, STYLE.md "vector lanes kept full"):
+/* A block of fragments in structure-of-arrays form:
  * what the rasterizer hands a technique's shade_block, one (object, screen tile) batch at a time.
  * Fragment i is lane i of every array, in the rasterizer's order (chunks, their triangles,
  * each triangle's samples row by row), so a triangle's fragments are consecutive. The arrays
@@ -236,7 +236,7 @@ static inline meso_vec3 meso_light_direction(const meso_light *light, meso_vec3 
                : meso_vec3_normalize(meso_vec3_sub(light->position, position));
 }
 
-/* The shading model of DESIGN.md: albedo * colour map(uv) * (ambient + sum over lights of
+/* The shading model of docs/design.md: albedo * colour map(uv) * (ambient + sum over lights of
  * colour * max(0, N.L) * visibility[i]) + Blinn-Phong specular * visibility[i].
  * normal is unit; visibility may be NULL (every light visible). Pure, thread-safe. */
 meso_vec3 meso_shade_point(const meso_frame *frame, const meso_object *object, meso_vec3 position,
@@ -280,7 +280,7 @@ static inline meso_vec3 meso_displaced_normal(meso_vec3 normal, meso_vec3 tangen
 
 /* The set-up triangles and tile lists of meso_raster_depth_map, kept from one call to the next
  * (the buffers only grow): a shadow map redrawn every frame from a new mesh then reuses pages
- * already touched instead of having the kernel zero fresh ones (issue 16, moving camera).
+ * already touched instead of having the kernel zero fresh ones (moving camera).
  * Opaque; made by the first meso_raster_depth_map given a pointer to NULL. */
 typedef struct meso_raster_depth_scratch meso_raster_depth_scratch;
 

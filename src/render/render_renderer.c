@@ -101,7 +101,7 @@ void meso_renderer_destroy(meso_renderer *renderer) {
 }
 
 /* The technique of object i, checked against its mesostructure. With `fallback`, an override
- * that cannot draw the object gives way to the object's own technique (issue 9 item 5: mixed
+ * that cannot draw the object gives way to the object's own technique (mixed
  * scenes), or to `flat` when that is the reference or cannot draw it either. */
 static meso_result resolve_technique(meso_context *ctx, const meso_object *object,
                                      const char *override, bool fallback,

@@ -1,4 +1,4 @@
-/* The shading model every technique and the reference share (DESIGN.md, "Shading"). */
+/* The shading model every technique and the reference share (docs/design.md, "Shading"). */
 #include <math.h>
 
 #include "render_environment.h"
@@ -18,7 +18,7 @@ static inline void load_code_pairs(const int32_t *base, v8i index, v8i *left, v8
 /* The colour map at eight uvs: bilinear between texel centres at level 0 with the texture's
  * wrap (the arithmetic of meso_texture_sample(t, uv, 0, MESO_FILTER_BILINEAR): uv reduced to
  * [0, 1) for repeat, x = u W - 0.5, y = (1 - v) H - 0.5), 0 for a non-finite uv. */
-/* Inlined: a call and its prologue cost 10 % of the lookup's instructions, once a group of 8. */
+/* Inlined: a call and its prologue cost a noticeable share of the lookup's instructions. */
 static inline __attribute__((always_inline)) void sample_color_map(const meso_texture *t,
                                                                    const float *srgb8_table, v8f u,
                                                                    v8f v, v8f *out_r, v8f *out_g,
@@ -152,7 +152,7 @@ static void apply_normal_map(const meso_material *m, const meso_shade_batch *in,
 }
 
 /* What the shading of one object in one frame reads whatever the point: worked out once a call
- * of meso_shade_batches_to_block instead of once a group of eight (issue 16: with the call, a
+ * of meso_shade_batches_to_block instead of once a group of eight (with the call, a
  * tenth of flat's shading). */
 typedef struct shade_constants {
     const meso_frame *frame;
@@ -173,8 +173,8 @@ static void shade_constants_init(shade_constants *c, const meso_frame *frame,
 }
 
 /* colour = albedo map(uv) (ambient + sum_i c_i max(0, N.L_i) v_i) + sum_i spec c_i (N.H_i)^s v_i
- * (DESIGN.md); with an environment, ambient + E(N) / pi (render_environment.h), specular only where
- * N.L_i > 0 and N.H_i > 0. */
+ * (docs/design.md); with an environment, ambient + E(N) / pi (render_environment.h), specular only
+ * where N.L_i > 0 and N.H_i > 0. */
 static inline __attribute__((always_inline)) void shade8(const shade_constants *c,
                                                          const meso_shade_batch *in, int lanes,
                                                          v8f *out_r, v8f *out_g, v8f *out_b) {

@@ -87,7 +87,7 @@ static inline v8i v8i_gather(const int32_t *base, v8i index) {
 }
 
 /* base[index[k]] in *left and base[index[k] + 1] in *right per lane (any 32-bit values, as
- * float bits), by one 8-byte load a lane instead of gathers: on the AVX-512 machine of issue 16
+ * float bits), by one 8-byte load a lane instead of gathers: on an AVX-512 machine
  * the gathers of a lookup outside a dependent chain cost more time than the loads, the index
  * extraction and the shuffles together (more instructions, though: callgrind counts a gather
  * as one). */

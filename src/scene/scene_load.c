@@ -1,7 +1,7 @@
-/* Scene files: JSON text -> meso_scene (DESIGN.md "Scene file contract", docs/scene-format.md).
- * The top level (image, camera, ambient, lights, objects) lives here; the environment is parsed
- * by scene_environment.c, objects by scene_object.c. Every error names the file and the key path;
- * nothing leaks on any path. */
+/* Scene files: JSON text -> meso_scene (docs/design.md "The scene file",
+ * docs/scene-format.md). The top level (image, camera, ambient, lights, objects) lives here; the
+ * environment is parsed by scene_environment.c, objects by scene_object.c. Every error names the
+ * file and the key path; nothing leaks on any path. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>

@@ -298,7 +298,7 @@ static meso_result parse_height_map_or_solid(const scene_parser *p, const cJSON 
         return cJSON_GetObjectItemCaseSensitive(solid, "impostor")
                    ? parse_impostor_solid(p, solid, &k, object)
                    : parse_procedural_solid(p, solid, &k, object);
-    if (cJSON_IsString(solid)) { /* a tile mesh (DESIGN.md: x, y -> u, v; z -> 1 - w) */
+    if (cJSON_IsString(solid)) { /* a tile mesh (docs/design.md: x, y -> u, v; z -> 1 - w) */
         char path[SCENE_PATH_MAX];
         if ((r = scene_resolve_path(p, &k, solid->valuestring, path)) ||
             (r = scene_check_readable(p, &k, path)))
@@ -349,7 +349,7 @@ static meso_result load_color_map_file(const scene_parser *p, const scene_key *k
     meso_image *image = NULL;
     meso_result r = load_map_image(p, key, path, 4, &image);
     if (r != MESO_OK) return r;
-    /* Colour maps are authored in sRGB; shading is linear (DESIGN.md). Alpha stays linear. */
+    /* Colour maps are authored in sRGB; shading is linear (docs/design.md). Alpha stays linear. */
     int colour_channels = image->channels >= 3 ? 3 : 1;
     size_t n = (size_t)image->width * (size_t)image->height;
     for (size_t t = 0; t < n; t++)

@@ -1,4 +1,4 @@
-/* Output formats of renders and difference images (issue 14 item 13): `-o X.exr` writes
+/* Output formats of renders and difference images: `-o X.exr` writes
  * OpenEXR (half floats, linear, read back here with the OpenEXR library), `--bits 16` a 16-bit
  * PNG; both hold the same linear values as each other within their precision. Before, every
  * output was an 8-bit PNG whatever its name, and --bits did not exist. */

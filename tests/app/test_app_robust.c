@@ -1,4 +1,4 @@
-/* The meso program against the inputs of the bad-input campaign (issue 15), kept under
+/* The meso program against the inputs of the bad-input campaign, kept under
  * tests/data/bad/: every one refused with status 2 and one line "meso: <file>: <reason>", and
  * outputs written all or none, never through a FIFO or device, never leaving temporaries. */
 #include <dirent.h>

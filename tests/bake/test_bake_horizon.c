@@ -113,7 +113,7 @@ static void test_one_and_two_threads_bake_the_same_bytes(void **state) {
     meso_context_destroy(two);
 }
 
-/* The memory budget (issue 15): 40 x 24 texels x 8 azimuths is 30 KiB, refused under 16 KiB. */
+/* The memory budget: 40 x 24 texels x 8 azimuths is 30 KiB, refused under 16 KiB. */
 static void test_bake_keeps_to_the_memory_budget(void **state) {
     (void)state;
     meso_context *tiny = NULL;

@@ -273,7 +273,7 @@ static void test_bad_descs_name_the_field(void **state) {
     assert_int_equal(meso_bake_layers(ctx, &desc, &m), MESO_ERROR_LIMIT);
     assert_null(m);
     meso_context_destroy(ctx);
-    /* the memory budget (issue 15): a 256^2 x 4 map needs 4 MiB, refused under 1 MiB */
+    /* the memory budget: a 256^2 x 4 map needs 4 MiB, refused under 1 MiB */
     meso_context *tiny = NULL;
     assert_int_equal(meso_context_create(
                          &(meso_context_desc){.num_threads = 1, .memory_limit = 1u << 20}, &tiny),

@@ -1,4 +1,4 @@
-/* Bake files that pass the container's checks but must still not be trusted (issue 15): values
+/* Bake files that pass the container's checks but must still not be trusted: values
  * that are not finite, entries made from another source; and every truncation and single-bit
  * flip of a real VDM, relief layers and GDM file refused. */
 #include <math.h>

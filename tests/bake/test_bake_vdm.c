@@ -349,7 +349,7 @@ static void test_vdm_cached_bake_is_reused(void **state) {
     meso_context_destroy(ctx);
 }
 
-/* The memory budget (issue 15): a bake that cannot fit is refused before it allocates, and one
+/* The memory budget: a bake that cannot fit is refused before it allocates, and one
  * with no room to hold its table between the SVD's passes casts it twice, to the same map. */
 static void test_vdm_bake_keeps_to_the_memory_budget(void **state) {
     meso_heightfield *hf = make_bumps(16);

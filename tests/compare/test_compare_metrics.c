@@ -160,7 +160,7 @@ static int lowest_ink(const meso_image *image, int x0, int x1) {
     return -1;
 }
 
-/* Issue 14: the 5 x 7 font drew "p" and "g" on the baseline ("bumP"). */
+/* The 5 x 7 font once drew "p" and "g" on the baseline ("bumP"). */
 static void test_compare_text_has_descenders(void **state) {
     meso_context *ctx = test_context(1);
     meso_image *image = filled(ctx, 40, 16, 3, 0.0f);

@@ -1,4 +1,4 @@
-/* OpenEXR output (issue 14 item 13): images written by meso_image_save(".exr") and read back
+/* OpenEXR output: images written by meso_image_save(".exr") and read back
  * with the OpenEXR library's own reader (its RGBA interface, not meso's code) hold the same
  * linear values within half precision, unclamped, in the channels their layout names. */
 #include <ImfCRgbaFile.h>

@@ -1,6 +1,6 @@
 /* Spherical harmonics (include/meso/sh.h) and their use on environments: orthonormality, the
  * projection of a constant environment, rotation against rotating the map, irradiance of
- * uniform and hemispherical skies against the closed forms (issue 17's tests). */
+ * uniform and hemispherical skies against the closed forms. */
 #include <math.h>
 #include <stdlib.h>
 

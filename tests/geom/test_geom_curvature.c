@@ -139,7 +139,7 @@ static void test_teapot_curvature_and_quadrics_are_finite(void **state) {
     meso_context_destroy(ctx);
 }
 
-/* Byte-identical results whatever the number of threads (STYLE.md). */
+/* Byte-identical results whatever the number of threads (CONTRIBUTING.md). */
 static void test_derived_arrays_do_not_depend_on_thread_count(void **state) {
     meso_mesh *meshes[2];
     for (int k = 0; k < 2; k++) {

@@ -1,4 +1,4 @@
-/* The GL back end against the CPU one (issue 13): for every shader, on the examples, the GL
+/* The GL back end against the CPU one: for every shader, on the examples, the GL
  * image agrees with the CPU image of the same scene at covered PSNR >= 40 dB (linear colour,
  * peak 1), and their coverage is identical except along the silhouette: a pixel covered by
  * one and not the other lies within one pixel of the CPU image's coverage edge. Run on Mesa's

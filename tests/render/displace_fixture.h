@@ -52,7 +52,7 @@ static void fixture_alloc_frames(fixture *f) {
     assert_non_null(f->mesh->bitangents);
 }
 
-/* The built-in plane's parametrisation (DESIGN.md) on a cells x cells grid, side 2. */
+/* The built-in plane's parametrisation (docs/design.md) on a cells x cells grid, side 2. */
 static void fixture_plane(fixture *f, int cells) {
     size_t side = (size_t)cells + 1;
     assert_int_equal(

@@ -16,7 +16,7 @@ typedef struct test_scene {
     meso_object objects[TEST_SCENE_MAX_OBJECTS];
 } test_scene;
 
-/* A scene of width x height, the DESIGN.md camera, one directional light, ambient 0.1. */
+/* A scene of width x height, the docs/design.md camera, one directional light, ambient 0.1. */
 static inline void test_scene_init(test_scene *ts, int width, int height) {
     memset(ts, 0, sizeof(*ts));
     meso_scene *s = &ts->scene;

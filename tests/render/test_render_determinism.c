@@ -1,4 +1,4 @@
-/* Determinism (DESIGN.md, issue 15): every example x every technique that draws it, and the
+/* Determinism (docs/design.md): every example x every technique that draws it, and the
  * reference, gives the same image bytes with 1, 2 and 7 threads. Small images and small bakes
  * keep it short; the bakes go through the build tree's cache, so the 2- and 7-thread runs read
  * what the 1-thread run baked — and the bakes' own thread independence is tested beside them

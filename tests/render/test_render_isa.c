@@ -1,4 +1,4 @@
-/* Portable builds (issue 14 item 10): the techniques' AVX2 copy, chosen at run time, and the
+/* Portable builds: the techniques' AVX2 copy, chosen at run time, and the
  * baseline x86-64 code draw the same bits, on examples that take every technique (height
  * fields, solids, a curved mesh). MESO_ISA=baseline makes the registry hand out the baseline
  * copy. Skipped where the build has no AVX2 copy (a -DMESO_NATIVE=ON build, another

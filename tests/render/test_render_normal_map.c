@@ -1,4 +1,4 @@
-/* Normal maps (issue 14 item 12): a constant tangent-space normal map on a flat plane shades
+/* Normal maps: a constant tangent-space normal map on a flat plane shades
  * every technique and the reference as the analytic Lambert value of the tilted normal;
  * "normal_map_convention": "directx" flips green; a bad normal_map is one error line. Before,
  * "normal_map" was an unknown material key. */

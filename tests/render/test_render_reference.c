@@ -1,4 +1,4 @@
-/* The reference tracer's truth checks (issue 3): constant height fields against the plain mesh,
+/* The reference tracer's truth checks: constant height fields against the plain mesh,
  * an analytic V groove, a solid slab against a height field, grazing rays along a shared prism
  * edge, limits and determinism. */
 #include <math.h>

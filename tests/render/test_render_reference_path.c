@@ -1,4 +1,4 @@
-/* The path-traced reference (reference_path.c, issue 17): a flat surface under a uniform sky
+/* The path-traced reference (reference_path.c): a flat surface under a uniform sky
  * against the closed form, the direct-light reference reproduced without environment and
  * interreflection, interreflection adding light, convergence as 1/sqrt(N), and the same image
  * for any thread count. Images are tiny (24 x 24 to 32 x 32) to keep the test at seconds. */

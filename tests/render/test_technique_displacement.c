@@ -1,5 +1,5 @@
 /* `displacement` (uniform): 4^L triangles a base triangle, vertices on the displaced surface of
- * DESIGN.md, crack-free on closed meshes, the automatic level, limits, shadows. */
+ * docs/design.md, crack-free on closed meshes, the automatic level, limits, shadows. */
 #include "displace_fixture.h"
 
 extern const meso_technique meso_technique_displacement;

@@ -143,7 +143,7 @@ static void test_lookup8_equals_the_bakes_lookup(void **state) {
     meso_context_destroy(ctx);
 }
 
-/* Issue 10: adjacent prisms leave no gap. A sphere under a constant height field is a
+/* Adjacent prisms leave no gap. A sphere under a constant height field is a
  * smaller sphere: its pixels form one run in every row and every column (a crack between
  * prisms would show the background inside the outline). */
 static void test_closed_mesh_with_a_constant_height_field_has_no_gap(void **state) {
@@ -247,7 +247,7 @@ static void test_hits_lie_on_the_ray_in_a_curved_prism(void **state) {
     meso_context_destroy(ctx);
 }
 
-/* Issue 10: a slab solid equals the base mesh translated down by its thickness -- depth and
+/* A slab solid equals the base mesh translated down by its thickness -- depth and
  * colour at every pixel both cover away from the border -- seen along each diagonal of the
  * plane, one of which is the fin its two prisms share: a ray along that fin must not leak
  * into the neighbour (a hole or a wrong depth on the diagonal). */
@@ -372,7 +372,7 @@ static void bumps_plane_scene(meso_context *ctx, test_scene *ts) {
     o->mesostructure.depth = 0.1f;
 }
 
-/* Issue 10: the GDM of a height field draws what relief_exact draws on a plane's interior
+/* The GDM of a height field draws what relief_exact draws on a plane's interior
  * (both checked against the truth elsewhere; here against each other, shadows included). */
 static void test_height_field_matches_relief_exact_on_a_plane(void **state) {
     meso_context *ctx = test_context(2);

@@ -22,7 +22,7 @@ static const meso_option small_bake[] = {
 };
 #define NUM_SMALL_BAKE (int)(sizeof small_bake / sizeof small_bake[0])
 
-/* Two horizontal squares of side 2 (the built-in plane's layout, DESIGN.md), at y = 0 and
+/* Two horizontal squares of side 2 (the built-in plane's layout, docs/design.md), at y = 0 and
  * y = upper, normals +y, uv 0..2 on both: triangles 0, 1 below, 2, 3 above. */
 static meso_mesh *two_planes(meso_context *ctx, float upper) {
     meso_mesh *mesh = NULL;

@@ -89,7 +89,7 @@ static meso_fragment tiled_fragment(const fixture *fx, float s, float u, float v
 }
 
 /* A height field through relief_layers shades like relief: the same hits, and the normal of
- * the field's gradient there (DESIGN.md), also on a cone's flanks and tip and on tiled UVs. */
+ * the field's gradient there (docs/design.md), also on a cone's flanks and tip and on tiled UVs. */
 static void test_heightfield_normals_equal_relief_on_a_steep_cone(void **state) {
     (void)state;
     setenv("MESO_CACHE_DIR", "off", 1);

@@ -1,4 +1,5 @@
-/* Scene files that load: the DESIGN.md example, defaults, extensions, transforms, examples/. */
+/* Scene files that load: the docs/design.md example, defaults, extensions, transforms, examples/.
+ */
 #include <dirent.h>
 #include <math.h>
 #include <stdio.h>
@@ -24,7 +25,7 @@ static void write_maps(meso_context *ctx, const char *dir) {
     meso_image_destroy(rgb);
 }
 
-/* DESIGN.md's example, line breaks moved to fit 100 columns. */
+/* docs/design.md's example, line breaks moved to fit 100 columns. */
 static const char design_example[] =
     "{\n"
     "  \"image\":   { \"width\": 512, \"height\": 512, \"background\": [0, 0, 0],\n"

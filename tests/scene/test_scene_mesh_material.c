@@ -1,4 +1,4 @@
-/* Materials from the mesh file (issue 14 item 12): a glTF's baseColorFactor/baseColorTexture
+/* Materials from the mesh file: a glTF's baseColorFactor/baseColorTexture
  * and an OBJ's MTL Kd/map_Kd are read, used when the scene's material sets no colour, and
  * `meso info` says what was used and what ignored. Before, the mesh file's material was
  * dropped silently and every imported mesh was grey 0.8. */

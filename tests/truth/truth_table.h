@@ -3,8 +3,8 @@
  * over the pixels both images cover) and the least coverage IoU it must reach against
  * `reference`. Shared by test_truth.c (every technique but vdm) and test_truth_vdm.c.
  *
- * Margin rule: each floor is the figure measured on 2026-12-01, less 1.5 dB for the PSNR and
- * less 0.005 for the IoU, rounded down (to 0.1 dB, to 0.001). The margin absorbs rounding
+ * Margin rule: each floor is the figure measured when the row was written, less 1.5 dB for the
+ * PSNR and less 0.005 for the IoU, rounded down (to 0.1 dB, to 0.001). The margin absorbs rounding
  * differences between builds (-march=native, the sanitizer build at -O0); a technique that
  * breaks loses far more. To regenerate: MESO_TRUTH_PRINT=1 build/test_truth (and
  * build/test_truth_vdm) prints every row with these floors; look at the pictures it writes to

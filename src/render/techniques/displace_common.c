@@ -48,7 +48,7 @@ meso_vec2 displace_gradient(const displace_surface *surface, meso_vec2 uv) {
     return displace_heightfield_gradient(surface->heightfield, t.x, t.y);
 }
 
-/* DESIGN.md: P' = P - (1 - h) depth N, N the normalised interpolated vertex normal */
+/* docs/design.md: P' = P - (1 - h) depth N, N the normalised interpolated vertex normal */
 static meso_vec3 displaced_position(const displace_surface *surface,
                                     const displace_vertex *vertex) {
     return meso_vec3_madd(vertex->base, vertex->unit_normal,
@@ -98,7 +98,7 @@ static void vertex_midpoint_uv(const displace_vertex *a, const displace_vertex *
 }
 
 /* The rest of the interpolated fields, only for a midpoint that survived the vetoes (most do
- * not: 57 % of bricks-teapot's, and nothing reads a vetoed record's other fields). */
+ * not on bricks-teapot, and nothing reads a vetoed record's other fields). */
 static void vertex_midpoint_frame(const displace_vertex *a, const displace_vertex *b,
                                   displace_vertex *out) {
     out->base = mid3(a->base, b->base);
@@ -203,8 +203,8 @@ _Static_assert(offsetof(displace_vertex, uv) - offsetof(displace_vertex, base) =
 
 /* A slot of a job's memo table: entry index + 1 (0: empty), and 32 bits of the key's hash that
  * the slot's position does not use, so that a probe passing another key's slot mostly skips
- * reading that entry (a cache miss each: the memo's look-ups were 9-13 % of a moving
- * bricks-teapot frame's time, docs/performance.md). */
+ * reading that entry (a cache miss each: the memo's look-ups were a large part of a moving
+ * bricks-teapot frame's time). */
 typedef struct tess_memo_slot {
     uint32_t entry;
     uint32_t tag;
@@ -454,8 +454,8 @@ static uint64_t memo_key(size_t triangle, int32_t kb, int32_t kc) {
 }
 
 /* Entry e of the job's memo. The entries live in pages that never move: a moving camera adds
- * midpoints every frame, and one growing array was copied by realloc each time it grew (about a
- * tenth of a moving bricks-teapot frame's instructions, docs/performance.md). */
+ * midpoints every frame, and one growing array would be copied by realloc each time it grew (a
+ * visible part of a moving bricks-teapot frame's instructions). */
 static inline tess_memo *memo_entry(const tess_job *job, size_t e) {
     return &job->memo_pages[e >> MEMO_PAGE_BITS][e & (MEMO_PAGE_ENTRIES - 1)];
 }
@@ -985,7 +985,7 @@ static void run_job(void *user, size_t index, int thread_index) {
      * and the workers' scratch records lie side by side in arrays, and the counters and sizes
      * written for every edge would otherwise share cache lines with the neighbouring job's
      * (run at the same time on the other thread) or the other worker's: false sharing made two
-     * threads slower than one (docs/performance.md, tess-speed). */
+     * threads slower than one. */
     tess_job job = t->jobs[index];
     tess_scratch s = t->scratch[thread_index];
     job.num_vertices = job.num_triangles = 0;

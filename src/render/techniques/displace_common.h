@@ -1,5 +1,5 @@
 /* Shared code of the two geometry techniques, `displacement` (uniform) and `tessellation`
- * (Doggett & Hirche 2000): vertex displacement (DESIGN.md), the recursive midpoint tessellator
+ * (Doggett & Hirche 2000): vertex displacement (docs/design.md), the recursive midpoint tessellator
  * with its triangle stack, shading with the height field's normal, and shadow maps of the
  * displaced mesh. Private to src/render/techniques.
  *
@@ -126,7 +126,7 @@ typedef struct displace_vertex {
     meso_vec2 texture_uv;  /* displace_texture_uv(uv) */
     meso_vec3 unit_normal; /* N = normalize(normal) */
     float height;          /* h(uv) */
-    meso_vec3 position;    /* P' = P - (1 - h) depth N (DESIGN.md) */
+    meso_vec3 position;    /* P' = P - (1 - h) depth N (docs/design.md) */
     /* filled by the technique's vertex hook (tessellation: the edge tests' inputs) */
     meso_vec3 surface_normal; /* normal of the displaced surface (bump-map operation) */
     meso_vec4 clip;           /* view_projection * position */

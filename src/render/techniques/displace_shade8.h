@@ -2,9 +2,9 @@
  * blocks (render_internal.h, meso_fragment_block): the height field's gradient, the displaced
  * normal, the face normal, the shadow maps' 2 x 2 percentage-closer lookup and the shading
  * model, each lane with the scalar code's operations in its order (-ffp-contract=off), so the
- * bits are the same. Before, a displacement frame went through the per-fragment adapter: every
- * fragment copied out of the block and back, its gradient and shadow lookup one at a time, the
- * shading model re-gathered from the copies (about a quarter of a frame, docs/performance.md).
+ * bits are the same. Through the per-fragment adapter every fragment would be copied out of the
+ * block and back, its gradient and shadow lookup taken one at a time, and the shading model's
+ * inputs gathered again from the copies: a large part of a displacement frame.
  *
  * Static inline, for the technique files: a portable build compiles them twice (baseline and
  * AVX2, CMakeLists.txt), so this code runs on single AVX instructions where the CPU has them. */
@@ -18,10 +18,9 @@
 /* Groups of eight shaded by one call of the shading model (its per-object constants once). */
 #define DISPLACE_SHADE_GROUPS 8
 
-/* base[index[k]] per lane by eight scalar loads. Not the AVX2 gather (v8_gather): on the
- * 2-core AMD EPYC box the gathers made a one-thread displacement frame 10-20 % slower
- * (bricks-plane 55 -> 45 ms, bumps-sphere 24.4 -> 21.7 ms with these loads instead;
- * docs/performance.md), although callgrind counts a gather as one instruction. */
+/* base[index[k]] per lane by eight scalar loads. Not the AVX2 gather (v8_gather): on an AMD
+ * EPYC the gathers made a one-thread displacement frame slower than these loads (meso bench),
+ * although callgrind counts a gather as one instruction. */
 static inline v8f displace_gather8(const float *base, v8i index) {
     v8f r;
     for (int k = 0; k < V8_LANES; ++k) r[k] = base[index[k]];

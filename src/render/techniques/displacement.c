@@ -1,5 +1,5 @@
 /* `displacement`: uniform tessellation of every base triangle into 4^L triangles whose vertices
- * are displaced by the height field (DESIGN.md: P' = P - (1 - h) depth N), rasterized with the
+ * are displaced by the height field (docs/design.md: P' = P - (1 - h) depth N), rasterized with the
  * shared shading; the brute-force baseline of Doggett & Hirche 2000 ("Displacement Mapping":
  * base mesh + displacement map = displaced mesh) and of VDM §1. Self-shadowing by a shadow map
  * of the displaced mesh (displace_common.c). */
@@ -15,8 +15,8 @@
 #define DISPLACEMENT_AUTO_MAX_LEVEL 9
 /* Consecutive triangles culled together. The tessellator emits each base triangle's 4^L
  * triangles depth first, so 16 consecutive ones (4^2) are one small patch of the surface. Their
- * cone of normals is what limits culling on a rough surface (a brick's side walls): measured
- * on bricks-teapot, 64-triangle clusters drop 12 % of the triangles, 16-triangle ones 28 %. */
+ * cone of normals is what limits culling on a rough surface (a brick's side walls): smaller
+ * clusters drop more triangles (docs/techniques/displacement.md, CLUSTER_TRIANGLES). */
 #define CLUSTER_TRIANGLES 16
 /* A cluster is dropped as back-facing only when every triangle in it faces away by more than
  * this angle (radians) past edge-on: twice the rasterizer's own early margin

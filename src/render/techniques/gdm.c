@@ -27,8 +27,8 @@
  * midpoint, usually a fraction of a voxel off, one step leaves rounding error; where the shell
  * turns sharply (weave-teapot's handle) the midpoint is farther off and the steps go on, up to
  * 4, until one moves (u, v, w) by less than the tolerance: a third of a voxel of a 64-voxel
- * tile, after which the error left is about its square (1e-3 measured the same, with 1.3 %
- * more instructions on weave-torus) */
+ * tile, after which the error left is about its square (1e-3 drew the same, with more
+ * instructions) */
 #define GDM_UNMAP_ITERATIONS 4
 #define GDM_UNMAP_TOLERANCE 5e-3f
 /* refine_hit's most probes along a segment where the table was wrong */
@@ -266,8 +266,8 @@ static inline int window_index(meso_wrap wrap, int i, int n) {
  * 16-bit multiples of window_unit rounded up: a bound only proves a segment outside, which the
  * probes would find anyway (the same images), and a looser one by 1/65535 of the map's
  * highest texel proves about as many. As floats, all levels, the maxima took 7 MB for a 512²
- * map, read at random: 6 % of bark-cylinder's cycles went to that read (perf). false: out of
- * memory. */
+ * map, read at random: a visible share of bark-cylinder's cycles went to that read (perf).
+ * false: out of memory. */
 static bool heightfield_windows(gdm_state *s) {
     const meso_heightfield *hf = s->heightfield;
     int width = hf->width, height = hf->height, longest = width > height ? width : height;
@@ -409,7 +409,7 @@ static meso_result gdm_prepare(meso_context *ctx, const meso_scene *scene,
     /* The table's d next to the surface is blended with the solid voxels' 0: read from the
      * table alone, a shadow ray must start well off it; probed on the mesostructure (the
      * refinement), a quarter voxel keeps it off the surface and misses fewer near blockers
-     * (weave-plane 27.6 -> 31.4 dB, cones-plane 34.9 -> 38.5; docs/techniques/gdm.md). */
+     * (docs/techniques/gdm.md, shadow_bias). */
     s->shadow_bias = options.shadow_bias >= 0.0f ? options.shadow_bias
                                                  : (options.refine_steps > 0 ? 0.25f : 1.5f);
     s->hit_margin = options.hit_margin;
@@ -644,7 +644,7 @@ static inline bool inside_mesostructure(const gdm_state *s, meso_vec3 uvw) {
  * distance is a bound with Lipschitz constant 1 in (u, v, w) (mesostructure_solid.c), and so
  * is a height field's (1 - h) - w scaled by probe_scale; every point nearer than |f| to a
  * sample is on the same side of the surface. A probe there gets the same answer without
- * evaluating the mesostructure (the weave's distance function was 56 % of weave-torus's
+ * evaluating the mesostructure (the weave's distance function was most of weave-torus's
  * frame): the answers, and so the images, are those of evaluating every probe.
  *
  * Along one ray a height field's f changes faster than |dir.z| + |dir.x| slope_u + |dir.y|
@@ -670,8 +670,8 @@ typedef struct ray_probe {
  * grid proves the side when p lies within the node's |f| (less the distance to it, with
  * ray_probe_inside's margins), and *out_radius is then that bound, remembered as a sample's
  * |f| would be; otherwise the solid is evaluated (*out_radius = |f|). Not inline: it keeps
- * ray_probe_inside small enough to be inlined for height fields (measured: 9 % more
- * instructions on bumps-sphere with the grid's code inline). */
+ * ray_probe_inside small enough to be inlined for height fields (with the grid's code inline,
+ * bumps-sphere ran more instructions). */
 __attribute__((noinline)) static float solid_probe(const gdm_state *s, meso_vec3 p,
                                                    float *out_radius) {
     meso_vec3 q = gdm_tile_point(p);
@@ -802,7 +802,7 @@ static bool state_probes_inside(const void *state, meso_vec3 t0, meso_vec3 dir, 
  * proves nothing above clear_w: the two bounds agree), so refine_hit's even probes start
  * after them. On [0, length] the path's w is at most t0.z + x dir.z + max(bow.z, 0)
  * length^2 / 4 (the bow's factor x (length - x) is at most length^2 / 4); 1e-6 covers the
- * rounding of the probe's own point. bark-cylinder: 44 % of the even probes. */
+ * rounding of the probe's own point. On bark-cylinder, many of the even probes. */
 static inline int ray_probe_below(const ray_probe *r, float length, int probes) {
     if (!(r->dir.z > 0.0f)) return 0;
     float room = r->clear_w - 1e-6f -
@@ -836,9 +836,8 @@ static float refine_hit(const gdm_state *s, ray_probe probe, float d, float dt, 
         if (INSIDE(0.0f)) return 0.0f;
         /* probes from the entry, evenly spaced, one every eighth of the refinement's window
          * (3 layers), 8 to GDM_PROBES: eight along a long segment skipped chainmail rings,
-         * threads, bars and mortar grooves (chainmail-plane 21.6 -> 34.2 dB, bricks-plane
-         * 35.8 -> 44.9, docs/techniques/gdm.md); the probe cache skips the evaluations the
-         * distance bounds already decide */
+         * threads, bars and mortar grooves (docs/techniques/gdm.md); the probe cache skips the
+         * evaluations the distance bounds already decide */
         float wanted = ceilf(8.0f * dt / window);
         int probes = wanted > 8.0f ? (wanted < (float)GDM_PROBES ? (int)wanted : GDM_PROBES) : 8;
         int first = s->heightfield ? ray_probe_below(&probe, dt, probes) + 1 : 1;
@@ -914,8 +913,8 @@ __attribute__((flatten)) static bool shadowed(const gdm_state *s, meso_vec3 t, m
     /* A light toward the slab's bottom lies under the base surface: the object's own body is
      * between (the far wall of a torus seen through the holes of the near one). §3.2's local
      * test cannot see that; this much of the base geometry's shadow it can. Measured on an
-     * open mesh too: inside grid-vase (lit only through its rim) it is 2.4 dB nearer the truth
-     * than letting such light through. */
+     * open mesh too: inside grid-vase (lit only through its rim) it is nearer the truth than
+     * letting such light through. */
     if (lt.z >= 0.0f) return true;
     float bias = s->shadow_bias;
     /* from a point `bias` voxels off the surface: at the surface d is interpolated with the
@@ -932,7 +931,8 @@ __attribute__((flatten)) static bool shadowed(const gdm_state *s, meso_vec3 t, m
      * start `bias` off along the normal can still be inside, and its probes then report the
      * thread itself (single dark specks on fin lines, weave-torus). Such a start is pushed on
      * until outside. Not at an open border's fins: there the thread is cut, its normal says
-     * nothing of the cut face, and pushing lets light in (weave-plane -1.4 dB, measured). */
+     * nothing of the cut face, and pushing lets light in (weave-plane drew further from its truth).
+     */
     for (int k = 0; k < 8 && at_seam && inside_mesostructure(s, t); k++) {
         t = meso_vec3_add(t, step);
         t.z = gdm_fminf(gdm_fmaxf(t.z, 0.0f), 1.0f);
@@ -1123,8 +1123,8 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
             /* A light the slab finds clear is walked on past the slab; not from a prism whose
              * top has the whole shell behind it (clear_top_walk 0): the ray leaves the shell
              * through a top before the flat slab's end on a convex mesh, and that walk only
-             * crossed prisms untested (bark-cylinder: 60 k walks a frame, 5 % of its
-             * instructions, the same image; docs/techniques/gdm.md, "clear_top_walk"). */
+             * crossed prisms untested (the same image with fewer instructions;
+             * docs/techniques/gdm.md, clear_top_walk). */
             else if (s->shell && !blocked &&
                      !(s->skip_clear_tops && gdm_shell_top_clear(s->shell, prism_index)))
                 blocked =
@@ -1138,8 +1138,8 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
 /* A block of fragments (render_internal.h): each one's ray through its prism (shade_one, on a
  * meso_fragment holding the inputs it reads), then the hits of up to 64 fragments shaded
  * together 8-wide; misses draw nothing. Read straight from the block's arrays: through the
- * per-fragment adapter every field of every fragment was copied out and back (bumps-sphere:
- * 306 k fragments, three in four of them misses). Each fragment's result is its own, so the
+ * per-fragment adapter every field of every fragment would be copied out and back, and most
+ * fragments are misses. Each fragment's result is its own, so the
  * same bits as shading it alone. */
 static void gdm_shade_block(const void *state, const meso_frame *frame, const meso_object *object,
                             meso_fragment_block *block) {

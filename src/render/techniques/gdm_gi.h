@@ -1,4 +1,4 @@
-/* gdm under global illumination (GDM paper §3.2 "Global Illumination", §4.2; issue 17 item 4;
+/* gdm under global illumination (GDM paper §3.2 "Global Illumination", §4.2;
  * docs/techniques/gdm-gi.md): at the GDM hit, the environment's light reflected by the
  * mesostructure is the dot product of the radiance transfer volume's vector at (uvw, view)
  * (bake_rtv.h) with the incident radiance vector interpolated from the base triangle's

@@ -403,9 +403,9 @@ static bool segment_blocked(const gdm_shell_desc *d, meso_vec3 t0, meso_vec3 dir
          * voxel. Each probe's answer is the mesostructure's whatever the order, so a height
          * field's voxel probes (a sample each, cheaper than the lookup) go first, and the
          * lookup is made only where none of them is inside (most segments that a thorough
-         * walk tests hold its blocker: bark-cylinder -0.7 % instructions a frame, the same
-         * images). Not for a solid, whose probes cost about a lookup each (the distance
-         * function): weave-teapot gained nothing in that order. */
+         * walk tests hold its blocker: fewer instructions, the same images). Not for a solid, whose
+         * probes cost about a lookup each (the distance function): weave-teapot gained nothing in
+         * that order. */
         if (probes_blocked(d, t0, dir, -1.0f, length, steps)) return true;
         float hit = lookup(d, t0, dir);
         if (!(hit < length - margin)) return false;
@@ -546,9 +546,9 @@ static bool light_visible(const gdm_shell *shell, size_t prism, meso_vec3 uvw, m
         at && slab_clear ? at->position : meso_prism_map(first, d->mesh, layer->depth, t0, -1);
     /* tested: the prisms of this stretch are tested (after the ray left the slab the caller's
      * test covered). That test ran in one flat slab along the point's own frame: it covered
-     * the ray up to where a flat shell's top would be, w depth / (N . L) away (5 % more for
-     * rounding). Where the surface curves over the point (under a vase's flared rim) the ray
-     * stays in the shell longer, crossing other prisms through their fins: from there on they
+     * the ray up to where a flat shell's top would be, w depth / (N . L) away (and a little
+     * more for rounding). Where the surface curves over the point (under a vase's flared rim) the
+     * ray stays in the shell longer, crossing other prisms through their fins: from there on they
      * are tested. */
     bool tested = !slab_clear;
     float reach = INFINITY;

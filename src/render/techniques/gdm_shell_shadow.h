@@ -34,7 +34,7 @@ static inline meso_vec3 gdm_tile_point(meso_vec3 uvw) {
     return (meso_vec3){uvw.x - floorf(uvw.x), uvw.y - floorf(uvw.y), uvw.z};
 }
 
-/* Inside the mesostructure at uvw: a height field's solid is w >= 1 - h(u, v) (DESIGN.md), a
+/* Inside the mesostructure at uvw: a height field's solid is w >= 1 - h(u, v) (docs/design.md), a
  * solid's is where its distance bound is <= 0. One of heightfield / solid is non-NULL. The one
  * definition gdm's refinement and the shell walk share. */
 static inline bool gdm_mesostructure_inside(const meso_heightfield *heightfield,

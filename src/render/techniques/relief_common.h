@@ -6,7 +6,7 @@
  * Texture space of a fragment. With T = dP/du, B = dP/dv and N unit at the fragment, the view
  * vector V = P - eye (unnormalised) is written V = du T + dv B + dn N (dual basis). Along the
  * ray P + t V (t >= 0 from the base mesh), the texture coordinates are uv + t (du, dv) and the
- * depth below the base surface in shell units (d = 1 - h, d = 0 at the mesh, DESIGN.md) is
+ * depth below the base surface in shell units (d = 1 - h, d = 0 at the mesh, docs/design.md) is
  *     d(t) = t (a - b t),   a = -dn / depth,   b = (qa x^2 + qb y^2) / depth
  * where (x, y) = (V.normalize(T), V.normalize(B)) and (qa, qb) the per-vertex quadric
  * interpolated at the fragment (Oliveira & Policarpo 2005, summarised in Policarpo & Oliveira
@@ -161,7 +161,7 @@ static inline void relief_load_quads8(const float *base, v8i index, v8f out[4]) 
 
 /* relief_sample8 with the texel pairs read by loads (v8_load_pairs), not gathers: the same
  * texels, so the same bits. For a lookup outside a search's dependent chain, where the loads
- * cost less time than the gathers (parallax's unshifted depth, issue 16); inside a chain the
+ * cost less time than the gathers (parallax's unshifted depth); inside a chain the
  * index extraction would lengthen it (not measured). */
 static inline v8f relief_sample8_loads(const relief_heights *m, v8f x, v8f y) {
     v8i i, j;
@@ -177,7 +177,7 @@ static inline v8f relief_sample8_loads(const relief_heights *m, v8f x, v8f y) {
 /* relief_sample8 at (x + 1, y) in *right and (x - 1, y) in *left, with the same bits. Both read
  * rows j and j + 1; where every lane's two texel pairs are the four texels from i - 1 on (no
  * wrap between them), AVX2 reads them with one 16-byte load a lane and row instead of two
- * gathers a sample and row (the gathers were most of bump's frame, issue 16). */
+ * gathers a sample and row (the gathers were most of bump's frame). */
 static inline void relief_sample8_beside(const relief_heights *m, v8f x, v8f y, v8f *right,
                                          v8f *left) {
 #if defined(__AVX2__)
@@ -659,7 +659,7 @@ static inline void relief_gradient8(const relief_heights *m, v8f x, v8f y, v8f *
      * and j + 1, (x, y - 1) rows j - 1 and j, (x, y + 1) rows j + 1 and j + 2, every one in the
      * columns i - 1 .. i + 2. Where no lane wraps inside that block, four 16-byte loads a lane
      * read it all instead of two quad loads and eight pair gathers; the same texels and
-     * fractions, so the same bits (the gathers were a fifth of parallax's time, issue 16). */
+     * fractions, so the same bits (the gathers were a fifth of parallax's time). */
     v8i ir, jr, il, jl, iu, ju, id, jd;
     v8f txr, tyr, txl, tyl, txu, tyu, txd, tyd;
     relief_texel8(m, x + 1.0f, y, &ir, &jr, &txr, &tyr);

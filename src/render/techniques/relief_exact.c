@@ -240,8 +240,8 @@ static inline void trace8_begin(const exact_state *s, const exact_rays8 *r, int 
     const v8f zero = v8_splat(0.0f);
     /* View rays start where the cells are as long as the ray's footprint (start_level, per
      * lane). Shadow rays start at level 0: they leave the surface, so every coarser cell
-     * around their start reaches them and would only be descended, a step a level (issue 16:
-     * 0.7-2.3 % of relief_exact's instructions, the same images). */
+     * around their start reaches them and would only be descended, a step a level (fewer
+     * instructions, the same images). */
     v8f extent = (v8_max(r->xd, -r->xd) + v8_max(r->yd, -r->yd)) * (r->t1 - r->t0);
     st->level = v8i_splat(0);
     int start_cap =
@@ -587,8 +587,7 @@ static void search(const void *user, const relief_batch *batches, int count, v8f
         int hit[2] = {0, 0};
         memset(r, 0, sizeof r);
         /* No probes to shorten the rays: with the start level capped at 2 and the clearance
-         * advance they no longer saved a step (4.3 M instructions on bricks-plane, same
-         * images). */
+         * advance they save no step (they only cost instructions; the same images). */
         for (int g = 0; g < count; ++g) r[g] = view_rays(s, &batches[g]);
         trace8x2(s, r, todo, count, true, t, hit);
         for (int g = 0; g < count; ++g) {
@@ -656,7 +655,7 @@ static void shadow(const void *user, const relief_shadow_batch *batches, int cou
             active[g] = b->active_bits & ~blocked;
         }
         /* No cone steps: a shadow ray starts on the surface, where the cone of the cell under it
-         * allows no step (measured: +1.7 M instructions on bumps-sphere, +0.6 M on
+         * allows no step (with them, more instructions on bumps-sphere and
          * bricks-plane). */
         trace8x2(s, r, active, count, false, t, out_blocked);
         for (int g = 0; g < count; ++g) out_blocked[g] |= probed[g];

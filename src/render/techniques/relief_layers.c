@@ -5,7 +5,7 @@
  * interface rule of §3.2 for the texel whose normals shade the hit; self-shadows by a search
  * toward each light (§3.1, last paragraphs); silhouettes, depth correction and shading shared
  * with `relief` (relief_common.h). Height fields are one layer (§3, Fig. 10) and shade with
- * the field's own gradient, as relief (DESIGN.md; why not the baked normals: normal()). Missed
+ * the field's own gradient, as relief (docs/design.md; why not the baked normals: normal()). Missed
  * rays are discarded (§3.1, "the fragment can be discarded") or, with "missed": 1, drawn on the
  * shell's floor with the mesh's normal (§3.1's base texture). docs/techniques/relief_layers.md.
  */
@@ -158,7 +158,7 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
     if (r != MESO_OK) return r;
     /* "float" defaults to 1 on height fields: the search then meets the field's own heights,
      * as relief does (their normals come from the field, not the map, so 8 bits now costs
-     * only the depths' rounding: 0.0-0.1 dB, docs/techniques/relief_layers.md); solids keep
+     * only the depths' rounding, docs/techniques/relief_layers.md); solids keep
      * the paper's 8 bits. */
     /* an impostor (§4) is a whole model on one quad: finer map and search by default */
     bool impostor = object->mesostructure.kind == MESO_MESOSTRUCTURE_SOLID &&
@@ -416,7 +416,7 @@ static void search(const void *user, const relief_batch *batches, int count, v8f
  * bias. The sample's depth is relief's, d (1 - s) + bulge s (1 - s) (relief_shadow_batch): on
  * a curved mesh the surface falls away from the light ray, which so runs deeper than the
  * straight line; without the bulge a sphere's bumps lost shadows that relief and the reference
- * draw (1 dB on bumps-sphere). */
+ * draw. */
 static void shadow(const void *user, const relief_shadow_batch *batches, int count,
                    int *out_blocked) {
     const layers_state *s = user;
@@ -457,10 +457,9 @@ static void shadow(const void *user, const relief_shadow_batch *batches, int cou
  * w only the shell's depth), so a field's normal there is nearly horizontal: a cone one shell
  * deep over 8 texels of 256 has slope 32 per u, z = 0.03. Bilinear (x, y) of unit normals
  * whose directions differ (around a cone's tip, across a ridge) is shorter than 1, and the z
- * rebuilt from it is too large, by 2.4 times at the 90th percentile of points on the truth
- * suite's cones (world normals off by 20 degrees there): they drew 10 dB below relief
- * (docs/techniques/relief_layers.md). Solids read the nearest texel's normal, not a mix, so
- * they do not meet it. */
+ * rebuilt from it is too large, by a factor of two and more on many points of the truth
+ * suite's cones: they drew far below relief (docs/techniques/relief_layers.md). Solids read the
+ * nearest texel's normal, not a mix, so they do not meet it. */
 static void normal(const void *user, const relief_lanes *l, const relief_batch *batch, v8f t,
                    v8f hx, v8f hy, v8f hd, float depth, v8vec3 *out) {
     const layers_state *s = user;

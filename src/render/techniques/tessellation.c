@@ -415,7 +415,7 @@ static void tessellation_shade(const void *state, const meso_frame *frame,
 
 /* Eight fragments at a time from the rasterizer's block (displace_shade8.h, as `displacement`
  * shades): the colours of displace_shade, bit for bit, without the per-fragment adapter's
- * copies (about 7 % of a bricks-teapot frame's instructions, docs/techniques/tessellation.md). */
+ * copies (docs/techniques/tessellation.md). */
 static void tessellation_shade_block(const void *state, const meso_frame *frame,
                                      const meso_object *object, meso_fragment_block *block) {
     (void)object;

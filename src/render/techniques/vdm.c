@@ -411,15 +411,14 @@ static inline float lookup(const vdm_state *s, meso_vec2 uv, float theta, float 
  * (from the bump's near side to the ground behind it), so the paper's interpolated d lands
  * between the two surfaces -- on the hidden far side of the bump, lit from the wrong side:
  * with 8 azimuths 45 degrees apart, and asymmetric maps seen off the axes, most of a cone's
- * outline is such a jump (docs/techniques/vdm.md, random cones: 21.9 dB before, see there
- * after). Each corner d is a distance the ray may have at this pixel; along the pixel's own
- * ray (bake space, unit vb, d in shell depths) a point d is below the height field when
- * r(d) = d vb.z - (1 - h(T - d depth_tiles vb.xy)) >= 0. The first corner with r >= 0
- * brackets the first crossing after the last one with r < 0 (0 is above the surface unless
- * the mesostructure touches it); `steps` of the Illinois regula falsi close in. Where the 8
- * corners agree the table is smooth and d is used as the paper does: no height samples. When
- * the ray is above the surface at every corner, returns past_every_corner (NAN: the largest
- * corner, the nearest to where the hit must be). */
+ * outline is such a jump (docs/techniques/vdm.md, "Hit refinement"). Each corner d is a distance
+ * the ray may have at this pixel; along the pixel's own ray (bake space, unit vb, d in shell
+ * depths) a point d is below the height field when r(d) = d vb.z - (1 - h(T - d depth_tiles vb.xy))
+ * >= 0. The first corner with r >= 0 brackets the first crossing after the last one with r < 0 (0
+ * is above the surface unless the mesostructure touches it); `steps` of the Illinois regula falsi
+ * close in. Where the 8 corners agree the table is smooth and d is used as the paper does: no
+ * height samples. When the ray is above the surface at every corner, returns past_every_corner
+ * (NAN: the largest corner, the nearest to where the hit must be). */
 /* The 8 corner values, clamped to >= 0 and sorted ascending; false when they agree within 1/50
  * shell depth (the table is smooth there: its interpolated d is used as the paper does). */
 static inline bool sorted_corners(const float in[8], float out[8]) {
@@ -507,8 +506,8 @@ static float refine_hit(const meso_heightfield *hf, meso_vec2 uv, meso_vec3 vb, 
  * away, up to 22 degrees off in phi) hits it and the next misses, and no corner says where
  * along the pixel's own ray the occluder lies -- choosing among them (refine_hit's way) or
  * probing at and between them missed most of a cone's shadow edge under a low light
- * (truth scene cones-uv-scale: 20.3 and 22.2 dB). So there `steps` uniform probes along the
- * ray decide, as relief's shadow search does (28.4 dB). */
+ * (truth scene cones-uv-scale). So there `steps` uniform probes along the ray decide, as
+ * relief's shadow search does. */
 static bool blocked_before(const meso_heightfield *hf, meso_vec2 uv, meso_vec3 vb,
                            float depth_tiles, const float corners_in[8], float d, float limit,
                            int steps) {

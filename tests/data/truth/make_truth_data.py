@@ -6,10 +6,11 @@ plane-mirrored.obj  the built-in 2x2 plane (y = 0, normal +y) as a 4x4 grid whos
 plane-rotated.obj   the same grid with its UVs rotated 90 degrees (u = (1 - z) / 2,
                     v = (1 - x) / 2): u runs away from the viewer, v to the left.
 
-random-cones.png, the height map of every truth scene, is the team's fixture
-/work/shared/fixtures/random-cones.png (40 cones of random radius at random places, 512x512,
-16-bit; made by make_random_cones.py there, numpy seed 7) averaged 2x2 down to 256x256:
-    convert random-cones.png -scale 50% -depth 16 -type Grayscale -strip random-cones.png
+random-cones.png, the height map of every truth scene, is ../random-cones/random-cones.png
+(40 cones of random radius at random places, 512x512, 16-bit; made by
+../random-cones/make_random_cones.py, numpy seed 7) averaged 2x2 down to 256x256:
+    convert ../random-cones/random-cones.png -scale 50% -depth 16 -type Grayscale -strip \
+        random-cones.png
 Not periodic, not symmetric: a technique that mirrors, swaps or shifts an axis shows it here,
 where the regular procedural maps hide it.
 
