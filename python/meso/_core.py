@@ -94,6 +94,7 @@ class Context:
     scene, renderer and comparison has its own, so errors never mix between threads."""
 
     def __init__(self, threads=0, progress=None):
+        self.ptr = None
         threads = check_threads(threads)
         desc = ffi.new("meso_context_desc *")
         desc.num_threads = threads

@@ -87,7 +87,9 @@ def compare(a, b, diff_scale=0.25, background=(0.0, 0.0, 0.0)):
     context.check(lib.meso_image_compare(context.ptr, image_a, image_b, desc, result))
     out = ffi.new("meso_image **")
     context.check(lib.meso_image_diff(context.ptr, image_a, image_b, float(diff_scale), out))
-    diff = _copy_image(Owned(out[0], lib.meso_image_destroy).ptr)
+    diff_image = Owned(out[0], lib.meso_image_destroy)
+    diff = _copy_image(diff_image.ptr)
+    diff_image.close()
     del keep
     r = result[0]
     return {
