@@ -8,8 +8,10 @@ program's.
 frames   For each scene x technique: `meso bench SCENE --techniques T --frames 30 --json` and a
          kept meso.Renderer drawing 2 warm-up frames then 30 timed ones into the same Image
          (render(out=...)), alternated --rounds times so that both see the same machine load.
-         Reports the medians of both, their ratio, and the Python-side cost of a call: the
-         median over frames of (wall time of renderer.render) - (libmeso's own frame time).
+         Reports the medians over rounds of both, their ratio, the range and median of the
+         rounds' ratios, the ratio of the quickest rounds, and the Python-side cost of a call:
+         the median over frames of (wall time of renderer.render) - (libmeso's own frame
+         time), which includes the part of meso_renderer_render outside its own timer.
 memory   `meso render SCENE --size 2048x2048 -o x.png` and the same from Python
          (scene.render(size=(2048, 2048)).save(...)), each in a fresh process; peak resident
          set sizes (/usr/bin/time for the program, getrusage in the Python child), and
@@ -136,7 +138,7 @@ def main():
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"load {os.getloadavg()[0]:.2f}; meso ISA {meso.technique_isa()}")
     print(f"{'scene':14s} {'technique':10s} {'bench ms':>9s} {'python ms':>9s} {'ratio':>6s} "
-          f"{'python-side us':>15s}")
+          f"{'round ratios':>22s} {'best ratio':>10s} {'python-side us':>15s}")
     for pair in arguments.pairs.split(","):
         name, technique = pair.split(":")
         scene = os.path.join(SOURCE, "examples", name + ".json")
@@ -147,8 +149,12 @@ def main():
             python.append(wall)
             overhead.append(cost)
         b, p = statistics.median(bench), statistics.median(python)
-        print(f"{name:14s} {technique:10s} {b:9.3f} {p:9.3f} {p / b:6.3f} "
-              f"{statistics.median(overhead):15.1f}", flush=True)
+        ratios = sorted(q / r for q, r in zip(python, bench))
+        spread = f"{ratios[0]:.3f}..{ratios[-1]:.3f} ({statistics.median(ratios):.3f})"
+        # the quietest round of each: what a quiet machine would give
+        print(f"{name:14s} {technique:10s} {b:9.3f} {p:9.3f} {p / b:6.3f} {spread:>22s} "
+              f"{min(python) / min(bench):10.3f} {statistics.median(overhead):15.1f}",
+              flush=True)
     bricks = os.path.join(SOURCE, "examples", "bricks-plane.json")
     package, bare = call_cost(bricks)
     print(f"a 16x16 flat frame: renderer.render(out=...) {package:.2f} us, the bare cffi call "

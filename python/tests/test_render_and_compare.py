@@ -182,6 +182,23 @@ def test_progress_reports_a_bake_and_can_cancel_it(monkeypatch, scene):
         scene.render("vdm", options=small, progress=lambda label, f: label == "vdm bake")
     assert error.value.result == "cancelled"
 
+    class Bar:  # what tqdm.tqdm offers
+        def __init__(self):
+            self.n, self.descriptions = 0.0, []
+
+        def reset(self, total):
+            self.n, self.total = 0.0, total
+
+        def set_description(self, text):
+            self.descriptions.append(text)
+
+        def update(self, amount):
+            self.n += amount
+
+    bar = Bar()
+    scene.render("vdm", options=small, progress=bar)
+    assert "vdm bake" in bar.descriptions and bar.total == 100 and 0 < bar.n <= 100
+
     class Stop(Exception):
         pass
 

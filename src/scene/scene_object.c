@@ -390,13 +390,24 @@ static meso_result load_named_map_image(const scene_parser *p, const scene_key *
     return MESO_OK;
 }
 
-/* A colour map's texture from its image (consumed), decoded from sRGB unless `encoding` is
- * linear; with its 8-bit sRGB copy (4 bytes a texel). */
-static meso_result make_color_texture(const scene_parser *p, meso_image *image,
-                                      meso_encoding encoding, meso_wrap wrap,
-                                      meso_texture **out_texture) {
+typedef enum map_kind {
+    MAP_COLOR,  /* authored in sRGB (decoded unless a resource says linear), alpha linear */
+    MAP_NORMAL, /* data: RGB, x, y, z in [-1, 1] as 2 c - 1, never decoded */
+} map_kind;
+
+/* A colour or normal map's texture from its image (consumed); a colour map gets its 8-bit
+ * sRGB copy (4 bytes a texel). */
+static meso_result make_map_texture(const scene_parser *p, const scene_key *key, meso_image *image,
+                                    map_kind kind, meso_encoding encoding, meso_wrap wrap,
+                                    meso_texture **out_texture) {
+    if (kind == MAP_NORMAL && image->channels < 3) {
+        int channels = image->channels;
+        meso_image_destroy(image);
+        return scene_error(p, MESO_ERROR_FORMAT, key,
+                           "a normal map needs RGB channels (this PNG has %d)", channels);
+    }
     /* Colour maps are authored in sRGB; shading is linear (DESIGN.md). Alpha stays linear. */
-    if (encoding != MESO_ENCODING_LINEAR) {
+    if (kind == MAP_COLOR && encoding != MESO_ENCODING_LINEAR) {
         int colour_channels = image->channels >= 3 ? 3 : 1;
         size_t n = (size_t)image->width * (size_t)image->height;
         for (size_t t = 0; t < n; t++)
@@ -407,59 +418,28 @@ static meso_result make_color_texture(const scene_parser *p, meso_image *image,
     }
     meso_result r = meso_texture_create(p->ctx, image, wrap, true, out_texture);
     meso_image_destroy(image);
-    if (r == MESO_OK) r = meso_texture_add_srgb8(p->ctx, *out_texture);
+    if (r == MESO_OK && kind == MAP_COLOR) r = meso_texture_add_srgb8(p->ctx, *out_texture);
     return r;
 }
 
-/* A colour map at a resolved path, converted from sRGB to linear. */
-static meso_result load_color_map_file(const scene_parser *p, const scene_key *key,
-                                       const char *path, meso_wrap wrap,
-                                       meso_texture **out_texture) {
+/* A map at a resolved path (a mesh file's own textures). */
+static meso_result load_map_file(const scene_parser *p, const scene_key *key, const char *path,
+                                 map_kind kind, meso_wrap wrap, meso_texture **out_texture) {
     meso_image *image = NULL;
-    meso_result r = load_map_image(p, key, path, 4, &image);
-    return r == MESO_OK ? make_color_texture(p, image, MESO_ENCODING_SRGB, wrap, out_texture) : r;
+    meso_result r = load_map_image(p, key, path, kind == MAP_COLOR ? 4 : 0, &image);
+    return r == MESO_OK
+               ? make_map_texture(p, key, image, kind, MESO_ENCODING_SRGB, wrap, out_texture)
+               : r;
 }
 
-static meso_result load_color_map(const scene_parser *p, const scene_key *key, const char *file,
-                                  meso_wrap wrap, meso_texture **out_texture) {
+/* A map the scene names: a resource or a file beside the scene. */
+static meso_result load_named_map(const scene_parser *p, const scene_key *key, const char *file,
+                                  map_kind kind, meso_wrap wrap, meso_texture **out_texture) {
     meso_image *image = NULL;
     meso_encoding encoding;
-    meso_result r = load_named_map_image(p, key, file, 4, &image, &encoding);
-    return r == MESO_OK ? make_color_texture(p, image, encoding, wrap, out_texture) : r;
-}
-
-/* A normal map's texture from its image (consumed): linear (no sRGB decoding), RGB (x, y, z
- * in [-1, 1] as 2 c - 1). */
-static meso_result make_normal_texture(const scene_parser *p, const scene_key *key,
-                                       meso_image *image, meso_wrap wrap,
-                                       meso_texture **out_texture) {
-    if (image->channels < 3) {
-        int channels = image->channels;
-        meso_image_destroy(image);
-        return scene_error(p, MESO_ERROR_FORMAT, key,
-                           "a normal map needs RGB channels (this PNG has %d)", channels);
-    }
-    meso_result r = meso_texture_create(p->ctx, image, wrap, true, out_texture);
-    meso_image_destroy(image);
-    return r;
-}
-
-/* A normal map at a resolved path. */
-static meso_result load_normal_map_file(const scene_parser *p, const scene_key *key,
-                                        const char *path, meso_wrap wrap,
-                                        meso_texture **out_texture) {
-    meso_image *image = NULL;
-    meso_result r = load_map_image(p, key, path, 0, &image);
-    return r == MESO_OK ? make_normal_texture(p, key, image, wrap, out_texture) : r;
-}
-
-/* A normal map the scene names (a resource or a file). */
-static meso_result load_normal_map(const scene_parser *p, const scene_key *key, const char *file,
-                                   meso_wrap wrap, meso_texture **out_texture) {
-    meso_image *image = NULL;
-    meso_encoding encoding; /* normal maps are data: never decoded */
-    meso_result r = load_named_map_image(p, key, file, 0, &image, &encoding);
-    return r == MESO_OK ? make_normal_texture(p, key, image, wrap, out_texture) : r;
+    meso_result r =
+        load_named_map_image(p, key, file, kind == MAP_COLOR ? 4 : 0, &image, &encoding);
+    return r == MESO_OK ? make_map_texture(p, key, image, kind, encoding, wrap, out_texture) : r;
 }
 
 static void append_note(char *text, size_t size, const char *note) {
@@ -502,7 +482,8 @@ static meso_result apply_mesh_material(const scene_parser *p, const cJSON *obj,
                 return scene_error(p, MESO_ERROR_LIMIT, &k, "texture path too long");
             const meso_mesostructure *m = &object->mesostructure;
             meso_wrap wrap = m->kind != MESO_MESOSTRUCTURE_NONE ? m->wrap : MESO_WRAP_REPEAT;
-            meso_result r = load_color_map_file(p, &k, path, wrap, &object->material.color_map);
+            meso_result r =
+                load_map_file(p, &k, path, MAP_COLOR, wrap, &object->material.color_map);
             if (r != MESO_OK) return r;
             append_note(note, note_size, "colour texture used");
         }
@@ -522,7 +503,7 @@ static meso_result apply_mesh_material(const scene_parser *p, const cJSON *obj,
             return scene_error(p, MESO_ERROR_LIMIT, &k, "texture path too long");
         const meso_mesostructure *m = &object->mesostructure;
         meso_wrap wrap = m->kind != MESO_MESOSTRUCTURE_NONE ? m->wrap : MESO_WRAP_REPEAT;
-        meso_result r = load_normal_map_file(p, &k, path, wrap, &object->material.normal_map);
+        meso_result r = load_map_file(p, &k, path, MAP_NORMAL, wrap, &object->material.normal_map);
         if (r != MESO_OK) return r;
         append_note(note, note_size,
                     object->material.normal_map_directx
@@ -570,7 +551,7 @@ static meso_result parse_material(const scene_parser *p, const cJSON *item, cons
     }
     if (normal_map) {
         scene_key k = scene_key_child(key, "normal_map");
-        if ((r = load_normal_map(p, &k, normal_map, wrap, &mat->normal_map))) return r;
+        if ((r = load_named_map(p, &k, normal_map, MAP_NORMAL, wrap, &mat->normal_map))) return r;
     }
     if (!color_map) return MESO_OK;
     scene_key k = scene_key_child(key, "color_map");
@@ -582,7 +563,7 @@ static meso_result parse_material(const scene_parser *p, const cJSON *item, cons
             return r;
         return meso_texture_add_srgb8(p->ctx, mat->color_map);
     }
-    return load_color_map(p, &k, color_map, wrap, &mat->color_map);
+    return load_named_map(p, &k, color_map, MAP_COLOR, wrap, &mat->color_map);
 }
 
 /* ---- Shape and transform ------------------------------------------------------------------ */
