@@ -18,6 +18,9 @@ memory   `meso render SCENE --size 2048x2048 -o x.png` and the same from Python
          Python's baseline (interpreter, NumPy and the package imported, nothing rendered).
 calls    The package's own cost of a frame: renderer.render(out=...) against the bare cffi
          call it makes, on a 16x16 frame, 3000 times each, alternated.
+--callgrind  Instruction counts instead, which machine load does not change (valgrind):
+         libmeso's work in a frame from the program and from Python, and the package's own
+         instructions a frame.
 """
 
 import argparse
@@ -127,6 +130,50 @@ def memory(program, scene_path, technique):
     return program_mb, python_mb, baseline_mb
 
 
+CALLGRIND_FRAMES = r"""
+import sys
+import meso
+from meso._core import lib
+scene = meso.Scene.load(sys.argv[1])
+with scene.renderer(sys.argv[2], threads=1) as renderer:
+    image = renderer.render(None if sys.argv[3] == "scene" else (16, 16))
+    pointer, fb = renderer._handle.ptr, image._framebuffer
+    for _ in range(int(sys.argv[4])):
+        if sys.argv[3] == "bare":
+            lib.meso_renderer_render(pointer, fb)
+        else:
+            renderer.render(out=image)
+"""
+
+
+def instructions(command, toggle=None):
+    """Instructions callgrind counts for `command` (only inside `toggle` when given)."""
+    with tempfile.NamedTemporaryFile() as out:
+        options = [f"--toggle-collect={toggle}"] if toggle else []
+        done = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out.name}",
+                               *options, *command], check=True, capture_output=True, text=True,
+                              env=dict(os.environ, PYTHONHASHSEED="0"))
+    line = next(line for line in done.stderr.splitlines() if "Collected :" in line)
+    return int(line.split(":")[-1])
+
+
+def callgrind(program, scene_path, technique, frames=300):
+    """Instructions, which a loaded machine does not change: libmeso's work in one frame of
+    the scene (inside meso_renderer_render, one thread) from `meso render` and from
+    scene.render; and the package's own per frame: `frames` 16x16 `flat` frames through
+    renderer.render(out=...) against as many bare cffi calls, whole processes counted."""
+    python = [sys.executable, "-c", CALLGRIND_FRAMES, scene_path]
+    in_program = instructions([program, "render", scene_path, "--technique", technique,
+                               "--threads", "1", "-o",
+                               os.path.join(tempfile.gettempdir(), "measure-python.png")],
+                              "meso_renderer_render")
+    in_python = instructions(python + [technique, "scene", "0"], "meso_renderer_render")
+    package = instructions(python + ["flat", "package", str(frames)])
+    bare = instructions(python + ["flat", "bare", str(frames)])
+    again = instructions(python + ["flat", "bare", str(frames)])
+    return in_program, in_python, (package - bare) / frames, abs(again - bare) / frames
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--program", default=os.path.join(SOURCE, "build", "meso"))
@@ -134,7 +181,19 @@ def main():
     parser.add_argument("--frames", type=int, default=30)
     parser.add_argument("--pairs", default="bricks-plane:relief,bricks-plane:flat,"
                         "bumps-sphere:parallax,bricks-teapot:relief")
+    parser.add_argument("--callgrind", action="store_true",
+                        help="instruction counts instead (valgrind; minutes)")
     arguments = parser.parse_args()
+    if arguments.callgrind:
+        bricks = os.path.join(SOURCE, "examples", "bricks-plane.json")
+        in_program, in_python, package, noise = callgrind(arguments.program, bricks, "relief")
+        print(f"bricks-plane relief 512x512, one thread, instructions inside "
+              f"meso_renderer_render: meso render {in_program / 1e6:.3f} M, scene.render "
+              f"{in_python / 1e6:.3f} M ({in_python / in_program - 1:+.4%})")
+        print(f"the package's own instructions a frame: {package:.0f} (between two identical "
+              f"runs: {noise:.0f} a frame); a kept renderer's frame: "
+              f"{(in_python + package) / in_program:.5f}x the program's")
+        return
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"load {os.getloadavg()[0]:.2f}; meso ISA {meso.technique_isa()}")
     print(f"{'scene':14s} {'technique':10s} {'bench ms':>9s} {'python ms':>9s} {'ratio':>6s} "
