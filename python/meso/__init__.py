@@ -3,7 +3,7 @@
     import numpy as np, meso
     heights = np.random.default_rng(1).random((64, 64)).astype(np.float32)
     scene = meso.Scene.from_dict({
-        "objects": [{"shape": {"plane": {}}, "technique": "relief",
+        "objects": [{"shape": "plane", "size": 2, "technique": "relief",
                      "mesostructure": {"height_map": meso.HeightField(heights),
                                        "depth": 0.05}}],
         "lights": [{"type": "directional", "direction": [0.4, 1, 0.3]}]})
@@ -20,6 +20,10 @@ from .compare import compare, load_image
 from .render import Image, Renderer
 from .scene import Camera, Light, Object, Scene
 from .techniques import Option, Technique, technique_isa, techniques
+
+for _name in ("Error", "Warning", "Scene", "Camera", "Light", "Object", "HeightField",
+              "ColorMap", "NormalMap", "TileMesh", "Renderer", "Image"):
+    globals()[_name].__module__ = "meso"  # tracebacks say meso.Error, as the docs do
 
 __version__ = "0.1.0"
 __all__ = ["Error", "Warning", "Scene", "Camera", "Light", "Object", "HeightField",
