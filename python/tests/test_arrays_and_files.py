@@ -25,6 +25,16 @@ def test_numpy_height_map_renders_as_its_16bit_png(tmp_path, cones, technique):
     assert_same_image(from_file, from_array)
 
 
+def test_a_height_fields_wrap_reaches_the_scene(cones):
+    clamped = meso.Scene.from_dict(plane_scene(meso.HeightField(cones, wrap="clamp")))
+    assert clamped.objects[0].mesostructure["wrap"] == "clamp"
+    assert np.array_equal(clamped.objects[0].height_field,
+                          cones.astype(np.float32) * (np.float32(1) / np.float32(65535)))
+    repeated = meso.Scene.from_dict(plane_scene(meso.HeightField(cones)))
+    assert repeated.objects[0].mesostructure["wrap"] == "repeat"
+    assert not np.array_equal(clamped.render("relief").rgb, repeated.render("relief").rgb)
+
+
 def test_uint8_and_float_arrays_read_as_png_values(tmp_path):
     grey8 = (asymmetric_heights() >> 8).astype(np.uint8)
     write_png(tmp_path / "grey8.png", grey8)
