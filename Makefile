@@ -6,7 +6,7 @@ JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
 .PHONY: all deps build demo test test-asan test-clang bench install clean format format-check \
-	docs-check
+	docs-check python
 
 all: build
 
@@ -18,6 +18,12 @@ $(BUILD)/CMakeCache.txt: | deps
 
 build: deps $(BUILD)/CMakeCache.txt
 	cmake --build $(BUILD) -j $(JOBS)
+
+# The Python package (docs/python.md) in $(BUILD)/python, over $(BUILD)/libmeso.so: what the
+# tests import (PYTHONPATH=$(BUILD)/python). `make build` makes it too, unless -DMESO_PYTHON=OFF.
+python: deps $(BUILD)/CMakeCache.txt
+	cmake --build $(BUILD) -j $(JOBS) --target meso_python
+	@echo "make python: PYTHONPATH=$(CURDIR)/$(BUILD)/python /usr/bin/python3 -c 'import meso'"
 
 demo: build
 	$(BUILD)/meso demo -o demo

@@ -22,6 +22,8 @@ packages=(
     libegl-mesa0 libgl1-mesa-dri   # Mesa's EGL and llvmpipe: GL 3.3 core without a GPU
     glslang-tools         # glslangValidator checks shaders/ in make test
     libopenexr-dev        # meso bake -o: VDM tables as OpenEXR
+    python3-cffi python3-dev python3-setuptools   # the Python package (python/, cffi API mode)
+    python3-numpy python3-pytest python3-matplotlib   # its tests and examples (docs/python.md)
 )
 
 missing=()

@@ -28,6 +28,10 @@ extern "C" {
 
 /* ---- Framebuffers ------------------------------------------------------------------------- */
 
+/* Made by meso_framebuffer_create, or by the caller around its own arrays (colour 3 floats a
+ * pixel, coverage and depth 1, rows packed; any alignment, 64 bytes is what create uses):
+ * renderers and the save functions only read and write through the pointers, never free or
+ * replace them (the Python package draws into NumPy's arrays so, docs/python.md). */
 typedef struct meso_framebuffer {
     int width, height;
     float *color;    /* RGB linear, 3 floats a pixel, row 0 at the top; background where empty */

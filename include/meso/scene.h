@@ -124,6 +124,39 @@ meso_result meso_scene_load(meso_context *ctx, const char *path, meso_scene **ou
 /* Parse scene text; `name` is used in messages, `base_dir` resolves relative paths (NULL: "."). */
 meso_result meso_scene_parse(meso_context *ctx, const char *json, const char *name,
                              const char *base_dir, meso_scene **out_scene);
+
+/* Data a scene's text names in place of a file, for programs that hold their pictures and
+ * tile meshes in memory (the Python package hands over NumPy arrays this way, docs/python.md).
+ * A string value of "height_map", "color_map", "normal_map" or a tile-mesh "solid" that equals
+ * a resource's `name` takes the resource instead of a file: the same conversions follow as for
+ * a file (a height map's luminance, a colour map's sRGB decoding, the memory budget). */
+typedef struct meso_scene_resource {
+    const char *name; /* matched exactly against the scene's string, before path resolution */
+    /* height_map, color_map, normal_map: values as a PNG loads them ([0, 1]; 1-4 channels) */
+    const meso_image *image;
+    meso_encoding encoding; /* a colour map's: sRGB (default) is decoded, linear kept as is */
+    /* a tile-mesh "solid" (meso_solid_create_from_triangles): 3 indices a triangle */
+    const meso_vec3 *positions;
+    size_t num_vertices;
+    const uint32_t *indices;
+    size_t num_triangles;
+} meso_scene_resource;
+
+typedef struct meso_scene_desc {
+    const char *json;     /* the scene text */
+    const char *name;     /* used in messages (NULL: "scene") */
+    const char *base_dir; /* relative paths resolve against it (NULL: ".") */
+    const meso_scene_resource *resources;
+    size_t num_resources;
+} meso_scene_desc;
+
+/* Make a scene from desc's text, as meso_scene_parse does, with desc's resources standing in
+ * for the files they name. desc and the resources are read during the call only (images and
+ * arrays are copied). Returns as meso_scene_parse; a resource of the wrong kind for its key
+ * (an image given as a tile mesh, or the reverse) is MESO_ERROR_FORMAT naming the key.
+ * Threads: safe on different contexts at once. */
+meso_result meso_scene_create(meso_context *ctx, const meso_scene_desc *desc,
+                              meso_scene **out_scene);
 void meso_scene_destroy(meso_scene *scene);
 
 #ifdef __cplusplus

@@ -15,7 +15,12 @@ typedef struct scene_parser {
     const char *file;          /* the scene's name in messages */
     const char *base_dir;      /* relative paths resolve against it */
     uint64_t *memory_estimate; /* bytes the objects parsed so far need (the memory budget) */
+    const meso_scene_resource *resources; /* in-memory data named in place of files */
+    size_t num_resources;
 } scene_parser;
+
+/* The resource called `name`, or NULL (then `name` is a file). */
+const meso_scene_resource *scene_find_resource(const scene_parser *p, const char *name);
 
 /* A key path: "" at the top, "objects[0]", "objects[0].material". */
 typedef struct scene_key {

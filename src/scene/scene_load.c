@@ -210,25 +210,45 @@ meso_result scene_account_memory(const scene_parser *p, const scene_key *key, ui
     return meso_memory_check(p->ctx, name, *p->memory_estimate);
 }
 
-meso_result meso_scene_parse(meso_context *ctx, const char *json, const char *name,
-                             const char *base_dir, meso_scene **out_scene) {
+const meso_scene_resource *scene_find_resource(const scene_parser *p, const char *name) {
+    for (size_t i = 0; i < p->num_resources; i++)
+        if (p->resources[i].name && strcmp(p->resources[i].name, name) == 0)
+            return &p->resources[i];
+    return NULL;
+}
+
+meso_result meso_scene_create(meso_context *ctx, const meso_scene_desc *desc,
+                              meso_scene **out_scene) {
     *out_scene = NULL;
-    if (!name) name = "scene";
-    if (!base_dir || !base_dir[0]) base_dir = ".";
-    if (!json) return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: no scene text", name);
+    const char *name = desc && desc->name ? desc->name : "scene";
+    const char *base_dir = desc && desc->base_dir && desc->base_dir[0] ? desc->base_dir : ".";
+    if (!desc || !desc->json)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: no scene text", name);
+    if (desc->num_resources > 0 && !desc->resources)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: NULL resources", name);
     uint64_t memory_estimate = 0;
-    scene_parser p = {
-        .ctx = ctx, .file = name, .base_dir = base_dir, .memory_estimate = &memory_estimate};
+    scene_parser p = {.ctx = ctx,
+                      .file = name,
+                      .base_dir = base_dir,
+                      .memory_estimate = &memory_estimate,
+                      .resources = desc->resources,
+                      .num_resources = desc->num_resources};
     meso_scene *scene = calloc(1, sizeof(*scene));
     if (!scene) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", name);
     snprintf(scene->path, sizeof(scene->path), "%s", name);
-    meso_result r = parse_document(&p, json, scene);
+    meso_result r = parse_document(&p, desc->json, scene);
     if (r != MESO_OK) {
         meso_scene_destroy(scene);
         return r;
     }
     *out_scene = scene;
     return MESO_OK;
+}
+
+meso_result meso_scene_parse(meso_context *ctx, const char *json, const char *name,
+                             const char *base_dir, meso_scene **out_scene) {
+    const meso_scene_desc desc = {.json = json, .name = name, .base_dir = base_dir};
+    return meso_scene_create(ctx, &desc, out_scene);
 }
 
 meso_result meso_scene_load(meso_context *ctx, const char *path, meso_scene **out_scene) {

@@ -281,12 +281,22 @@ static meso_result parse_height_map_or_solid(const scene_parser *p, const cJSON 
         if (!cJSON_IsString(height_map))
             return scene_error(p, MESO_ERROR_FORMAT, &k,
                                "must be a PNG path or {\"procedural\": NAME, ...}");
-        char path[SCENE_PATH_MAX];
-        if ((r = scene_resolve_path(p, &k, height_map->valuestring, path)) ||
-            (r = scene_check_readable(p, &k, path)))
-            return r;
-        r = meso_heightfield_load_png(p->ctx, path, m->wrap, &m->height_field);
-        if (r != MESO_OK) return scene_relog_at_key(p, &k, r);
+        const meso_scene_resource *resource = scene_find_resource(p, height_map->valuestring);
+        if (resource) {
+            if (!resource->image)
+                return scene_error(p, MESO_ERROR_FORMAT, &k, "'%s' is not an image",
+                                   resource->name);
+            r = meso_heightfield_create_from_image(p->ctx, resource->image, m->wrap,
+                                                   &m->height_field);
+            if (r != MESO_OK) return scene_relog_at_key(p, &k, r);
+        } else {
+            char path[SCENE_PATH_MAX];
+            if ((r = scene_resolve_path(p, &k, height_map->valuestring, path)) ||
+                (r = scene_check_readable(p, &k, path)))
+                return r;
+            r = meso_heightfield_load_png(p->ctx, path, m->wrap, &m->height_field);
+            if (r != MESO_OK) return scene_relog_at_key(p, &k, r);
+        }
         uint64_t texels = (uint64_t)m->height_field->width * (uint64_t)m->height_field->height;
         if ((r = scene_account_memory(p, &k, 4 * texels)) != MESO_OK) return r;
         snprintf(m->source, sizeof(m->source), "%s", base_name(height_map->valuestring));
@@ -299,6 +309,18 @@ static meso_result parse_height_map_or_solid(const scene_parser *p, const cJSON 
                    ? parse_impostor_solid(p, solid, &k, object)
                    : parse_procedural_solid(p, solid, &k, object);
     if (cJSON_IsString(solid)) { /* a tile mesh (docs/design.md: x, y -> u, v; z -> 1 - w) */
+        const meso_scene_resource *resource = scene_find_resource(p, solid->valuestring);
+        if (resource) {
+            if (!resource->positions || !resource->indices)
+                return scene_error(p, MESO_ERROR_FORMAT, &k, "'%s' is not a tile mesh",
+                                   resource->name);
+            r = meso_solid_create_from_triangles(
+                p->ctx, resource->positions, resource->num_vertices, resource->indices,
+                resource->num_triangles, resource->name, 0, &m->solid);
+            if (r != MESO_OK) return r;
+            snprintf(m->source, sizeof(m->source), "%s", resource->name);
+            return MESO_OK;
+        }
         char path[SCENE_PATH_MAX];
         if ((r = scene_resolve_path(p, &k, solid->valuestring, path)) ||
             (r = scene_check_readable(p, &k, path)))
@@ -341,52 +363,83 @@ static meso_result load_map_image(const scene_parser *p, const scene_key *key, c
     return MESO_OK;
 }
 
-/* A colour map at a resolved path, converted from sRGB to linear; with its 8-bit sRGB copy
- * (4 bytes a texel). */
-static meso_result load_color_map_file(const scene_parser *p, const scene_key *key,
-                                       const char *path, meso_wrap wrap,
-                                       meso_texture **out_texture) {
-    meso_image *image = NULL;
-    meso_result r = load_map_image(p, key, path, 4, &image);
-    if (r != MESO_OK) return r;
-    /* Colour maps are authored in sRGB; shading is linear (docs/design.md). Alpha stays linear. */
-    int colour_channels = image->channels >= 3 ? 3 : 1;
-    size_t n = (size_t)image->width * (size_t)image->height;
-    for (size_t t = 0; t < n; t++)
-        for (int c = 0; c < colour_channels; c++) {
-            float *value = &image->pixels[t * (size_t)image->channels + (size_t)c];
-            *value = meso_srgb_to_linear(*value);
-        }
-    r = meso_texture_create(p->ctx, image, wrap, true, out_texture);
-    meso_image_destroy(image);
-    if (r == MESO_OK) r = meso_texture_add_srgb8(p->ctx, *out_texture);
-    return r;
+/* A map the scene names: its resource's image (copied, its memory accounted as a file's),
+ * or the PNG at the path resolved against the scene's folder. *out_encoding is the resource's
+ * encoding, sRGB for a file. */
+static meso_result load_named_map_image(const scene_parser *p, const scene_key *key,
+                                        const char *file, uint64_t extra_per_texel,
+                                        meso_image **out_image, meso_encoding *out_encoding) {
+    *out_image = NULL;
+    *out_encoding = MESO_ENCODING_SRGB;
+    const meso_scene_resource *resource = scene_find_resource(p, file);
+    if (!resource) {
+        char path[SCENE_PATH_MAX];
+        meso_result r = scene_resolve_path(p, key, file, path);
+        return r == MESO_OK ? load_map_image(p, key, path, extra_per_texel, out_image) : r;
+    }
+    if (!resource->image)
+        return scene_error(p, MESO_ERROR_FORMAT, key, "'%s' is not an image", resource->name);
+    const meso_image *image = resource->image;
+    uint64_t texels = (uint64_t)image->width * (uint64_t)image->height;
+    uint64_t image_bytes = texels * (uint64_t)image->channels * sizeof(float);
+    meso_result r =
+        scene_account_memory(p, key, image_bytes + image_bytes / 3 * 4 + texels * extra_per_texel);
+    if (r == MESO_OK) r = meso_image_clone(p->ctx, image, out_image);
+    if (r != MESO_OK) return scene_relog_at_key(p, key, r);
+    *out_encoding = resource->encoding;
+    return MESO_OK;
 }
 
-static meso_result load_color_map(const scene_parser *p, const scene_key *key, const char *file,
-                                  meso_wrap wrap, meso_texture **out_texture) {
-    char path[SCENE_PATH_MAX];
-    meso_result r = scene_resolve_path(p, key, file, path);
-    return r == MESO_OK ? load_color_map_file(p, key, path, wrap, out_texture) : r;
-}
+typedef enum map_kind {
+    MAP_COLOR,  /* authored in sRGB (decoded unless a resource says linear), alpha linear */
+    MAP_NORMAL, /* data: RGB, x, y, z in [-1, 1] as 2 c - 1, never decoded */
+} map_kind;
 
-/* A normal map at a resolved path: linear (no sRGB decoding), RGB (x, y, z in [-1, 1] as
- * 2 c - 1). */
-static meso_result load_normal_map_file(const scene_parser *p, const scene_key *key,
-                                        const char *path, meso_wrap wrap,
-                                        meso_texture **out_texture) {
-    meso_image *image = NULL;
-    meso_result r = load_map_image(p, key, path, 0, &image);
-    if (r != MESO_OK) return r;
-    if (image->channels < 3) {
+/* A colour or normal map's texture from its image (consumed); a colour map gets its 8-bit
+ * sRGB copy (4 bytes a texel). */
+static meso_result make_map_texture(const scene_parser *p, const scene_key *key, meso_image *image,
+                                    map_kind kind, meso_encoding encoding, meso_wrap wrap,
+                                    meso_texture **out_texture) {
+    if (kind == MAP_NORMAL && image->channels < 3) {
         int channels = image->channels;
         meso_image_destroy(image);
         return scene_error(p, MESO_ERROR_FORMAT, key,
                            "a normal map needs RGB channels (this PNG has %d)", channels);
     }
-    r = meso_texture_create(p->ctx, image, wrap, true, out_texture);
+    /* Colour maps are authored in sRGB; shading is linear (docs/design.md). Alpha stays linear. */
+    if (kind == MAP_COLOR && encoding != MESO_ENCODING_LINEAR) {
+        int colour_channels = image->channels >= 3 ? 3 : 1;
+        size_t n = (size_t)image->width * (size_t)image->height;
+        for (size_t t = 0; t < n; t++)
+            for (int c = 0; c < colour_channels; c++) {
+                float *value = &image->pixels[t * (size_t)image->channels + (size_t)c];
+                *value = meso_srgb_to_linear(*value);
+            }
+    }
+    meso_result r = meso_texture_create(p->ctx, image, wrap, true, out_texture);
     meso_image_destroy(image);
+    if (r == MESO_OK && kind == MAP_COLOR) r = meso_texture_add_srgb8(p->ctx, *out_texture);
     return r;
+}
+
+/* A map at a resolved path (a mesh file's own textures). */
+static meso_result load_map_file(const scene_parser *p, const scene_key *key, const char *path,
+                                 map_kind kind, meso_wrap wrap, meso_texture **out_texture) {
+    meso_image *image = NULL;
+    meso_result r = load_map_image(p, key, path, kind == MAP_COLOR ? 4 : 0, &image);
+    return r == MESO_OK
+               ? make_map_texture(p, key, image, kind, MESO_ENCODING_SRGB, wrap, out_texture)
+               : r;
+}
+
+/* A map the scene names: a resource or a file beside the scene. */
+static meso_result load_named_map(const scene_parser *p, const scene_key *key, const char *file,
+                                  map_kind kind, meso_wrap wrap, meso_texture **out_texture) {
+    meso_image *image = NULL;
+    meso_encoding encoding;
+    meso_result r =
+        load_named_map_image(p, key, file, kind == MAP_COLOR ? 4 : 0, &image, &encoding);
+    return r == MESO_OK ? make_map_texture(p, key, image, kind, encoding, wrap, out_texture) : r;
 }
 
 static void append_note(char *text, size_t size, const char *note) {
@@ -429,7 +482,8 @@ static meso_result apply_mesh_material(const scene_parser *p, const cJSON *obj,
                 return scene_error(p, MESO_ERROR_LIMIT, &k, "texture path too long");
             const meso_mesostructure *m = &object->mesostructure;
             meso_wrap wrap = m->kind != MESO_MESOSTRUCTURE_NONE ? m->wrap : MESO_WRAP_REPEAT;
-            meso_result r = load_color_map_file(p, &k, path, wrap, &object->material.color_map);
+            meso_result r =
+                load_map_file(p, &k, path, MAP_COLOR, wrap, &object->material.color_map);
             if (r != MESO_OK) return r;
             append_note(note, note_size, "colour texture used");
         }
@@ -449,7 +503,7 @@ static meso_result apply_mesh_material(const scene_parser *p, const cJSON *obj,
             return scene_error(p, MESO_ERROR_LIMIT, &k, "texture path too long");
         const meso_mesostructure *m = &object->mesostructure;
         meso_wrap wrap = m->kind != MESO_MESOSTRUCTURE_NONE ? m->wrap : MESO_WRAP_REPEAT;
-        meso_result r = load_normal_map_file(p, &k, path, wrap, &object->material.normal_map);
+        meso_result r = load_map_file(p, &k, path, MAP_NORMAL, wrap, &object->material.normal_map);
         if (r != MESO_OK) return r;
         append_note(note, note_size,
                     object->material.normal_map_directx
@@ -497,10 +551,7 @@ static meso_result parse_material(const scene_parser *p, const cJSON *item, cons
     }
     if (normal_map) {
         scene_key k = scene_key_child(key, "normal_map");
-        char path[SCENE_PATH_MAX];
-        if ((r = scene_resolve_path(p, &k, normal_map, path)) ||
-            (r = load_normal_map_file(p, &k, path, wrap, &mat->normal_map)))
-            return r;
+        if ((r = load_named_map(p, &k, normal_map, MAP_NORMAL, wrap, &mat->normal_map))) return r;
     }
     if (!color_map) return MESO_OK;
     scene_key k = scene_key_child(key, "color_map");
@@ -512,7 +563,7 @@ static meso_result parse_material(const scene_parser *p, const cJSON *item, cons
             return r;
         return meso_texture_add_srgb8(p->ctx, mat->color_map);
     }
-    return load_color_map(p, &k, color_map, wrap, &mat->color_map);
+    return load_named_map(p, &k, color_map, MAP_COLOR, wrap, &mat->color_map);
 }
 
 /* ---- Shape and transform ------------------------------------------------------------------ */
