@@ -630,6 +630,15 @@ static meso_result build_mesh(const scene_parser *p, const cJSON *obj, const sce
         (r = create_mesh(p, obj, key, &object->mesh, &from_file, mesh_path)) ||
         (mesh_path[0] && (r = apply_mesh_material(p, obj, key, mesh_path, &from_file, object))))
         return r;
+    bool require_uvs =
+        object->mesostructure.kind != MESO_MESOSTRUCTURE_NONE || object->material.color_map != NULL;
+    /* The transform is a uniform scale times a rotation: its scale is the length of a column. */
+    float world_per_mesh_unit =
+        sqrtf(transform.m[0] * transform.m[0] + transform.m[1] * transform.m[1] +
+              transform.m[2] * transform.m[2]);
+    if ((r = scene_texture_coordinates(p, obj, key, mesh_path, require_uvs, world_per_mesh_unit,
+                                       object)))
+        return r;
     meso_mesh *mesh = object->mesh;
     meso_mesh_transform(mesh, transform);
     float offset = object->mesostructure.offset; /* "height": place the shell (see above) */
@@ -640,8 +649,6 @@ static meso_result build_mesh(const scene_parser *p, const cJSON *obj, const sce
         meso_mesh_scale_uvs(mesh, uv_scale);
         if ((r = check_texture_coordinates(p, key, mesh)) != MESO_OK) return r;
     }
-    bool require_uvs =
-        object->mesostructure.kind != MESO_MESOSTRUCTURE_NONE || object->material.color_map != NULL;
     char label[SCENE_KEY_MAX + 1100];
     snprintf(label, sizeof(label), "%s: %s", p->file, key->text);
     if ((r = meso_mesh_validate(p->ctx, mesh, label, require_uvs))) return r;
@@ -722,10 +729,22 @@ static bool wants_generated_color(const cJSON *obj) {
 
 meso_result scene_parse_object(const scene_parser *p, const cJSON *item, int index,
                                meso_object *object) {
-    static const char *const keys[] = {
-        "name",      "shape",    "size",     "minor_radius",  "height",    "segments",
-        "transform", "uv_scale", "material", "mesostructure", "technique", "technique_options",
-        NULL};
+    static const char *const keys[] = {"name",
+                                       "shape",
+                                       "size",
+                                       "minor_radius",
+                                       "height",
+                                       "segments",
+                                       "transform",
+                                       "uv_scale",
+                                       "uv_projection",
+                                       "uv_projection_scale",
+                                       "uv_projection_axis",
+                                       "material",
+                                       "mesostructure",
+                                       "technique",
+                                       "technique_options",
+                                       NULL};
     scene_key objects = {"objects"};
     scene_key key = scene_key_index(&objects, index);
     meso_image *generated_color = NULL;
