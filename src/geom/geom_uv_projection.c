@@ -14,8 +14,7 @@
 
 #include "geom_internal.h"
 
-static const char *const projection_names[] = {"none", "box", "cylindrical", "spherical",
-                                               "planar"};
+static const char *const projection_names[] = {"none", "box", "cylindrical", "spherical", "planar"};
 
 bool meso_uv_projection_kind_from_name(const char *name, meso_uv_projection_kind *out_kind) {
     for (int k = MESO_UV_PROJECTION_BOX; k <= MESO_UV_PROJECTION_PLANAR; k++)
@@ -43,8 +42,7 @@ bool geom_uv_jacobian_is_degenerate(meso_vec2 t0, meso_vec2 t1, meso_vec2 t2) {
                                         (double)t2.x - t0.x, (double)t2.y - t0.y);
 }
 
-void meso_mesh_degenerate_uvs(const meso_mesh *mesh, size_t *out_count,
-                              double *out_area_fraction) {
+void meso_mesh_degenerate_uvs(const meso_mesh *mesh, size_t *out_count, double *out_area_fraction) {
     size_t count = 0;
     double degenerate_area = 0.0, total_area = 0.0;
     for (size_t t = 0; mesh->uvs && t < mesh->num_triangles; t++) {
@@ -96,12 +94,18 @@ static int box_chart(meso_vec3 face_normal) {
 
 static meso_vec2 box_uv(meso_vec3 d, int chart) {
     switch (chart) {
-    case 0: return (meso_vec2){-d.z, d.y};
-    case 1: return (meso_vec2){d.z, d.y};
-    case 2: return (meso_vec2){d.x, -d.z};
-    case 3: return (meso_vec2){d.x, d.z};
-    case 4: return (meso_vec2){d.x, d.y};
-    default: return (meso_vec2){-d.x, d.y};
+    case 0:
+        return (meso_vec2){-d.z, d.y};
+    case 1:
+        return (meso_vec2){d.z, d.y};
+    case 2:
+        return (meso_vec2){d.x, -d.z};
+    case 3:
+        return (meso_vec2){d.x, d.z};
+    case 4:
+        return (meso_vec2){d.x, d.y};
+    default:
+        return (meso_vec2){-d.x, d.y};
     }
 }
 
@@ -120,8 +124,7 @@ static int project_triangle(const projector *pr, size_t t, meso_vec2 out[3]) {
     meso_vec3 p[3];
     for (int k = 0; k < 3; k++) p[k] = mesh->positions[tri[k]];
     if (pr->kind == MESO_UV_PROJECTION_BOX) {
-        meso_vec3 face =
-            meso_vec3_cross(meso_vec3_sub(p[1], p[0]), meso_vec3_sub(p[2], p[0]));
+        meso_vec3 face = meso_vec3_cross(meso_vec3_sub(p[1], p[0]), meso_vec3_sub(p[2], p[0]));
         int chart = box_chart(face);
         for (int k = 0; k < 3; k++) {
             meso_vec2 uv = box_uv(meso_vec3_sub(p[k], pr->centre), chart);
@@ -164,8 +167,8 @@ static int project_triangle(const projector *pr, size_t t, meso_vec2 out[3]) {
         if (pr->kind == MESO_UV_PROJECTION_CYLINDRICAL) {
             v = q[k].y * pr->inv_scale;
         } else {
-            double r = sqrt((double)q[k].x * q[k].x + (double)q[k].y * q[k].y +
-                            (double)q[k].z * q[k].z);
+            double r =
+                sqrt((double)q[k].x * q[k].x + (double)q[k].y * q[k].y + (double)q[k].z * q[k].z);
             double polar = r > 0.0 ? acos(fmax(-1.0, fmin(1.0, -q[k].y / r))) : 0.0;
             v = polar / MESO_PI * pr->tiles_pole; /* 0 at the south pole (-y'), as the sphere */
         }
@@ -185,8 +188,8 @@ static double mean_radius(const projector *pr) {
         for (int k = 0; k < 3; k++)
             c = meso_vec3_add(c, to_axis_frame(mesh->positions[tri[k]], pr->centre, pr->axis));
         c = meso_vec3_scale(c, 1.0f / 3.0f);
-        double r = pr->kind == MESO_UV_PROJECTION_CYLINDRICAL ? hypot(c.x, c.z)
-                                                               : meso_vec3_length(c);
+        double r =
+            pr->kind == MESO_UV_PROJECTION_CYLINDRICAL ? hypot(c.x, c.z) : meso_vec3_length(c);
         double area = geom_triangle_double_area(mesh, t);
         sum += area * r;
         weight += area;
@@ -235,8 +238,8 @@ meso_result meso_mesh_project_uvs(meso_context *ctx, meso_mesh *mesh,
     /* Every corner may become a vertex of its own: checked before allocating. */
     meso_result r = geom_check_counts(ctx, "mesh", corners, nt);
     if (r != MESO_OK) return r;
-    projector pr = {mesh, projection->kind, projection->axis, {0, 0, 0},
-                    1.0f / projection->scale, 1.0, 1.0};
+    projector pr = {
+        mesh, projection->kind, projection->axis, {0, 0, 0}, 1.0f / projection->scale, 1.0, 1.0};
     meso_vec3 lo, hi;
     meso_mesh_bounds(mesh, &lo, &hi);
     pr.centre = meso_vec3_scale(meso_vec3_add(lo, hi), 0.5f);

@@ -49,17 +49,16 @@ static meso_result parse_projection(const scene_parser *p, const cJSON *obj, con
             return scene_error(p, MESO_ERROR_FORMAT, &k,
                                "does not apply to \"box\" (it projects along all three axes)");
         if (strlen(axis) != 1 || !strchr("xyz", axis[0]))
-            return scene_error(p, MESO_ERROR_FORMAT, &k, "must be \"x\", \"y\" or \"z\", not \"%s\"",
-                               axis);
+            return scene_error(p, MESO_ERROR_FORMAT, &k,
+                               "must be \"x\", \"y\" or \"z\", not \"%s\"", axis);
         out->axis = axis[0] - 'x';
     }
     return MESO_OK;
 }
 
-meso_result scene_texture_coordinates(const scene_parser *p, const cJSON *obj,
-                                      const scene_key *key, const char *mesh_file,
-                                      bool needs_uvs, float world_per_mesh_unit,
-                                      meso_object *object) {
+meso_result scene_texture_coordinates(const scene_parser *p, const cJSON *obj, const scene_key *key,
+                                      const char *mesh_file, bool needs_uvs,
+                                      float world_per_mesh_unit, meso_object *object) {
     meso_uv_projection projection;
     float world_scale;
     meso_result r = parse_projection(p, obj, key, &projection, &world_scale);
@@ -84,8 +83,7 @@ meso_result scene_texture_coordinates(const scene_parser *p, const cJSON *obj,
             snprintf(out, out_size, "%s", owner);
             if (degenerate)
                 snprintf(out + strlen(out), out_size - strlen(out),
-                         " (degenerate on %zu of %zu triangles)", degenerate,
-                         mesh->num_triangles);
+                         " (degenerate on %zu of %zu triangles)", degenerate, mesh->num_triangles);
             return MESO_OK;
         }
         if (!mesh->uvs && !needs_uvs) {
@@ -124,9 +122,9 @@ meso_result scene_texture_coordinates(const scene_parser *p, const cJSON *obj,
     if (r != MESO_OK) return scene_relog_at_key(p, key, r);
     /* The split vertices count against the memory budget like the file's own. */
     if (mesh->num_vertices > vertices_before &&
-        (r = scene_account_memory(p, key,
-                                  meso_mesh_memory_estimate(mesh->num_vertices - vertices_before,
-                                                            0))) != MESO_OK)
+        (r = scene_account_memory(
+             p, key, meso_mesh_memory_estimate(mesh->num_vertices - vertices_before, 0))) !=
+            MESO_OK)
         return r;
     static const char *const axis_names[] = {" along x", " along y", " along z"};
     snprintf(out, out_size, "%s projection%s, %g world units a tile (%s)",
@@ -142,8 +140,8 @@ meso_result scene_texture_coordinates(const scene_parser *p, const cJSON *obj,
                          "mesostructure is smeared across them",
                          p->file, key->text, meso_uv_projection_kind_name(projection.kind),
                          degenerate, mesh->num_triangles, 100.0 * degenerate_area);
-        snprintf(out + strlen(out), out_size - strlen(out),
-                 ", degenerate on %zu of %zu triangles", degenerate, mesh->num_triangles);
+        snprintf(out + strlen(out), out_size - strlen(out), ", degenerate on %zu of %zu triangles",
+                 degenerate, mesh->num_triangles);
     }
     return MESO_OK;
 }

@@ -126,7 +126,8 @@ static void test_a_mesh_without_uvs_and_nothing_to_map_keeps_none(void **state) 
     const char *path = test_path(dir, "plain.obj");
     test_write_file(path, tetrahedron, strlen(tetrahedron));
     meso_scene *scene = NULL;
-    assert_int_equal(meso_scene_parse(ctx, "{\"objects\": [{\"shape\": {\"file\": \"plain.obj\"}}]}",
+    assert_int_equal(meso_scene_parse(ctx,
+                                      "{\"objects\": [{\"shape\": {\"file\": \"plain.obj\"}}]}",
                                       "scene.json", dir, &scene),
                      MESO_OK);
     assert_null(scene->objects[0].mesh->uvs);
