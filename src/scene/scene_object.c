@@ -601,7 +601,7 @@ static meso_result create_mesh(const scene_parser *p, const cJSON *obj, const sc
 #define MAX_TEXTURE_COORDINATE 65536.0f
 
 static meso_result check_texture_coordinates(const scene_parser *p, const scene_key *key,
-                                             const meso_mesh *mesh) {
+                                             const meso_mesh *mesh, const char *cause) {
     float largest = 0.0f;
     for (size_t i = 0; i < mesh->num_vertices; i++) {
         float u = fabsf(mesh->uvs[i].x), v = fabsf(mesh->uvs[i].y);
@@ -609,7 +609,7 @@ static meso_result check_texture_coordinates(const scene_parser *p, const scene_
         largest = v > largest ? v : largest;
     }
     if (largest <= MAX_TEXTURE_COORDINATE) return MESO_OK; /* NaN is refused by validation */
-    scene_key k = scene_key_child(key, "uv_scale");
+    scene_key k = scene_key_child(key, cause);
     return scene_error(p, MESO_ERROR_LIMIT, &k,
                        "scaled texture coordinates reach %g, beyond the limit %g", (double)largest,
                        (double)MAX_TEXTURE_COORDINATE);
@@ -647,7 +647,12 @@ static meso_result build_mesh(const scene_parser *p, const cJSON *obj, const sce
             mesh->positions[v] = meso_vec3_madd(mesh->positions[v], mesh->normals[v], offset);
     if (mesh->uvs) {
         meso_mesh_scale_uvs(mesh, uv_scale);
-        if ((r = check_texture_coordinates(p, key, mesh)) != MESO_OK) return r;
+        /* a tiny "uv_projection_scale" makes large coordinates as surely as a large uv_scale */
+        bool projected = strstr(object->texture_coordinates, "projection") != NULL;
+        const char *cause = projected && uv_scale.x == 1.0f && uv_scale.y == 1.0f
+                                ? "uv_projection_scale"
+                                : "uv_scale";
+        if ((r = check_texture_coordinates(p, key, mesh, cause)) != MESO_OK) return r;
     }
     char label[SCENE_KEY_MAX + 1100];
     snprintf(label, sizeof(label), "%s: %s", p->file, key->text);

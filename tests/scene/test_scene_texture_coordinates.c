@@ -120,6 +120,20 @@ static void test_bad_projection_keys_are_refused_naming_them(void **state) {
     }
 }
 
+static void test_a_tiny_projection_scale_is_refused_naming_it(void **state) {
+    meso_context *ctx = test_context(1);
+    meso_scene *scene = NULL;
+    /* 2 units across in tiles of 1e-6: coordinates of 1e6, beyond the limit of 65536. */
+    assert_int_equal(parse(ctx, tetrahedron,
+                           "\"uv_projection\": \"box\", \"uv_projection_scale\": 1e-6, ", &scene),
+                     MESO_ERROR_LIMIT);
+    assert_null(scene);
+    if (!strstr(meso_context_last_error(ctx), "objects[0].uv_projection_scale: scaled texture "
+                                              "coordinates reach"))
+        fail_msg("%s", meso_context_last_error(ctx));
+    meso_context_destroy(ctx);
+}
+
 static void test_a_mesh_without_uvs_and_nothing_to_map_keeps_none(void **state) {
     meso_context *ctx = test_context(1);
     const char *dir = test_temp_dir();
@@ -142,6 +156,7 @@ int main(void) {
         cmocka_unit_test(test_degenerate_uvs_are_replaced_the_same_way),
         cmocka_unit_test(test_an_asked_projection_scales_with_the_transform),
         cmocka_unit_test(test_bad_projection_keys_are_refused_naming_them),
+        cmocka_unit_test(test_a_tiny_projection_scale_is_refused_naming_it),
         cmocka_unit_test(test_a_mesh_without_uvs_and_nothing_to_map_keeps_none),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
