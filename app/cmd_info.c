@@ -111,6 +111,23 @@ static meso_result info_mesh(meso_context *ctx, const char *path) {
     if (result == MESO_OK) {
         printf("mesh: %s\n", path);
         print_mesh(mesh, "");
+        /* what a scene does with them (docs/scene-format.md, "uv_projection") */
+        size_t degenerate = 0;
+        double degenerate_area = 0.0;
+        meso_mesh_degenerate_uvs(mesh, &degenerate, &degenerate_area);
+        if (!mesh->uvs)
+            printf("texture coordinates: none (a scene projects them: \"uv_projection\", "
+                   "\"box\" unless it says otherwise)\n");
+        else if (degenerate_area > MESO_MESH_MOSTLY_DEGENERATE_UVS)
+            printf("texture coordinates: degenerate on %zu of %zu triangles (%.1f %% of the "
+                   "area): a scene treats them as none (\"uv_projection\")\n",
+                   degenerate, mesh->num_triangles, 100.0 * degenerate_area);
+        else if (degenerate)
+            printf("texture coordinates: the file's, degenerate on %zu of %zu triangles (%.1f %% "
+                   "of the area)\n",
+                   degenerate, mesh->num_triangles, 100.0 * degenerate_area);
+        else
+            printf("texture coordinates: the file's\n");
         /* what a scene using this file would take from it (docs/scene-format.md) */
         printf("material:");
         if (material.has_color)
@@ -213,6 +230,8 @@ static meso_result info_scene(meso_context *ctx, const char *path) {
         const meso_object *o = &scene->objects[i];
         printf("  [%d] %s\n", i, o->name);
         if (o->mesh) print_mesh(o->mesh, "      ");
+        if (o->texture_coordinates[0])
+            printf("      texture coordinates: %s\n", o->texture_coordinates);
         print_vec3("      material: albedo ", o->material.albedo);
         if (o->material.color_map && o->material.color_map->levels[0])
             printf(", colour map %dx%d", o->material.color_map->levels[0]->width,

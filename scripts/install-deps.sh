@@ -9,6 +9,7 @@ packages=(
     libstb-dev            # Radiance .hdr environment maps (stb_image)
     libcjson-dev          # scene files
     libassimp-dev         # mesh import
+    assimp-testmodels     # make test-assets: assimp's own corpus of models nobody here made
     libembree-dev         # reference ray tracer (Embree 3)
     liblapacke-dev libopenblas-dev   # SVD (VDM / GDM compression)
     libcmocka-dev         # tests

@@ -154,6 +154,48 @@ meso_result meso_mesh_compute_curvature(meso_context *ctx, meso_mesh *mesh);
  * frame (Oliveira & Policarpo 2005). Needs tangents. */
 meso_result meso_mesh_compute_quadrics(meso_context *ctx, meso_mesh *mesh);
 
+/* ---- Projected texture coordinates (docs/shapes.md, "Projected texture coordinates") ---- */
+
+typedef enum meso_uv_projection_kind {
+    MESO_UV_PROJECTION_NONE = 0,
+    MESO_UV_PROJECTION_BOX,         /* each triangle on the plane of its dominant normal axis */
+    MESO_UV_PROJECTION_CYLINDRICAL, /* u around the axis, v along it */
+    MESO_UV_PROJECTION_SPHERICAL,   /* u longitude around the axis, v latitude */
+    MESO_UV_PROJECTION_PLANAR,      /* u, v in the plane across the axis */
+} meso_uv_projection_kind;
+
+typedef struct meso_uv_projection {
+    meso_uv_projection_kind kind;
+    float scale; /* mesh units per tile, > 0 (cylindrical and spherical round it so that a
+                    whole number of tiles goes around the mean radius) */
+    int axis;    /* 0 x, 1 y, 2 z: the cylinder's or sphere's axis, the plane's normal; box:
+                    unused */
+} meso_uv_projection;
+
+/* The kind named `name` ("box", "cylindrical", "spherical", "planar"); false when unknown. */
+bool meso_uv_projection_kind_from_name(const char *name, meso_uv_projection_kind *out_kind);
+const char *meso_uv_projection_kind_name(meso_uv_projection_kind kind);
+
+/* Replace the mesh's UVs (adding them when it has none) by a projection of its positions
+ * around the centre of its bounds. Each triangle's corners are projected together, so its
+ * coordinates are continuous inside it; a vertex that its triangles give different coordinates
+ * (box chart borders, the cylinder's and sphere's seam, the poles) is split into one vertex per
+ * coordinate with the same position and normal. Vertices no triangle uses are dropped. Derived
+ * arrays are freed (compute the tangents after). MESO_ERROR_INVALID_ARGUMENT for a bad
+ * projection, MESO_ERROR_LIMIT when the split vertices would exceed the limit. */
+meso_result meso_mesh_project_uvs(meso_context *ctx, meso_mesh *mesh,
+                                  const meso_uv_projection *projection);
+
+/* The triangles whose UV Jacobian is degenerate (UV edges parallel within a sine of 1e-7, or
+ * of zero length: the triangles the tangent code cannot use), and the fraction of the mesh's
+ * world area they cover (0 without UVs). Pure. */
+/* A scene treats a mesh whose degenerate UV triangles cover more than this fraction of its
+ * area as having none (and projects them): most of it would show one texel smeared across each
+ * triangle, which no technique can make into a mesostructure. Below it the coordinates are
+ * kept and the count reported. */
+#define MESO_MESH_MOSTLY_DEGENERATE_UVS 0.5
+void meso_mesh_degenerate_uvs(const meso_mesh *mesh, size_t *out_count, double *out_area_fraction);
+
 /* World length of one texture tile: sqrt(world area / uv area) over the mesh (uv_scale
  * applied); 0 without UVs or area. VDM §3.2 asks for a locally uniform texture scale; this is
  * its average. Pure. */

@@ -99,6 +99,10 @@ typedef struct meso_object {
     /* shape {"file"}: what of the mesh file's material was used and what not ("base colour
      * used, colour texture used, ignored: occlusion texture"), "" otherwise (meso info) */
     char mesh_material_note[768];
+    /* Which texture coordinates the mesh carries and why: "the file's", "the shape's", "none",
+     * or "box projection, 0.5 world units a tile (the file has none)" (meso info;
+     * docs/scene-format.md, "uv_projection"). */
+    char texture_coordinates[256];
 } meso_object;
 
 typedef struct meso_scene {

@@ -50,6 +50,17 @@ void geom_weld_free(geom_weld *weld);
  * basis, Duff et al. 2017). */
 meso_vec3 geom_any_perpendicular(meso_vec3 n);
 
+/* UV triangles whose (signed) area is below this fraction of the product of their UV edge
+ * lengths have no usable Jacobian: the UV edges are (nearly) parallel, or one has zero length
+ * (every corner at one coordinate included). The tangent code skips them; a mesh that has
+ * them over most of its area is treated as having no UVs (docs/shapes.md). */
+#define GEOM_DEGENERATE_UV_SINE 1e-7
+
+/* Whether UV edges (du1, dv1), (du2, dv2) are degenerate by the test above. */
+bool geom_uv_edges_are_degenerate(double du1, double dv1, double du2, double dv2);
+/* The same for the triangle of corner coordinates t0, t1, t2. */
+bool geom_uv_jacobian_is_degenerate(meso_vec2 t0, meso_vec2 t1, meso_vec2 t2);
+
 /* The teapot (geom_teapot.c): desc already defaulted and checked. */
 meso_result geom_create_teapot(meso_context *ctx, const meso_shape_desc *desc,
                                meso_mesh **out_mesh);

@@ -13,10 +13,6 @@
  * count (every job writes its own range). */
 #define JOB_SIZE 4096
 
-/* UV triangles whose (signed) area is below this fraction of the product of their edge lengths
- * have no usable gradient: the UV edges are (nearly) parallel. */
-#define DEGENERATE_UV_SINE 1e-7
-
 typedef struct face_gradient {
     meso_vec3 dpdu, dpdv;
     float weight; /* world area; 0 when the UVs are degenerate */
@@ -43,9 +39,8 @@ static void compute_face_gradients(void *user, size_t job, int thread_index) {
         meso_vec3 e2 = meso_vec3_sub(mesh->positions[tri[2]], p0);
         double du1 = (double)t1.x - t0.x, dv1 = (double)t1.y - t0.y;
         double du2 = (double)t2.x - t0.x, dv2 = (double)t2.y - t0.y;
+        if (geom_uv_edges_are_degenerate(du1, dv1, du2, dv2)) continue;
         double det = du1 * dv2 - du2 * dv1;
-        double scale = hypot(du1, dv1) * hypot(du2, dv2);
-        if (!(fabs(det) > DEGENERATE_UV_SINE * scale)) continue;
         /* e1 = dP/du du1 + dP/dv dv1 and e2 = dP/du du2 + dP/dv dv2, solved for the two
          * gradients (the inverse of the 2x2 UV edge matrix). */
         double inv = 1.0 / det;

@@ -80,6 +80,15 @@ meso_result scene_relog_at_key(const scene_parser *p, const scene_key *key, meso
  * value (MESO_ERROR_FORMAT) at the key with the library's reason; other results pass. */
 meso_result scene_relog_as_format(const scene_parser *p, const scene_key *key, meso_result r);
 
+/* The texture coordinates of object->mesh (in its own coordinates, before the transform): the
+ * mesh's, or the projection of "uv_projection" / "uv_projection_scale" / "uv_projection_axis"
+ * when asked, when the mesh has none and `needs_uvs`, or when its own are degenerate over most
+ * of its area (scene_texture_coordinates.c). mesh_file is the mesh's path, "" for a built-in
+ * shape; world_per_mesh_unit the transform's scale. Fills object->texture_coordinates. */
+meso_result scene_texture_coordinates(const scene_parser *p, const cJSON *obj, const scene_key *key,
+                                      const char *mesh_file, bool needs_uvs,
+                                      float world_per_mesh_unit, meso_object *object);
+
 /* "environment" of the top level (scene_environment.c); item may be NULL (none). */
 meso_result scene_parse_environment(const scene_parser *p, const cJSON *item, meso_scene *scene);
 

@@ -652,7 +652,7 @@ static meso_result create_mesh(const scene_parser *p, const cJSON *obj, const sc
 #define MAX_TEXTURE_COORDINATE 65536.0f
 
 static meso_result check_texture_coordinates(const scene_parser *p, const scene_key *key,
-                                             const meso_mesh *mesh) {
+                                             const meso_mesh *mesh, const char *cause) {
     float largest = 0.0f;
     for (size_t i = 0; i < mesh->num_vertices; i++) {
         float u = fabsf(mesh->uvs[i].x), v = fabsf(mesh->uvs[i].y);
@@ -660,7 +660,7 @@ static meso_result check_texture_coordinates(const scene_parser *p, const scene_
         largest = v > largest ? v : largest;
     }
     if (largest <= MAX_TEXTURE_COORDINATE) return MESO_OK; /* NaN is refused by validation */
-    scene_key k = scene_key_child(key, "uv_scale");
+    scene_key k = scene_key_child(key, cause);
     return scene_error(p, MESO_ERROR_LIMIT, &k,
                        "scaled texture coordinates reach %g, beyond the limit %g", (double)largest,
                        (double)MAX_TEXTURE_COORDINATE);
@@ -681,6 +681,15 @@ static meso_result build_mesh(const scene_parser *p, const cJSON *obj, const sce
         (r = create_mesh(p, obj, key, &object->mesh, &from_file, mesh_path)) ||
         (mesh_path[0] && (r = apply_mesh_material(p, obj, key, mesh_path, &from_file, object))))
         return r;
+    bool require_uvs =
+        object->mesostructure.kind != MESO_MESOSTRUCTURE_NONE || object->material.color_map != NULL;
+    /* The transform is a uniform scale times a rotation: its scale is the length of a column. */
+    float world_per_mesh_unit =
+        sqrtf(transform.m[0] * transform.m[0] + transform.m[1] * transform.m[1] +
+              transform.m[2] * transform.m[2]);
+    if ((r = scene_texture_coordinates(p, obj, key, mesh_path, require_uvs, world_per_mesh_unit,
+                                       object)))
+        return r;
     meso_mesh *mesh = object->mesh;
     meso_mesh_transform(mesh, transform);
     float offset = object->mesostructure.offset; /* "height": place the shell (see above) */
@@ -689,10 +698,13 @@ static meso_result build_mesh(const scene_parser *p, const cJSON *obj, const sce
             mesh->positions[v] = meso_vec3_madd(mesh->positions[v], mesh->normals[v], offset);
     if (mesh->uvs) {
         meso_mesh_scale_uvs(mesh, uv_scale);
-        if ((r = check_texture_coordinates(p, key, mesh)) != MESO_OK) return r;
+        /* a tiny "uv_projection_scale" makes large coordinates as surely as a large uv_scale */
+        bool projected = strstr(object->texture_coordinates, "projection") != NULL;
+        const char *cause = projected && uv_scale.x == 1.0f && uv_scale.y == 1.0f
+                                ? "uv_projection_scale"
+                                : "uv_scale";
+        if ((r = check_texture_coordinates(p, key, mesh, cause)) != MESO_OK) return r;
     }
-    bool require_uvs =
-        object->mesostructure.kind != MESO_MESOSTRUCTURE_NONE || object->material.color_map != NULL;
     char label[SCENE_KEY_MAX + 1100];
     snprintf(label, sizeof(label), "%s: %s", p->file, key->text);
     if ((r = meso_mesh_validate(p->ctx, mesh, label, require_uvs))) return r;
@@ -773,10 +785,22 @@ static bool wants_generated_color(const cJSON *obj) {
 
 meso_result scene_parse_object(const scene_parser *p, const cJSON *item, int index,
                                meso_object *object) {
-    static const char *const keys[] = {
-        "name",      "shape",    "size",     "minor_radius",  "height",    "segments",
-        "transform", "uv_scale", "material", "mesostructure", "technique", "technique_options",
-        NULL};
+    static const char *const keys[] = {"name",
+                                       "shape",
+                                       "size",
+                                       "minor_radius",
+                                       "height",
+                                       "segments",
+                                       "transform",
+                                       "uv_scale",
+                                       "uv_projection",
+                                       "uv_projection_scale",
+                                       "uv_projection_axis",
+                                       "material",
+                                       "mesostructure",
+                                       "technique",
+                                       "technique_options",
+                                       NULL};
     scene_key objects = {"objects"};
     scene_key key = scene_key_index(&objects, index);
     meso_image *generated_color = NULL;

@@ -165,7 +165,10 @@ static void test_app_unknown_technique_names_the_scene(void **state) {
     expect_bad_input(args, "nope");
 }
 
-static void test_app_obj_without_uvs_under_mesostructure_is_bad_input(void **state) {
+/* A mesh without texture coordinates under a mesostructure is drawn through the box
+ * projection, with one note naming the file and the key (docs/scene-format.md); a bad
+ * projection key is bad input. */
+static void test_app_obj_without_uvs_is_projected_with_a_note(void **state) {
     (void)state;
     const char *obj = "v 0 0 0\nv 1 0 0\nv 0 0 -1\nf 1 2 3\n";
     test_write_file(test_path(test_temp_dir(), "nouv.obj"), obj, strlen(obj));
@@ -173,7 +176,15 @@ static void test_app_obj_without_uvs_under_mesostructure_is_bad_input(void **sta
                                     "{\"procedural\": \"bricks\"}", "0.1", NULL);
     char args[4096];
     snprintf(args, sizeof(args), "render %s -o %s", scene, out_png());
-    expect_bad_input_either(args, "nouv.obj", "nouv.json");
+    const char *err = NULL;
+    int status = test_run_meso(args, &err);
+    if (status != 0 || !strstr(err, "meso: warning: ") ||
+        !strstr(err, "nouv.obj: the file has none") || !strstr(err, "\"uv_projection\": \"box\""))
+        fail_msg("meso %s\n  status %d (want 0), stderr: %s", args, status, err);
+    scene = write_scene("badproj.json", "{\"file\": \"nouv.obj\"}, \"uv_projection\": \"cubic\"",
+                        "{\"procedural\": \"bricks\"}", "0.1", NULL);
+    snprintf(args, sizeof(args), "render %s -o %s", scene, out_png());
+    expect_bad_input(args, "objects[0].uv_projection: must be");
 }
 
 static void test_app_obj_with_nan_vertex_is_bad_input(void **state) {
@@ -279,7 +290,7 @@ int main(void) {
         cmocka_unit_test(test_app_huge_png_is_refused_naming_the_file),
         cmocka_unit_test(test_app_malformed_json_names_the_file),
         cmocka_unit_test(test_app_unknown_technique_names_the_scene),
-        cmocka_unit_test(test_app_obj_without_uvs_under_mesostructure_is_bad_input),
+        cmocka_unit_test(test_app_obj_without_uvs_is_projected_with_a_note),
         cmocka_unit_test(test_app_obj_with_nan_vertex_is_bad_input),
         cmocka_unit_test(test_app_missing_scene_names_the_file),
         cmocka_unit_test(test_app_scene_without_objects_is_bad_input),
