@@ -113,10 +113,11 @@ void app_print_technique_help(const meso_technique_info *t) {
     static const char *const type_names[] = {"integer", "boolean", "number"};
     printf("%s: %s\nPaper: %s\nDraws: ", t->name, t->summary, t->paper);
     const char *separator = "";
-    const char *kinds[] = {"plain meshes", "height fields", "solids"};
+    const char *kinds[] = {"plain meshes", "height fields", "solids that tile",
+                           "models' solids (impostors)"};
     const unsigned bits[] = {MESO_TECHNIQUE_ACCEPTS_NONE, MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD,
-                             MESO_TECHNIQUE_ACCEPTS_SOLID};
-    for (int k = 0; k < 3; k++) {
+                             MESO_TECHNIQUE_ACCEPTS_SOLID, MESO_TECHNIQUE_ACCEPTS_MODEL_SOLID};
+    for (int k = 0; k < 4; k++) {
         if (!(t->accepts & bits[k])) continue;
         printf("%s%s", separator, kinds[k]);
         separator = ", ";
@@ -552,21 +553,8 @@ bool app_technique_applies(const meso_technique_info *info, const meso_scene *sc
 
 int app_technique_draws(const meso_technique_info *info, const meso_scene *scene) {
     int count = 0;
-    for (int i = 0; i < scene->num_objects; i++) {
-        unsigned need = MESO_TECHNIQUE_ACCEPTS_NONE;
-        switch (scene->objects[i].mesostructure.kind) {
-        case MESO_MESOSTRUCTURE_NONE:
-            need = MESO_TECHNIQUE_ACCEPTS_NONE;
-            break;
-        case MESO_MESOSTRUCTURE_HEIGHT_FIELD:
-            need = MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD;
-            break;
-        case MESO_MESOSTRUCTURE_SOLID:
-            need = MESO_TECHNIQUE_ACCEPTS_SOLID;
-            break;
-        }
-        count += (info->accepts & need) != 0;
-    }
+    for (int i = 0; i < scene->num_objects; i++)
+        count += meso_technique_accepts(info, &scene->objects[i].mesostructure);
     return count;
 }
 

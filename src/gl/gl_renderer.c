@@ -47,12 +47,6 @@ struct meso_gl_renderer {
     meso_render_stats stats;
 };
 
-static unsigned accepts_bit(meso_mesostructure_kind kind) {
-    return kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD ? MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD
-           : kind == MESO_MESOSTRUCTURE_SOLID      ? MESO_TECHNIQUE_ACCEPTS_SOLID
-                                                   : MESO_TECHNIQUE_ACCEPTS_NONE;
-}
-
 GLuint gl_texture_2d(GLenum internal_format, int width, int height, GLenum format, GLenum type,
                      const void *data) {
     GLuint texture;
@@ -83,19 +77,19 @@ meso_result gl_resolve_technique(meso_context *ctx, const meso_object *object,
     const char *own = object->technique[0] ? object->technique : "flat";
     const char *name = desc->technique ? desc->technique : own;
     const meso_technique_info *info = meso_technique_find(name);
-    unsigned kind = accepts_bit(object->mesostructure.kind);
+    const meso_mesostructure *kind = &object->mesostructure;
     *out = NULL;
-    if (info && desc->fallback && desc->technique && !(info->accepts & kind)) {
+    if (info && desc->fallback && desc->technique && !meso_technique_accepts(info, kind)) {
         const meso_technique_info *mine = meso_technique_find(own);
-        info = mine && mine->kind == MESO_TECHNIQUE_PER_PIXEL && (mine->accepts & kind) &&
-                       meso_gl_technique_supported(own)
+        info = mine && mine->kind == MESO_TECHNIQUE_PER_PIXEL &&
+                       meso_technique_accepts(mine, kind) && meso_gl_technique_supported(own)
                    ? mine
                    : meso_technique_find("flat");
     }
     if (!info)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: unknown technique '%s'",
                               object->name, name);
-    if (!(info->accepts & kind))
+    if (!meso_technique_accepts(info, kind))
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "%s: technique '%s' does not accept this mesostructure", object->name,
                               info->name);

@@ -1,0 +1,67 @@
+/* The command line's contract as a new user meets it: a technique that cannot draw a scene is
+ * "not applicable" (silently), an output meso cannot write is refused before any work, a
+ * request the command cannot serve is a usage error (exit 2, one line), and `meso info` says
+ * the same thing about a mesh file's material as it says about a scene using the file. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "test_util.h"
+
+#define EXAMPLES MESO_SOURCE_DIR "/examples"
+
+/* The line of a results.csv for `technique` (a static copy), failing when there is none. */
+static const char *csv_row(const char *csv, const char *technique) {
+    static char row[1024];
+    char key[64];
+    snprintf(key, sizeof key, ",%s,", technique);
+    const char *at = strstr(csv, key);
+    if (!at) fail_msg("no row for %s in:\n%s", technique, csv);
+    while (at > csv && at[-1] != '\n') at--;
+    size_t length = strcspn(at, "\n");
+    snprintf(row, sizeof row, "%.*s", (int)length, at);
+    return row;
+}
+
+/* One line on stderr, ending in a newline. */
+static void assert_one_line(const char *err) {
+    if (!err[0] || strchr(err, '\n') != err + strlen(err) - 1)
+        fail_msg("not one line on stderr:\n%s", err);
+}
+
+/* gdm draws solids that tile (Wang et al. 2004 §3: the GDM of one tile repeats over the
+ * surface); a relief impostor's solid is a whole model. `--techniques` (and the demo, which
+ * shares its code) skips it as every technique that cannot draw a scene is skipped: "not
+ * applicable", no warning, not "failed". */
+static void test_gdm_is_not_applicable_to_an_impostor(void **state) {
+    (void)state;
+    const char *dir = test_path(test_temp_dir(), "impostor");
+    char arguments[2048];
+    snprintf(arguments, sizeof arguments,
+             "render %s/teapot-impostor.json --techniques flat,gdm --size 16x16 --frames 1 "
+             "--set reference.resolution=16 -o %s",
+             EXAMPLES, dir);
+    const char *err = NULL;
+    assert_int_equal(test_run_meso(arguments, &err), 0);
+    if (strstr(err, "warning") || strstr(err, "failed")) fail_msg("stderr said:\n%s", err);
+    size_t size;
+    char *csv = test_read_file(test_path(dir, "results.csv"), &size);
+    const char *row = csv_row(csv, "gdm");
+    if (!strstr(row, ",gdm,skipped,")) fail_msg("gdm's row: %s", row);
+    free(csv);
+    /* drawn with gdm on its own: refused before any bake, naming the object */
+    snprintf(arguments, sizeof arguments,
+             "render %s/teapot-impostor.json --technique gdm --size 16x16 -o %s", EXAMPLES,
+             test_path(test_temp_dir(), "impostor-gdm.png"));
+    assert_int_equal(test_run_meso(arguments, &err), 2);
+    assert_one_line(err);
+    if (!strstr(err, "teapot impostor: technique 'gdm' does not accept")) fail_msg("%s", err);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_gdm_is_not_applicable_to_an_impostor),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
