@@ -455,6 +455,18 @@ static int compare_doubles(const void *a, const void *b) {
     return (x > y) - (x < y);
 }
 
+int app_check_image_output(const char *path, bool exr, const char *writer) {
+    char extension[16];
+    app_path_extension(path, extension, sizeof extension);
+    if (!strcmp(extension, "png") || (exr && !strcmp(extension, "exr"))) return -1;
+    const char *formats = exr ? ".png and .exr" : ".png";
+    if (extension[0])
+        app_error("%s: cannot write .%s images (%s writes %s)", path, extension, writer, formats);
+    else
+        app_error("%s: no image extension (%s writes %s)", path, writer, formats);
+    return APP_EXIT_BAD_INPUT;
+}
+
 double app_median(double *values, size_t count) {
     qsort(values, count, sizeof(double), compare_doubles);
     return count % 2 ? values[count / 2] : 0.5 * (values[count / 2 - 1] + values[count / 2]);

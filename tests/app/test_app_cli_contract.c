@@ -59,9 +59,51 @@ static void test_gdm_is_not_applicable_to_an_impostor(void **state) {
     if (!strstr(err, "teapot impostor: technique 'gdm' does not accept")) fail_msg("%s", err);
 }
 
+/* An image output is named for a format meso writes (.png, .exr): `-o out.jpg` wrote a PNG
+ * under a JPEG's name. Any other extension, or none, is refused before any work (the inputs
+ * here do not exist: the output is what is refused), exit 2, one line naming the formats. */
+static void test_an_image_output_meso_cannot_write_is_refused(void **state) {
+    (void)state;
+    const char *dir = test_temp_dir();
+    const struct {
+        const char *command; /* %s: the output */
+        const char *output;
+        const char *says;
+    } cases[] = {
+        {"render no-such-scene.json -o %s", "out.jpg", "meso writes .png and .exr"},
+        {"render no-such-scene.json -o %s", "OUT.JPEG", "meso writes .png and .exr"},
+        {"render no-such-scene.json -o %s", "out", "meso writes .png and .exr"},
+        {"render no-such-scene.json -o ok.png --coverage %s", "mask.tif",
+         "meso writes .png and .exr"},
+        {"compare no-a.png no-b.png -o %s", "diff.jpg", "meso writes .png and .exr"},
+        {"compare no-a.png no-b.png --sheet %s", "sheet.webp", "meso writes .png and .exr"},
+        {"view no-such-scene.json --screenshot %s", "shot.exr", "meso view writes .png"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        const char *output = test_path(dir, cases[i].output);
+        char command[1200], arguments[1400];
+        snprintf(command, sizeof command, cases[i].command, output);
+        snprintf(arguments, sizeof arguments, "%s", command);
+        const char *err = NULL;
+        int status = test_run_meso(arguments, &err);
+        if (strstr(err, "SDL2")) continue; /* a build without the viewer says that first */
+        if (status != 2 || !strstr(err, cases[i].output) || !strstr(err, cases[i].says))
+            fail_msg("meso %s: status %d, stderr:\n%s", arguments, status, err);
+        assert_one_line(err);
+        assert_int_not_equal(access(output, F_OK), 0);
+    }
+    /* the extensions it writes, in any case */
+    char arguments[2048];
+    const char *err = NULL;
+    snprintf(arguments, sizeof arguments, "render %s/bricks-plane.json --size 8x8 -o %s", EXAMPLES,
+             test_path(dir, "small.PNG"));
+    assert_int_equal(test_run_meso(arguments, &err), 0);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_gdm_is_not_applicable_to_an_impostor),
+        cmocka_unit_test(test_an_image_output_meso_cannot_write_is_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
