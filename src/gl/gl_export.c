@@ -395,15 +395,9 @@ meso_result meso_gl_export_textures(meso_context *ctx, const meso_scene *scene,
                                     const meso_render_desc *desc, const char *dir) {
     if (!scene || !dir) return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "export: NULL");
     meso_render_desc d = desc ? *desc : (meso_render_desc){0};
-    meso_result r = meso_technique_check_scene(ctx, scene);
     /* every object's technique and options first: a scene that cannot be exported writes
      * nothing */
-    for (int i = 0; i < scene->num_objects && r == MESO_OK; i++) {
-        const meso_technique_info *info;
-        double options[64];
-        r = gl_resolve_technique(ctx, &scene->objects[i], &d, &info);
-        if (r == MESO_OK) r = meso_technique_options_values(ctx, scene, i, &d, info->name, options);
-    }
+    meso_result r = meso_gl_check_scene(ctx, scene, &d);
     if (r != MESO_OK) return r;
     cJSON *manifest = cJSON_CreateObject();
     cJSON_AddStringToObject(manifest, "scene", scene->path);

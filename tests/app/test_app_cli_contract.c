@@ -100,10 +100,47 @@ static void test_an_image_output_meso_cannot_write_is_refused(void **state) {
     assert_int_equal(test_run_meso(arguments, &err), 0);
 }
 
+/* A technique the command cannot serve is a usage error (README: 2 bad input or usage), said
+ * in one line before any work: the GL back end and the texture export have no tessellation
+ * shader. What the machine lacks (no EGL, no OpenGL 3.3) stays 1 (tests/gl). */
+static void test_a_technique_the_command_cannot_serve_is_a_usage_error(void **state) {
+    (void)state;
+    const char *dir = test_path(test_temp_dir(), "bake-tessellation");
+    const char *png = test_path(test_temp_dir(), "gl-tessellation.png");
+    const char *commands[] = {"bake %s/bricks-plane.json -o %s --technique tessellation",
+                              "render %s/bricks-plane.json --backend gl --technique tessellation "
+                              "-o %s",
+                              "render %s/bricks-plane.json --backend gl --technique tessellation "
+                              "--samples 4 -o %s"};
+    const char *outputs[] = {dir, png, png};
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++) {
+        char arguments[2048];
+        snprintf(arguments, sizeof arguments, commands[i], EXAMPLES, outputs[i]);
+        const char *err = NULL;
+        int status = test_run_meso(arguments, &err);
+        if (status != 2) fail_msg("meso %s: status %d (not 2): %s", arguments, status, err);
+        assert_one_line(err);
+        assert_int_not_equal(access(outputs[i], F_OK), 0);
+    }
+    /* the same for a scene whose own technique has no shader */
+    const char *scene = test_path(test_temp_dir(), "tessellated.json");
+    const char text[] = "{\"objects\": [{\"shape\": \"plane\", \"technique\": \"tessellation\", "
+                        "\"mesostructure\": {\"height_map\": {\"procedural\": \"bricks\", "
+                        "\"resolution\": 64}, \"depth\": 0.05}}]}";
+    test_write_file(scene, text, strlen(text));
+    char arguments[2048];
+    const char *err = NULL;
+    snprintf(arguments, sizeof arguments, "bake %s -o %s", scene, dir);
+    assert_int_equal(test_run_meso(arguments, &err), 2);
+    assert_one_line(err);
+    if (!strstr(err, "'tessellation' has no GL shader")) fail_msg("%s", err);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_gdm_is_not_applicable_to_an_impostor),
         cmocka_unit_test(test_an_image_output_meso_cannot_write_is_refused),
+        cmocka_unit_test(test_a_technique_the_command_cannot_serve_is_a_usage_error),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

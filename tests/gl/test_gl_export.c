@@ -212,7 +212,7 @@ static void test_export_layers(void **state) {
 }
 
 /* meso bake's bad input: one line, status 2, nothing written; a technique without a shader
- * is a capability the GL back end lacks: status 1, as `meso render --backend gl` says it. */
+ * too, as `meso render --backend gl` says it. */
 static void test_bake_command_bad_input(void **state) {
     (void)state;
     const char *dir = test_path(test_temp_dir(), "bake-bad");
@@ -225,7 +225,7 @@ static void test_bake_command_bad_input(void **state) {
     assert_int_equal(test_run_meso(arguments, &err), 2);
     snprintf(arguments, sizeof arguments,
              "bake %s/examples/bricks-plane.json -o %s --technique horizon", MESO_SOURCE_DIR, dir);
-    assert_int_equal(test_run_meso(arguments, &err), 1); /* as render --backend gl */
+    assert_int_equal(test_run_meso(arguments, &err), 2); /* as render --backend gl */
     assert_non_null(strstr(err, "'horizon' has no GL shader"));
     assert_ptr_equal(strchr(err, '\n'), err + strlen(err) - 1);
     assert_int_not_equal(access(test_path(dir, "manifest.json"), F_OK), 0);
