@@ -202,6 +202,12 @@ void app_machine_description(char *out, size_t out_size);
  * timings are contended by other work. */
 double app_load_average(void);
 
+/* ---- The examples built into the program (app_examples.c) -------------------------------- */
+
+/* Parse example `index` of meso_embedded_examples (examples_embedded.h), with the files of
+ * examples/assets it reads. */
+meso_result app_example_parse(meso_context *ctx, size_t index, meso_scene **out_scene);
+
 /* ---- Render every technique and compare (app_compare_all.c) ------------------------------- */
 
 /* One technique's run of a scene. */

@@ -331,7 +331,7 @@ static meso_result load_scenes(meso_context *ctx, const char *const *paths, int 
         } else {
             const meso_embedded_example *ex = &meso_embedded_examples[i];
             snprintf(s->name, sizeof(s->name), "%s", ex->name);
-            result = meso_scene_parse(ctx, ex->json, ex->name, ".", &s->scene);
+            result = app_example_parse(ctx, i, &s->scene);
         }
         if (result != MESO_OK) return result;
         (*out_count)++;

@@ -132,7 +132,7 @@ int meso_cmd_demo(int argc, char **argv) {
         demo_example *d = &examples[count];
         d->name = ex->name;
         d->all.reference = -1;
-        if (meso_scene_parse(ctx, ex->json, ex->name, ".", &d->scene) == MESO_OK)
+        if (app_example_parse(ctx, i, &d->scene) == MESO_OK)
             count++;
         else if (!globals.quiet)
             fprintf(stderr, "meso: warning: %s\n", meso_context_last_error(ctx));

@@ -2,6 +2,7 @@
  * "not applicable" (silently), an output meso cannot write is refused before any work, a
  * request the command cannot serve is a usage error (exit 2, one line), and `meso info` says
  * the same thing about a mesh file's material as it says about a scene using the file. */
+#include <dirent.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -136,11 +137,41 @@ static void test_a_technique_the_command_cannot_serve_is_a_usage_error(void **st
     if (!strstr(err, "'tessellation' has no GL shader")) fail_msg("%s", err);
 }
 
+/* The program carries every example of examples/, those reading examples/assets included
+ * (chainmail-plane's tile mesh): `meso demo` and `meso bench` without scenes render them all
+ * (docs/cli.md). Bench, the quicker of the two, shows which were loaded. */
+static void test_every_example_is_built_into_the_program(void **state) {
+    (void)state;
+    const char *json = test_path(test_temp_dir(), "bench.json");
+    char arguments[2048];
+    snprintf(arguments, sizeof arguments,
+             "bench --techniques flat --frames 1 --size 8x8 --threads 1 --json %s", json);
+    const char *err = NULL;
+    if (test_run_meso(arguments, &err) != 0) fail_msg("%s", err);
+    size_t size;
+    char *text = test_read_file(json, &size);
+    DIR *dir = opendir(EXAMPLES);
+    assert_non_null(dir);
+    int examples = 0;
+    for (struct dirent *entry; (entry = readdir(dir)) != NULL;) {
+        size_t length = strlen(entry->d_name);
+        if (length < 6 || strcmp(entry->d_name + length - 5, ".json") != 0) continue;
+        char key[300];
+        snprintf(key, sizeof key, "\"scene\": \"%.*s\"", (int)(length - 5), entry->d_name);
+        if (!strstr(text, key)) fail_msg("%s is not built in", entry->d_name);
+        examples++;
+    }
+    closedir(dir);
+    assert_true(examples >= 10);
+    free(text);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_gdm_is_not_applicable_to_an_impostor),
         cmocka_unit_test(test_an_image_output_meso_cannot_write_is_refused),
         cmocka_unit_test(test_a_technique_the_command_cannot_serve_is_a_usage_error),
+        cmocka_unit_test(test_every_example_is_built_into_the_program),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
