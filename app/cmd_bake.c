@@ -48,6 +48,7 @@ int meso_cmd_bake(int argc, char **argv) {
     meso_context *ctx = app_context_create(&globals);
     if (!ctx) return APP_EXIT_FAILURE;
     meso_scene *scene = NULL;
+    meso_context_set_subject(ctx, positionals[0]); /* named by a long bake's notice */
     meso_result result = meso_scene_load(ctx, positionals[0], &scene);
     if (result != MESO_OK) {
         status = app_fail(ctx, result);

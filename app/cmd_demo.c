@@ -75,6 +75,7 @@ static meso_result render_examples(meso_context *ctx, demo_example *examples, si
     meso_result result = MESO_OK;
     for (size_t e = 0; e < count && result == MESO_OK; e++) {
         desc.scene = examples[e].scene;
+        meso_context_set_subject(ctx, examples[e].name); /* "baking gdm for weave-plane ..." */
         result = app_compare_all_render(ctx, &desc, &examples[e].all);
         if (result != MESO_OK) break;
         if (!quiet) app_compare_all_print_notes(&examples[e].all, examples[e].name, false);

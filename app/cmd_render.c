@@ -344,6 +344,7 @@ int meso_cmd_render(int argc, char **argv) {
             scene_options.output = output;
         }
         meso_scene *scene = NULL;
+        meso_context_set_subject(ctx, positionals[s]); /* "baking gdm for SCENE (about 10 s)" */
         meso_result result = meso_scene_load(ctx, positionals[s], &scene);
         meso_render_desc orbit_desc = {.technique = o.technique,
                                        .samples = o.samples,
