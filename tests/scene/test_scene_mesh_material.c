@@ -155,14 +155,19 @@ static void test_the_scene_uses_the_file_material_unless_it_sets_a_colour(void *
     meso_context_destroy(ctx);
 }
 
+/* The folder `name` in the test's folder, made; its path in dir. */
+static void make_subfolder(const char *name, char *dir, size_t size) {
+    snprintf(dir, size, "%s/%s", test_temp_dir(), name);
+    char command[1300];
+    snprintf(command, sizeof command, "mkdir -p '%s'", dir);
+    assert_int_equal(system(command), 0);
+}
+
 /* A texture outside the mesh's folder is not read. */
 static void test_a_texture_outside_the_mesh_folder_is_not_read(void **state) {
     (void)state;
     char dir[1100];
-    snprintf(dir, sizeof dir, "%s/outside", test_temp_dir());
-    char command[1300];
-    snprintf(command, sizeof command, "mkdir -p '%s'", dir);
-    assert_int_equal(system(command), 0);
+    make_subfolder("outside", dir, sizeof dir);
     write_png(test_path(test_temp_dir(), "secret.png"), 0.5f);
     write_text(dir, "quad.mtl", "newmtl brick\nKd 0.6 0.3 0.1\nmap_Kd ../secret.png\n");
     write_text(dir, "quad.obj", obj_quad);
@@ -217,11 +222,8 @@ static void test_meso_info_says_what_was_read_and_ignored(void **state) {
  * the scene projects them, and the scene and `meso info` of the file both say it is used. */
 static void test_a_normal_texture_without_uvs_is_used_through_projected_ones(void **state) {
     (void)state;
-    char dir[1100];
-    snprintf(dir, sizeof dir, "%s/no-uvs", test_temp_dir());
-    char command[4096];
-    snprintf(command, sizeof command, "mkdir -p '%s'", dir);
-    assert_int_equal(system(command), 0);
+    char dir[1100], command[4096];
+    make_subfolder("no-uvs", dir, sizeof dir);
     char gltf[sizeof gltf_triangle];
     snprintf(gltf, sizeof gltf, "%s", gltf_triangle);
     const char *const cut[] = {",\"TEXCOORD_0\":1", ",\"baseColorTexture\":{\"index\":0}"};
