@@ -13,11 +13,19 @@ all: build
 deps:
 	@bash scripts/install-deps.sh
 
+# The build is quiet unless asked (make VERBOSE=1, which CMake's makefiles also read: every
+# command in full): its progress lines on stdout go nowhere, its warnings and errors (stderr)
+# still show, so `make demo` starts with pictures, not ~830 lines of build.
+ifeq ($(VERBOSE),)
+QUIET := >/dev/null
+endif
+
 $(BUILD)/CMakeCache.txt: | deps
-	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS)
+	@echo "make: configuring and building meso in $(BUILD)/ (about 1.5 min the first time; make VERBOSE=1 shows every step)"
+	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS) $(QUIET)
 
 build: deps $(BUILD)/CMakeCache.txt
-	cmake --build $(BUILD) -j $(JOBS)
+	@cmake --build $(BUILD) -j $(JOBS) $(QUIET)
 
 # The Python package (docs/python.md) in $(BUILD)/python, over $(BUILD)/libmeso.so: what the
 # tests import (PYTHONPATH=$(BUILD)/python). `make build` makes it too, unless -DMESO_PYTHON=OFF.

@@ -113,10 +113,11 @@ void app_print_technique_help(const meso_technique_info *t) {
     static const char *const type_names[] = {"integer", "boolean", "number"};
     printf("%s: %s\nPaper: %s\nDraws: ", t->name, t->summary, t->paper);
     const char *separator = "";
-    const char *kinds[] = {"plain meshes", "height fields", "solids"};
+    const char *kinds[] = {"plain meshes", "height fields", "solids that tile",
+                           "models' solids (impostors)"};
     const unsigned bits[] = {MESO_TECHNIQUE_ACCEPTS_NONE, MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD,
-                             MESO_TECHNIQUE_ACCEPTS_SOLID};
-    for (int k = 0; k < 3; k++) {
+                             MESO_TECHNIQUE_ACCEPTS_SOLID, MESO_TECHNIQUE_ACCEPTS_MODEL_SOLID};
+    for (int k = 0; k < 4; k++) {
         if (!(t->accepts & bits[k])) continue;
         printf("%s%s", separator, kinds[k]);
         separator = ", ";
@@ -454,6 +455,18 @@ static int compare_doubles(const void *a, const void *b) {
     return (x > y) - (x < y);
 }
 
+int app_check_image_output(const char *path, bool exr, const char *writer) {
+    char extension[16];
+    app_path_extension(path, extension, sizeof extension);
+    if (!strcmp(extension, "png") || (exr && !strcmp(extension, "exr"))) return -1;
+    const char *formats = exr ? ".png and .exr" : ".png";
+    if (extension[0])
+        app_error("%s: cannot write .%s images (%s writes %s)", path, extension, writer, formats);
+    else
+        app_error("%s: no image extension (%s writes %s)", path, writer, formats);
+    return APP_EXIT_BAD_INPUT;
+}
+
 double app_median(double *values, size_t count) {
     qsort(values, count, sizeof(double), compare_doubles);
     return count % 2 ? values[count / 2] : 0.5 * (values[count / 2 - 1] + values[count / 2]);
@@ -552,21 +565,8 @@ bool app_technique_applies(const meso_technique_info *info, const meso_scene *sc
 
 int app_technique_draws(const meso_technique_info *info, const meso_scene *scene) {
     int count = 0;
-    for (int i = 0; i < scene->num_objects; i++) {
-        unsigned need = MESO_TECHNIQUE_ACCEPTS_NONE;
-        switch (scene->objects[i].mesostructure.kind) {
-        case MESO_MESOSTRUCTURE_NONE:
-            need = MESO_TECHNIQUE_ACCEPTS_NONE;
-            break;
-        case MESO_MESOSTRUCTURE_HEIGHT_FIELD:
-            need = MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD;
-            break;
-        case MESO_MESOSTRUCTURE_SOLID:
-            need = MESO_TECHNIQUE_ACCEPTS_SOLID;
-            break;
-        }
-        count += (info->accepts & need) != 0;
-    }
+    for (int i = 0; i < scene->num_objects; i++)
+        count += meso_technique_accepts(info, &scene->objects[i].mesostructure);
     return count;
 }
 

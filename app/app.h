@@ -151,6 +151,11 @@ bool app_path_join(char *out, size_t out_size, const char *dir, const char *name
 /* The extension of a path in lower case without the dot ("png"), "" if none. */
 void app_path_extension(const char *path, char *out, size_t out_size);
 
+/* An image output's name checked before any work: it must end in an extension meso writes,
+ * .png or (with exr) .exr, in any case: -1 when it does, else one line "meso: <path>: ..."
+ * naming the formats `writer` writes ("meso", "meso view") and 2. */
+int app_check_image_output(const char *path, bool exr, const char *writer);
+
 /* The median of values (count >= 1); reorders the array. */
 double app_median(double *values, size_t count);
 
@@ -196,6 +201,12 @@ void app_machine_description(char *out, size_t out_size);
 /* The 1-minute load average (/proc/loadavg), NAN when unknown: above the number of cores,
  * timings are contended by other work. */
 double app_load_average(void);
+
+/* ---- The examples built into the program (app_examples.c) -------------------------------- */
+
+/* Parse example `index` of meso_embedded_examples (examples_embedded.h), with the files of
+ * examples/assets it reads. */
+meso_result app_example_parse(meso_context *ctx, size_t index, meso_scene **out_scene);
 
 /* ---- Render every technique and compare (app_compare_all.c) ------------------------------- */
 

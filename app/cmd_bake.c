@@ -48,18 +48,19 @@ int meso_cmd_bake(int argc, char **argv) {
     meso_context *ctx = app_context_create(&globals);
     if (!ctx) return APP_EXIT_FAILURE;
     meso_scene *scene = NULL;
+    meso_context_set_subject(ctx, positionals[0]); /* named by a long bake's notice */
     meso_result result = meso_scene_load(ctx, positionals[0], &scene);
     if (result != MESO_OK) {
         status = app_fail(ctx, result);
     } else {
         meso_render_desc desc = {
             .technique = technique, .options = settings.items, .num_options = settings.count};
-        result = app_make_dir(ctx, output);
+        /* a technique without a GL shader is a request this command cannot serve: bad input,
+         * said before the folder is made */
+        result = meso_gl_check_scene(ctx, scene, &desc);
+        if (result == MESO_OK) result = app_make_dir(ctx, output);
         if (result == MESO_OK) result = meso_gl_export_textures(ctx, scene, &desc, output);
         status = result == MESO_OK ? APP_EXIT_OK : app_fail_in(ctx, result, scene->path);
-        /* a technique without a GL shader is a capability the GL back end lacks, as a missing
-         * EGL is: exit 1, as `meso render --backend gl` says it (docs/cli.md) */
-        if (result == MESO_ERROR_UNSUPPORTED) status = APP_EXIT_FAILURE;
         if (result == MESO_OK && !globals.quiet)
             fprintf(stderr, "meso: bake: %d object(s) -> %s/manifest.json\n", scene->num_objects,
                     output);

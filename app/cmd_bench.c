@@ -331,7 +331,7 @@ static meso_result load_scenes(meso_context *ctx, const char *const *paths, int 
         } else {
             const meso_embedded_example *ex = &meso_embedded_examples[i];
             snprintf(s->name, sizeof(s->name), "%s", ex->name);
-            result = meso_scene_parse(ctx, ex->json, ex->name, ".", &s->scene);
+            result = app_example_parse(ctx, i, &s->scene);
         }
         if (result != MESO_OK) return result;
         (*out_count)++;
@@ -423,6 +423,7 @@ int meso_cmd_bench(int argc, char **argv) {
     if (result == MESO_OK)
         progress = meso_progress_begin(ctx, "bench", (uint64_t)num_scenes * (uint64_t)num_names);
     for (size_t s = 0; s < num_scenes && result == MESO_OK; s++) {
+        meso_context_set_subject(ctx, scenes[s].name); /* named by a long bake's notice */
         for (int t = 0; t < num_names && result == MESO_OK; t++) {
             const meso_technique_info *info = meso_technique_find(names[t]);
             meso_progress_advance(progress, 1);

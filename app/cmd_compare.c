@@ -128,6 +128,12 @@ int meso_cmd_compare(int argc, char **argv) {
     /* Outputs are checked before any work and written together at the end: both or none. */
     meso_result result = diff_path ? meso_file_check_output(ctx, diff_path) : MESO_OK;
     if (result == MESO_OK && sheet_path) result = meso_file_check_output(ctx, sheet_path);
+    /* and their names say their formats: one meso does not write is refused */
+    const char *image_outputs[2] = {diff_path, sheet_path};
+    for (int i = 0; i < 2 && result == MESO_OK; i++)
+        if (image_outputs[i] &&
+            (status = app_check_image_output(image_outputs[i], true, "meso")) >= 0)
+            goto done;
     if (result == MESO_OK) result = meso_image_load_png(ctx, path_a, &a);
     if (result == MESO_OK) result = meso_image_load_png(ctx, path_b, &b);
     if (result == MESO_OK && mask_a_path) result = meso_image_load_png(ctx, mask_a_path, &mask_a);

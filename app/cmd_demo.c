@@ -75,6 +75,7 @@ static meso_result render_examples(meso_context *ctx, demo_example *examples, si
     meso_result result = MESO_OK;
     for (size_t e = 0; e < count && result == MESO_OK; e++) {
         desc.scene = examples[e].scene;
+        meso_context_set_subject(ctx, examples[e].name); /* "baking gdm for weave-plane ..." */
         result = app_compare_all_render(ctx, &desc, &examples[e].all);
         if (result != MESO_OK) break;
         if (!quiet) app_compare_all_print_notes(&examples[e].all, examples[e].name, false);
@@ -132,7 +133,7 @@ int meso_cmd_demo(int argc, char **argv) {
         demo_example *d = &examples[count];
         d->name = ex->name;
         d->all.reference = -1;
-        if (meso_scene_parse(ctx, ex->json, ex->name, ".", &d->scene) == MESO_OK)
+        if (app_example_parse(ctx, i, &d->scene) == MESO_OK)
             count++;
         else if (!globals.quiet)
             fprintf(stderr, "meso: warning: %s\n", meso_context_last_error(ctx));

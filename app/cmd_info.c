@@ -132,8 +132,19 @@ static meso_result info_mesh(meso_context *ctx, const char *path) {
         printf("material:");
         if (material.has_color)
             printf(" base colour %g %g %g,", material.color.x, material.color.y, material.color.z);
-        if (material.color_map[0]) printf(" colour texture %s,", material.color_map);
-        if (material.normal_map[0]) printf(" normal texture %s (not used),", material.normal_map);
+        /* as the scene loader decides (meso_mesh_material_unused_reason) */
+        const char *unused = meso_mesh_material_unused_reason(material.color_map);
+        if (material.color_map[0] && unused)
+            printf(" colour texture %s (not used: %s),", material.color_map, unused);
+        else if (material.color_map[0])
+            printf(" colour texture %s,", material.color_map);
+        unused = meso_mesh_material_unused_reason(material.normal_map);
+        if (material.normal_map[0] && unused)
+            printf(" normal texture %s (not used: %s),", material.normal_map, unused);
+        else if (material.normal_map[0])
+            printf(" normal texture %s (used as the normal map, OpenGL convention, when the "
+                   "scene's material sets none),",
+                   material.normal_map);
         if (!material.has_color && !material.color_map[0] && !material.normal_map[0])
             printf(" none,");
         printf(" ignored: %s\n", material.ignored[0] ? material.ignored : "nothing");

@@ -314,6 +314,11 @@ int meso_cmd_render(int argc, char **argv) {
             meso_context_destroy(ctx);
             return status;
         }
+        /* and its name says its format: one meso does not write is refused */
+        if (outputs[i] && (status = app_check_image_output(outputs[i], true, "meso")) >= 0) {
+            meso_context_destroy(ctx);
+            return status;
+        }
     }
     const char *batch_dir = num_positionals > 1 ? o.output : NULL;
     if (batch_dir) {
@@ -339,6 +344,7 @@ int meso_cmd_render(int argc, char **argv) {
             scene_options.output = output;
         }
         meso_scene *scene = NULL;
+        meso_context_set_subject(ctx, positionals[s]); /* "baking gdm for SCENE (about 10 s)" */
         meso_result result = meso_scene_load(ctx, positionals[s], &scene);
         meso_render_desc orbit_desc = {.technique = o.technique,
                                        .samples = o.samples,

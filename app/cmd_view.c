@@ -939,6 +939,9 @@ int meso_cmd_view(int argc, char **argv) {
     if (num_positionals < 1) return app_usage_error("view", "missing the SCENE file");
     if (o.events && o.script)
         return app_usage_error("view", "--events and --script exclude each other");
+    /* screenshots are PNGs */
+    if (o.screenshot && (status = app_check_image_output(o.screenshot, false, "meso view")) >= 0)
+        return status;
     const char *listed[VIEW_MAX_TECHNIQUES];
     char listed_storage[1024];
     int num_listed = 0;

@@ -159,6 +159,16 @@ typedef struct meso_progress meso_progress;
 /* Start reporting progress of `total` units of work. Never fails: returns NULL when nothing is
  * to be reported, and every progress function accepts NULL. */
 meso_progress *meso_progress_begin(meso_context *ctx, const char *label, uint64_t total);
+/* meso_progress_begin for a bake (work made once and cached), its bar labelled "<what> bake".
+ * Where no bar is drawn because stderr is not a terminal (MESO_PROGRESS_DEFAULT: a log, CI),
+ * one line goes to stderr instead as soon as the rate of the work shows it will take more
+ * than about 2 s in all: "meso: baking <what> for <subject> (about N s)" (the subject of
+ * meso_context_set_subject, when set), so that a log is not silent through a long bake. */
+meso_progress *meso_progress_begin_bake(meso_context *ctx, const char *what, uint64_t total);
+/* Name what the context's work is for ("weave-plane", a scene's path) in the line above; NULL
+ * or "" names nothing. Copied (at most 255 bytes). Set it between pieces of work, not while a
+ * bake runs. */
+void meso_context_set_subject(meso_context *ctx, const char *subject);
 /* Add `units` done. Thread-safe. Returns true when the user cancelled (see meso_progress_fn). */
 bool meso_progress_advance(meso_progress *progress, uint64_t units);
 /* Finish: the bar, if shown, is completed and ended with a newline. */

@@ -115,6 +115,13 @@ typedef struct meso_mesh_material {
     char ignored[512]; /* what the file holds that meso does not use, comma-separated, or "" */
 } meso_mesh_material;
 
+/* Why a scene does not use the mesh file's texture `texture` (the color_map or normal_map of
+ * its material): "not beside the mesh file" for an absolute path or one through "..", the rule
+ * of a glTF's buffers. NULL when a scene uses it (unless its own material sets that map; a
+ * mesh without usable UVs gets projected ones, docs/scene-format.md). The scene loader and
+ * `meso info MODEL` both ask it, so they say the same. Pure. */
+const char *meso_mesh_material_unused_reason(const char *texture);
+
 /* meso_mesh_load, and the mesh's material in *out_material (zeroed when the file has none:
  * assimp's default material of an OBJ without MTL or of a PLY is "none"). */
 meso_result meso_mesh_load_with_material(meso_context *ctx, const char *path, meso_mesh **out_mesh,

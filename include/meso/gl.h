@@ -60,13 +60,24 @@ meso_result meso_gl_probe(meso_context *ctx, meso_gl_info *out_info);
 /* True when `technique` has a fragment shader (flat, parallax, relief, ...). Thread-safe. */
 bool meso_gl_technique_supported(const char *technique);
 
+/* What meso_gl_renderer_create and meso_gl_export_textures check first, without a GL context
+ * and before any bake or file: desc (may be NULL) asks for one sample a pixel and no
+ * wireframe, the scene's techniques and options are valid (meso_technique_check_scene) and
+ * every object's technique accepts its mesostructure and has a shader. A request the GL back
+ * end cannot serve is bad input, MESO_ERROR_INVALID_ARGUMENT naming the object ("wall:
+ * technique 'tessellation' has no GL shader (the GL back end draws: ...)"); what the machine
+ * lacks (no EGL, no GL 3.3) is MESO_ERROR_UNSUPPORTED, from the calls that make a context. */
+meso_result meso_gl_check_scene(meso_context *ctx, const meso_scene *scene,
+                                const meso_render_desc *desc);
+
 typedef struct meso_gl_renderer meso_gl_renderer;
 
-/* Check the scene's techniques and options (as meso_renderer_create does), create the context,
- * compile the programs, upload meshes and maps. The scene must outlive the renderer.
- * Errors: those of meso_renderer_create for the scene; MESO_ERROR_UNSUPPORTED for a technique
- * without a shader, no EGL or no GL 3.3; MESO_ERROR_FORMAT for a shader that does not compile;
- * MESO_ERROR_LIMIT for maps larger than the GL allows. */
+/* Check the scene (meso_gl_check_scene), create the context, compile the programs, upload
+ * meshes and maps. The scene must outlive the renderer. Errors: those of meso_gl_check_scene;
+ * MESO_ERROR_INVALID_ARGUMENT for an option the GL does not draw (gdm or vdm with compressed 0,
+ * gdm's gi under an environment, relief_exact on a repeating map of other than power-of-two
+ * sides); MESO_ERROR_UNSUPPORTED for no EGL or no GL 3.3; MESO_ERROR_FORMAT for a shader that
+ * does not compile; MESO_ERROR_LIMIT for maps larger than the GL allows. */
 meso_result meso_gl_renderer_create(meso_context *ctx, const meso_scene *scene,
                                     const meso_gl_desc *desc, meso_gl_renderer **out_renderer);
 /* Draw one frame into fb (any size up to the GL's largest viewport) and read it back: colour,

@@ -73,7 +73,10 @@ typedef enum meso_technique_kind {
 enum {
     MESO_TECHNIQUE_ACCEPTS_NONE = 1u << 0, /* objects without mesostructure */
     MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD = 1u << 1,
-    MESO_TECHNIQUE_ACCEPTS_SOLID = 1u << 2,
+    MESO_TECHNIQUE_ACCEPTS_SOLID = 1u << 2, /* a solid that tiles (procedural or a tile mesh) */
+    /* a whole model's solid, clamped at its box (a relief impostor, Policarpo & Oliveira 2006
+     * §4; meso_solid_is_periodic is false): no tile to repeat */
+    MESO_TECHNIQUE_ACCEPTS_MODEL_SOLID = 1u << 3,
 };
 
 typedef enum meso_option_type {
@@ -102,6 +105,16 @@ typedef struct meso_technique_info {
     const meso_technique_option *options; /* the option table (NULL when it has none) */
     size_t num_options;
 } meso_technique_info;
+
+/* The MESO_TECHNIQUE_ACCEPTS_* bit a technique needs to draw `mesostructure`, and its name
+ * ("none", "height field", "solid", "model's solid"). Pure. */
+unsigned meso_mesostructure_accepts_bit(const meso_mesostructure *mesostructure);
+const char *meso_mesostructure_accepts_name(unsigned accepts_bit);
+/* Whether `technique` can draw an object with `mesostructure` (its accepts has the bit). The
+ * one test of applicability: the renderers refuse what it refuses, and the commands skip
+ * those techniques as "not applicable". Pure. */
+bool meso_technique_accepts(const meso_technique_info *technique,
+                            const meso_mesostructure *mesostructure);
 
 /* The registered techniques, in a fixed order (flat, bump, ...). Thread-safe. */
 size_t meso_technique_count(void);

@@ -651,7 +651,7 @@ meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm
         .columns = columns,
         .fill = fill_rows,
         .user = &job,
-        .progress = meso_progress_begin(ctx, "gdm bake", (table ? 1u : 2u) * (uint64_t)rows)};
+        .progress = meso_progress_begin_bake(ctx, "gdm", (table ? 1u : 2u) * (uint64_t)rows)};
     /* §4.1: A = U S E^T, W = U S: weight maps W_i(x, y, phi), eigen-maps E_i(z, theta) */
     result =
         meso_bake_svd_streamed(ctx, "gdm", &source, k, gdm->singular, vectors, gdm->weights, table);

@@ -201,7 +201,7 @@ meso_result meso_bake_horizon(meso_context *ctx, const meso_heightfield *heightf
         job.scratch = malloc((size_t)meso_context_num_threads(ctx) * (size_t)width * sizeof(float));
         if (!job.scratch) goto oom;
     }
-    job.progress = meso_progress_begin(ctx, "horizon map", (uint64_t)height);
+    job.progress = meso_progress_begin_bake(ctx, "horizon map", (uint64_t)height);
     meso_parallel_for(ctx, (size_t)height, bake_row, &job);
     meso_progress_end(job.progress);
     free(job.scratch);

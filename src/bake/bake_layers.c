@@ -142,6 +142,7 @@ typedef struct bake_job {
     meso_layers *map;
     int *row_max_count, *row_max_crossings;
     uint64_t *row_clipped, *row_clipped_four;
+    meso_progress *progress; /* a row a unit */
 } bake_job;
 
 static float field_at(const meso_layers_desc *d, meso_vec3 p) {
@@ -257,6 +258,7 @@ static void bake_row(void *user, size_t job, int thread_index) {
     b->row_max_crossings[j] = row_crossings;
     b->row_clipped[j] = clipped;
     b->row_clipped_four[j] = clipped_four;
+    meso_progress_advance(b->progress, 1);
 }
 
 meso_result meso_bake_layers(meso_context *ctx, const meso_layers_desc *desc,
@@ -278,13 +280,16 @@ meso_result meso_bake_layers(meso_context *ctx, const meso_layers_desc *desc,
                     calloc(rows, sizeof(int)),
                     calloc(rows, sizeof(int)),
                     calloc(rows, sizeof(uint64_t)),
-                    calloc(rows, sizeof(uint64_t))};
+                    calloc(rows, sizeof(uint64_t)),
+                    NULL};
     if (!job.row_max_count || !job.row_max_crossings || !job.row_clipped || !job.row_clipped_four) {
         r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "relief_layers: out of memory");
         meso_layers_destroy(map);
         map = NULL;
     } else {
+        job.progress = meso_progress_begin_bake(ctx, "relief_layers", rows);
         meso_parallel_for(ctx, rows, bake_row, &job);
+        meso_progress_end(job.progress);
         for (size_t j = 0; j < rows; j++) { /* fixed order: thread-count independent */
             if (job.row_max_count[j] > map->max_count) map->max_count = job.row_max_count[j];
             if (job.row_max_crossings[j] > map->max_crossings)

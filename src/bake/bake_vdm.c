@@ -478,7 +478,7 @@ meso_result meso_bake_vdm(meso_context *ctx, const meso_vdm_desc *desc, meso_vdm
         .user = &job,
         .column_scale = scale,
         .choose_scale = balance_mvm,
-        .progress = meso_progress_begin(ctx, "vdm bake", (table ? 1u : 2u) * (uint64_t)rows)};
+        .progress = meso_progress_begin_bake(ctx, "vdm", (table ? 1u : 2u) * (uint64_t)rows)};
     /* §3.3: A = U lambda E^T = W E^T, the MVM part weighted (balance_mvm) */
     result = meso_bake_svd_streamed(ctx, "vdm", &source, kw, vdm->singular, vectors, vdm->weights,
                                     table);

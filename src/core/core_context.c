@@ -51,6 +51,10 @@ void meso_context_destroy(meso_context *ctx) {
 
 int meso_context_num_threads(const meso_context *ctx) { return ctx->num_threads; }
 
+void meso_context_set_subject(meso_context *ctx, const char *subject) {
+    snprintf(ctx->subject, sizeof ctx->subject, "%s", subject ? subject : "");
+}
+
 void meso_context_set_num_threads(meso_context *ctx, int num_threads) {
     int count = num_threads > 0 ? num_threads : omp_get_max_threads();
     if (count < 1) count = 1;

@@ -24,6 +24,7 @@ struct meso_context {
     uint64_t memory_limit; /* bytes a job may estimate to need (meso_memory_check) */
     pthread_mutex_t lock;  /* serialises logging and last_error */
     char last_error[MESO_MESSAGE_MAX];
+    char subject[256]; /* meso_context_set_subject: named in a bake's notice */
 };
 
 #endif

@@ -9,6 +9,11 @@
 #define PROGRESS_DELAY_SECONDS 1.0 /* no bar for work shorter than this */
 #define PROGRESS_REDRAW_SECONDS 0.1
 #define PROGRESS_BAR_WIDTH 30
+/* Without a bar, a bake that will take longer than this says so in one line, once its rate has
+ * been measured for PROGRESS_NOTICE_MEASURE_SECONDS (a shorter sample misjudges the start-up of
+ * a parallel loop). */
+#define PROGRESS_NOTICE_SECONDS 2.0
+#define PROGRESS_NOTICE_MEASURE_SECONDS 0.25
 
 struct meso_progress {
     meso_context *ctx;
@@ -21,12 +26,16 @@ struct meso_progress {
     _Atomic double last_draw;
     bool show_bar;
     bool drawn;
+    bool notice;   /* a bake without a bar: one line when it proves long */
+    bool noticed;  /* that line was printed (or the bake proved short) */
+    char what[64]; /* the bake's name in the notice: "gdm" */
 };
 
-meso_progress *meso_progress_begin(meso_context *ctx, const char *label, uint64_t total) {
+static meso_progress *begin(meso_context *ctx, const char *label, uint64_t total, bool bake) {
     bool show_bar = ctx->progress_mode == MESO_PROGRESS_ALWAYS ||
                     (ctx->progress_mode == MESO_PROGRESS_DEFAULT && isatty(STDERR_FILENO));
-    if ((!show_bar && !ctx->on_progress) || total == 0) return NULL;
+    bool notice = bake && !show_bar && ctx->progress_mode == MESO_PROGRESS_DEFAULT;
+    if ((!show_bar && !notice && !ctx->on_progress) || total == 0) return NULL;
     meso_progress *p = calloc(1, sizeof(*p));
     if (!p) return NULL;
     p->ctx = ctx;
@@ -37,7 +46,32 @@ meso_progress *meso_progress_begin(meso_context *ctx, const char *label, uint64_
     atomic_flag_clear(&p->drawing);
     p->start = meso_time_seconds();
     p->show_bar = show_bar;
+    p->notice = notice;
     return p;
+}
+
+meso_progress *meso_progress_begin(meso_context *ctx, const char *label, uint64_t total) {
+    return begin(ctx, label, total, false);
+}
+
+meso_progress *meso_progress_begin_bake(meso_context *ctx, const char *what, uint64_t total) {
+    char label[64];
+    snprintf(label, sizeof label, "%s bake", what);
+    meso_progress *p = begin(ctx, label, total, true);
+    if (p) snprintf(p->what, sizeof p->what, "%s", what);
+    return p;
+}
+
+/* The one line of a long bake without a bar: the whole estimated from the rate so far. */
+static void notice(meso_progress *p, double fraction, double elapsed) {
+    if (elapsed < PROGRESS_NOTICE_MEASURE_SECONDS || fraction <= 0.0) return;
+    double estimate = elapsed / fraction;
+    p->noticed = true; /* measured once: a short bake stays silent */
+    if (estimate <= PROGRESS_NOTICE_SECONDS) return;
+    const char *subject = p->ctx->subject;
+    fprintf(stderr, "meso: baking %s%s%s (about %.0f s)\n", p->what, subject[0] ? " for " : "",
+            subject, estimate);
+    fflush(stderr);
 }
 
 static void draw(meso_progress *p, uint64_t done, double now) {
@@ -45,6 +79,7 @@ static void draw(meso_progress *p, uint64_t done, double now) {
     if (fraction > 1.0) fraction = 1.0;
     if (p->ctx->on_progress && p->ctx->on_progress(p->ctx->progress_user, p->label, fraction))
         atomic_store(&p->cancelled, true);
+    if (p->notice && !p->noticed) notice(p, fraction, now - p->start);
     if (!p->show_bar || now - p->start < PROGRESS_DELAY_SECONDS) return;
     int filled = (int)(fraction * PROGRESS_BAR_WIDTH + 0.5);
     char bar[PROGRESS_BAR_WIDTH + 1];

@@ -216,6 +216,10 @@ static void read_texture(const struct aiMaterial *material, enum aiTextureType t
     }
 }
 
+const char *meso_mesh_material_unused_reason(const char *texture) {
+    return texture[0] == '/' || strstr(texture, "..") ? "not beside the mesh file" : NULL;
+}
+
 /* The first instance's material; what else the file holds goes to `ignored`. */
 static void read_material(const struct aiScene *scene, const import_state *s,
                           meso_mesh_material *m) {

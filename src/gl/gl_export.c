@@ -391,22 +391,42 @@ static meso_result export_object_textures(meso_context *ctx, const meso_scene *s
     return r;
 }
 
+/* The scene's path relative to the folder `dir` ("../scenes/wall.json"), so that the folder
+ * moves with its project; the path as given when either cannot be resolved (a scene parsed
+ * from memory). */
+static void scene_path_from(const char *dir, const char *scene_path, char *out, size_t size) {
+    snprintf(out, size, "%s", scene_path);
+    char *from = realpath(dir, NULL), *to = realpath(scene_path, NULL);
+    if (from && to) {
+        /* the longest common run of whole components, then one ".." a component of `from` left */
+        size_t common = 0, length = strlen(from);
+        for (size_t i = 0; from[i] && from[i] == to[i]; i++)
+            if (from[i] == '/') common = i;
+        if (strncmp(from, to, length) == 0 && to[length] == '/') common = length; /* below dir */
+        size_t used = 0;
+        for (const char *c = from + common; *c; c++)
+            if (*c == '/' && used + 3 < size) {
+                memcpy(out + used, "../", 3);
+                used += 3;
+            }
+        snprintf(out + used, size - used, "%s", to + common + 1);
+    }
+    free(from);
+    free(to);
+}
+
 meso_result meso_gl_export_textures(meso_context *ctx, const meso_scene *scene,
                                     const meso_render_desc *desc, const char *dir) {
     if (!scene || !dir) return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "export: NULL");
     meso_render_desc d = desc ? *desc : (meso_render_desc){0};
-    meso_result r = meso_technique_check_scene(ctx, scene);
     /* every object's technique and options first: a scene that cannot be exported writes
      * nothing */
-    for (int i = 0; i < scene->num_objects && r == MESO_OK; i++) {
-        const meso_technique_info *info;
-        double options[64];
-        r = gl_resolve_technique(ctx, &scene->objects[i], &d, &info);
-        if (r == MESO_OK) r = meso_technique_options_values(ctx, scene, i, &d, info->name, options);
-    }
+    meso_result r = meso_gl_check_scene(ctx, scene, &d);
     if (r != MESO_OK) return r;
     cJSON *manifest = cJSON_CreateObject();
-    cJSON_AddStringToObject(manifest, "scene", scene->path);
+    char scene_path[4096];
+    scene_path_from(dir, scene->path, scene_path, sizeof scene_path);
+    cJSON_AddStringToObject(manifest, "scene", scene_path); /* relative to the manifest */
     cJSON_AddStringToObject(
         manifest, "conventions",
         "docs/design.md: texture space u right, v up (row 0 of every file at v = "

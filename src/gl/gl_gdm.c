@@ -29,11 +29,11 @@ meso_result gl_gdm_bake(meso_context *ctx, const meso_scene *scene, const meso_o
     memset(out, 0, sizeof *out);
     const meso_mesostructure *ms = &object->mesostructure;
     if (gl_option_value(info, options, "compressed") == 0.0)
-        return meso_log_error(ctx, MESO_ERROR_UNSUPPORTED,
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "%s: gdm: compressed 0 (the raw 5D table) is drawn on the CPU only",
                               object->name);
     if (scene && scene->environment && gl_option_value(info, options, "gi") != 0.0)
-        return meso_log_error(ctx, MESO_ERROR_UNSUPPORTED,
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "%s: gdm: gi 1 (the radiance transfer volume of an environment) is "
                               "drawn on the CPU only; set gdm.gi=0 for the GL",
                               object->name);

@@ -54,7 +54,8 @@ meso_result gl_program_build(meso_context *ctx, const char *technique, const cha
 
 /* The technique of an object: desc's override or its own; with desc->fallback, an override
  * that cannot draw the object gives way to the object's own, else flat (as
- * meso_renderer_create). MESO_ERROR_UNSUPPORTED when it has no shader. */
+ * meso_renderer_create). MESO_ERROR_INVALID_ARGUMENT when it does not accept the object's
+ * mesostructure or has no shader: a request the back end cannot serve. */
 meso_result gl_resolve_technique(meso_context *ctx, const meso_object *object,
                                  const meso_render_desc *desc, const meso_technique_info **out);
 

@@ -12,7 +12,7 @@ meso_result gl_max_mip_create(meso_context *ctx, const meso_object *object, GLui
     const meso_heightfield *hf = object->mesostructure.height_field;
     int w = hf ? hf->width : 0, h = hf ? hf->height : 0;
     if (hf && hf->wrap != MESO_WRAP_CLAMP && ((w & (w - 1)) != 0 || (h & (h - 1)) != 0))
-        return meso_log_error(ctx, MESO_ERROR_UNSUPPORTED,
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "%s: relief_exact on the GL needs a height field of power-of-two "
                               "sides (this one is %d x %d)",
                               object->name, w, h);

@@ -47,12 +47,6 @@ struct meso_gl_renderer {
     meso_render_stats stats;
 };
 
-static unsigned accepts_bit(meso_mesostructure_kind kind) {
-    return kind == MESO_MESOSTRUCTURE_HEIGHT_FIELD ? MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD
-           : kind == MESO_MESOSTRUCTURE_SOLID      ? MESO_TECHNIQUE_ACCEPTS_SOLID
-                                                   : MESO_TECHNIQUE_ACCEPTS_NONE;
-}
-
 GLuint gl_texture_2d(GLenum internal_format, int width, int height, GLenum format, GLenum type,
                      const void *data) {
     GLuint texture;
@@ -83,19 +77,19 @@ meso_result gl_resolve_technique(meso_context *ctx, const meso_object *object,
     const char *own = object->technique[0] ? object->technique : "flat";
     const char *name = desc->technique ? desc->technique : own;
     const meso_technique_info *info = meso_technique_find(name);
-    unsigned kind = accepts_bit(object->mesostructure.kind);
+    const meso_mesostructure *kind = &object->mesostructure;
     *out = NULL;
-    if (info && desc->fallback && desc->technique && !(info->accepts & kind)) {
+    if (info && desc->fallback && desc->technique && !meso_technique_accepts(info, kind)) {
         const meso_technique_info *mine = meso_technique_find(own);
-        info = mine && mine->kind == MESO_TECHNIQUE_PER_PIXEL && (mine->accepts & kind) &&
-                       meso_gl_technique_supported(own)
+        info = mine && mine->kind == MESO_TECHNIQUE_PER_PIXEL &&
+                       meso_technique_accepts(mine, kind) && meso_gl_technique_supported(own)
                    ? mine
                    : meso_technique_find("flat");
     }
     if (!info)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: unknown technique '%s'",
                               object->name, name);
-    if (!(info->accepts & kind))
+    if (!meso_technique_accepts(info, kind))
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "%s: technique '%s' does not accept this mesostructure", object->name,
                               info->name);
@@ -108,7 +102,7 @@ meso_result gl_resolve_technique(meso_context *ctx, const meso_object *object,
             int w = snprintf(list + used, sizeof list - used, "%s%s", used ? ", " : "", t);
             if (w > 0 && (size_t)w < sizeof list - used) used += (size_t)w;
         }
-        return meso_log_error(ctx, MESO_ERROR_UNSUPPORTED,
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "%s: technique '%s' has no GL shader (the GL back end draws: %s)",
                               object->name, info->name, list);
     }
@@ -247,24 +241,38 @@ static meso_result prepare_object(meso_gl_renderer *r, int index, const meso_gl_
     return MESO_OK;
 }
 
+meso_result meso_gl_check_scene(meso_context *ctx, const meso_scene *scene,
+                                const meso_render_desc *desc) {
+    if (!scene) return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "gl: NULL scene");
+    meso_render_desc d = desc ? *desc : (meso_render_desc){0};
+    if (d.samples > 1 || d.wireframe)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "%s: the GL back end draws one sample a pixel and no wireframe",
+                              scene->path);
+    meso_result result = meso_technique_check_scene(ctx, scene);
+    for (int i = 0; result == MESO_OK && i < d.num_options; i++) {
+        char where[160];
+        snprintf(where, sizeof where, "render options: %s.%s", d.options[i].technique,
+                 d.options[i].name);
+        result = meso_technique_check_option(ctx, d.options[i].technique, d.options[i].name,
+                                             d.options[i].value, where);
+    }
+    for (int i = 0; result == MESO_OK && i < scene->num_objects; i++) {
+        const meso_technique_info *info;
+        double values[GL_MAX_OPTIONS];
+        result = gl_resolve_technique(ctx, &scene->objects[i], &d, &info);
+        if (result == MESO_OK)
+            result = meso_technique_options_values(ctx, scene, i, &d, info->name, values);
+    }
+    return result;
+}
+
 meso_result meso_gl_renderer_create(meso_context *ctx, const meso_scene *scene,
                                     const meso_gl_desc *desc, meso_gl_renderer **out_renderer) {
     *out_renderer = NULL;
     meso_gl_desc d = desc ? *desc : (meso_gl_desc){0};
     if (!scene) return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "gl: NULL scene");
-    if (d.render.samples > 1 || d.render.wireframe)
-        return meso_log_error(ctx, MESO_ERROR_UNSUPPORTED,
-                              "%s: the GL back end draws one sample a pixel and no wireframe",
-                              scene->path);
-    meso_result result = meso_technique_check_scene(ctx, scene);
-    for (int i = 0; result == MESO_OK && i < d.render.num_options; i++) {
-        char where[160];
-        snprintf(where, sizeof where, "render options: %s.%s", d.render.options[i].technique,
-                 d.render.options[i].name);
-        result =
-            meso_technique_check_option(ctx, d.render.options[i].technique,
-                                        d.render.options[i].name, d.render.options[i].value, where);
-    }
+    meso_result result = meso_gl_check_scene(ctx, scene, &d.render);
     if (result != MESO_OK) return result;
     double start = meso_time_seconds();
     meso_gl_renderer *r = calloc(1, sizeof *r);
@@ -277,12 +285,6 @@ meso_result meso_gl_renderer_create(meso_context *ctx, const meso_scene *scene,
     r->ctx = ctx;
     r->scene = scene;
     r->gl.context = EGL_NO_CONTEXT;
-    /* the techniques first: a scene the GL cannot draw says so before any context is made */
-    for (int i = 0; i < scene->num_objects; i++) {
-        const meso_technique_info *info;
-        if ((result = gl_resolve_technique(ctx, &scene->objects[i], &d.render, &info)) != MESO_OK)
-            goto fail;
-    }
     if ((result = gl_context_create(ctx, &r->gl, NULL)) != MESO_OK) goto fail;
     r->num_objects = scene->num_objects;
     for (int i = 0; i < scene->num_objects; i++)

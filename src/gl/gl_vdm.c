@@ -79,7 +79,7 @@ meso_result gl_vdm_bake(meso_context *ctx, const meso_object *object,
     memset(out, 0, sizeof *out);
     const meso_heightfield *hf = object->mesostructure.height_field;
     if (gl_option_value(info, options, "compressed") == 0.0)
-        return meso_log_error(ctx, MESO_ERROR_UNSUPPORTED,
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "%s: vdm: compressed 0 (the raw 5D table) is drawn on the CPU only",
                               object->name);
     float tile = meso_mesh_tile_length(object->mesh);

@@ -39,28 +39,6 @@ struct meso_renderer {
 #define raster_resolve_avx2 raster_resolve
 #endif
 
-static const char *kind_name(meso_mesostructure_kind kind) {
-    switch (kind) {
-    case MESO_MESOSTRUCTURE_HEIGHT_FIELD:
-        return "height field";
-    case MESO_MESOSTRUCTURE_SOLID:
-        return "solid";
-    default:
-        return "none";
-    }
-}
-
-static unsigned kind_bit(meso_mesostructure_kind kind) {
-    switch (kind) {
-    case MESO_MESOSTRUCTURE_HEIGHT_FIELD:
-        return MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD;
-    case MESO_MESOSTRUCTURE_SOLID:
-        return MESO_TECHNIQUE_ACCEPTS_SOLID;
-    default:
-        return MESO_TECHNIQUE_ACCEPTS_NONE;
-    }
-}
-
 static void list_names(char *buffer, size_t size, bool techniques_list, unsigned accepts) {
     size_t used = 0;
     buffer[0] = 0;
@@ -68,11 +46,12 @@ static void list_names(char *buffer, size_t size, bool techniques_list, unsigned
         meso_technique_list_names(buffer, size);
         return;
     }
-    const meso_mesostructure_kind kinds[] = {
-        MESO_MESOSTRUCTURE_NONE, MESO_MESOSTRUCTURE_HEIGHT_FIELD, MESO_MESOSTRUCTURE_SOLID};
-    for (size_t i = 0; i < 3; i++) {
-        if (!(accepts & kind_bit(kinds[i]))) continue;
-        int w = snprintf(buffer + used, size - used, "%s%s", used ? ", " : "", kind_name(kinds[i]));
+    const unsigned bits[] = {MESO_TECHNIQUE_ACCEPTS_NONE, MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD,
+                             MESO_TECHNIQUE_ACCEPTS_SOLID, MESO_TECHNIQUE_ACCEPTS_MODEL_SOLID};
+    for (size_t i = 0; i < sizeof bits / sizeof bits[0]; i++) {
+        if (!(accepts & bits[i])) continue;
+        int w = snprintf(buffer + used, size - used, "%s%s", used ? ", " : "",
+                         meso_mesostructure_accepts_name(bits[i]));
         if (w < 0 || (size_t)w >= size - used) return;
         used += (size_t)w;
     }
@@ -111,10 +90,10 @@ static meso_result resolve_technique(meso_context *ctx, const meso_object *objec
     const char *name = override ? override : own;
     const meso_technique *t = meso_technique_lookup(name);
     *out = NULL;
-    if (fallback && override && t && !(t->info.accepts & kind_bit(object->mesostructure.kind))) {
+    if (fallback && override && t && !meso_technique_accepts(&t->info, &object->mesostructure)) {
         const meso_technique *mine = meso_technique_lookup(own);
         bool usable = mine && mine->info.kind != MESO_TECHNIQUE_REFERENCE &&
-                      (mine->info.accepts & kind_bit(object->mesostructure.kind));
+                      meso_technique_accepts(&mine->info, &object->mesostructure);
         name = usable ? own : "flat";
         t = meso_technique_lookup(name);
     }
@@ -123,13 +102,14 @@ static meso_result resolve_technique(meso_context *ctx, const meso_object *objec
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                               "%s: unknown technique '%s' (known: %s)", object->name, name, list);
     }
-    meso_mesostructure_kind kind = object->mesostructure.kind;
-    if (!(t->info.accepts & kind_bit(kind))) {
+    if (!meso_technique_accepts(&t->info, &object->mesostructure)) {
         list_names(list, sizeof(list), false, t->info.accepts);
         return meso_log_error(
             ctx, MESO_ERROR_INVALID_ARGUMENT,
             "%s: technique '%s' does not accept mesostructure '%s' (it accepts: %s)", object->name,
-            name, kind_name(kind), list);
+            name,
+            meso_mesostructure_accepts_name(meso_mesostructure_accepts_bit(&object->mesostructure)),
+            list);
     }
     if (t->info.kind == MESO_TECHNIQUE_GEOMETRY && !t->geometry) {
         return meso_log_error(ctx, MESO_ERROR_INTERNAL,

@@ -18,7 +18,7 @@ static const meso_technique technique_reference = {
              .paper = "ground truth: the displaced / mapped mesostructure as real geometry",
              .kind = MESO_TECHNIQUE_REFERENCE,
              .accepts = MESO_TECHNIQUE_ACCEPTS_NONE | MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD |
-                        MESO_TECHNIQUE_ACCEPTS_SOLID,
+                        MESO_TECHNIQUE_ACCEPTS_SOLID | MESO_TECHNIQUE_ACCEPTS_MODEL_SOLID,
              .options = meso_reference_options,
              .num_options = MESO_REFERENCE_NUM_OPTIONS},
 };
@@ -86,6 +86,35 @@ const meso_technique *meso_technique_lookup(const char *name) {
 const meso_technique_info *meso_technique_find(const char *name) {
     const meso_technique *t = meso_technique_lookup(name);
     return t ? &t->info : NULL;
+}
+
+unsigned meso_mesostructure_accepts_bit(const meso_mesostructure *m) {
+    switch (m->kind) {
+    case MESO_MESOSTRUCTURE_HEIGHT_FIELD:
+        return MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD;
+    case MESO_MESOSTRUCTURE_SOLID:
+        return m->solid && !meso_solid_is_periodic(m->solid) ? MESO_TECHNIQUE_ACCEPTS_MODEL_SOLID
+                                                             : MESO_TECHNIQUE_ACCEPTS_SOLID;
+    default:
+        return MESO_TECHNIQUE_ACCEPTS_NONE;
+    }
+}
+
+const char *meso_mesostructure_accepts_name(unsigned accepts_bit) {
+    switch (accepts_bit) {
+    case MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD:
+        return "height field";
+    case MESO_TECHNIQUE_ACCEPTS_SOLID:
+        return "solid";
+    case MESO_TECHNIQUE_ACCEPTS_MODEL_SOLID:
+        return "model's solid";
+    default:
+        return "none";
+    }
+}
+
+bool meso_technique_accepts(const meso_technique_info *technique, const meso_mesostructure *m) {
+    return (technique->accepts & meso_mesostructure_accepts_bit(m)) != 0;
 }
 
 void meso_technique_list_names(char *buffer, size_t size) {

@@ -469,8 +469,11 @@ static meso_result apply_mesh_material(const scene_parser *p, const cJSON *obj,
             append_note(note, note_size, "base colour used");
         }
         const char *texture = from_file->color_map;
-        if (texture[0] && (texture[0] == '/' || strstr(texture, ".."))) {
-            append_note(note, note_size, "colour texture not used: not beside the mesh file");
+        const char *unused = meso_mesh_material_unused_reason(texture);
+        if (texture[0] && unused) {
+            char text[160];
+            snprintf(text, sizeof text, "colour texture not used: %s", unused);
+            append_note(note, note_size, text);
         } else if (texture[0]) {
             char path[SCENE_PATH_MAX];
             const char *slash = strrchr(mesh_path, '/');
@@ -489,10 +492,13 @@ static meso_result apply_mesh_material(const scene_parser *p, const cJSON *obj,
         }
     }
     const char *normal = from_file->normal_map;
+    const char *unused = meso_mesh_material_unused_reason(normal);
     if (normal[0] && cJSON_GetObjectItemCaseSensitive(material, "normal_map")) {
         append_note(note, note_size, "normal texture not used: the scene's material sets one");
-    } else if (normal[0] && (normal[0] == '/' || strstr(normal, ".."))) {
-        append_note(note, note_size, "normal texture not used: not beside the mesh file");
+    } else if (normal[0] && unused) {
+        char text[160];
+        snprintf(text, sizeof text, "normal texture not used: %s", unused);
+        append_note(note, note_size, text);
     } else if (normal[0]) {
         char path[SCENE_PATH_MAX];
         const char *slash = strrchr(mesh_path, '/');
@@ -681,8 +687,9 @@ static meso_result build_mesh(const scene_parser *p, const cJSON *obj, const sce
         (r = create_mesh(p, obj, key, &object->mesh, &from_file, mesh_path)) ||
         (mesh_path[0] && (r = apply_mesh_material(p, obj, key, mesh_path, &from_file, object))))
         return r;
-    bool require_uvs =
-        object->mesostructure.kind != MESO_MESOSTRUCTURE_NONE || object->material.color_map != NULL;
+    /* a normal map needs them too: its tangent frame is dP/du, dP/dv (docs/scene-format.md) */
+    bool require_uvs = object->mesostructure.kind != MESO_MESOSTRUCTURE_NONE ||
+                       object->material.color_map != NULL || object->material.normal_map != NULL;
     /* The transform is a uniform scale times a rotation: its scale is the length of a column. */
     float world_per_mesh_unit =
         sqrtf(transform.m[0] * transform.m[0] + transform.m[1] * transform.m[1] +

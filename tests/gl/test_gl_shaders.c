@@ -162,9 +162,8 @@ static void test_missing_gl_is_one_line(void **state) {
     snprintf(arguments, sizeof arguments, "render %s --backend gl --technique tessellation -o %s",
              scene, out);
     const char *err = NULL;
-    assert_int_equal(test_run_meso(arguments, &err), 1);
+    assert_int_equal(test_run_meso(arguments, &err), 2); /* a usage error, not the machine's */
     assert_non_null(strstr(err, "'tessellation' has no GL shader"));
-    assert_non_null(strstr(err, "--backend cpu works"));
     snprintf(arguments, sizeof arguments, "render %s --backend vulkan -o %s", scene, out);
     assert_int_equal(test_run_meso(arguments, &err), 2);
     assert_non_null(strstr(err, "'vulkan' is not cpu or gl"));

@@ -155,14 +155,19 @@ static void test_the_scene_uses_the_file_material_unless_it_sets_a_colour(void *
     meso_context_destroy(ctx);
 }
 
+/* The folder `name` in the test's folder, made; its path in dir. */
+static void make_subfolder(const char *name, char *dir, size_t size) {
+    snprintf(dir, size, "%s/%s", test_temp_dir(), name);
+    char command[1300];
+    snprintf(command, sizeof command, "mkdir -p '%s'", dir);
+    assert_int_equal(system(command), 0);
+}
+
 /* A texture outside the mesh's folder is not read. */
 static void test_a_texture_outside_the_mesh_folder_is_not_read(void **state) {
     (void)state;
     char dir[1100];
-    snprintf(dir, sizeof dir, "%s/outside", test_temp_dir());
-    char command[1300];
-    snprintf(command, sizeof command, "mkdir -p '%s'", dir);
-    assert_int_equal(system(command), 0);
+    make_subfolder("outside", dir, sizeof dir);
     write_png(test_path(test_temp_dir(), "secret.png"), 0.5f);
     write_text(dir, "quad.mtl", "newmtl brick\nKd 0.6 0.3 0.1\nmap_Kd ../secret.png\n");
     write_text(dir, "quad.obj", obj_quad);
@@ -203,6 +208,50 @@ static void test_meso_info_says_what_was_read_and_ignored(void **state) {
     if (!strstr(text, "base colour 0.25 0.5 0.75") || !strstr(text, "colour texture c.png") ||
         !strstr(text, "normal texture n.png") || !strstr(text, "ignored: occlusion texture"))
         fail_msg("meso info said:\n%s", text);
+    /* the file alone says what the scene above says: its normal texture is used */
+    if (strstr(text, "not used") ||
+        !strstr(text, "normal texture n.png (used as the normal map, OpenGL convention, when the "
+                      "scene's material sets none)"))
+        fail_msg("meso info said:\n%s", text);
+    free(text);
+}
+
+/* A normal map's tangent frame is dP/du, dP/dv (docs/scene-format.md, "Normal maps"): on a
+ * mesh without UVs the file's normal texture alone had none to be oriented by, so it was
+ * loaded, said "used" and changed nothing. It needs texture coordinates as a colour map does:
+ * the scene projects them, and the scene and `meso info` of the file both say it is used. */
+static void test_a_normal_texture_without_uvs_is_used_through_projected_ones(void **state) {
+    (void)state;
+    char dir[1100], command[4096];
+    make_subfolder("no-uvs", dir, sizeof dir);
+    char gltf[sizeof gltf_triangle];
+    snprintf(gltf, sizeof gltf, "%s", gltf_triangle);
+    const char *const cut[] = {",\"TEXCOORD_0\":1", ",\"baseColorTexture\":{\"index\":0}"};
+    for (int i = 0; i < 2; i++) {
+        char *at = strstr(gltf, cut[i]);
+        assert_non_null(at);
+        memmove(at, at + strlen(cut[i]), strlen(at + strlen(cut[i])) + 1);
+    }
+    write_text(dir, "painted.gltf", gltf);
+    write_png(test_path(dir, "n.png"), 0.5f);
+    meso_context *ctx = test_context(1);
+    meso_scene *scene = load_scene(ctx, dir, "no-uvs.json", NULL);
+    const meso_object *o = &scene->objects[0];
+    assert_non_null(o->material.normal_map);
+    assert_non_null(o->mesh->uvs); /* projected */
+    assert_non_null(o->mesh->tangents);
+    if (!strstr(o->mesh_material_note, "normal texture used (OpenGL convention)"))
+        fail_msg("note: %s", o->mesh_material_note);
+    meso_scene_destroy(scene);
+    meso_context_destroy(ctx);
+    char out_path[1200];
+    snprintf(out_path, sizeof out_path, "%s/info.txt", dir);
+    snprintf(command, sizeof command, "%s info %s/painted.gltf > %s", MESO_PROGRAM, dir, out_path);
+    assert_int_equal(system(command), 0);
+    size_t size;
+    char *text = test_read_file(out_path, &size);
+    if (!strstr(text, "normal texture n.png (used as the normal map"))
+        fail_msg("meso info said:\n%s", text);
     free(text);
 }
 
@@ -213,6 +262,7 @@ int main(void) {
         cmocka_unit_test(test_the_scene_uses_the_file_material_unless_it_sets_a_colour),
         cmocka_unit_test(test_a_texture_outside_the_mesh_folder_is_not_read),
         cmocka_unit_test(test_meso_info_says_what_was_read_and_ignored),
+        cmocka_unit_test(test_a_normal_texture_without_uvs_is_used_through_projected_ones),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -26,7 +26,7 @@ const meso_technique meso_technique_flat = {
              .paper = "Gouraud 1971 / Phong 1975 smooth normals (baseline)",
              .kind = MESO_TECHNIQUE_PER_PIXEL,
              .accepts = MESO_TECHNIQUE_ACCEPTS_NONE | MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD |
-                        MESO_TECHNIQUE_ACCEPTS_SOLID},
+                        MESO_TECHNIQUE_ACCEPTS_SOLID | MESO_TECHNIQUE_ACCEPTS_MODEL_SOLID},
     .prepare = flat_prepare,
     .release = flat_release,
     .shade_block = flat_shade_block,

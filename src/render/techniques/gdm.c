@@ -1202,6 +1202,8 @@ const meso_technique meso_technique_gdm = {
              .summary = "generalized displacement maps: prisms rasterized, 5D distance lookup",
              .paper = "Wang et al. 2004, \"Generalized Displacement Maps\", §3.2",
              .kind = MESO_TECHNIQUE_GEOMETRY,
+             /* solids that tile only: the GDM is one tile's volume repeated over the surface
+              * (§3), and a model's solid (an impostor) is clamped at its box */
              .accepts = MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD | MESO_TECHNIQUE_ACCEPTS_SOLID,
              .options = gdm_option_table,
              .num_options = MESO_OPTION_COUNT(gdm_option_table)},

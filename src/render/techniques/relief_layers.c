@@ -641,7 +641,8 @@ const meso_technique meso_technique_relief_layers = {
              .summary = "multilayer relief maps: non-height-field details, shadows, silhouettes",
              .paper = "Policarpo & Oliveira 2006, §3",
              .kind = MESO_TECHNIQUE_PER_PIXEL,
-             .accepts = MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD | MESO_TECHNIQUE_ACCEPTS_SOLID,
+             .accepts = MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD | MESO_TECHNIQUE_ACCEPTS_SOLID |
+                        MESO_TECHNIQUE_ACCEPTS_MODEL_SOLID, /* §4: impostors */
              .options = layers_option_table,
              .num_options = MESO_OPTION_COUNT(layers_option_table)},
     .prepare = prepare,
