@@ -113,10 +113,8 @@ static void test_closed_mesh_is_watertight_from_50_views(void **state) {
         float distance = 2.6f + test_uniform(&seed);
         /* an up vector off the view axis */
         meso_vec3 up = fabsf(dir.y) > 0.9f ? (meso_vec3){1, 0, 0} : (meso_vec3){0, 1, 0};
-        ts.scene.camera = (meso_camera){meso_vec3_add(meso_vec3_scale(dir, distance), off),
-                                        {0.0f, 0.0f, 0.0f},
-                                        up,
-                                        40.0f};
+        ts.scene.camera = (meso_camera){
+            meso_vec3_add(meso_vec3_scale(dir, distance), off), {0.0f, 0.0f, 0.0f}, up, 40.0f};
         size_t covered, holes[2];
         for (int walk = 0; walk < 2; walk++) {
             if (meso_renderer_render(renderer[walk], fb) != MESO_OK)
@@ -179,7 +177,8 @@ static void test_plane_seen_down_its_fins_has_no_pinhole(void **state) {
                     meso_vec3 q = meso_vec3_madd(frame.eye, dir, t);
                     if (fabsf(q.x) > 0.95f || fabsf(q.z) > 0.95f) continue;
                     inside++;
-                    holes[walk] += !(fb->coverage[(size_t)y * (size_t)fb->width + (size_t)x] > 0.0f);
+                    holes[walk] +=
+                        !(fb->coverage[(size_t)y * (size_t)fb->width + (size_t)x] > 0.0f);
                 }
             meso_framebuffer_destroy(fb);
         }
@@ -332,11 +331,11 @@ static void test_ray_along_a_shared_fin_enters_one_prism(void **state) {
             gdm_walk_crossing c;
             for (int first = 0; first < 2; first++) {
                 if (offset == 0) { /* in the fin: either prism may get the entry */
-                    c = (gdm_walk_crossing){.prism = (size_t)first,
-                                            .entry_face = meso_prism_layer_face(layer, (size_t)first,
-                                                                                MESO_PRISM_TOP),
-                                            .entry_slot = MESO_PRISM_TOP,
-                                            .p_in = start};
+                    c = (gdm_walk_crossing){
+                        .prism = (size_t)first,
+                        .entry_face = meso_prism_layer_face(layer, (size_t)first, MESO_PRISM_TOP),
+                        .entry_slot = MESO_PRISM_TOP,
+                        .p_in = start};
                 } else if (first == 1 || !first_boundary_entry(layer, o, dir, &c)) {
                     continue;
                 }
@@ -451,8 +450,8 @@ static void test_walk_and_every_prism_drawn_agree_on_every_example(void **state)
         }
         print_message("%-16s every prism %6.2f / %6.2f dB IoU %.4f; walk %6.2f / %6.2f dB IoU "
                       "%.4f\n",
-                      gdm_examples[e], s[0].whole, s[0].covered, s[0].iou, s[1].whole,
-                      s[1].covered, s[1].iou);
+                      gdm_examples[e], s[0].whole, s[0].covered, s[0].iou, s[1].whole, s[1].covered,
+                      s[1].iou);
         if (s[1].whole < s[0].whole - 0.2 || s[1].covered < s[0].covered - 0.2 ||
             s[1].iou < s[0].iou - 1.0 / fmax(s[0].union_pixels, 1.0))
             fail_msg("%s: the walk is less accurate than every prism drawn", gdm_examples[e]);

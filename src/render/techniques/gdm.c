@@ -51,6 +51,10 @@ typedef struct gdm_state {
      * group_start[g + 1]); NULL without the walk, every face drawn */
     uint32_t *fin_twin, *boundary;
     size_t group_start[4];
+    /* the walk: per fin face of the layer, 1 where its twin's vertices carry the same (u, v, w)
+     * (not a UV seam): the twin's linear (u, v, w) is then the face's own, and the exit's
+     * (u, v, w) is the neighbour's entry */
+    uint8_t *twin_same_uvw;
     gdm_lookup_table table; /* the compressed map laid out 8-wide (unless raw) */
     meso_prism_layer *layer;
     const meso_heightfield *heightfield; /* one of these two */
@@ -183,6 +187,7 @@ static void gdm_release(void *state) {
     free(s->drawn_face);
     free(s->fin_twin);
     free(s->boundary);
+    free(s->twin_same_uvw);
     free(s->sort_counts);
     free(s->sort_keys);
     free(s->prism_clear);
@@ -399,7 +404,21 @@ static bool walk_boundary(gdm_state *s) {
     size_t n = layer->num_prisms;
     s->fin_twin = gdm_fin_twins(layer);
     s->boundary = malloc((n ? 8 * n : 1) * sizeof *s->boundary);
-    if (!s->fin_twin || !s->boundary) return false;
+    s->twin_same_uvw = calloc(n ? 8 * n : 1, 1);
+    if (!s->fin_twin || !s->boundary || !s->twin_same_uvw) return false;
+    for (size_t f = n; f < 7 * n; f++) {
+        uint32_t twin = s->fin_twin[f];
+        if (twin == GDM_NO_TWIN) continue;
+        const meso_vec3 *a = layer->face_frames[f].uvw, *b = layer->face_frames[twin].uvw;
+        bool same = true;
+        for (int i = 0; i < 3 && same; i++) {
+            bool found = false;
+            for (int j = 0; j < 3 && !found; j++)
+                found = a[i].x == b[j].x && a[i].y == b[j].y && a[i].z == b[j].z;
+            same = found;
+        }
+        s->twin_same_uvw[f] = same;
+    }
     size_t count = 0;
     for (size_t f = 0; f < n; f++) s->boundary[count++] = (uint32_t)f;
     for (size_t f = n; f < 7 * n; f++) {
@@ -1262,14 +1281,19 @@ static bool shade_walk(const gdm_state *s, const meso_frame *frame, const meso_o
     for (int n = 0; n < GDM_WALK_MAX_PRISMS; n++) {
         /* a stretch of no length holds nothing (a fold's planes crossed at the entry point,
          * whose (u, v, w) on two faces' planes differ) -- but a floor there is the floor */
-        if ((c.t_exit > 0.0f || c.exit_slot == MESO_PRISM_BOTTOM) &&
-            segment_hit(s, object->mesh, &c, t_in, view, &seg)) {
+        bool tested = c.t_exit > 0.0f || c.exit_slot == MESO_PRISM_BOTTOM;
+        if (tested && segment_hit(s, object->mesh, &c, t_in, view, &seg)) {
             shade_hit(s, frame, object, f, &c, &seg, visibility, out_hit);
             return true;
         }
-        if (!gdm_walk_next(s->layer, s->fin_twin, &c) || !gdm_walk_exit(s->layer, &c, view))
-            return false;
-        t_in = meso_prism_layer_face_uvw(s->layer, c.entry_face, c.p_in);
+        size_t exit_face = meso_prism_layer_face(s->layer, c.prism, c.exit_slot);
+        if (!gdm_walk_next(s->layer, s->fin_twin, &c)) return false;
+        /* the exit's (u, v, w), made by segment_hit, is the entry's unless a UV seam lies
+         * between (the same linear interpolation of the same vertices) */
+        t_in = tested && s->twin_same_uvw[exit_face]
+                   ? seg.t_out
+                   : meso_prism_layer_face_uvw(s->layer, c.entry_face, c.p_in);
+        if (!gdm_walk_exit(s->layer, &c, view)) return false;
     }
     return false;
 }
@@ -1331,7 +1355,7 @@ static size_t gdm_memory(const void *state) {
            gdm_lookup_table_bytes(&s->table) + meso_prism_layer_memory(s->layer) +
            s->group_start[3] * (4 * sizeof(uint32_t) + sizeof(float)) +
            (s->boundary ? s->group_start[3] * sizeof(uint32_t) +
-                              s->layer->faces->num_triangles * sizeof(uint32_t)
+                              s->layer->faces->num_triangles * (sizeof(uint32_t) + 1)
                         : 0) +
            gdm_gi_memory(s->gi) + gdm_shell_memory(s->shell) +
            (s->grid ? (size_t)GDM_GRID_LAYERS * GDM_GRID_SIDE * GDM_GRID_SIDE * sizeof(float) : 0) +

@@ -52,16 +52,16 @@ typedef struct gdm_walk_crossing {
 /* How far inside face `face` the point x lies, projected on the face's plane: its least
  * barycentric weight there (negative outside the triangle), as meso_prism_layer_face_uvw
  * weighs it; -INFINITY for a degenerate face. */
-static inline float gdm_walk_face_inside(const meso_prism_layer *layer, size_t face,
-                                         meso_vec3 x) {
+static inline float gdm_walk_face_inside(const meso_prism_layer *layer, size_t face, meso_vec3 x) {
     const meso_prism_face_frame *f = &layer->face_frames[face];
     if (!(f->det > 0.0f)) return -INFINITY;
     meso_vec3 d = meso_vec3_sub(x, f->p0);
     float d20 = meso_vec3_dot(d, f->e1), d21 = meso_vec3_dot(d, f->e2);
-    float b1 = (f->d11 * d20 - f->d01 * d21) / f->det;
-    float b2 = (f->d00 * d21 - f->d01 * d20) / f->det;
-    float b0 = 1.0f - b1 - b2;
-    return fminf(b0, fminf(b1, b2));
+    /* the weights times det, the least of them divided once */
+    float b1 = f->d11 * d20 - f->d01 * d21, b2 = f->d00 * d21 - f->d01 * d20;
+    float b0 = f->det - b1 - b2, least = b1 < b2 ? b1 : b2;
+    least = b0 < least ? b0 : least;
+    return least / f->det;
 }
 
 /* Where the ray origin + t dir crosses face `face`'s triangle going out of its prism (the
@@ -108,20 +108,21 @@ static inline bool gdm_walk_exit_planes(const meso_prism_layer *layer, gdm_walk_
  * nearly the same point, either side of the diagonal; the other triangle's linear (u, v, w)
  * extended over the plane is off by the fin's bend there (a thousandth of a tile on
  * bumps-sphere), and the walk carries the exit's (u, v, w) into the neighbour through the
- * twin. Where the point lies off both (a folded prism's planes, crossed beside their
- * triangles: the teapot's lid rim), or the ray does not go out through the face's plane at
- * all (entered at an edge, rounded a hair outside the plane of a face it goes in through: a
+ * twin. Where the point lies off both fin triangles (a folded prism's planes, crossed beside
+ * their triangles: the teapot's lid rim), or the ray does not go out through the face's plane
+ * at all (entered at an edge, rounded a hair outside the plane of a face it goes in through: a
  * top at once, t = 0, which would end the walk there), the exit is the nearest of the prism's
  * faces whose triangle the ray crosses going out, as a walk through a cell complex takes it
- * (Bunyk et al. 1997); Fig. 5's answer stands where none is crossed. false: no face bounds the ray (a
- * degenerate prism) or the exit is not finite. */
+ * (Bunyk et al. 1997); Fig. 5's answer stands where none is crossed. false: no face bounds the
+ * ray (a degenerate prism) or the exit is not finite. */
 static inline bool gdm_walk_exit(const meso_prism_layer *layer, gdm_walk_crossing *c,
                                  meso_vec3 dir) {
     if (!gdm_walk_exit_planes(layer, c, dir)) return false;
-    float inside =
-        gdm_walk_face_inside(layer, meso_prism_layer_face(layer, c->prism, c->exit_slot), c->p_out);
+    float inside = 0.0f; /* a top or a bottom ends the walk: only its direction is checked */
     if (c->exit_slot >= MESO_PRISM_FIN) {
         int partner = c->exit_slot ^ 1; /* the fin's other triangle: slots 2k, 2k + 1 */
+        inside = gdm_walk_face_inside(layer, meso_prism_layer_face(layer, c->prism, c->exit_slot),
+                                      c->p_out);
         float other =
             gdm_walk_face_inside(layer, meso_prism_layer_face(layer, c->prism, partner), c->p_out);
         if (other > inside) c->exit_slot = partner, inside = other;
