@@ -15,11 +15,19 @@
 #include "render_internal.h"
 #include "render_test_scene.h"
 
-static const meso_option small_bake_walk[] = {
-    {"gdm", "resolution", 32}, {"gdm", "layers", 16}, {"gdm", "num_theta", 8},
-    {"gdm", "num_phi", 16},    {"gdm", "walk", 1},
+/* small bakes, and walk 0 (every prism drawn) or walk 1 (the walk) */
+static const meso_option small_bake_walk[2][5] = {
+    {{"gdm", "resolution", 32},
+     {"gdm", "layers", 16},
+     {"gdm", "num_theta", 8},
+     {"gdm", "num_phi", 16},
+     {"gdm", "walk", 0}},
+    {{"gdm", "resolution", 32},
+     {"gdm", "layers", 16},
+     {"gdm", "num_theta", 8},
+     {"gdm", "num_phi", 16},
+     {"gdm", "walk", 1}},
 };
-#define NUM_SMALL_BAKE 4 /* the first four: without the walk */
 
 /* A sphere of radius 1 (`segments` as test_shape takes them) under a constant height field of
  * 0.5, the shell `depth` deep: the surface is a smaller sphere (radius about 1 - depth / 2). */
@@ -82,8 +90,7 @@ static void test_closed_mesh_is_watertight_from_50_views(void **state) {
     const meso_mesh *mesh = ts.objects[0].mesh;
     meso_renderer *renderer[2] = {NULL, NULL};
     for (int walk = 0; walk < 2; walk++) {
-        meso_render_desc desc = {.options = small_bake_walk,
-                                 .num_options = walk ? NUM_SMALL_BAKE + 1 : NUM_SMALL_BAKE};
+        meso_render_desc desc = {.options = small_bake_walk[walk], .num_options = 5};
         if (meso_renderer_create(ctx, &ts.scene, &desc, &renderer[walk]) != MESO_OK)
             fail_msg("%s", meso_context_last_error(ctx));
     }
@@ -162,8 +169,7 @@ static void test_plane_seen_down_its_fins_has_no_pinhole(void **state) {
         int inside = 0, holes[2] = {0, 0};
         for (int walk = 0; walk < 2; walk++) {
             meso_framebuffer *fb = NULL;
-            meso_render_desc desc = {.options = small_bake_walk,
-                                     .num_options = walk ? NUM_SMALL_BAKE + 1 : NUM_SMALL_BAKE};
+            meso_render_desc desc = {.options = small_bake_walk[walk], .num_options = 5};
             if (meso_render_scene(ctx, &ts.scene, &desc, &fb) != MESO_OK)
                 fail_msg("%s", meso_context_last_error(ctx));
             meso_frame frame;

@@ -149,7 +149,7 @@ static const meso_technique_option gdm_option_table[] = {
                     "vertex of the shell behind it (a convex base mesh's), where it leaves the "
                     "shell through the tops",
                     gdm_options, clear_top_walk),
-    MESO_OPTION_ROW(MESO_OPTION_BOOL, walk, 0, 1, 0,
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, walk, 0, 1, 1,
                     "1: the shell walk -- only the shell's outer boundary is drawn and each "
                     "pixel's ray walks front to back through the prisms it crosses, across "
                     "shared fins, to its first hit (watertight); 0: every prism's faces drawn "
