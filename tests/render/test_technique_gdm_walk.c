@@ -34,11 +34,7 @@ static const meso_option small_bake_walk[2][5] = {
 static void add_constant_sphere(meso_context *ctx, test_scene *ts, int segments, float depth) {
     meso_object *o = test_scene_add(
         ts, test_shape(ctx, MESO_SHAPE_SPHERE, 1.0f, segments, (meso_vec3){0, 0, 0}), "gdm");
-    meso_heightfield *hf = NULL;
-    assert_int_equal(meso_heightfield_create_constant(ctx, 8, 8, 0.5f, &hf), MESO_OK);
-    o->mesostructure.kind = MESO_MESOSTRUCTURE_HEIGHT_FIELD;
-    o->mesostructure.height_field = hf;
-    o->mesostructure.depth = depth;
+    test_object_constant_height(ctx, o, depth);
     meso_mesh_scale_uvs(o->mesh, (meso_vec2){4.0f, 2.0f});
     assert_int_equal(meso_mesh_compute_tangents(ctx, o->mesh), MESO_OK);
 }
@@ -161,11 +157,7 @@ static void test_plane_seen_down_its_fins_has_no_pinhole(void **state) {
         ts.scene.camera = (meso_camera){eyes[e], target, {0, 0, -1}, 45.0f};
         meso_object *o = test_scene_add(
             &ts, test_shape(ctx, MESO_SHAPE_PLANE, 2.0f, 4, (meso_vec3){0, 0, 0}), "gdm");
-        meso_heightfield *hf = NULL;
-        assert_int_equal(meso_heightfield_create_constant(ctx, 8, 8, 0.5f, &hf), MESO_OK);
-        o->mesostructure.kind = MESO_MESOSTRUCTURE_HEIGHT_FIELD;
-        o->mesostructure.height_field = hf;
-        o->mesostructure.depth = depth;
+        test_object_constant_height(ctx, o, depth);
         int inside = 0, holes[2] = {0, 0};
         for (int walk = 0; walk < 2; walk++) {
             meso_framebuffer *fb = NULL;
