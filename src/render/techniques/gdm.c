@@ -6,6 +6,7 @@
  * shading; shadows where GDM(T, L_t) ends before the slab's boundary. Height fields and solids
  * alike: the map is baked from either (src/bake/bake_gdm.c) and cached. */
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -39,6 +40,14 @@
  * few hundred. */
 #define GDM_WALK_MAX_PRISMS 4096
 
+/* The work of a frame (meso_render_stats: prisms, lookups, samples), counted per thread while
+ * shading (gdm_thread_counts) and added to the state's totals at the end of each block: the
+ * prisms the view rays were tested in (segment_hit), the table lookups of the view rays and of
+ * the slab's light test (lookup), the mesostructure's samples along them and along the shell
+ * walk's light rays (ray_probe_inside's, not those a remembered bound answers). */
+enum { GDM_COUNT_PRISMS, GDM_COUNT_LOOKUPS, GDM_COUNT_SAMPLES, GDM_NUM_COUNTS };
+static _Thread_local uint64_t gdm_thread_counts[GDM_NUM_COUNTS];
+
 typedef struct gdm_state {
     meso_gdm *gdm;
     /* the faces in this frame's drawing order (gdm_geometry): drawn shares the layer's
@@ -47,8 +56,8 @@ typedef struct gdm_state {
     uint32_t *drawn_indices, *drawn_face, *sort_counts;
     float *sort_keys;
     /* the walk (option walk): the layer's fin twins (gdm_walk.h) and the faces drawn, the
-     * shell's outer boundary: tops, then open borders' fins, then bottoms (group_start[g] to
-     * group_start[g + 1]); NULL without the walk, every face drawn */
+     * shell's outer boundary (walk_boundary): tops, then the fins drawn, then bottoms
+     * (group_start[g] to group_start[g + 1]); NULL without the walk, every face drawn */
     uint32_t *fin_twin, *boundary;
     size_t group_start[4];
     /* the walk: per fin face of the layer, 1 where its twin's vertices carry the same (u, v, w)
@@ -88,6 +97,8 @@ typedef struct gdm_state {
     float hit_margin;    /* d < dt - hit_margin is a hit */
     gdm_gi *gi;          /* global illumination (gdm_gi.h); NULL: off */
     gdm_shell *shell;    /* shadows through the shell (gdm_shell_shadow.h); NULL: off */
+    /* this frame's counts (GDM_COUNT_*), reset by gdm_geometry; the one thing shading writes */
+    _Atomic uint64_t counted[GDM_NUM_COUNTS];
 } gdm_state;
 
 typedef struct gdm_options {
@@ -595,6 +606,8 @@ static meso_result gdm_geometry(meso_context *ctx, void *state, const meso_frame
     (void)ctx;
     gdm_state *s = state;
     if (s->gi) gdm_gi_begin_frame(s->gi, frame);
+    for (int k = 0; k < GDM_NUM_COUNTS; k++)
+        atomic_store_explicit(&s->counted[k], 0, memory_order_relaxed);
     const meso_mesh *faces = s->layer->faces;
     size_t total = s->group_start[3];
     float *keys = s->sort_keys;
@@ -632,6 +645,7 @@ static meso_result gdm_geometry(meso_context *ctx, void *state, const meso_frame
 
 /* d_GDM(uvw, direction): the raw table, or the compressed one through the 8-wide path. */
 static inline float lookup(const gdm_state *s, meso_vec3 uvw, meso_vec3 direction) {
+    gdm_thread_counts[GDM_COUNT_LOOKUPS]++;
     if (s->raw) return meso_gdm_lookup(s->gdm, uvw, direction, 0, true);
     return gdm_lookup8(&s->table, uvw, direction);
 }
@@ -859,6 +873,7 @@ static inline bool ray_probe_inside(const gdm_state *s, ray_probe *r, float x) {
             return side == 1;
     meso_vec3 p = ray_probe_point(r, x);
     if (p.z < r->clear_w) return false;
+    gdm_thread_counts[GDM_COUNT_SAMPLES]++;
     float f, radius;
     if (s->heightfield) { /* inside_mesostructure's test: w >= 1 - h is (1 - h) - w <= 0 */
         f = (1.0f - heightfield_sample(s, p.x, p.y)) - p.z;
@@ -1081,6 +1096,7 @@ static bool segment_hit(const gdm_state *s, const meso_mesh *mesh, const gdm_wal
     size_t prism_index = c->prism;
     const meso_prism *prism = &layer->prisms[prism_index];
     int exit_slot = c->exit_slot;
+    gdm_thread_counts[GDM_COUNT_PRISMS]++;
     meso_vec3 t_out = meso_prism_layer_face_uvw(
         layer, meso_prism_layer_face(layer, prism_index, exit_slot), c->p_out);
     out->t_out = t_out;
@@ -1314,6 +1330,7 @@ static void gdm_shade_block(const void *state, const meso_frame *frame, const me
     meso_fragment fragments[CHUNK];
     size_t lanes[CHUNK]; /* the block lane of each hit */
     size_t count = block->count;
+    memset(gdm_thread_counts, 0, sizeof gdm_thread_counts);
     for (size_t start = 0; start < count; start += CHUNK) {
         size_t end = start + CHUNK < count ? start + CHUNK : count, n = 0;
         for (size_t i = start; i < end; i++) {
@@ -1343,6 +1360,10 @@ static void gdm_shade_block(const void *state, const meso_frame *frame, const me
             block->out_depth[i] = fragments[h].out_depth;
         }
     }
+    /* the state's one write while shading: relaxed adds, the totals the same in any order */
+    _Atomic uint64_t *counted = (_Atomic uint64_t *)s->counted;
+    for (int c = 0; c < GDM_NUM_COUNTS; c++)
+        atomic_fetch_add_explicit(&counted[c], gdm_thread_counts[c], memory_order_relaxed);
 }
 
 static size_t gdm_memory(const void *state) {
@@ -1365,6 +1386,12 @@ static size_t gdm_memory(const void *state) {
                 : 0);
 }
 
+static void gdm_counters(const void *state, uint64_t out[3]) {
+    const gdm_state *s = state;
+    for (int c = 0; c < GDM_NUM_COUNTS; c++)
+        out[c] += atomic_load_explicit((_Atomic uint64_t *)&s->counted[c], memory_order_relaxed);
+}
+
 const meso_technique meso_technique_gdm = {
     .info = {.name = "gdm",
              .summary = "generalized displacement maps: prisms rasterized, 5D distance lookup",
@@ -1380,4 +1407,5 @@ const meso_technique meso_technique_gdm = {
     /* shade_one reads a fragment's triangle, barycentrics, position and depth */
     .skip_fields = MESO_FRAGMENT_SKIP_SAMPLE | MESO_FRAGMENT_SKIP_TANGENTS,
     .memory = gdm_memory,
+    .counters = gdm_counters,
 };
