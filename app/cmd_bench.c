@@ -48,9 +48,11 @@ static const app_command_help bench_help = {
         "then counts as it would in an animation.\n\n"
         "With --profile each row also gives the cost model of docs/performance.md, from the\n"
         "one-thread run: covered pixels of the frame, fragments shaded a covered pixel,\n"
-        "nanoseconds and time-stamp-counter cycles a covered pixel, and for techniques whose\n"
+        "nanoseconds and time-stamp-counter cycles a covered pixel, for techniques whose\n"
         "searches take a fixed number of steps (linear_steps, binary_steps, shadow_steps) the\n"
-        "nominal steps a pixel and nanoseconds a step.",
+        "nominal steps a pixel and nanoseconds a step, and for techniques that count their\n"
+        "work (gdm) the prisms tested, table lookups and mesostructure samples a covered\n"
+        "pixel.",
     .examples = "  meso bench\n"
                 "  meso bench examples/bricks-plane.json --techniques relief,parallax --frames 10\n"
                 "  meso bench --size 256x256 --seconds 1 --json bench.json\n"
@@ -84,6 +86,9 @@ typedef struct bench_row {
     double fragments;     /* shaded in the last frame */
     double cycles_single; /* median time-stamp-counter cycles a frame */
     double steps;         /* nominal search steps a covered pixel; NAN: no fixed count */
+    /* the technique's own counts of the last frame (meso_render_stats; gdm's): prisms,
+     * table lookups, mesostructure samples; all 0 for a technique that counts none */
+    double prisms, lookups, samples;
 } bench_row;
 
 typedef struct bench_scene {
@@ -216,7 +221,10 @@ static meso_result bench_one(meso_context *ctx, const bench_scene *s, const char
         size_t pixels = (size_t)fb->width * (size_t)fb->height;
         for (size_t i = 0; i < pixels; i++) covered += fb->coverage[i];
         row->covered = covered;
-        row->fragments = (double)app_renderer_get_stats(&renderer).fragments;
+        meso_render_stats stats = app_renderer_get_stats(&renderer);
+        row->fragments = (double)stats.fragments;
+        row->prisms = (double)stats.prisms, row->lookups = (double)stats.lookups;
+        row->samples = (double)stats.samples;
         const meso_technique_info *info = meso_technique_find(technique);
         if (info) row->steps = nominal_steps(info, o, s->scene);
     }
@@ -245,8 +253,8 @@ static void print_table(const bench_row *rows, size_t count, int threads) {
 /* The cost model (--profile): per covered pixel at one thread. */
 static void print_profile(const bench_row *rows, size_t count) {
     printf("\nper covered pixel, one thread (cycles: time-stamp counter)\n");
-    printf("%-20s %-14s %10s %8s %9s %9s %7s %8s\n", "scene", "technique", "covered px", "frag/px",
-           "ns/px", "cyc/px", "steps", "ns/step");
+    printf("%-20s %-14s %10s %8s %9s %9s %7s %8s %9s %9s %9s\n", "scene", "technique", "covered px",
+           "frag/px", "ns/px", "cyc/px", "steps", "ns/step", "prism/px", "lookup/px", "sample/px");
     for (size_t i = 0; i < count; i++) {
         const bench_row *r = &rows[i];
         if (!(r->covered > 0.0)) {
@@ -257,9 +265,14 @@ static void print_profile(const bench_row *rows, size_t count) {
         printf("%-20s %-14s %10.0f %8.2f %9.1f %9.0f", r->scene, r->technique, r->covered,
                r->fragments / r->covered, ns, r->cycles_single / r->covered);
         if (isnan(r->steps))
-            printf(" %7s %8s\n", "-", "-");
+            printf(" %7s %8s", "-", "-");
         else
-            printf(" %7.0f %8.2f\n", r->steps, ns / r->steps);
+            printf(" %7.0f %8.2f", r->steps, ns / r->steps);
+        if (r->prisms > 0.0 || r->lookups > 0.0 || r->samples > 0.0)
+            printf(" %9.2f %9.2f %9.2f\n", r->prisms / r->covered, r->lookups / r->covered,
+                   r->samples / r->covered);
+        else
+            printf(" %9s %9s %9s\n", "-", "-", "-");
     }
 }
 
@@ -300,6 +313,12 @@ static meso_result write_json(meso_context *ctx, const char *path, const bench_r
             app_text_json_number(&json, r->covered);
             app_text_printf(&json, ", \"fragments\": ");
             app_text_json_number(&json, r->fragments);
+            app_text_printf(&json, ", \"prisms\": ");
+            app_text_json_number(&json, r->prisms);
+            app_text_printf(&json, ", \"lookups\": ");
+            app_text_json_number(&json, r->lookups);
+            app_text_printf(&json, ", \"samples\": ");
+            app_text_json_number(&json, r->samples);
             app_text_printf(&json, ", \"ns_per_pixel_1_thread\": ");
             app_text_json_number(&json, r->ms_single * 1e6 / r->covered);
             app_text_printf(&json, ", \"tsc_cycles_per_pixel_1_thread\": ");

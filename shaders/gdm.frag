@@ -45,8 +45,10 @@
 //   gi 1 in a scene with an environment, where it would apply), bool u_macro_shadows and
 //   u_gi_inside_sky (the CPU's shadows through the whole shell, gdm_shell_shadow.c: not read
 //   here; the GL's shadows are the slab-local ones, the CPU's with macro_shadows 0), bool
-//   u_clear_top_walk (of that walk: not read; it changes no image) and bool u_refine_secant
-//   (true: a height field's refinement ends with a secant step, as the CPU's).
+//   u_clear_top_walk (of that walk: not read; it changes no image), bool u_refine_secant
+//   (true: a height field's refinement ends with a secant step, as the CPU's) and bool u_walk
+//   (the CPU's view-ray shell walk, gdm_walk.h: not read here; every prism's faces are drawn,
+//   the CPU's walk 0, docs/gpu.md).
 
 uniform bool u_compressed;
 uniform int u_eigenmaps;
@@ -68,6 +70,7 @@ uniform bool u_macro_shadows;
 uniform bool u_gi_inside_sky;
 uniform bool u_clear_top_walk;
 uniform bool u_refine_secant;
+uniform bool u_walk;
 
 uniform samplerBuffer u_gdm_weights;
 uniform samplerBuffer u_gdm_eigen;

@@ -185,6 +185,10 @@ typedef struct meso_render_stats {
     uint64_t triangles;        /* rasterized or traced in the last frame */
     uint64_t fragments;        /* shaded in the last frame */
     size_t memory_bytes;       /* baked data, acceleration structures */
+    /* work counted by the techniques in the last frame (0 where a technique counts none; gdm:
+     * the prisms its view rays were tested in, its table lookups along view and light rays
+     * in the slab, and the mesostructure's samples along them) */
+    uint64_t prisms, lookups, samples;
 } meso_render_stats;
 
 /* The camera of a frame of width x height pixels, as the rasterizer and the reference use it:

@@ -173,6 +173,9 @@ typedef struct meso_technique {
      * the mesh, toward the eye); early depth rejection stays valid since nothing else lies
      * inside the shell. */
     bool both_faces;
+    /* NULL, or the work counted in the last frame drawn (meso_render_stats: prisms, lookups,
+     * samples), added to out[0..2]. Called once a frame after it is drawn, single-threaded. */
+    void (*counters)(const void *state, uint64_t out[3]);
 } meso_technique;
 
 /* Every technique's entry (techniques/<name>.c), so a file can name its own info. */

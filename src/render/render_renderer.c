@@ -314,6 +314,11 @@ static meso_result draw_frame(meso_renderer *rd, meso_framebuffer *fb, const mes
                                                         rd->meshes, count, rd->wireframe, color,
                                                         coverage, depth, &triangles, &fragments);
         if (r != MESO_OK) return r;
+        uint64_t counted[3] = {0, 0, 0};
+        for (int i = 0; i < count; i++)
+            if (rd->techniques[i]->counters) rd->techniques[i]->counters(rd->states[i], counted);
+        rd->stats.prisms = counted[0], rd->stats.lookups = counted[1];
+        rd->stats.samples = counted[2];
     }
     if (n > 1) {
         (rd->avx2 ? raster_resolve_avx2 : raster_resolve)(ctx, n, fb->width, fb->height, color,

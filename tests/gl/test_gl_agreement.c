@@ -163,7 +163,7 @@ static void check_gdm(const char *example, const meso_option *options, int num_o
     agreement a = compare(gl, cpu), floor = compare(nudged, cpu);
     print_message("%-13s gdm refine_steps %s: GL vs CPU covered PSNR %6.2f dB, coverage differs "
                   "at %zu (%zu off the edge); CPU nudged vs CPU %6.2f dB, %zu (%zu)\n",
-                  example, num_options > 3 ? "0" : "6", a.psnr_covered, a.mismatched,
+                  example, num_options > 4 ? "0" : "6", a.psnr_covered, a.mismatched,
                   a.mismatched_off_edge, floor.psnr_covered, floor.mismatched,
                   floor.mismatched_off_edge);
     assert_true(a.covered_both > 1000);
@@ -185,14 +185,16 @@ static void test_gdm_agrees(void **state) {
     gl_require_device();
     const char *const scenes[] = {"bricks-plane", "bumps-sphere", "weave-plane", "weave-torus"};
     /* macro_shadows 0: the shader has gdm's slab-local shadows only, not the CPU's walk
-     * through the shell (gdm_shell_shadow.h, docs/techniques/gdm.md) */
-    const meso_option options[4] = {{.technique = "gdm", .name = "resolution", .value = 32},
+     * through the shell (gdm_shell_shadow.h, docs/techniques/gdm.md); walk 0: it draws every
+     * prism's faces, not the CPU's view-ray shell walk (docs/gpu.md) */
+    const meso_option options[5] = {{.technique = "gdm", .name = "resolution", .value = 32},
                                     {.technique = "gdm", .name = "layers", .value = 16},
                                     {.technique = "gdm", .name = "macro_shadows", .value = 0},
+                                    {.technique = "gdm", .name = "walk", .value = 0},
                                     {.technique = "gdm", .name = "refine_steps", .value = 0}};
     for (int paper = 0; paper < 2; paper++)
         for (size_t i = 0; i < sizeof scenes / sizeof scenes[0]; i++)
-            check_gdm(scenes[i], options, paper ? 4 : 3);
+            check_gdm(scenes[i], options, paper ? 5 : 4);
 }
 
 /* Options reach the shader as the CPU reads them: with 4 linear steps and no binary search the

@@ -71,6 +71,16 @@ static inline void test_object_bricks(meso_context *ctx, meso_object *o) {
     snprintf(o->mesostructure.source, sizeof(o->mesostructure.source), "bricks");
 }
 
+/* Give the object a constant height field of 0.5 (8 x 8 texels), the shell `depth` deep: its
+ * surface is the base mesh moved half the depth inward. */
+static inline void test_object_constant_height(meso_context *ctx, meso_object *o, float depth) {
+    meso_heightfield *hf = NULL;
+    assert_int_equal(meso_heightfield_create_constant(ctx, 8, 8, 0.5f, &hf), MESO_OK);
+    o->mesostructure.kind = MESO_MESOSTRUCTURE_HEIGHT_FIELD;
+    o->mesostructure.height_field = hf;
+    o->mesostructure.depth = depth;
+}
+
 static inline void test_scene_free(test_scene *ts) {
     for (int i = 0; i < ts->scene.num_objects; i++) {
         meso_mesh_destroy(ts->objects[i].mesh);

@@ -153,11 +153,7 @@ static void test_closed_mesh_with_a_constant_height_field_has_no_gap(void **stat
     ts.scene.camera = (meso_camera){{0.3f, 0.9f, 2.8f}, {0.0f, 0.0f, 0.0f}, {0, 1, 0}, 45.0f};
     meso_object *o = test_scene_add(
         &ts, test_shape(ctx, MESO_SHAPE_SPHERE, 1.0f, 24, (meso_vec3){0, 0, 0}), "gdm");
-    meso_heightfield *hf = NULL;
-    assert_int_equal(meso_heightfield_create_constant(ctx, 8, 8, 0.5f, &hf), MESO_OK);
-    o->mesostructure.kind = MESO_MESOSTRUCTURE_HEIGHT_FIELD;
-    o->mesostructure.height_field = hf;
-    o->mesostructure.depth = 0.2f;
+    test_object_constant_height(ctx, o, 0.2f);
     meso_mesh_scale_uvs(o->mesh, (meso_vec2){4.0f, 2.0f});
     assert_int_equal(meso_mesh_compute_tangents(ctx, o->mesh), MESO_OK);
     meso_framebuffer *fb = render(ctx, &ts.scene, "gdm", small_bake, NUM_SMALL_BAKE);

@@ -3,6 +3,8 @@
  * ray; docs/techniques/gdm.md). */
 #include "gdm_shell_shadow.h"
 
+#include "gdm_walk.h"
+
 #include <embree3/rtcore.h>
 #include <math.h>
 #include <stdint.h>
@@ -25,8 +27,10 @@ struct gdm_shell {
      * tops, bottoms and fins on an open border. A ray leaving a prism through a fin enters
      * the twin's prism right there: the walk crosses sideways without asking Embree, which
      * was most of its cost on a convex mesh (docs/techniques/gdm.md). NULL: out of memory at
-     * create, every crossing asks Embree. */
-    uint32_t *fin_twin;
+     * create, every crossing asks Embree. gdm's own table (gdm_shell_desc.fin_twin) or
+     * owned_twin, built here (gdm_walk.h). */
+    const uint32_t *fin_twin;
+    uint32_t *owned_twin;
     /* Per prism, 1 where every vertex of the layer lies behind (or on) the prism's top plane:
      * the whole layer is in that half-space, so a ray that leaves the prism through its top
      * is outside it from then on and meets no prism again. The walk then ends there without
@@ -35,67 +39,7 @@ struct gdm_shell {
     uint8_t *top_clear;
 };
 
-#define NO_TWIN UINT32_MAX
-
-/* A fin triangle's key: its three vertex positions' bits, sorted, and its face. Twins have
- * equal keys. */
-typedef struct fin_key {
-    uint32_t bits[9];
-    uint32_t face;
-} fin_key;
-
-static int compare_fin_keys(const void *a, const void *b) {
-    const fin_key *x = a, *y = b;
-    int c = memcmp(x->bits, y->bits, sizeof x->bits);
-    if (c) return c;
-    return (x->face > y->face) - (x->face < y->face);
-}
-
-static int compare_bits3(const void *a, const void *b) {
-    return memcmp(a, b, 3 * sizeof(uint32_t));
-}
-
-/* The twin table (see fin_twin). Keys with exactly two faces whose prisms differ pair up; a key
- * shared by more (a non-manifold edge) or by one (an open border) leaves NO_TWIN. */
-static uint32_t *build_fin_twins(const meso_prism_layer *layer) {
-    const meso_mesh *faces = layer->faces;
-    size_t num_faces = faces->num_triangles, num_fins = layer->num_prisms * 6;
-    uint32_t *twin = malloc(num_faces * sizeof *twin);
-    fin_key *keys = malloc((num_fins ? num_fins : 1) * sizeof *keys);
-    if (!twin || !keys) {
-        free(twin);
-        free(keys);
-        return NULL;
-    }
-    for (size_t f = 0; f < num_faces; f++) twin[f] = NO_TWIN;
-    size_t n = 0;
-    for (size_t prism = 0; prism < layer->num_prisms; prism++)
-        for (int slot = MESO_PRISM_FIN; slot < MESO_PRISM_NUM_FACES; slot++) {
-            size_t f = meso_prism_layer_face(layer, prism, slot);
-            uint32_t corner[3][3];
-            for (int k = 0; k < 3; k++)
-                memcpy(corner[k], &faces->positions[faces->indices[3 * f + (size_t)k]],
-                       3 * sizeof(uint32_t));
-            qsort(corner, 3, sizeof corner[0], compare_bits3);
-            memcpy(keys[n].bits, corner, sizeof keys[n].bits);
-            keys[n++].face = (uint32_t)f;
-        }
-    qsort(keys, n, sizeof *keys, compare_fin_keys);
-    for (size_t i = 0; i < n;) {
-        size_t j = i + 1;
-        while (j < n && memcmp(keys[j].bits, keys[i].bits, sizeof keys[i].bits) == 0) j++;
-        if (j - i == 2) {
-            int slot;
-            size_t a = meso_prism_layer_face_prism(layer, keys[i].face, &slot);
-            size_t b = meso_prism_layer_face_prism(layer, keys[i + 1].face, &slot);
-            if (a != b)
-                twin[keys[i].face] = keys[i + 1].face, twin[keys[i + 1].face] = keys[i].face;
-        }
-        i = j;
-    }
-    free(keys);
-    return twin;
-}
+#define NO_TWIN GDM_NO_TWIN
 
 /* The proof of top_clear: each job tests a run of prisms' top planes against every vertex of
  * the layer, a cell of a coarse grid over the layer at a time by the cell's bounding box
@@ -320,7 +264,8 @@ meso_result gdm_shell_create(meso_context *ctx, const gdm_shell_desc *desc, cons
                            "%s: gdm shell shadows: Embree could not build", name);
         goto fail;
     }
-    shell->fin_twin = build_fin_twins(desc->layer);
+    if (!desc->fin_twin) shell->owned_twin = gdm_fin_twins(desc->layer);
+    shell->fin_twin = desc->fin_twin ? desc->fin_twin : shell->owned_twin;
     shell->top_clear = malloc(desc->layer->num_prisms ? desc->layer->num_prisms : 1);
     if (shell->top_clear && gdm_prism_tops_clear(ctx, desc->layer, shell->top_clear) == 0) {
         free(shell->top_clear); /* nothing proven: every top exit asks Embree */
@@ -337,7 +282,7 @@ void gdm_shell_destroy(gdm_shell *shell) {
     if (!shell) return;
     if (shell->scene) rtcReleaseScene(shell->scene);
     if (shell->device) rtcReleaseDevice(shell->device);
-    free(shell->fin_twin);
+    free(shell->owned_twin);
     free(shell->top_clear);
     free(shell);
 }
@@ -345,7 +290,7 @@ void gdm_shell_destroy(gdm_shell *shell) {
 size_t gdm_shell_memory(const gdm_shell *shell) {
     if (!shell) return 0;
     const meso_mesh *faces = shell->desc.layer->faces;
-    return sizeof *shell + (shell->fin_twin ? faces->num_triangles * sizeof(uint32_t) : 0) +
+    return sizeof *shell + (shell->owned_twin ? faces->num_triangles * sizeof(uint32_t) : 0) +
            (shell->top_clear ? shell->desc.layer->num_prisms : 0) +
            faces->num_vertices * 3 * sizeof(float) +
            faces->num_triangles * (3 * sizeof(uint32_t) + 32); /* + the BVH, about */

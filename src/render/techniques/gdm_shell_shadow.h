@@ -50,6 +50,9 @@ typedef struct gdm_shell gdm_shell;
 typedef struct gdm_shell_desc {
     const meso_prism_layer *layer;
     const meso_mesh *mesh; /* the base mesh the layer was extruded from */
+    /* NULL, or the layer's fin twin table (gdm_fin_twins), borrowed: the shell builds its own
+     * without it */
+    const uint32_t *fin_twin;
     const meso_gdm *gdm;
     const gdm_lookup_table *table;       /* the compressed map 8-wide; NULL: gdm's raw table */
     const meso_heightfield *heightfield; /* one of these two */
