@@ -5,7 +5,7 @@ BUILD_CLANG ?= build-clang
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps build demo test test-asan test-clang bench install clean format format-check
+.PHONY: all deps build demo test test-views test-asan test-clang bench install clean format format-check
 
 all: build
 
@@ -23,6 +23,13 @@ demo: build
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+
+# The random-view test with K views an example (docs/techniques.md, "From every side"): every
+# example x technique against the reference from seeded cameras; writes $(BUILD)/views-report.md
+# and the failing views' images to $(BUILD)/views-images. `make test` runs it with 2 views.
+K ?= 200
+test-views: build
+	cd $(BUILD) && ./test_views --views $(K) --size 64 --report views-report.md --images views-images
 
 # The whole suite again under AddressSanitizer + UndefinedBehaviorSanitizer (CI runs it).
 test-asan: deps
