@@ -236,55 +236,6 @@ static void emit_caps(emitter *em) {
     em->cap = false;
 }
 
-/* An edge of the mesh by its end points' positions (their bits), the lower point first, and
- * its slot (triangle * 3 + e). */
-typedef struct edge_record {
-    uint32_t key[6];
-    size_t slot;
-} edge_record;
-
-static int edge_record_cmp(const void *pa, const void *pb) {
-    const edge_record *a = pa, *b = pb;
-    int c = memcmp(a->key, b->key, sizeof a->key);
-    if (c) return c;
-    return a->slot < b->slot ? -1 : a->slot > b->slot;
-}
-
-/* border[t] bit e: edge e of triangle t (vertex e to e + 1) belongs to no other triangle. NULL
- * when out of memory. */
-static uint8_t *open_border_edges(const meso_mesh *mesh) {
-    size_t nt = mesh->num_triangles, ne = 3 * nt;
-    uint8_t *border = calloc(nt ? nt : 1, 1);
-    edge_record *records = malloc((ne ? ne : 1) * sizeof *records);
-    if (!border || !records) {
-        free(border);
-        free(records);
-        return NULL;
-    }
-    for (size_t t = 0; t < nt; t++)
-        for (size_t e = 0; e < 3; e++) {
-            meso_vec3 p = mesh->positions[mesh->indices[3 * t + e]];
-            meso_vec3 q = mesh->positions[mesh->indices[3 * t + (e + 1) % 3]];
-            uint32_t a[3], b[3];
-            memcpy(a, &p, sizeof a);
-            memcpy(b, &q, sizeof b);
-            bool swap = memcmp(b, a, sizeof a) < 0;
-            edge_record *r = &records[3 * t + e];
-            memcpy(r->key, swap ? b : a, sizeof a);
-            memcpy(r->key + 3, swap ? a : b, sizeof a);
-            r->slot = 3 * t + e;
-        }
-    qsort(records, ne, sizeof *records, edge_record_cmp);
-    for (size_t i = 0; i < ne;) {
-        size_t j = i + 1;
-        while (j < ne && !memcmp(records[j].key, records[i].key, sizeof records[i].key)) j++;
-        if (j == i + 1) border[records[i].slot / 3] |= (uint8_t)(1u << (records[i].slot % 3));
-        i = j;
-    }
-    free(records);
-    return border;
-}
-
 /* Embree's filter on a solid's quads: a cap's hit counts only where the solid is inside. */
 static void keep_cap_hits_inside(const struct RTCFilterFunctionNArguments *args) {
     const reference_object *ref = args->geometryUserPtr;
@@ -501,7 +452,7 @@ meso_result reference_build_solid(meso_context *ctx, const meso_reference_desc *
     b.remap = calloc(threads * nv_iso, sizeof *b.remap);
     b.stamp = calloc(threads * nv_iso, sizeof *b.stamp);
     b.stamp_counter = calloc(threads, sizeof *b.stamp_counter);
-    b.border = open_border_edges(mesh);
+    b.border = meso_mesh_open_border_edges(mesh);
     if (!b.triangle_counts || !b.vertex_counts || !b.real_counts || !triangle_offsets ||
         !vertex_offsets || !b.remap || !b.stamp || !b.stamp_counter || !b.border) {
         result =

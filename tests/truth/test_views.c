@@ -35,7 +35,7 @@
 #define MAX_EXAMPLES 32
 #define MAX_TECHNIQUES 32
 #define SPECK_THRESHOLD 0.4f /* sRGB luma: a speck stands out from its whole neighbourhood */
-#define SPECK_SMOOTH 0.08f    /* sRGB luma: the reference's 3 x 3 counts as smooth */
+#define SPECK_SMOOTH 0.08f   /* sRGB luma: the reference's 3 x 3 counts as smooth */
 #define PINHOLE_NEIGHBOURS 6
 
 typedef struct options {
@@ -96,8 +96,8 @@ static view make_view(const meso_scene *scene, unsigned seed, int example, int k
         v.kind = "top";
         elevation = 1.5707964f;
     } else if (k % 3 == 1) {
-        const meso_object *object = &scene->objects[(size_t)(unit(&state) * 0.999f *
-                                                             (float)scene->num_objects)];
+        const meso_object *object =
+            &scene->objects[(size_t)(unit(&state) * 0.999f * (float)scene->num_objects)];
         const meso_mesh *mesh = object->mesh;
         size_t t = (size_t)(unit(&state) * 0.999f * (float)mesh->num_triangles);
         int e = (int)(unit(&state) * 2.999f);
@@ -402,7 +402,8 @@ static void run_example(example_run *run, const char *file, const char *path, in
             long specks = count_specks(&image, &truth, o->size, o->size);
             meso_compare_result m;
             meso_compare_desc cd = {.coverage_a = image.coverage, .coverage_b = truth.coverage};
-            if (meso_image_compare(ctx, image.color, truth.color, &cd, &m) != MESO_OK) m = (meso_compare_result){0};
+            if (meso_image_compare(ctx, image.color, truth.color, &cd, &m) != MESO_OK)
+                m = (meso_compare_result){0};
             double psnr = isnan(m.psnr_covered) ? INFINITY : m.psnr_covered;
             views_floor floor = views_floor_of(infos[i]->name);
             bool below = o->floors && !o->small_bakes &&
@@ -457,8 +458,8 @@ static void write_report(const example_run *run, const options *o, int num_examp
             "| technique | views | failed | pinholes | specks | worst covered dB | floor dB | "
             "worst IoU | floor IoU | worst view |\n"
             "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |\n",
-            num_examples, o->views, o->size, o->size, o->seed,
-            o->small_bakes ? "small" : "default", meso_technique_isa());
+            num_examples, o->views, o->size, o->size, o->seed, o->small_bakes ? "small" : "default",
+            meso_technique_isa());
     for (size_t i = 0; i < run->num_tallies; i++) {
         const tally *t = &run->tallies[i];
         views_floor floor = views_floor_of(t->technique);
@@ -490,13 +491,20 @@ int main(int argc, char **argv) {
             fprintf(stderr, "test_views: %s: needs a value (see the file's comment)\n", a);
             return 2;
         }
-        if (!strcmp(a, "--views")) o.views = atoi(next);
-        else if (!strcmp(a, "--size")) o.size = atoi(next);
-        else if (!strcmp(a, "--seed")) o.seed = (unsigned)strtoul(next, NULL, 10);
-        else if (!strcmp(a, "--examples")) o.examples = next;
-        else if (!strcmp(a, "--techniques")) o.techniques = next;
-        else if (!strcmp(a, "--report")) o.report = next;
-        else if (!strcmp(a, "--images")) o.images = next;
+        if (!strcmp(a, "--views"))
+            o.views = atoi(next);
+        else if (!strcmp(a, "--size"))
+            o.size = atoi(next);
+        else if (!strcmp(a, "--seed"))
+            o.seed = (unsigned)strtoul(next, NULL, 10);
+        else if (!strcmp(a, "--examples"))
+            o.examples = next;
+        else if (!strcmp(a, "--techniques"))
+            o.techniques = next;
+        else if (!strcmp(a, "--report"))
+            o.report = next;
+        else if (!strcmp(a, "--images"))
+            o.images = next;
         else {
             fprintf(stderr, "test_views: %s: unknown option\n", a);
             return 2;
