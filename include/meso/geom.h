@@ -170,8 +170,9 @@ void meso_mesh_bounds(const meso_mesh *mesh, meso_vec3 *out_min, meso_vec3 *out_
 uint8_t *meso_mesh_open_border_edges(const meso_mesh *mesh);
 
 /* The texture domain's open sides: where every open border of a mesh lies on a side of its UV
- * bounding box (a plane's four sides, a tube's two ends), a ray that leaves the box through
- * such a side has left the shell -- the mesostructure ends at the border and the true surface
+ * bounding box and no edge two triangles share lies on that side (a plane's four sides, a
+ * tube's two ends; not a teapot's patch borders), a ray that leaves the box through such a
+ * side has left the shell -- the mesostructure ends at the border and the true surface
  * has nothing past it -- so the per-pixel techniques count a hit past it as a miss, not as the
  * next tile of a repeating map. A mesh with an open border elsewhere gets sides 0 (no check):
  * its borders need the shell's own sides (docs/techniques/relief.md, "Open borders"). */

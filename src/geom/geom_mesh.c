@@ -458,10 +458,12 @@ bool meso_mesh_uv_domain(const meso_mesh *mesh, meso_uv_domain *out) {
         d.u_min = fminf(d.u_min, mesh->uvs[i].x), d.u_max = fmaxf(d.u_max, mesh->uvs[i].x);
         d.v_min = fminf(d.v_min, mesh->uvs[i].y), d.v_max = fmaxf(d.v_max, mesh->uvs[i].y);
     }
+    /* a side is open when open borders lie on it and no edge two triangles share does (a
+     * teapot's patches meet along their box sides: rays cross those) */
     bool on_box = true;
-    for (size_t t = 0; t < mesh->num_triangles && on_box; t++)
-        for (int e = 0; e < 3 && on_box; e++) {
-            if (!(border[t] >> e & 1)) continue;
+    unsigned interior = 0;
+    for (size_t t = 0; t < mesh->num_triangles; t++)
+        for (int e = 0; e < 3; e++) {
             meso_vec2 a = mesh->uvs[mesh->indices[3 * t + (size_t)e]];
             meso_vec2 b = mesh->uvs[mesh->indices[3 * t + (size_t)(e + 1) % 3]];
             unsigned side = a.x == d.u_min && b.x == d.u_min   ? MESO_UV_DOMAIN_U_MIN
@@ -469,9 +471,14 @@ bool meso_mesh_uv_domain(const meso_mesh *mesh, meso_uv_domain *out) {
                             : a.y == d.v_min && b.y == d.v_min ? MESO_UV_DOMAIN_V_MIN
                             : a.y == d.v_max && b.y == d.v_max ? MESO_UV_DOMAIN_V_MAX
                                                                : 0u;
-            on_box = side != 0;
-            d.sides |= side;
+            if (!(border[t] >> e & 1))
+                interior |= side;
+            else if (side)
+                d.sides |= side;
+            else
+                on_box = false;
         }
+    d.sides &= ~interior;
     free(border);
     if (on_box) *out = d;
     return true;

@@ -29,8 +29,7 @@ static meso_scene *plane_scene(meso_context *ctx, const char *mesostructure) {
 
 static meso_framebuffer *draw(meso_context *ctx, const meso_scene *scene, const char *technique) {
     meso_framebuffer *fb = NULL;
-    if (meso_render_scene(ctx, scene, &(meso_render_desc){.technique = technique}, &fb) !=
-        MESO_OK)
+    if (meso_render_scene(ctx, scene, &(meso_render_desc){.technique = technique}, &fb) != MESO_OK)
         fail_msg("%s: %s", technique, meso_context_last_error(ctx));
     return fb;
 }
