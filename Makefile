@@ -5,8 +5,8 @@ BUILD_CLANG ?= build-clang
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps build demo test test-assets test-asan test-clang bench install clean format \
-	format-check docs-check python
+.PHONY: all deps build demo test test-assets test-views test-asan test-clang bench install \
+	clean format format-check docs-check python
 
 all: build
 
@@ -43,6 +43,13 @@ test: build
 # the reference, at 64 x 64 (scripts/test-assets.sh; docs/techniques.md). CI runs it.
 test-assets: build
 	bash scripts/test-assets.sh $(BUILD)/meso
+
+# The random-view test with K views an example (docs/techniques.md, "From every side"): every
+# example x technique against the reference from seeded cameras; writes $(BUILD)/views-report.md
+# and the failing views' images to $(BUILD)/views-images. `make test` runs it with 2 views.
+K ?= 200
+test-views: build
+	cd $(BUILD) && ./test_views --views $(K) --size 64 --report views-report.md --images views-images
 
 # The whole suite again under AddressSanitizer + UndefinedBehaviorSanitizer (CI runs it).
 test-asan: deps

@@ -24,7 +24,7 @@ typedef struct render_options {
     int bits;                   /* --bits: PNG bit depth (0: 8) */
     app_settings settings;      /* --set */
     int orbit;                  /* frames of a turntable into folder OUT (0: none) */
-    app_camera_override camera; /* --eye, --target, --fov, --light */
+    app_camera_override camera; /* --eye, --target, --up, --fov, --light */
     app_backend backend;        /* --backend, --shader-dir */
 } render_options;
 

@@ -56,14 +56,15 @@ int app_camera_override_apply(const char *command, const app_camera_override *o,
     if (o->eye && !app_parse_vec3(o->eye, &camera.eye)) return bad_vector(command, "--eye", o->eye);
     if (o->target && !app_parse_vec3(o->target, &camera.target))
         return bad_vector(command, "--target", o->target);
+    if (o->up && !app_parse_vec3(o->up, &camera.up)) return bad_vector(command, "--up", o->up);
     if (o->fov > 0.0) camera.fov_y_deg = (float)o->fov;
     meso_vec3 forward = meso_vec3_sub(camera.target, camera.eye);
     meso_vec3 side = meso_vec3_cross(forward, camera.up);
     /* the same conditions the scene loader puts on a camera, with the same kind of message */
     if (!(meso_vec3_length(forward) > 1e-9f) || !(meso_vec3_length(side) > 1e-9f)) {
         fprintf(stderr,
-                "meso: %s: --eye/--target: the eye must differ from the target and not "
-                "look along up\n",
+                "meso: %s: --eye/--target/--up: the eye must differ from the target and "
+                "not look along up\n",
                 scene->path);
         return APP_EXIT_BAD_INPUT;
     }

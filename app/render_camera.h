@@ -10,16 +10,19 @@
 
 /* The overrides as given ("X,Y,Z" texts point into argv; fov 0 = the scene's). */
 typedef struct app_camera_override {
-    const char *eye, *target, *light;
+    const char *eye, *target, *up, *light;
     double fov;
 } app_camera_override;
 
-/* The four option rows of an app_camera_override `o`, for a command's option table. */
+/* The five option rows of an app_camera_override `o`, for a command's option table. */
 #define APP_CAMERA_OVERRIDE_OPTIONS(o)                                                             \
     {"--eye", NULL, APP_OPTION_STRING, &(o).eye, "X,Y,Z", "the camera's position", "the scene's",  \
      0,       0},                                                                                  \
         {"--target",    NULL,    APP_OPTION_STRING,                                                \
          &(o).target,   "X,Y,Z", "the point the camera looks at",                                  \
+         "the scene's", 0,       0},                                                               \
+        {"--up",        NULL,    APP_OPTION_STRING,                                                \
+         &(o).up,       "X,Y,Z", "the camera's up direction (to look straight down, 0,0,-1)",      \
          "the scene's", 0,       0},                                                               \
         {"--fov",       NULL, APP_OPTION_DOUBLE,                                                   \
          &(o).fov,      "D",  "vertical field of view, degrees",                                   \

@@ -24,6 +24,17 @@
 
 uniform bool u_shadows;
 uniform bool u_silhouettes;
+// The texture domain's open sides (meso_mesh_uv_domain): bits 1 u_min, 2 u_max, 4 v_min,
+// 8 v_max of u_domain = (u_min, u_max, v_min, v_max); a hit past one is a miss.
+uniform int u_domain_sides;
+uniform vec4 u_domain;
+
+bool relief_domain_inside(vec2 uv) {
+    return !((u_domain_sides & 1) != 0 && uv.x < u_domain.x) &&
+           !((u_domain_sides & 2) != 0 && uv.x > u_domain.y) &&
+           !((u_domain_sides & 4) != 0 && uv.y < u_domain.z) &&
+           !((u_domain_sides & 8) != 0 && uv.y > u_domain.w);
+}
 
 // One view ray in texel-centre coordinates: (x0 + xd t, y0 + yd t) at depth d(t) = t (a - b t),
 // searched over [0, t_end]; t_end is where it reaches the shell's bottom (floor_hit) or leaves
@@ -180,6 +191,7 @@ void relief_shade(meso_frame f, vec2 uv, vec2 quadric, bool silhouettes, bool sh
     vec2 hit = r.start + r.step * tt;
     vec3 hit_position = f.position + f.view * t;
     vec2 hit_uv = uv + vec2(cu, cv) * tt;
+    if (!relief_domain_inside(hit_uv)) discard; // past an open border: the ray left the shell
     float view_depth = dot(f.view, u_forward) * (1.0 + t);
     vec3 n = relief_hit_normal(f, r, t, hit, hd);
     if (silhouettes) n = relief_curve_normal(f, q, t, n);

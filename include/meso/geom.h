@@ -211,6 +211,36 @@ float meso_mesh_tile_length(const meso_mesh *mesh);
 /* Axis-aligned bounds of the positions. */
 void meso_mesh_bounds(const meso_mesh *mesh, meso_vec3 *out_min, meso_vec3 *out_max);
 
+/* The mesh's open borders: bit e of entry t is set when edge e of triangle t (vertex e to
+ * e + 1) belongs to no other triangle. Edges pair by their end points' positions (their
+ * bits), so a texture seam's duplicated vertices close the seam. A new array of
+ * num_triangles bytes (at least one) owned by the caller (free); NULL when out of memory.
+ * Pure; thread-safe. */
+uint8_t *meso_mesh_open_border_edges(const meso_mesh *mesh);
+
+/* The texture domain's open sides: where every open border of a mesh lies on a side of its UV
+ * bounding box and no edge two triangles share lies on that side (a plane's four sides, a
+ * tube's two ends; not a teapot's patch borders), a ray that leaves the box through such a
+ * side has left the shell -- the mesostructure ends at the border and the true surface
+ * has nothing past it -- so the per-pixel techniques count a hit past it as a miss, not as the
+ * next tile of a repeating map. A mesh with an open border elsewhere gets sides 0 (no check):
+ * its borders need the shell's own sides (docs/techniques/relief.md, "Open borders"). */
+typedef struct meso_uv_domain {
+    unsigned sides; /* MESO_UV_DOMAIN_* bits of the box's sides that are open borders */
+    float u_min, u_max, v_min, v_max;
+} meso_uv_domain;
+
+enum {
+    MESO_UV_DOMAIN_U_MIN = 1u << 0,
+    MESO_UV_DOMAIN_U_MAX = 1u << 1,
+    MESO_UV_DOMAIN_V_MIN = 1u << 2,
+    MESO_UV_DOMAIN_V_MAX = 1u << 3,
+};
+
+/* Fill *out (sides 0 without UVs or open borders). False only when out of memory. Pure;
+ * thread-safe. */
+bool meso_mesh_uv_domain(const meso_mesh *mesh, meso_uv_domain *out);
+
 #ifdef __cplusplus
 }
 #endif

@@ -202,6 +202,13 @@ meso_result meso_solid_create_from_model(meso_context *ctx, const meso_vec3 *pos
                                          meso_solid **out_solid);
 /* False for a model's solid (clamped at the box), true for tiles and procedural solids. */
 bool meso_solid_is_periodic(const meso_solid *solid);
+/* A model's solid keeps the model's own triangles in texture space (u, v, w), w = 0 at the
+ * box's top: the object an impostor stands for, which the reference traces. Borrowed views,
+ * valid until the solid is destroyed. Returns false, with every output NULL or 0, for tiles
+ * and procedural solids (and a NULL solid). Pure; thread-safe. */
+bool meso_solid_model_view(const meso_solid *solid, const meso_vec3 **out_uvw,
+                           size_t *out_num_vertices, const uint32_t **out_indices,
+                           size_t *out_num_triangles);
 void meso_solid_destroy(meso_solid *solid);
 /* The parameters the solid was made with (defaults filled in). */
 meso_solid_desc meso_solid_get_desc(const meso_solid *solid);

@@ -400,3 +400,86 @@ float meso_mesh_tile_length(const meso_mesh *mesh) {
     }
     return uv > 0.0 && world > 0.0 ? (float)sqrt(world / uv) : 0.0f;
 }
+
+/* An edge of the mesh by its end points' positions (their bits), the lower point first, and
+ * its slot (triangle * 3 + e). */
+typedef struct edge_record {
+    uint32_t key[6];
+    size_t slot;
+} edge_record;
+
+static int edge_record_cmp(const void *pa, const void *pb) {
+    const edge_record *a = pa, *b = pb;
+    int c = memcmp(a->key, b->key, sizeof a->key);
+    if (c) return c;
+    return a->slot < b->slot ? -1 : a->slot > b->slot;
+}
+
+uint8_t *meso_mesh_open_border_edges(const meso_mesh *mesh) {
+    size_t nt = mesh->num_triangles, ne = 3 * nt;
+    uint8_t *border = calloc(nt ? nt : 1, 1);
+    edge_record *records = malloc((ne ? ne : 1) * sizeof *records);
+    if (!border || !records) {
+        free(border);
+        free(records);
+        return NULL;
+    }
+    for (size_t t = 0; t < nt; t++)
+        for (size_t e = 0; e < 3; e++) {
+            meso_vec3 p = mesh->positions[mesh->indices[3 * t + e]];
+            meso_vec3 q = mesh->positions[mesh->indices[3 * t + (e + 1) % 3]];
+            uint32_t a[3], b[3];
+            memcpy(a, &p, sizeof a);
+            memcpy(b, &q, sizeof b);
+            bool swap = memcmp(b, a, sizeof a) < 0;
+            edge_record *r = &records[3 * t + e];
+            memcpy(r->key, swap ? b : a, sizeof a);
+            memcpy(r->key + 3, swap ? a : b, sizeof a);
+            r->slot = 3 * t + e;
+        }
+    qsort(records, ne, sizeof *records, edge_record_cmp);
+    for (size_t i = 0; i < ne;) {
+        size_t j = i + 1;
+        while (j < ne && !memcmp(records[j].key, records[i].key, sizeof records[i].key)) j++;
+        if (j == i + 1) border[records[i].slot / 3] |= (uint8_t)(1u << (records[i].slot % 3));
+        i = j;
+    }
+    free(records);
+    return border;
+}
+
+bool meso_mesh_uv_domain(const meso_mesh *mesh, meso_uv_domain *out) {
+    *out = (meso_uv_domain){0};
+    if (!mesh->uvs || !mesh->indices || !mesh->num_triangles || !mesh->num_vertices) return true;
+    uint8_t *border = meso_mesh_open_border_edges(mesh);
+    if (!border) return false;
+    meso_uv_domain d = {0, mesh->uvs[0].x, mesh->uvs[0].x, mesh->uvs[0].y, mesh->uvs[0].y};
+    for (size_t i = 0; i < mesh->num_vertices; i++) {
+        d.u_min = fminf(d.u_min, mesh->uvs[i].x), d.u_max = fmaxf(d.u_max, mesh->uvs[i].x);
+        d.v_min = fminf(d.v_min, mesh->uvs[i].y), d.v_max = fmaxf(d.v_max, mesh->uvs[i].y);
+    }
+    /* a side is open when open borders lie on it and no edge two triangles share does (a
+     * teapot's patches meet along their box sides: rays cross those) */
+    bool on_box = true;
+    unsigned interior = 0;
+    for (size_t t = 0; t < mesh->num_triangles; t++)
+        for (int e = 0; e < 3; e++) {
+            meso_vec2 a = mesh->uvs[mesh->indices[3 * t + (size_t)e]];
+            meso_vec2 b = mesh->uvs[mesh->indices[3 * t + (size_t)(e + 1) % 3]];
+            unsigned side = a.x == d.u_min && b.x == d.u_min   ? MESO_UV_DOMAIN_U_MIN
+                            : a.x == d.u_max && b.x == d.u_max ? MESO_UV_DOMAIN_U_MAX
+                            : a.y == d.v_min && b.y == d.v_min ? MESO_UV_DOMAIN_V_MIN
+                            : a.y == d.v_max && b.y == d.v_max ? MESO_UV_DOMAIN_V_MAX
+                                                               : 0u;
+            if (!(border[t] >> e & 1))
+                interior |= side;
+            else if (side)
+                d.sides |= side;
+            else
+                on_box = false;
+        }
+    d.sides &= ~interior;
+    free(border);
+    if (on_box) *out = d;
+    return true;
+}

@@ -30,6 +30,7 @@ typedef struct gl_object {
     gl_layers *layers; /* technique relief_layers: its maps */
     gl_gdm *gdm;       /* technique gdm: its table and prisms (their faces are drawn) */
     int max_mip_levels;
+    meso_uv_domain domain; /* the relief family's open sides (meso_mesh_uv_domain) */
     double options[GL_MAX_OPTIONS];
 } gl_object;
 
@@ -216,6 +217,8 @@ static meso_result prepare_object(meso_gl_renderer *r, int index, const meso_gl_
         return result;
     if ((result = upload_mesh(r, o, o->gdm ? gl_gdm_faces(o->gdm) : object->mesh)) != MESO_OK)
         return result;
+    if (!meso_mesh_uv_domain(object->mesh, &o->domain))
+        return meso_log_error(r->ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
     const meso_texture *color_map = object->material.color_map;
     if (color_map &&
         (result = upload_texture(r, object, color_map->levels[0]->width,
@@ -397,6 +400,9 @@ static void set_uniforms(const meso_gl_renderer *r, const gl_object *o,
     glUniform2i(glGetUniformLocation(p, "u_height_size"), hf ? hf->width : 1, hf ? hf->height : 1);
     glUniform1i(glGetUniformLocation(p, "u_height_clamp"), hf && hf->wrap == MESO_WRAP_CLAMP);
     glUniform1f(glGetUniformLocation(p, "u_depth"), o->object->mesostructure.depth);
+    glUniform1i(glGetUniformLocation(p, "u_domain_sides"), (int)o->domain.sides);
+    glUniform4f(glGetUniformLocation(p, "u_domain"), o->domain.u_min, o->domain.u_max,
+                o->domain.v_min, o->domain.v_max);
     for (size_t k = 0; k < o->info->num_options; k++) {
         const meso_technique_option *option = &o->info->options[k];
         char name[80];

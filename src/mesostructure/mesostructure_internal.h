@@ -29,6 +29,11 @@ struct meso_solid {
     bool grid_clamped; /* a model (impostor): not periodic, nodes at i / (n - 1) in u and v */
     uint64_t grid_hash;
     char grid_name[256];
+    /* a model's own triangles in (u, v, w): the object an impostor stands for, which the
+     * reference traces (meso_solid_model_view); NULL for tiles and procedural solids */
+    meso_vec3 *model_uvw;
+    uint32_t *model_indices;
+    size_t model_num_vertices, model_num_triangles;
 };
 
 /* The distance of a tile-mesh solid at (u, v, w): trilinear in the grid (u, v periodic). */

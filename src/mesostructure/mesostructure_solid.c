@@ -271,6 +271,8 @@ meso_result meso_solid_create_procedural(meso_context *ctx, const meso_solid_des
 void meso_solid_destroy(meso_solid *solid) {
     if (!solid) return;
     free(solid->grid);
+    free(solid->model_uvw);
+    free(solid->model_indices);
     free(solid);
 }
 

@@ -301,6 +301,19 @@ static meso_result create_solid(meso_context *ctx, const meso_vec3 *positions, s
         r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", name);
         goto fail;
     }
+    if (!periodic) {
+        s->model_uvw = malloc(num_vertices * sizeof *s->model_uvw);
+        s->model_indices = malloc(3 * num_triangles * sizeof *s->model_indices);
+        if (!s->model_uvw || !s->model_indices) {
+            r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", name);
+            goto fail;
+        }
+        for (size_t i = 0; i < num_vertices; i++) /* the box's z runs up: w = 1 - z */
+            s->model_uvw[i] = (meso_vec3){positions[i].x, positions[i].y, 1.0f - positions[i].z};
+        memcpy(s->model_indices, indices, 3 * num_triangles * sizeof *indices);
+        s->model_num_vertices = num_vertices;
+        s->model_num_triangles = num_triangles;
+    }
     if ((r = build_scene(ctx, &ts, num_vertices, name)) != MESO_OK) goto fail;
     grid_job job = {&ts, s->grid, n};
     meso_parallel_for(ctx, (size_t)n * (size_t)n, grid_column, &job);
@@ -340,6 +353,17 @@ meso_result meso_solid_create_from_model(meso_context *ctx, const meso_vec3 *pos
 }
 
 bool meso_solid_is_periodic(const meso_solid *solid) { return !solid->grid_clamped; }
+
+bool meso_solid_model_view(const meso_solid *solid, const meso_vec3 **out_uvw,
+                           size_t *out_num_vertices, const uint32_t **out_indices,
+                           size_t *out_num_triangles) {
+    bool model = solid && solid->model_uvw;
+    *out_uvw = model ? solid->model_uvw : NULL;
+    *out_num_vertices = model ? solid->model_num_vertices : 0;
+    *out_indices = model ? solid->model_indices : NULL;
+    *out_num_triangles = model ? solid->model_num_triangles : 0;
+    return model;
+}
 
 float meso_solid_grid_distance(const meso_solid *solid, meso_vec3 uvw) {
     int n = solid->grid_side;

@@ -38,6 +38,11 @@ typedef struct solid_build {
     const meso_mesh *mesh;
     const meso_isosurface *iso;
     float depth;
+    /* the w that lies on the mesh: 0 for tiles (the mesh is the shell's top); 0.5 for a
+     * model's solid, an impostor, whose quad passes through the model's middle (Policarpo &
+     * Oliveira 2006 §4), as relief_layers draws it */
+    float mesh_w;
+    bool single_tile; /* a model: one copy at tile (0, 0), not a tiling */
     /* per base triangle: output counts (pass 1) and offsets (pass 2) */
     /* per base triangle, counted by primitives (Embree quads; a triangle is a quad with its
      * last vertex repeated) and by the triangles they hold */
@@ -73,7 +78,8 @@ static inline float side(const meso_prism_edge *e, meso_vec2 x) {
 static uint32_t new_vertex(emitter *em, meso_vec3 x, int on_edge) {
     uint64_t index = em->vertex_base + em->num_vertices++;
     if (em->write) {
-        meso_vec3 p = meso_prism_map(em->st, em->b->mesh, em->b->depth, x, on_edge);
+        meso_vec3 shell = {x.x, x.y, x.z - em->b->mesh_w};
+        meso_vec3 p = meso_prism_map(em->st, em->b->mesh, em->b->depth, shell, on_edge);
         float *out = em->b->vertices + 3 * index;
         out[0] = p.x;
         out[1] = p.y;
@@ -230,55 +236,6 @@ static void emit_caps(emitter *em) {
     em->cap = false;
 }
 
-/* An edge of the mesh by its end points' positions (their bits), the lower point first, and
- * its slot (triangle * 3 + e). */
-typedef struct edge_record {
-    uint32_t key[6];
-    size_t slot;
-} edge_record;
-
-static int edge_record_cmp(const void *pa, const void *pb) {
-    const edge_record *a = pa, *b = pb;
-    int c = memcmp(a->key, b->key, sizeof a->key);
-    if (c) return c;
-    return a->slot < b->slot ? -1 : a->slot > b->slot;
-}
-
-/* border[t] bit e: edge e of triangle t (vertex e to e + 1) belongs to no other triangle. NULL
- * when out of memory. */
-static uint8_t *open_border_edges(const meso_mesh *mesh) {
-    size_t nt = mesh->num_triangles, ne = 3 * nt;
-    uint8_t *border = calloc(nt ? nt : 1, 1);
-    edge_record *records = malloc((ne ? ne : 1) * sizeof *records);
-    if (!border || !records) {
-        free(border);
-        free(records);
-        return NULL;
-    }
-    for (size_t t = 0; t < nt; t++)
-        for (size_t e = 0; e < 3; e++) {
-            meso_vec3 p = mesh->positions[mesh->indices[3 * t + e]];
-            meso_vec3 q = mesh->positions[mesh->indices[3 * t + (e + 1) % 3]];
-            uint32_t a[3], b[3];
-            memcpy(a, &p, sizeof a);
-            memcpy(b, &q, sizeof b);
-            bool swap = memcmp(b, a, sizeof a) < 0;
-            edge_record *r = &records[3 * t + e];
-            memcpy(r->key, swap ? b : a, sizeof a);
-            memcpy(r->key + 3, swap ? a : b, sizeof a);
-            r->slot = 3 * t + e;
-        }
-    qsort(records, ne, sizeof *records, edge_record_cmp);
-    for (size_t i = 0; i < ne;) {
-        size_t j = i + 1;
-        while (j < ne && !memcmp(records[j].key, records[i].key, sizeof records[i].key)) j++;
-        if (j == i + 1) border[records[i].slot / 3] |= (uint8_t)(1u << (records[i].slot % 3));
-        i = j;
-    }
-    free(records);
-    return border;
-}
-
 /* Embree's filter on a solid's quads: a cap's hit counts only where the solid is inside. */
 static void keep_cap_hits_inside(const struct RTCFilterFunctionNArguments *args) {
     const reference_object *ref = args->geometryUserPtr;
@@ -317,6 +274,7 @@ static void process_triangle(emitter *em) {
     long gj0 = (long)floorf(vmin * (float)rv) - 1, gj1 = (long)ceilf(vmax * (float)rv);
     long tu0 = floor_div(gi0, ru), tu1 = floor_div(gi1, ru);
     long tv0 = floor_div(gj0, rv), tv1 = floor_div(gj1, rv);
+    if (em->b->single_tile) tu0 = tu1 = tv0 = tv1 = 0;
     for (long tv = tv0; tv <= tv1; tv++)
         for (long tu = tu0; tu <= tu1; tu++) {
             meso_vec3 tile = {(float)tu, (float)tv, 0.0f};
@@ -444,16 +402,48 @@ meso_result reference_build_solid(meso_context *ctx, const meso_reference_desc *
                               object->name, tiles,
                               (unsigned long long)MESO_REFERENCE_MAX_TRIANGLES);
 
-    meso_isosurface *iso = NULL;
-    result = meso_bake_isosurface_function(ctx, ref->field, ref->field_user, &idesc, &iso);
-    if (result != MESO_OK) return result;
-    meso_log_info(ctx, "%s: reference: isosurface %d x %d x %d: %zu triangles a tile", object->name,
-                  iso->resolution_u, iso->resolution_v, iso->resolution_w, iso->num_triangles);
+    /* An impostor's truth is the model it stands for (Policarpo & Oliveira 2006 §4): its own
+     * triangles, in one column of one tile, clipped into the prisms and mapped as the
+     * extracted surface of a tile would be; no extraction, so no extraction error. */
+    meso_isosurface *extracted = NULL, model_iso = {0};
+    uint32_t model_columns[2] = {0, 0};
+    const meso_vec3 *model_uvw = NULL;
+    const uint32_t *model_indices = NULL;
+    size_t model_vertices = 0, model_triangles = 0;
+    bool model = !desc->solid_field &&
+                 meso_solid_model_view(object->mesostructure.solid, &model_uvw, &model_vertices,
+                                       &model_indices, &model_triangles);
+    if (model) {
+        model_columns[1] = (uint32_t)model_triangles;
+        model_iso = (meso_isosurface){.resolution_u = 1,
+                                      .resolution_v = 1,
+                                      .resolution_w = 1,
+                                      .num_vertices = model_vertices,
+                                      .num_triangles = model_triangles,
+                                      .positions = (meso_vec3 *)model_uvw,
+                                      .indices = (uint32_t *)model_indices,
+                                      .column_offsets = model_columns};
+    } else {
+        result =
+            meso_bake_isosurface_function(ctx, ref->field, ref->field_user, &idesc, &extracted);
+        if (result != MESO_OK) return result;
+    }
+    const meso_isosurface *iso = model ? &model_iso : extracted;
+    meso_log_info(ctx, "%s: reference: %s %d x %d x %d: %zu triangles a tile", object->name,
+                  model ? "the model" : "isosurface", iso->resolution_u, iso->resolution_v,
+                  iso->resolution_w, iso->num_triangles);
 
     size_t nt = mesh->num_triangles;
     size_t threads = (size_t)meso_context_num_threads(ctx);
     size_t nv_iso = iso->num_vertices ? iso->num_vertices : 1;
-    solid_build b = {.mesh = mesh, .iso = iso, .depth = object->mesostructure.depth};
+    solid_build b = {.mesh = mesh,
+                     .iso = iso,
+                     .single_tile = model,
+                     .depth = object->mesostructure.depth,
+                     .mesh_w = object->mesostructure.solid &&
+                                       !meso_solid_is_periodic(object->mesostructure.solid)
+                                   ? 0.5f
+                                   : 0.0f};
     b.triangle_counts = calloc(nt + 1, sizeof *b.triangle_counts);
     b.vertex_counts = calloc(nt + 1, sizeof *b.vertex_counts);
     b.real_counts = calloc(nt + 1, sizeof *b.real_counts);
@@ -462,7 +452,7 @@ meso_result reference_build_solid(meso_context *ctx, const meso_reference_desc *
     b.remap = calloc(threads * nv_iso, sizeof *b.remap);
     b.stamp = calloc(threads * nv_iso, sizeof *b.stamp);
     b.stamp_counter = calloc(threads, sizeof *b.stamp_counter);
-    b.border = open_border_edges(mesh);
+    b.border = meso_mesh_open_border_edges(mesh);
     if (!b.triangle_counts || !b.vertex_counts || !b.real_counts || !triangle_offsets ||
         !vertex_offsets || !b.remap || !b.stamp || !b.stamp_counter || !b.border) {
         result =
@@ -553,6 +543,6 @@ fail:
     free(b.stamp);
     free(b.stamp_counter);
     free(b.border);
-    meso_isosurface_destroy(iso);
+    meso_isosurface_destroy(extracted);
     return result;
 }

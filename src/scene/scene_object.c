@@ -179,7 +179,9 @@ static meso_result parse_height_convention(const scene_parser *p, const cJSON *i
  * 0.05: x -> u, -z -> v (the built-in plane's axes, so the impostor on a plane of the model's
  * x-z size shows it unturned), y -> 1 - w. The plane's `size` should be the larger of the
  * model's x and z extents / 0.9 and `depth` its y extent / 0.9 (docs/techniques/
- * relief_layers.md), with the plane at y = the model's top + 0.05 depth. */
+ * relief_layers.md), with the plane through the model's middle: the impostor's shell runs
+ * from depth / 2 above the quad to depth / 2 below it (§4), and the reference traces the
+ * model's own triangles there (meso_solid_model_view). */
 static meso_result parse_impostor_solid(const scene_parser *p, const cJSON *item,
                                         const scene_key *key, meso_object *object) {
     static const char *const keys[] = {"impostor", "resolution", NULL};

@@ -70,6 +70,30 @@ static void test_app_render_writes_png_of_the_asked_size(void **state) {
     assert_string_equal(names, "x.coverage.png x.png "); /* no temporary file left */
 }
 
+/* Straight down the scene's up axis needs another up: refused without --up (exit 2, naming
+ * the scene), drawn with it, and the plane then fills the middle of the view. */
+static void test_app_render_up_lets_the_camera_look_straight_down(void **state) {
+    (void)state;
+    const char *dir = fresh_dir("render-up");
+    char args[4096];
+    const char *err = NULL;
+    snprintf(args, sizeof(args), "render %s -o %s --size 32x32 --eye 0,3,0 --target 0,0,0", BRICKS,
+             test_path(dir, "down.png"));
+    assert_int_equal(test_run_meso(args, &err), 2);
+    assert_non_null(strstr(err, "bricks-plane.json: --eye/--target/--up"));
+    snprintf(args, sizeof(args),
+             "render %s -o %s --size 32x32 --eye 0,3,0 --target 0,0,0 --up 0,0,-1 --coverage %s",
+             BRICKS, test_path(dir, "down.png"), test_path(dir, "down.coverage.png"));
+    run_ok(args);
+    meso_context *ctx = test_context(1);
+    meso_image *coverage = NULL;
+    assert_int_equal(meso_image_load_png(ctx, test_path(dir, "down.coverage.png"), &coverage),
+                     MESO_OK);
+    assert_true(coverage->pixels[(16 * 32 + 16) * coverage->channels] > 0.5f);
+    meso_image_destroy(coverage);
+    meso_context_destroy(ctx);
+}
+
 static void test_app_render_same_bytes_for_any_thread_count(void **state) {
     (void)state;
     const char *dir = fresh_dir("render-threads");
@@ -244,6 +268,7 @@ static void test_app_render_progress_shows_for_one_long_render(void **state) {
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_app_render_writes_png_of_the_asked_size),
+        cmocka_unit_test(test_app_render_up_lets_the_camera_look_straight_down),
         cmocka_unit_test(test_app_render_same_bytes_for_any_thread_count),
         cmocka_unit_test(test_app_render_techniques_writes_images_sheet_and_results),
         cmocka_unit_test(test_app_info_describes_the_example_and_its_render),

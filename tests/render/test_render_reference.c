@@ -372,6 +372,57 @@ static void test_reference_output_is_identical_for_any_thread_count(void **state
     meso_context_destroy(two);
 }
 
+/* The sRGB encoding the PNGs carry, so a PSNR here is the one `meso compare` reports. */
+static float srgb(float x) {
+    x = x < 0.0f ? 0.0f : x > 1.0f ? 1.0f : x;
+    return x <= 0.0031308f ? 12.92f * x : 1.055f * powf(x, 1.0f / 2.4f) - 0.055f;
+}
+
+static double srgb_psnr(const target *a, const target *b) {
+    size_t n = 3 * (size_t)a->width * (size_t)a->height;
+    double sum = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        double d = (double)srgb(a->color[i]) - (double)srgb(b->color[i]);
+        sum += d * d;
+    }
+    return sum > 0.0 ? 10.0 * log10((double)n / sum) : INFINITY;
+}
+
+/* The truth of an impostor is the object it stands for (Policarpo & Oliveira 2006 §4): the
+ * reference of the teapot impostor on its quad (the quad through the model's middle) draws
+ * the built-in teapot where the teapot itself stands, from views above, beside and below. */
+static void test_reference_of_an_impostor_is_the_model_it_stands_for(void **state) {
+    static const char *const eyes[] = {"[2.2, 2.6, 3.6]", "[-3.5, 0.4, 1.2]", "[0.8, -2.8, 2.5]"};
+    meso_context *ctx = test_context(0);
+    for (int e = 0; e < 3; e++) {
+        char json[2048];
+        static const char *const format =
+            "{\"image\": {\"width\": 96, \"height\": 96, \"background\": [0.02, 0.02, 0.03],"
+            " \"encoding\": \"linear\"},"
+            " \"camera\": {\"eye\": %s, \"target\": [0, 0, 0], \"up\": [0, 1, 0],"
+            " \"fov_y_deg\": 40},"
+            " \"ambient\": [0.15, 0.15, 0.15],"
+            " \"lights\": [{\"type\": \"directional\", \"direction\": [0.4, 0.8, 0.5],"
+            " \"color\": [1, 1, 1]}],"
+            " \"objects\": [{%s, \"material\": {\"albedo\": [0.8, 0.55, 0.3]},"
+            " \"technique\": \"reference\"}]}";
+        snprintf(json, sizeof json, format, eyes[e],
+                 "\"shape\": \"plane\", \"size\": 3.404, \"mesostructure\":"
+                 " {\"solid\": {\"impostor\": \"teapot\"}, \"depth\": 1.6667}");
+        meso_scene *impostor = parse(ctx, json);
+        snprintf(json, sizeof json, format, eyes[e], "\"shape\": \"teapot\"");
+        meso_scene *teapot = parse(ctx, json);
+        target a = trace(ctx, impostor, NULL), b = trace(ctx, teapot, NULL);
+        double psnr = srgb_psnr(&a, &b);
+        if (!(psnr >= 35.0)) fail_msg("eye %s: %.2f dB against the teapot itself", eyes[e], psnr);
+        target_free(&a);
+        target_free(&b);
+        meso_scene_destroy(teapot);
+        meso_scene_destroy(impostor);
+    }
+    meso_context_destroy(ctx);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_reference_constant_one_renders_like_flat),
@@ -382,6 +433,7 @@ int main(void) {
         cmocka_unit_test(test_reference_too_many_triangles_is_a_limit_error_naming_the_object),
         cmocka_unit_test(test_reference_view_cap_bounds_triangles_by_pixels),
         cmocka_unit_test(test_reference_output_is_identical_for_any_thread_count),
+        cmocka_unit_test(test_reference_of_an_impostor_is_the_model_it_stands_for),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

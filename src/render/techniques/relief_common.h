@@ -797,6 +797,25 @@ typedef struct relief_tracer {
                    v8f hx, v8f hy, v8f hd, float depth, v8vec3 *out_normal);
 } relief_tracer;
 
+/* Fill the domain (geom.h, meso_mesh_uv_domain: the UV box's sides that are open borders, where
+ * a ray leaves the shell and a hit past them is a miss, not the next tile of a repeating map). */
+static inline meso_result relief_domain_init(meso_context *ctx, const meso_object *object,
+                                             meso_uv_domain *out) {
+    *out = (meso_uv_domain){0};
+    if (!object->mesh || meso_mesh_uv_domain(object->mesh, out)) return MESO_OK;
+    return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
+}
+
+/* The lanes whose texture point (u, v) lies inside the domain's open sides. */
+static inline int relief_domain_inside8(const meso_uv_domain *d, v8f u, v8f v) {
+    v8i in = v8_mask_from_bits(0xff);
+    if (d->sides & MESO_UV_DOMAIN_U_MIN) in &= u >= d->u_min;
+    if (d->sides & MESO_UV_DOMAIN_U_MAX) in &= u <= d->u_max;
+    if (d->sides & MESO_UV_DOMAIN_V_MIN) in &= v >= d->v_min;
+    if (d->sides & MESO_UV_DOMAIN_V_MAX) in &= v <= d->v_max;
+    return v8_mask_bits(in);
+}
+
 typedef struct relief_params {
     bool shadows, silhouettes;
     /* Beyond the papers (relief_layers): on a curved mesh the shell at depth w is a smaller
@@ -805,6 +824,7 @@ typedef struct relief_params {
      * curvature along the ray (twice the quadric, Oliveira & Policarpo 2005), averaged from 0
      * to the ray's depth d as 1 / (1 - kappa d depth / 2). */
     bool curved_uv;
+    meso_uv_domain domain; /* hits past its open sides miss */
 } relief_params;
 
 /* The factor on the tangent-plane texture offset of a ray point at depth d (curved_uv). */
@@ -943,6 +963,8 @@ relief_shade_core(const relief_heights *m, const relief_tracer *tracer, relief_p
             hit_pos[g] = v8_madd(l[g].position, l[g].view, t[g]);
             hit_u[g] = l[g].u + du[g] * tt;
             hit_v[g] = l[g].v + dv[g] * tt;
+            if (params.domain.sides)
+                hit[g] &= relief_domain_inside8(&params.domain, hit_u[g], hit_v[g]);
             out_depth[g] = l[g].depth * (1.0f + t[g]); /* dot(P + t V - eye, forward) */
             if (tracer->normal) {
                 tracer->normal(tracer->user, &l[g], &batch[g], t[g], hx[g], hy[g], hd[g], depth,

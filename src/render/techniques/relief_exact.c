@@ -740,6 +740,7 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
     relief_maxmip_init(s->pyramid, &s->maxmip);
     s->params.shadows = options.shadows;
     s->params.silhouettes = options.silhouettes;
+    if ((r = relief_domain_init(ctx, object, &s->params.domain)) != MESO_OK) goto fail;
     *out_state = s;
     return MESO_OK;
 fail:

@@ -216,6 +216,7 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
     s->params.shadows = shadows != 0;
     s->params.silhouettes = silhouettes != 0;
     s->params.curved_uv = curved != 0;
+    if ((r = relief_domain_init(ctx, object, &s->params.domain)) != MESO_OK) goto fail;
     if (!map->from_heightfield) {
         /* back faces: the far wall of a closed mesh seen through holes in the near one */
         if (!(s->below = calloc(1, sizeof *s->below))) {
@@ -230,7 +231,8 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
         b->linear_steps = s->linear_steps;
         b->binary_steps = s->binary_steps;
         b->shadow_steps = s->shadow_steps;
-        b->params = (relief_params){.shadows = s->params.shadows, .silhouettes = false};
+        b->params = (relief_params){
+            .shadows = s->params.shadows, .silhouettes = false, .domain = s->params.domain};
         /* a closed mesh's inside is unlit; an impostor's quad (§4) is seen from behind in the
          * open, lit as from the front */
         b->enclosed = meso_solid_is_periodic(m->solid);
