@@ -284,22 +284,10 @@ static void frame_images_free(frame_images *f) {
     *f = (frame_images){0};
 }
 
+/* The one applicability test (meso_technique_accepts) for every object of the scene. */
 static bool technique_draws(const meso_technique_info *info, const meso_scene *scene) {
-    for (int i = 0; i < scene->num_objects; i++) {
-        unsigned need = MESO_TECHNIQUE_ACCEPTS_NONE;
-        switch (scene->objects[i].mesostructure.kind) {
-        case MESO_MESOSTRUCTURE_NONE:
-            need = MESO_TECHNIQUE_ACCEPTS_NONE;
-            break;
-        case MESO_MESOSTRUCTURE_HEIGHT_FIELD:
-            need = MESO_TECHNIQUE_ACCEPTS_HEIGHT_FIELD;
-            break;
-        case MESO_MESOSTRUCTURE_SOLID:
-            need = MESO_TECHNIQUE_ACCEPTS_SOLID;
-            break;
-        }
-        if (!(info->accepts & need)) return false;
-    }
+    for (int i = 0; i < scene->num_objects; i++)
+        if (!meso_technique_accepts(info, &scene->objects[i].mesostructure)) return false;
     return true;
 }
 
