@@ -5,7 +5,7 @@ BUILD_CLANG ?= build-clang
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
-.PHONY: all deps build demo test test-asan test-clang bench install clean format format-check
+.PHONY: all deps build demo test test-asan test-clang test-slurm bench install clean format format-check
 
 all: build
 
@@ -23,6 +23,12 @@ demo: build
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+
+# meso sweep on a real one-node Slurm cluster started for the test (docs/scale-out.md): a job
+# array of 3 shards and a dependent merge against a single process, a shard cancelled and
+# submitted again. Skipped, with a message, where the cluster cannot start.
+test-slurm: build
+	bash scripts/test-slurm.sh $(BUILD)/meso
 
 # The whole suite again under AddressSanitizer + UndefinedBehaviorSanitizer (CI runs it).
 test-asan: deps

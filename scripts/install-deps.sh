@@ -22,6 +22,8 @@ packages=(
     libegl-mesa0 libgl1-mesa-dri   # Mesa's EGL and llvmpipe: GL 3.3 core without a GPU
     glslang-tools         # glslangValidator checks shaders/ in make test
     libopenexr-dev        # meso bake -o: VDM tables as OpenEXR
+    munge slurmctld slurmd slurm-client   # make test-slurm: a one-node Slurm cluster
+    chromium              # the sweep report's test: index.html in headless Chromium
 )
 
 missing=()

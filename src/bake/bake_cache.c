@@ -111,5 +111,8 @@ meso_result meso_bake_cache_save(meso_context *ctx, const meso_bake_file *bake, 
     meso_result result = meso_bake_cache_path(ctx, bake->kind, key, path, sizeof(path));
     if (result == MESO_ERROR_UNSUPPORTED) return MESO_OK; /* cache disabled */
     if (result != MESO_OK) return result;
-    return meso_bake_file_save(ctx, bake, path);
+    result = meso_bake_file_save(ctx, bake, path);
+    /* one line a bake stored: how shards sharing a cache count the bakes they duplicated */
+    if (result == MESO_OK) meso_log_info(ctx, "bake cache: stored %s", path);
+    return result;
 }

@@ -1,0 +1,215 @@
+#!/usr/bin/env bash
+# make test-slurm (docs/scale-out.md): a real one-node Slurm cluster on this machine (Debian's
+# munge, slurmctld and slurmd, a generated slurm.conf in a temporary folder: localhost, 2 CPUs)
+# runs a sweep of 24+ jobs as a job array of 3 shards and a dependent merge job; the merged
+# results must equal a single-process sweep's (every image byte-identical, every metric column
+# equal; timing columns excepted). Then one shard is cancelled mid-way (scancel) and submitted
+# again, and the same checks pass, with no temporary file left in the cache or the output.
+# Every daemon started is stopped at the end, on failure too. Skipped, with a message, where
+# the cluster cannot start (packages missing, not root).
+#
+# usage: scripts/test-slurm.sh [path/to/meso]
+set -euo pipefail
+here=$(cd "$(dirname "$0")/.." && pwd)
+meso=$(realpath "${1:-$here/build/meso}")
+skip() {
+    echo "test-slurm: skipped: $*" >&2
+    exit 0
+}
+for tool in munged slurmctld slurmd sbatch squeue scancel scontrol; do
+    command -v "$tool" >/dev/null || PATH=$PATH:/usr/sbin command -v "$tool" >/dev/null ||
+        skip "$tool not found (scripts/install-deps.sh installs munge, slurmctld, slurmd, slurm-client)"
+done
+export PATH=$PATH:/usr/sbin
+[ "$(id -u)" -eq 0 ] || skip "slurmd must run as root to start jobs as their users"
+[ -x "$meso" ] || { echo "test-slurm: $meso: not built" >&2; exit 1; }
+
+work=$(mktemp -d /tmp/meso-test-slurm.XXXXXX)
+pids=()
+cleanup() {
+    local status=$?
+    # stop what this script started, by process id, daemons last
+    for pid in "${pids[@]}"; do kill "$pid" 2>/dev/null || true; done
+    for pid in "${pids[@]}"; do
+        for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
+        kill -9 "$pid" 2>/dev/null || true
+    done
+    if [ $status -ne 0 ]; then
+        echo "test-slurm: FAILED; the daemons' logs:" >&2
+        tail -n 20 "$work"/*.log >&2 2>/dev/null || true
+    fi
+    rm -rf "$work"
+    exit $status
+}
+trap cleanup EXIT INT TERM
+
+fail() {
+    echo "test-slurm: FAILED: $*" >&2
+    exit 1
+}
+
+# ---- munge: its own key, socket and files in the temporary folder ----
+mkdir -p "$work/munge" "$work/state" "$work/spool" "$work/cache"
+chmod 700 "$work/munge"
+dd if=/dev/urandom of="$work/munge/munge.key" bs=1024 count=1 status=none
+chmod 400 "$work/munge/munge.key"
+munged --foreground --force --key-file="$work/munge/munge.key" \
+    --socket="$work/munge/munge.sock" --pid-file="$work/munge/munged.pid" \
+    --log-file="$work/munge.log" --seed-file="$work/munge/seed" >"$work/munged.out" 2>&1 &
+pids+=($!)
+for _ in $(seq 50); do [ -S "$work/munge/munge.sock" ] && break; sleep 0.1; done
+[ -S "$work/munge/munge.sock" ] || skip "munged did not start ($(tail -n 1 "$work/munged.out" 2>/dev/null))"
+
+# ---- slurm.conf: this host, 2 CPUs, ports of its own ----
+host=$(hostname -s)
+port=$((20000 + RANDOM % 20000))
+cat >"$work/slurm.conf" <<EOF
+ClusterName=mesotest
+SlurmctldHost=$host
+SlurmUser=root
+SlurmdUser=root
+SlurmctldPort=$port
+SlurmdPort=$((port + 1))
+AuthType=auth/munge
+CredType=cred/munge
+AuthInfo=socket=$work/munge/munge.sock
+StateSaveLocation=$work/state
+SlurmdSpoolDir=$work/spool
+SlurmctldPidFile=$work/slurmctld.pid
+SlurmdPidFile=$work/slurmd.pid
+SlurmctldLogFile=$work/slurmctld.log
+SlurmdLogFile=$work/slurmd.log
+ProctrackType=proctrack/linuxproc
+TaskPlugin=task/none
+JobAcctGatherType=jobacct_gather/none
+AccountingStorageType=accounting_storage/none
+JobCompType=jobcomp/none
+SchedulerType=sched/backfill
+SelectType=select/cons_tres
+SelectTypeParameters=CR_CPU
+ReturnToService=2
+MpiDefault=none
+SlurmdTimeout=30
+InactiveLimit=0
+KillWait=5
+MinJobAge=600
+NodeName=$host CPUs=2 State=UNKNOWN
+PartitionName=test Nodes=$host Default=YES MaxTime=INFINITE State=UP
+EOF
+export SLURM_CONF=$work/slurm.conf
+slurmctld -D -i -f "$SLURM_CONF" >"$work/slurmctld.out" 2>&1 &
+pids+=($!)
+slurmd -D -f "$SLURM_CONF" >"$work/slurmd.out" 2>&1 &
+pids+=($!)
+up=0
+for _ in $(seq 100); do
+    if sinfo -h -o %T 2>/dev/null | grep -qE '^(idle|mixed|allocated)'; then up=1; break; fi
+    sleep 0.2
+done
+[ $up -eq 1 ] || skip "the cluster did not come up: $(tail -n 2 "$work/slurmctld.log" "$work/slurmd.log" 2>/dev/null | tr '\n' ' ')"
+echo "test-slurm: cluster up on $host (slurmctld port $port)"
+
+# ---- the sweep: 3 scenes, 27 jobs at 48x48 ----
+export MESO_CACHE_DIR=$work/cache MESO=$meso
+cat >"$work/spec.json" <<EOF
+{
+  "scenes": ["$here/examples/bricks-plane.json", "$here/examples/bumps-sphere.json",
+             "$here/examples/weave-plane.json"],
+  "techniques": ["flat", "bump", "parallax", "relief", "relief_layers", "vdm"],
+  "options": {"relief": {"linear_steps": [4, 8, 16, 32]}, "relief_layers": {"linear_steps": [8, 16, 32]}},
+  "sizes": [48],
+  "frames": 1
+}
+EOF
+jobs=$("$meso" sweep "$work/spec.json" --list | tail -n +2 | wc -l)
+echo "test-slurm: $jobs jobs"
+sbatch_script=$here/scripts/slurm/sweep.sbatch
+
+wait_for() { # job ids...: wait until none is pending or running (at most 10 minutes)
+    for _ in $(seq 1200); do
+        local left=0
+        for id in "$@"; do
+            state=$(scontrol -o show job "$id" 2>/dev/null | grep -o 'JobState=[A-Z_]*' | sort -u)
+            echo "$state" | grep -qE 'PENDING|RUNNING|COMPLETING|CONFIGURING' && left=1
+        done
+        [ $left -eq 0 ] && return 0
+        sleep 0.5
+    done
+    fail "jobs $* still running after 10 minutes"
+}
+
+# The merged folder against the single process's.
+check_same() {
+    local dir=$1
+    [ -f "$dir/results.csv" ] || fail "$dir/results.csv: missing (merge did not run)"
+    python3 - "$work/single/results.csv" "$dir/results.csv" <<'EOF' || fail "$dir: results differ"
+import csv, sys
+timing = {"prepare_ms", "frame_ms", "reference_ms"}
+a = list(csv.DictReader(open(sys.argv[1])))
+b = list(csv.DictReader(open(sys.argv[2])))
+assert len(a) == len(b) and len(a) >= 24, (len(a), len(b))
+for x, y in zip(a, b):
+    for k in x:
+        if k not in timing and x[k] != y[k]:
+            sys.exit(f"job {x['id']}: {k}: {x[k]} != {y[k]}")
+assert all(x["status"] == "ok" and x["psnr_covered_db"] for x in a), "a job without metrics"
+EOF
+    local images=0
+    while IFS= read -r f; do
+        cmp -s "$work/single/$f" "$dir/$f" || fail "$dir/$f differs from the single process's"
+        images=$((images + 1))
+    done < <(cd "$work/single" && find jobs refs -name '*.png' | sort)
+    [ "$images" -ge "$jobs" ] || fail "only $images images"
+    local theirs
+    theirs=$(cd "$dir" && find jobs refs -name '*.png' | wc -l)
+    [ "$theirs" -eq "$images" ] || fail "$dir has $theirs images, the single process $images"
+    if find "$dir" "$MESO_CACHE_DIR" -name '*.tmp*' | grep -q .; then
+        fail "temporary files left: $(find "$dir" "$MESO_CACHE_DIR" -name '*.tmp*' | head -3)"
+    fi
+    echo "test-slurm: $dir: $images images byte-identical, metrics equal, no temporary file"
+}
+
+# ---- 1. the array and the dependent merge ----
+cd "$work"
+array=$(sbatch --parsable --array=0-2 "$sbatch_script" "$work/spec.json" "$work/out" 3)
+merge=$(sbatch --parsable --dependency=afterok:"$array" "$sbatch_script" "$work/spec.json" "$work/out" 3)
+wait_for "$array" "$merge"
+# The shards started at once on a cold cache: how many times each entry was baked and stored
+# (atomically: a second store of an entry replaces it with the same bytes).
+stores=$(cat "$work"/meso-sweep-"$array"_*.log | grep 'bake cache: stored' || true)
+entries=$(echo "$stores" | grep -c . || true)
+unique=$(echo "$stores" | sed 's/.*stored //' | sort -u | grep -c . || true)
+echo "test-slurm: cold cache, 3 shards at once: $entries bakes stored for $unique entries"
+"$meso" sweep "$work/spec.json" -o "$work/single" --quiet
+check_same "$work/out"
+
+# ---- 2. a shard cancelled mid-way, submitted again ----
+array=$(sbatch --parsable --array=0-2 "$sbatch_script" "$work/spec.json" "$work/out2" 3)
+# shard 1 is cancelled once it has finished a job but not all of its jobs
+cancelled=0
+for _ in $(seq 1200); do
+    done_jobs=$( (find "$work/out2/shards/1/jobs" -name result.json 2>/dev/null || true) | wc -l)
+    if [ "$done_jobs" -ge 1 ]; then
+        # stopped at once (SIGSTOP), so the shard cannot finish while the cancel travels
+        scontrol suspend "${array}_1" || true
+        scancel "${array}_1" || true
+        cancelled=1
+        break
+    fi
+    sleep 0.02
+done
+[ $cancelled -eq 1 ] || fail "shard 1 never finished a job"
+wait_for "$array"
+state=$(scontrol -o show job "${array}_1" | grep -o 'JobState=[A-Z_]*')
+finished=$(find "$work/out2/shards/1/jobs" -name result.json | wc -l)
+mine=$("$meso" sweep "$work/spec.json" --list --shard 1/3 | tail -n +2 | wc -l)
+echo "test-slurm: shard 1 $state after $finished of its $mine jobs"
+[ "$state" = "JobState=CANCELLED" ] || fail "shard 1 was not cancelled ($state)"
+[ "$finished" -lt "$mine" ] || fail "shard 1 finished before it was cancelled: no test of the rerun"
+again=$(sbatch --parsable --array=1 "$sbatch_script" "$work/spec.json" "$work/out2" 3)
+merge=$(sbatch --parsable --dependency=afterok:"$again" "$sbatch_script" "$work/spec.json" "$work/out2" 3)
+wait_for "$again" "$merge"
+grep -q "$finished already done" "$work"/meso-sweep-"$again"_1.log ||
+    fail "the rerun of shard 1 did not skip its $finished finished jobs: $(head -n 3 "$work"/meso-sweep-"$again"_1.log)"
+check_same "$work/out2"
+echo "test-slurm: passed"
