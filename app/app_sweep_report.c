@@ -370,12 +370,12 @@ static const char page_head[] =
     "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n"
     "<title>meso sweep</title>\n<style>\n"
     "body{font-family:sans-serif;margin:1em 2em;color:#222}\n"
-    "table{border-collapse:collapse;font-size:13px}\n"
+    "table{border-collapse:collapse;font-size:13px;white-space:nowrap}\n"
     "th,td{border:1px solid #ccc;padding:2px 6px;text-align:right}\n"
     "td.t{text-align:left}\n"
     "th{cursor:pointer;background:#eee;position:sticky;top:0}\n"
     "th.asc::after{content:' \\25B2'}th.desc::after{content:' \\25BC'}\n"
-    ".plots img{margin:4px;border:1px solid #ccc}\n"
+    ".plots{display:flex;flex-wrap:wrap}.plots img{margin:4px;border:1px solid #ccc}\n"
     ".job{display:inline-block;margin:6px;vertical-align:top;font-size:12px}\n"
     ".swipe{position:relative;display:inline-block;line-height:0}\n"
     ".swipe img.over{position:absolute;left:0;top:0}\n"
@@ -509,21 +509,24 @@ static void write_html(const sweep_row *rows, size_t count, const char *hash, ap
         char truth[400];
         snprintf(truth, sizeof truth, "refs/%s/%dx%d/view-0000.png", row->scene, row->width,
                  row->height);
+        /* small images shown enlarged (pixelated), so a few pixels of error can be seen */
+        int scale = row->width < 192 ? (192 + row->width - 1) / row->width : 1;
+        int shown_w = row->width * scale, shown_h = row->height * scale;
         app_text_printf(t, "<div class=\"job\" id=\"job-%d\"><div>%d: ", row->id, row->id);
         app_text_xml(t, row->key);
         app_text_printf(t, "</div>\n<div class=\"swipe\"><img src=\"");
         html_attribute(t, truth);
         app_text_printf(
             t, "\" alt=\"truth\" width=\"%d\" height=\"%d\"><img class=\"over\" src=\"jobs/",
-            row->width, row->height);
+            shown_w, shown_h);
         html_attribute(t, row->key);
         app_text_printf(t, "/view-0000.png\" alt=\"job\" width=\"%d\" height=\"%d\"></div>\n",
-                        row->width, row->height);
+                        shown_w, shown_h);
         if (row->has_metrics) {
             app_text_printf(t, "<img src=\"jobs/");
             html_attribute(t, row->key);
             app_text_printf(t, "/diff-0000.png\" alt=\"difference\" width=\"%d\" height=\"%d\">\n",
-                            row->width, row->height);
+                            shown_w, shown_h);
         }
         app_text_printf(t,
                         "<div><input type=\"range\" min=\"0\" max=\"100\" value=\"100\" "
