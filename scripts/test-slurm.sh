@@ -16,26 +16,15 @@ skip() {
     echo "test-slurm: skipped: $*" >&2
     exit 0
 }
-for tool in munged slurmctld slurmd sbatch squeue scancel scontrol; do
-    command -v "$tool" >/dev/null || PATH=$PATH:/usr/sbin command -v "$tool" >/dev/null ||
-        skip "$tool not found (scripts/install-deps.sh installs munge, slurmctld, slurmd, slurm-client)"
-done
-export PATH=$PATH:/usr/sbin
-[ "$(id -u)" -eq 0 ] || skip "slurmd must run as root to start jobs as their users"
+source "$here/scripts/slurm/local-cluster.sh"
 [ -x "$meso" ] || { echo "test-slurm: $meso: not built" >&2; exit 1; }
 
 work=$(mktemp -d /tmp/meso-test-slurm.XXXXXX)
-pids=()
 cleanup() {
     local status=$?
-    # stop what this script started, by process id, daemons last
-    for pid in "${pids[@]}"; do kill "$pid" 2>/dev/null || true; done
-    for pid in "${pids[@]}"; do
-        for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
-        kill -9 "$pid" 2>/dev/null || true
-    done
+    cluster_stop # every daemon started, by process id
     if [ $status -ne 0 ]; then
-        echo "test-slurm: FAILED; the daemons' logs:" >&2
+        echo "test-slurm: FAILED; the logs:" >&2
         tail -n 20 "$work"/*.log >&2 2>/dev/null || true
     fi
     rm -rf "$work"
@@ -48,68 +37,11 @@ fail() {
     exit 1
 }
 
-# ---- munge: its own key, socket and files in the temporary folder ----
-mkdir -p "$work/munge" "$work/state" "$work/spool" "$work/cache"
-chmod 700 "$work/munge"
-dd if=/dev/urandom of="$work/munge/munge.key" bs=1024 count=1 status=none
-chmod 400 "$work/munge/munge.key"
-munged --foreground --force --key-file="$work/munge/munge.key" \
-    --socket="$work/munge/munge.sock" --pid-file="$work/munge/munged.pid" \
-    --log-file="$work/munge.log" --seed-file="$work/munge/seed" >"$work/munged.out" 2>&1 &
-pids+=($!)
-for _ in $(seq 50); do [ -S "$work/munge/munge.sock" ] && break; sleep 0.1; done
-[ -S "$work/munge/munge.sock" ] || skip "munged did not start ($(tail -n 1 "$work/munged.out" 2>/dev/null))"
+mkdir -p "$work/cache"
+cluster_start "$work" || skip "$cluster_error"
+echo "test-slurm: cluster up ($SLURM_CONF)"
 
-# ---- slurm.conf: this host, 2 CPUs, ports of its own ----
-host=$(hostname -s)
-port=$((20000 + RANDOM % 20000))
-cat >"$work/slurm.conf" <<EOF
-ClusterName=mesotest
-SlurmctldHost=$host
-SlurmUser=root
-SlurmdUser=root
-SlurmctldPort=$port
-SlurmdPort=$((port + 1))
-AuthType=auth/munge
-CredType=cred/munge
-AuthInfo=socket=$work/munge/munge.sock
-StateSaveLocation=$work/state
-SlurmdSpoolDir=$work/spool
-SlurmctldPidFile=$work/slurmctld.pid
-SlurmdPidFile=$work/slurmd.pid
-SlurmctldLogFile=$work/slurmctld.log
-SlurmdLogFile=$work/slurmd.log
-ProctrackType=proctrack/linuxproc
-TaskPlugin=task/none
-JobAcctGatherType=jobacct_gather/none
-AccountingStorageType=accounting_storage/none
-JobCompType=jobcomp/none
-SchedulerType=sched/backfill
-SelectType=select/cons_tres
-SelectTypeParameters=CR_CPU
-ReturnToService=2
-MpiDefault=none
-SlurmdTimeout=30
-InactiveLimit=0
-KillWait=5
-MinJobAge=600
-NodeName=$host CPUs=2 State=UNKNOWN
-PartitionName=test Nodes=$host Default=YES MaxTime=INFINITE State=UP
-EOF
-export SLURM_CONF=$work/slurm.conf
-slurmctld -D -i -f "$SLURM_CONF" >"$work/slurmctld.out" 2>&1 &
-pids+=($!)
-slurmd -D -f "$SLURM_CONF" >"$work/slurmd.out" 2>&1 &
-pids+=($!)
-up=0
-for _ in $(seq 100); do
-    if sinfo -h -o %T 2>/dev/null | grep -qE '^(idle|mixed|allocated)'; then up=1; break; fi
-    sleep 0.2
-done
-[ $up -eq 1 ] || skip "the cluster did not come up: $(tail -n 2 "$work/slurmctld.log" "$work/slurmd.log" 2>/dev/null | tr '\n' ' ')"
-echo "test-slurm: cluster up on $host (slurmctld port $port)"
-
-# ---- the sweep: 3 scenes, 27 jobs at 48x48 ----
+# ---- the sweep: 3 scenes, 26 jobs at 48x48 ----
 export MESO_CACHE_DIR=$work/cache MESO=$meso
 cat >"$work/spec.json" <<EOF
 {
@@ -125,17 +57,8 @@ jobs=$("$meso" sweep "$work/spec.json" --list | tail -n +2 | wc -l)
 echo "test-slurm: $jobs jobs"
 sbatch_script=$here/scripts/slurm/sweep.sbatch
 
-wait_for() { # job ids...: wait until none is pending or running (at most 10 minutes)
-    for _ in $(seq 1200); do
-        local left=0
-        for id in "$@"; do
-            state=$(scontrol -o show job "$id" 2>/dev/null | grep -o 'JobState=[A-Z_]*' | sort -u)
-            echo "$state" | grep -qE 'PENDING|RUNNING|COMPLETING|CONFIGURING' && left=1
-        done
-        [ $left -eq 0 ] && return 0
-        sleep 0.5
-    done
-    fail "jobs $* still running after 10 minutes"
+wait_for() { # job ids...: until none is pending or running (at most 10 minutes)
+    cluster_wait 600 "$@" || fail "jobs $* still running after 10 minutes"
 }
 
 # The merged folder against the single process's.
