@@ -14,7 +14,22 @@ cluster_pids=()
 cluster_error=""
 
 cluster_stop() {
-    local pid
+    local pid parent job_pids=() step_pids=()
+    # The jobs still on the node, and their slurmstepd, by process id (scontrol listpids of this
+    # cluster's slurmd): a job stopped (suspended) when the daemons go would stay forever.
+    if [ ${#cluster_pids[@]} -gt 0 ] && [ -n "${SLURM_CONF:-}" ]; then
+        while read -r pid _; do
+            [[ $pid =~ ^[0-9]+$ ]] || continue
+            job_pids+=("$pid")
+            parent=$(ps -o ppid= -p "$pid" 2>/dev/null | tr -d ' ' || true)
+            if [ -n "$parent" ] && [ "$(ps -o comm= -p "$parent" 2>/dev/null)" = slurmstepd ]; then
+                step_pids+=("$parent")
+            fi
+        done < <(scontrol listpids 2>/dev/null || true)
+    fi
+    for pid in "${job_pids[@]}"; do kill -KILL "$pid" 2>/dev/null || true; done
+    [ ${#job_pids[@]} -gt 0 ] && sleep 1
+    for pid in "${step_pids[@]}"; do kill -KILL "$pid" 2>/dev/null || true; done
     for pid in "${cluster_pids[@]}"; do kill "$pid" 2>/dev/null || true; done
     for pid in "${cluster_pids[@]}"; do
         for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
