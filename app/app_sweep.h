@@ -90,6 +90,7 @@ typedef struct sweep_row {
     char status[16]; /* ok, failed */
     char note[256];
     double prepare_ms, frame_ms, reference_ms;
+    double job_seconds; /* the job's wall time, its scene's references included when it drew them */
     bool has_metrics;
     double psnr_db, psnr_covered_db, rmse, rmse_covered, ssim, max_error, coverage_iou;
     double flicker; /* NAN without orbit */

@@ -5,6 +5,7 @@
 
 #include <cjson/cJSON.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -42,6 +43,7 @@ void app_sweep_row_json(const sweep_row *row, const char *spec_hash, app_text *t
     exact_number(t, "prepare_ms", row->prepare_ms);
     exact_number(t, "frame_ms", row->frame_ms);
     exact_number(t, "reference_ms", row->reference_ms);
+    exact_number(t, "job_seconds", row->job_seconds);
     app_text_printf(t, ",\n  \"has_metrics\": %s", row->has_metrics ? "true" : "false");
     exact_number(t, "psnr_db", row->psnr_db);
     exact_number(t, "psnr_covered_db", row->psnr_covered_db);
@@ -123,7 +125,8 @@ meso_result app_sweep_row_read(meso_context *ctx, const char *path, sweep_row *r
 
 /* ---- results.csv and results.json --------------------------------------------------------- */
 
-/* The columns of the tables, in order; timing columns are prepare_ms, frame_ms, reference_ms. */
+/* The columns of the tables, in order; the timing columns are prepare_ms, frame_ms,
+ * reference_ms and job_s. */
 typedef enum column_kind { COLUMN_INT, COLUMN_TEXT, COLUMN_NUMBER } column_kind;
 typedef struct column {
     const char *name;
@@ -143,6 +146,7 @@ static const column columns[] = {
     {"prepare_ms", COLUMN_NUMBER, "%.3f"},
     {"frame_ms", COLUMN_NUMBER, "%.3f"},
     {"reference_ms", COLUMN_NUMBER, "%.3f"},
+    {"job_s", COLUMN_NUMBER, "%.3f"},
     {"psnr_db", COLUMN_NUMBER, "%.4f"},
     {"psnr_covered_db", COLUMN_NUMBER, "%.4f"},
     {"rmse", COLUMN_NUMBER, "%.6f"},
@@ -162,66 +166,41 @@ static void cell(const sweep_row *row, size_t c, long *i, const char **text, dou
     *number = NAN;
     bool m = row->has_metrics;
     bool ok = strcmp(row->status, "ok") == 0;
-    switch (c) {
-    case 0:
-        *i = row->id;
-        break;
-    case 1:
-        *text = row->scene;
-        break;
-    case 2:
+    const char *name = columns[c].name;
+    /* text and whole-number columns */
+    if (!strcmp(name, "id")) *i = row->id;
+    if (!strcmp(name, "scene")) *text = row->scene;
+    if (!strcmp(name, "size")) {
         snprintf(size_text, 32, "%dx%d", row->width, row->height);
         *text = size_text;
-        break;
-    case 3:
-        *text = row->technique;
-        break;
-    case 4:
-        *text = row->options;
-        break;
-    case 5:
-        *i = row->samples;
-        break;
-    case 6:
-        *i = row->views;
-        break;
-    case 7:
-        *text = row->status;
-        break;
-    case 8:
-        *number = ok ? row->prepare_ms : NAN;
-        break;
-    case 9:
-        *number = ok ? row->frame_ms : NAN;
-        break;
-    case 10:
-        *number = row->reference_ms > 0 ? row->reference_ms : NAN;
-        break;
-    case 11:
-        *number = m ? row->psnr_db : NAN;
-        break;
-    case 12:
-        *number = m ? row->psnr_covered_db : NAN;
-        break;
-    case 13:
-        *number = m ? row->rmse : NAN;
-        break;
-    case 14:
-        *number = m ? row->rmse_covered : NAN;
-        break;
-    case 15:
-        *number = m ? row->ssim : NAN;
-        break;
-    case 16:
-        *number = m ? row->max_error : NAN;
-        break;
-    case 17:
-        *number = m ? row->coverage_iou : NAN;
-        break;
-    default:
-        *number = m ? row->flicker : NAN;
-        break;
     }
+    if (!strcmp(name, "technique")) *text = row->technique;
+    if (!strcmp(name, "options")) *text = row->options;
+    if (!strcmp(name, "samples")) *i = row->samples;
+    if (!strcmp(name, "views")) *i = row->views;
+    if (!strcmp(name, "status")) *text = row->status;
+    /* timing: blank for a failed job */
+    if (!strcmp(name, "prepare_ms") && ok) *number = row->prepare_ms;
+    if (!strcmp(name, "frame_ms") && ok) *number = row->frame_ms;
+    if (!strcmp(name, "reference_ms") && row->reference_ms > 0) *number = row->reference_ms;
+    if (!strcmp(name, "job_s")) *number = row->job_seconds;
+    /* metrics: blank without the reference */
+    static const struct {
+        const char *name;
+        size_t offset;
+    } metrics[] = {
+        {"psnr_db", offsetof(sweep_row, psnr_db)},
+        {"psnr_covered_db", offsetof(sweep_row, psnr_covered_db)},
+        {"rmse", offsetof(sweep_row, rmse)},
+        {"rmse_covered", offsetof(sweep_row, rmse_covered)},
+        {"ssim", offsetof(sweep_row, ssim)},
+        {"max_error", offsetof(sweep_row, max_error)},
+        {"coverage_iou", offsetof(sweep_row, coverage_iou)},
+        {"flicker", offsetof(sweep_row, flicker)},
+    };
+    for (size_t k = 0; k < sizeof metrics / sizeof metrics[0]; k++)
+        if (m && !strcmp(name, metrics[k].name))
+            memcpy(number, (const char *)row + metrics[k].offset, sizeof *number);
 }
 
 static void format_number(char *out, size_t size, const char *format, double v) {

@@ -316,6 +316,7 @@ static void row_from_job(const sweep_spec *spec, const sweep_job *job, sweep_row
 static meso_result run_job(meso_context *ctx, const sweep_spec *spec, const sweep_job *job,
                            const char *base, const char *hash, reference_views *refs,
                            sweep_row *row) {
+    double start = meso_time_seconds();
     row_from_job(spec, job, row);
     char dir[4096];
     if (!join3(dir, sizeof dir, base, "jobs", job->key))
@@ -397,6 +398,7 @@ static meso_result run_job(meso_context *ctx, const sweep_spec *spec, const swee
             if (spec->orbit > 1) row->flicker = flicker_sum / (spec->orbit - 1);
         }
     }
+    row->job_seconds = meso_time_seconds() - start;
     app_text json = {0};
     app_sweep_row_json(row, hash, &json);
     char path[4096];

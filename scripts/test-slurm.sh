@@ -67,7 +67,7 @@ check_same() {
     [ -f "$dir/results.csv" ] || fail "$dir/results.csv: missing (merge did not run)"
     python3 - "$work/single/results.csv" "$dir/results.csv" <<'EOF' || fail "$dir: results differ"
 import csv, sys
-timing = {"prepare_ms", "frame_ms", "reference_ms"}
+timing = {"prepare_ms", "frame_ms", "reference_ms", "job_s"}
 a = list(csv.DictReader(open(sys.argv[1])))
 b = list(csv.DictReader(open(sys.argv[2])))
 assert len(a) == len(b) and len(a) >= 24, (len(a), len(b))

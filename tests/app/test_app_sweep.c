@@ -16,12 +16,13 @@ static char spec_path[1200];
 static const char *write_spec(const char *name, const char *sizes) {
     static char path[1200];
     char text[2048];
-    snprintf(text, sizeof text,
-             "{\"scenes\": [\"%s/examples/bricks-plane.json\", \"%s/examples/bumps-sphere.json\"],\n"
-             " \"techniques\": [\"flat\", \"parallax\", \"relief\"],\n"
-             " \"options\": {\"relief\": {\"linear_steps\": [4, 16, 64]}},\n"
-             " \"sizes\": [%s], \"frames\": 1}\n",
-             MESO_SOURCE_DIR, MESO_SOURCE_DIR, sizes);
+    snprintf(
+        text, sizeof text,
+        "{\"scenes\": [\"%s/examples/bricks-plane.json\", \"%s/examples/bumps-sphere.json\"],\n"
+        " \"techniques\": [\"flat\", \"parallax\", \"relief\"],\n"
+        " \"options\": {\"relief\": {\"linear_steps\": [4, 16, 64]}},\n"
+        " \"sizes\": [%s], \"frames\": 1}\n",
+        MESO_SOURCE_DIR, MESO_SOURCE_DIR, sizes);
     snprintf(path, sizeof path, "%s", test_path(test_temp_dir(), name));
     test_write_file(path, text, strlen(text));
     return path;
@@ -79,8 +80,7 @@ static void test_sweep_refuses_bad_files(void **state) {
              "{\"refine_steps\": [1]}}}",
              scene);
     expect_refused(json, "options.vdm: 'vdm' is not among the sweep's techniques");
-    expect_refused("{\"scenes\": [\"missing.json\"], \"techniques\": \"all\"}",
-                   "scenes[0]: ");
+    expect_refused("{\"scenes\": [\"missing.json\"], \"techniques\": \"all\"}", "scenes[0]: ");
     snprintf(json, sizeof json, "{\"scenes\": [%s], \"techniques\": \"all\", \"sizes\": [0]}",
              scene);
     expect_refused(json, "sizes[0]: expected a size");
@@ -101,8 +101,8 @@ static void test_sweep_refuses_bad_files(void **state) {
     assert_int_equal(test_run_meso(arguments, &err), 2);
 }
 
-/* The rows of a results.csv without its timing columns (prepare_ms, frame_ms, reference_ms:
- * the 9th to 11th), into a new string. */
+/* The rows of a results.csv without its timing columns (prepare_ms, frame_ms, reference_ms,
+ * job_s: the 9th to 12th), into a new string. */
 static char *results_without_timing(const char *path) {
     size_t size = 0;
     char *text = test_read_file(path, &size);
@@ -114,7 +114,7 @@ static char *results_without_timing(const char *path) {
     for (size_t i = 0; i < size; i++) {
         char c = text[i];
         if (c == '"') quoted = !quoted;
-        bool timing = column >= 8 && column <= 10;
+        bool timing = column >= 8 && column <= 11;
         if (!timing || (c == ',' && !quoted) || c == '\n') out[n++] = c;
         if (c == ',' && !quoted) column++;
         if (c == '\n') column = 0;
@@ -278,12 +278,12 @@ static void test_sweep_report_opens_in_chromium(void **state) {
     if (!strstr(body, "data-broken-images=\"0\"") || !strstr(body, "data-script-errors=\"0\"") ||
         !strstr(body, "data-sorted=\"psnr_covered_db:desc\""))
         fail_msg("the page did not load cleanly: %.200s", body);
-    /* the table's rows in order of the PSNR column (the 13th), highest first */
+    /* the table's rows in order of the covered PSNR column (the 14th), highest first */
     int rows = 0;
     double previous = 1e30;
     for (const char *row = strstr(body, "<tbody>"); (row = strstr(row, "<tr>")) != NULL; row++) {
         const char *cell = row;
-        for (int c = 0; c < 13; c++) cell = strstr(cell + 1, "<td");
+        for (int c = 0; c < 14; c++) cell = strstr(cell + 1, "<td");
         const char *value = strstr(cell, "data-v=\"");
         assert_non_null(value);
         double psnr = atof(value + 8);
