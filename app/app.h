@@ -149,6 +149,9 @@ meso_result app_make_dir(meso_context *ctx, const char *path);
 /* "dir/name" into out (size out_size); false when it does not fit. */
 bool app_path_join(char *out, size_t out_size, const char *dir, const char *name);
 
+/* A file's name without folder and extension ("bricks-plane"): a scene's name in a batch. */
+void app_path_stem(const char *path, char *out, size_t size);
+
 /* The extension of a path in lower case without the dot ("png"), "" if none. */
 void app_path_extension(const char *path, char *out, size_t out_size);
 

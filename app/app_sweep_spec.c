@@ -42,15 +42,6 @@ static int read_int(const char *file, const cJSON *root, const char *key, int fa
     return -1;
 }
 
-/* A scene's name: its file name without folder and extension. */
-static void base_name(const char *path, char *out, size_t size) {
-    const char *slash = strrchr(path, '/');
-    const char *base = slash ? slash + 1 : path;
-    const char *dot = strrchr(base, '.');
-    size_t length = dot && dot != base ? (size_t)(dot - base) : strlen(base);
-    snprintf(out, size, "%.*s", (int)length, base);
-}
-
 static int read_scenes(meso_context *ctx, const char *file, const cJSON *root, sweep_spec *spec) {
     const cJSON *scenes = cJSON_GetObjectItemCaseSensitive(root, "scenes");
     if (!cJSON_IsArray(scenes) || cJSON_GetArraySize(scenes) < 1)
@@ -72,7 +63,7 @@ static int read_scenes(meso_context *ctx, const char *file, const cJSON *root, s
         int n = name[0] == '/' ? snprintf(s->path, sizeof s->path, "%s", name)
                                : snprintf(s->path, sizeof s->path, "%s/%s", folder, name);
         if (n < 0 || (size_t)n >= sizeof s->path) return spec_error(file, key, "path too long");
-        base_name(s->path, s->name, sizeof s->name);
+        app_path_stem(s->path, s->name, sizeof s->name);
         for (int k = 0; k < spec->num_scenes; k++)
             if (strcmp(spec->scenes[k].name, s->name) == 0)
                 return spec_error(file, key, "%s and %s would both write into '%s'",

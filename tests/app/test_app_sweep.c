@@ -234,6 +234,47 @@ static void test_sweep_lists_jobs_in_a_stable_order(void **state) {
     for (int i = 0; i < count; i++) assert_int_equal(ids[i], 1 + 3 * i);
 }
 
+/* Three shards started at once on a cold cache, each needing every bake (modulo: every shard
+ * has jobs of both scenes): each entry is baked and stored once, the others wait for it. */
+static void test_sweep_concurrent_shards_bake_each_entry_once(void **state) {
+    (void)state;
+    char cache[1200], out[1200], logs[1200], spec[1200], command[8192];
+    snprintf(cache, sizeof cache, "%s", test_path(test_temp_dir(), "cold-cache"));
+    snprintf(out, sizeof out, "%s", test_path(test_temp_dir(), "cold"));
+    snprintf(logs, sizeof logs, "%s", test_path(test_temp_dir(), "cold-stored.txt"));
+    snprintf(spec, sizeof spec, "%s", test_path(test_temp_dir(), "cold.json"));
+    char text[1024];
+    snprintf(text, sizeof text,
+             "{\"scenes\": [\"%s/examples/bricks-plane.json\", \"%s/examples/bumps-sphere.json\"],"
+             " \"techniques\": [\"relief_exact\", \"relief_layers\"], \"sizes\": [24, 32],"
+             " \"frames\": 1}",
+             MESO_SOURCE_DIR, MESO_SOURCE_DIR);
+    test_write_file(spec, text, strlen(text));
+    snprintf(command, sizeof command,
+             "export MESO_CACHE_DIR=%s; for k in 0 1 2; do %s sweep %s -o %s --shard $k/3 "
+             "--partition modulo --verbose 2>&1 | grep 'bake cache: stored' & done; wait",
+             cache, MESO_PROGRAM, spec, out);
+    char capture[9600];
+    snprintf(capture, sizeof capture, "(%s) > %s", command, logs);
+    assert_int_equal(system(capture), 0);
+    size_t size = 0;
+    char *stored = test_read_file(logs, &size);
+    /* cone and relief_layers of each scene: 4 entries, each stored by one shard only */
+    int lines = 0;
+    for (char *line = stored; (line = strstr(line, "stored ")) != NULL; line++) {
+        lines++;
+        char *end = strchr(line, '\n');
+        size_t length = end ? (size_t)(end - line) : strlen(line);
+        char *again = line + length;
+        while ((again = strstr(again, "stored ")) != NULL) {
+            if (!strncmp(again, line, length)) fail_msg("stored twice: %.*s", (int)length, line);
+            again++;
+        }
+    }
+    assert_int_equal(lines, 4);
+    free(stored);
+}
+
 static bool have_chromium(void) { return access("/usr/bin/chromium", X_OK) == 0; }
 
 static void test_sweep_report_opens_in_chromium(void **state) {
@@ -315,6 +356,7 @@ int main(void) {
         cmocka_unit_test(test_sweep_refuses_bad_files),
         cmocka_unit_test(test_sweep_shards_merge_to_one_process),
         cmocka_unit_test(test_sweep_lists_jobs_in_a_stable_order),
+        cmocka_unit_test(test_sweep_concurrent_shards_bake_each_entry_once),
         cmocka_unit_test(test_sweep_report_opens_in_chromium),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
