@@ -480,7 +480,7 @@ static int run_sweep(meso_context *ctx, sweep_spec *spec, const sweep_options *o
         sweep_row row;
         r = run_job(ctx, spec, job, base, hash, &refs, &row);
         ran++;
-        if (r == MESO_OK && !quiet && !meso_progress_advance(progress, 0)) {
+        if (r == MESO_OK && !quiet) {
             if (row.has_metrics)
                 fprintf(stderr, "meso: sweep: [%zu/%zu] job %d %s: %.2f ms, %.2f dB covered\n", ran,
                         mine - done, job->id, job->key, row.frame_ms, row.psnr_covered_db);

@@ -275,6 +275,44 @@ static void test_sweep_concurrent_shards_bake_each_entry_once(void **state) {
     free(stored);
 }
 
+/* Orbit views: every view's image and difference, the metrics averaged, flicker measured. */
+static void test_sweep_orbit_views_measure_flicker(void **state) {
+    (void)state;
+    char spec[1200], out[1200], text[1024];
+    snprintf(spec, sizeof spec, "%s", test_path(test_temp_dir(), "orbit.json"));
+    snprintf(out, sizeof out, "%s", test_path(test_temp_dir(), "orbit"));
+    snprintf(text, sizeof text,
+             "{\"scenes\": [\"%s/examples/bumps-sphere.json\"], \"techniques\": [\"flat\", "
+             "\"relief\"], \"sizes\": [24], \"frames\": 1, \"orbit\": 3}",
+             MESO_SOURCE_DIR);
+    test_write_file(spec, text, strlen(text));
+    assert_int_equal(run("sweep %s -o %s --quiet", spec, out), 0);
+    char path[1400];
+    snprintf(path, sizeof path, "%s/jobs/bumps-sphere/24x24/relief/view-0002.png", out);
+    struct stat st;
+    assert_int_equal(stat(path, &st), 0);
+    snprintf(path, sizeof path, "%s/jobs/bumps-sphere/24x24/relief/diff-0002.png", out);
+    assert_int_equal(stat(path, &st), 0);
+    snprintf(path, sizeof path, "%s/refs/bumps-sphere/24x24/view-0002.png", out);
+    assert_int_equal(stat(path, &st), 0);
+    snprintf(path, sizeof path, "%s/results.json", out);
+    size_t size = 0;
+    char *json = test_read_file(path, &size);
+    assert_non_null(strstr(json, "\"views\": 3"));
+    /* flat shades no mesostructure: its change between views is the truth's change minus the
+     * relief's, not zero; relief follows the truth more closely */
+    const char *flat = strstr(json, "\"technique\": \"flat\"");
+    const char *relief = strstr(json, "\"technique\": \"relief\"");
+    assert_non_null(flat);
+    assert_non_null(relief);
+    double flicker_flat = atof(strstr(flat, "\"flicker\": ") + 11);
+    double flicker_relief = atof(strstr(relief, "\"flicker\": ") + 11);
+    assert_true(flicker_flat > 0.0);
+    assert_true(flicker_relief > 0.0);
+    assert_true(flicker_relief < flicker_flat);
+    free(json);
+}
+
 static bool have_chromium(void) { return access("/usr/bin/chromium", X_OK) == 0; }
 
 static void test_sweep_report_opens_in_chromium(void **state) {
@@ -356,6 +394,7 @@ int main(void) {
         cmocka_unit_test(test_sweep_refuses_bad_files),
         cmocka_unit_test(test_sweep_shards_merge_to_one_process),
         cmocka_unit_test(test_sweep_lists_jobs_in_a_stable_order),
+        cmocka_unit_test(test_sweep_orbit_views_measure_flicker),
         cmocka_unit_test(test_sweep_concurrent_shards_bake_each_entry_once),
         cmocka_unit_test(test_sweep_report_opens_in_chromium),
     };
