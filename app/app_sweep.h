@@ -45,8 +45,8 @@ typedef struct sweep_job {
     int num_options;
     char key[SWEEP_KEY_MAX]; /* its folder under jobs/, unique */
     char options_text[256];  /* "linear_steps=8 binary_steps=4", "" for the defaults */
-    double cost_seconds;     /* estimated (app_sweep_job_cost) */
-    uint64_t memory_bytes;   /* estimated frame memory (meso_render_memory_estimate) */
+    double cost_seconds; /* estimated by the cost model (docs/sweep.md), its reference share too */
+    uint64_t memory_bytes; /* estimated frame memory (meso_render_memory_estimate) */
 } sweep_job;
 
 typedef struct sweep_spec {
@@ -70,9 +70,6 @@ typedef struct sweep_spec {
  * <reason>" and returns 2; 1 on other failures; -1 on success. */
 int app_sweep_spec_load(meso_context *ctx, const char *path, sweep_spec *out);
 void app_sweep_spec_free(sweep_spec *spec);
-
-/* The estimated seconds of a job on this machine's cores (the reference's share included). */
-double app_sweep_job_cost(const sweep_spec *spec, const sweep_job *job);
 
 /* "%016llx" of a hash. */
 void app_sweep_hash_text(uint64_t hash, char out[17]);

@@ -108,6 +108,7 @@ meso_result app_sweep_row_read(meso_context *ctx, const char *path, sweep_row *r
         read_number(root, "prepare_ms", &row->prepare_ms) &&
         read_number(root, "frame_ms", &row->frame_ms) &&
         read_number(root, "reference_ms", &row->reference_ms) &&
+        read_number(root, "job_seconds", &row->job_seconds) &&
         read_number(root, "psnr_db", &row->psnr_db) &&
         read_number(root, "psnr_covered_db", &row->psnr_covered_db) &&
         read_number(root, "rmse", &row->rmse) &&
@@ -431,7 +432,15 @@ static const char page_script[] =
     "});\n"
     "</script>\n";
 
-static void html_attribute(app_text *t, const char *s) { app_text_xml(t, s); }
+/* A relative path as a URL in an attribute: bytes other than letters, digits and -._~/=,
+ * percent-encoded (a scene named "a#b" or "a b" still links to its files). */
+static void url_path(app_text *t, const char *s) {
+    for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
+        bool plain = (*p >= 'a' && *p <= 'z') || (*p >= 'A' && *p <= 'Z') ||
+                     (*p >= '0' && *p <= '9') || strchr("-._~/=", *p);
+        app_text_printf(t, plain ? "%c" : "%%%02X", *p);
+    }
+}
 
 static void write_html(const sweep_row *rows, size_t count, const char *hash, app_text *t) {
     app_text_printf(t,
@@ -450,7 +459,7 @@ static void write_html(const sweep_row *rows, size_t count, const char *hash, ap
             any = any || (same_group(&rows[k], &rows[r]) && rows[k].has_metrics);
         if (!any) continue; /* no metrics: no plot */
         app_text_printf(t, "<img src=\"");
-        html_attribute(t, name);
+        url_path(t, name);
         app_text_printf(t, "\" alt=\"plot\" width=\"720\" height=\"460\">\n");
     }
     app_text_printf(t, "</div>\n<h2>Results</h2>\n<table id=\"results\"><thead><tr>");
@@ -494,16 +503,16 @@ static void write_html(const sweep_row *rows, size_t count, const char *hash, ap
         app_text_printf(t, "<div class=\"job\" id=\"job-%d\"><div>%d: ", row->id, row->id);
         app_text_xml(t, row->key);
         app_text_printf(t, "</div>\n<div class=\"swipe\"><img src=\"");
-        html_attribute(t, truth);
+        url_path(t, truth);
         app_text_printf(
             t, "\" alt=\"truth\" width=\"%d\" height=\"%d\"><img class=\"over\" src=\"jobs/",
             shown_w, shown_h);
-        html_attribute(t, row->key);
+        url_path(t, row->key);
         app_text_printf(t, "/view-0000.png\" alt=\"job\" width=\"%d\" height=\"%d\"></div>\n",
                         shown_w, shown_h);
         if (row->has_metrics) {
             app_text_printf(t, "<img src=\"jobs/");
-            html_attribute(t, row->key);
+            url_path(t, row->key);
             app_text_printf(t, "/diff-0000.png\" alt=\"difference\" width=\"%d\" height=\"%d\">\n",
                             shown_w, shown_h);
         }

@@ -265,39 +265,44 @@ static int read_options(meso_context *ctx, const char *file, const cJSON *root, 
 
 /* ---- Cost model --------------------------------------------------------------------------- */
 
-/* Frame time of a technique at one sample, milliseconds per million pixels, on the 2-core
- * development machine (docs/scale-out.md, "The cost model"): medians of the examples' frame
- * times from a sweep at 256 x 256, rounded up. The reference, rendered once per scene, view
- * and size, is shared by that scene's jobs. Preparing (and baking, on a cold cache) is not
- * in the model: it depends on the cache. */
-static double technique_ms_per_megapixel(const char *technique) {
+/* Seconds a job of a technique takes at 256 x 256, one sample, one view and 5 timed frames
+ * (prepare with a warm cache, 6 frames, the comparison and the writes): medians of the jobs of
+ * examples/sweeps/examples-256.json on the 2-core development machine under a load average of
+ * about 18 (docs/scale-out.md, "Measured"). They matter relative to each other: the cost
+ * partition balances shards with them. */
+static double technique_job_seconds(const char *technique) {
     static const struct {
         const char *name;
-        double ms;
+        double seconds;
     } table[] = {
-        {"flat", 60},    {"bump", 90},          {"horizon", 120},       {"parallax", 100},
-        {"relief", 250}, {"relief_exact", 350}, {"relief_layers", 400}, {"vdm", 250},
-        {"gdm", 2500},   {"tessellation", 800}, {"displacement", 800},  {"reference", 6000},
+        {"flat", 0.10},   {"bump", 0.16},         {"horizon", 0.42},       {"parallax", 0.23},
+        {"relief", 0.25}, {"relief_exact", 0.34}, {"relief_layers", 0.59}, {"vdm", 0.61},
+        {"gdm", 2.86},    {"tessellation", 0.62}, {"displacement", 1.47},
     };
     for (size_t i = 0; i < sizeof table / sizeof table[0]; i++)
-        if (strcmp(table[i].name, technique) == 0) return table[i].ms;
-    return 500;
+        if (strcmp(table[i].name, technique) == 0) return table[i].seconds;
+    return 1.0;
 }
 
-double app_sweep_job_cost(const sweep_spec *spec, const sweep_job *job) {
-    double megapixels = (double)job->width * (double)job->height * 1e-6;
-    /* a job draws its first frame and the timed ones at every view */
-    double frames = (double)(1 + spec->frames) * (double)spec->orbit;
-    double ms = technique_ms_per_megapixel(job->technique->info->name) * megapixels * frames *
-                (double)spec->samples;
-    /* the reference of the job's scene and size, shared by its jobs */
-    size_t sharing = 0;
-    for (size_t i = 0; i < spec->num_jobs; i++)
-        sharing += spec->jobs[i].scene == job->scene && spec->jobs[i].width == job->width &&
-                   spec->jobs[i].height == job->height;
-    double reference_ms = technique_ms_per_megapixel("reference") * megapixels *
-                          (double)spec->orbit * (double)spec->reference_samples;
-    return 1e-3 * (ms + reference_ms / (double)(sharing ? sharing : 1));
+/* The reference of a scene: building the true micro-geometry and its BVH once (a solid's
+ * extraction by dual contouring dominates: 20-50 s for the examples' solids against 2-5 s for
+ * a height field's grid, same machine and load), then a frame per view. */
+static double reference_seconds(const sweep_spec *spec, const meso_scene *scene, double pixels) {
+    bool solid = false;
+    for (int i = 0; i < scene->num_objects; i++)
+        solid = solid || scene->objects[i].mesostructure.kind == MESO_MESOSTRUCTURE_SOLID;
+    double frame = 0.3 * pixels / 65536.0 * (double)spec->reference_samples;
+    return (solid ? 40.0 : 3.0) + frame * (double)(1 + spec->frames) / 6.0 * (double)spec->orbit;
+}
+
+/* A job's estimated seconds; `sharing` jobs share its scene's reference at its size. */
+static double job_cost(const sweep_spec *spec, const sweep_job *job, size_t sharing) {
+    double pixels = (double)job->width * (double)job->height;
+    double job_seconds = technique_job_seconds(job->technique->info->name) * pixels / 65536.0 *
+                         (double)spec->samples * (double)spec->orbit * (double)(1 + spec->frames) /
+                         6.0;
+    double reference = reference_seconds(spec, spec->scenes[job->scene].scene, pixels);
+    return job_seconds + reference / (double)(sharing ? sharing : 1);
 }
 
 /* ---- Expansion ---------------------------------------------------------------------------- */
@@ -373,8 +378,17 @@ static int expand(const char *file, sweep_spec *spec) {
             }
         }
     }
-    for (size_t i = 0; i < spec->num_jobs; i++)
-        spec->jobs[i].cost_seconds = app_sweep_job_cost(spec, &spec->jobs[i]);
+    /* the jobs of one scene and size are consecutive: each run shares one reference */
+    for (size_t first = 0, end; first < spec->num_jobs; first = end) {
+        const sweep_job *a = &spec->jobs[first];
+        for (end = first + 1;
+             end < spec->num_jobs && spec->jobs[end].scene == a->scene &&
+             spec->jobs[end].width == a->width && spec->jobs[end].height == a->height;
+             end++) {
+        }
+        for (size_t i = first; i < end; i++)
+            spec->jobs[i].cost_seconds = job_cost(spec, &spec->jobs[i], end - first);
+    }
     return -1;
 }
 

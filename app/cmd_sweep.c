@@ -75,22 +75,76 @@ static int parse_shard(sweep_options *o) {
     return -1;
 }
 
-/* The shard of every job: by id modulo N, or cut where the running estimated cost crosses
- * k/N of the total (contiguous runs keep a scene's jobs together, so its reference is rendered
- * by as few shards as possible). */
-static void assign_shards(const sweep_spec *spec, const sweep_options *o, int *shard_of) {
-    double total = 0.0, before = 0.0;
-    for (size_t i = 0; i < spec->num_jobs; i++) total += spec->jobs[i].cost_seconds;
-    for (size_t i = 0; i < spec->num_jobs; i++) {
-        if (o->partition == PARTITION_MODULO || !(total > 0.0)) {
-            shard_of[i] = (int)(i % (size_t)o->shards);
-            continue;
-        }
-        double middle = before + 0.5 * spec->jobs[i].cost_seconds;
-        int k = (int)floor(middle / total * o->shards);
-        shard_of[i] = k < 0 ? 0 : k >= o->shards ? o->shards - 1 : k;
-        before += spec->jobs[i].cost_seconds;
+/* Whether job i starts a new scene and size (a run of jobs sharing one reference). */
+static bool starts_group(const sweep_spec *spec, size_t i) {
+    if (i == 0 || i >= spec->num_jobs) return true;
+    const sweep_job *a = &spec->jobs[i - 1], *b = &spec->jobs[i];
+    return a->scene != b->scene || a->width != b->width || a->height != b->height;
+}
+
+/* The shard of every job: by id modulo N, or N contiguous runs of about equal estimated cost.
+ * Each cut between runs goes to the job boundary nearest to k/N of the total cost, moved to
+ * the nearest boundary between scenes (or sizes) when one lies within a quarter of a shard's
+ * share: a scene split over two shards has its reference rendered by both, and a solid's
+ * reference costs as much as dozens of jobs. */
+/* The index in sorted[0..count) of the value nearest to target. */
+static size_t nearest(const double *sorted, size_t count, double target) {
+    size_t lo = 0, hi = count; /* the first value >= target, by bisection */
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (sorted[mid] < target)
+            lo = mid + 1;
+        else
+            hi = mid;
     }
+    if (lo == count) return count - 1;
+    if (lo > 0 && target - sorted[lo - 1] <= sorted[lo] - target) return lo - 1;
+    return lo;
+}
+
+static bool assign_shards(const sweep_spec *spec, const sweep_options *o, int *shard_of) {
+    size_t n = spec->num_jobs;
+    double total = 0.0;
+    for (size_t i = 0; i < n; i++) total += spec->jobs[i].cost_seconds;
+    if (o->partition == PARTITION_MODULO || !(total > 0.0) || o->shards == 1) {
+        for (size_t i = 0; i < n; i++) shard_of[i] = (int)(i % (size_t)o->shards);
+        return true;
+    }
+    /* before[i]: the cost of jobs 0..i-1; groups: the job indices starting a scene and size,
+     * and n, with their `before` */
+    double *before = calloc(n + 1, sizeof *before), *group_before = calloc(n + 1, sizeof *before);
+    size_t *groups = calloc(n + 1, sizeof *groups), num_groups = 0;
+    if (!before || !group_before || !groups) {
+        free(before);
+        free(group_before);
+        free(groups);
+        return false;
+    }
+    for (size_t i = 0; i < n; i++) before[i + 1] = before[i] + spec->jobs[i].cost_seconds;
+    for (size_t i = 0; i <= n; i++)
+        if (starts_group(spec, i)) {
+            groups[num_groups] = i;
+            group_before[num_groups++] = before[i];
+        }
+    double share = total / o->shards;
+    size_t previous = 0;
+    for (int k = 1; k <= o->shards; k++) {
+        size_t cut = n;
+        if (k < o->shards) {
+            double target = k * share;
+            cut = nearest(before, n + 1, target);
+            size_t g = nearest(group_before, num_groups, target);
+            if (fabs(group_before[g] - target) <= 0.25 * share && groups[g] > previous)
+                cut = groups[g];
+            if (cut < previous) cut = previous;
+        }
+        for (size_t i = previous; i < cut; i++) shard_of[i] = k - 1;
+        previous = cut;
+    }
+    free(before);
+    free(group_before);
+    free(groups);
+    return true;
 }
 
 /* ---- Files -------------------------------------------------------------------------------- */
@@ -797,8 +851,9 @@ int meso_cmd_sweep(int argc, char **argv) {
     if (!shard_of) {
         status = app_fail(ctx, meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "out of memory"));
     } else {
-        assign_shards(&spec, &o, shard_of);
-        if (o.list)
+        if (!assign_shards(&spec, &o, shard_of)) {
+            status = app_fail(ctx, meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "out of memory"));
+        } else if (o.list)
             print_list(&spec, &o, shard_of);
         else if (o.dry_run)
             print_dry_run(ctx, &spec, &o, shard_of);

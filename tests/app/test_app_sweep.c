@@ -299,6 +299,9 @@ static void test_sweep_orbit_views_measure_flicker(void **state) {
     size_t size = 0;
     char *json = test_read_file(path, &size);
     assert_non_null(strstr(json, "\"views\": 3"));
+    const char *job_s = strstr(json, "\"job_s\": ");
+    assert_non_null(job_s);
+    assert_true(atof(job_s + 9) > 0.0); /* the job's wall time, read back from its result */
     /* flat shades no mesostructure: its change between views is the truth's change minus the
      * relief's, not zero; relief follows the truth more closely */
     const char *flat = strstr(json, "\"technique\": \"flat\"");
