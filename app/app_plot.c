@@ -134,13 +134,44 @@ static size_t front_order(const app_plot_desc *d, size_t *order) {
     return count;
 }
 
+/* Where the front's labels go (top-left corners, pixels; x -1: not drawn): right of the point
+ * and above it, else below it, else left of it, whichever first overlaps no label placed before
+ * (the front in order of time); a label that fits nowhere is left out, its point still drawn. */
+static void place_labels(const app_plot_desc *d, const plot_axes *a, const size_t *front,
+                         size_t front_count, int *label_x, int *label_y) {
+    for (size_t i = 0; i < d->num_points; i++) label_x[i] = -1;
+    for (size_t k = 0; k < front_count; k++) {
+        const app_plot_point *p = &d->points[front[k]];
+        int x = (int)plot_x(a, p->frame_ms), y = (int)plot_y(a, p->psnr_covered_db);
+        int width = 6 * (int)strlen(p->label), height = 12; /* the font's advance and line */
+        const int candidates[3][2] = {{x + 7, y - 12}, {x + 7, y + 4}, {x - 7 - width, y - 12}};
+        for (int c = 0; c < 3; c++) {
+            int cx = candidates[c][0], cy = candidates[c][1];
+            bool fits = cx >= 0 && cx + width < PLOT_WIDTH && cy >= PLOT_TOP - 12;
+            for (size_t j = 0; j < k && fits; j++) {
+                size_t q = front[j];
+                if (label_x[q] < 0) continue;
+                int qw = 6 * (int)strlen(d->points[q].label);
+                fits = cx + width <= label_x[q] || label_x[q] + qw <= cx ||
+                       cy + height <= label_y[q] || label_y[q] + height <= cy;
+            }
+            if (fits) {
+                label_x[front[k]] = cx;
+                label_y[front[k]] = cy;
+                break;
+            }
+        }
+    }
+}
+
 static void svg_color(app_text *svg, const float c[3]) {
     app_text_printf(svg, "#%02x%02x%02x", (int)(c[0] * 255.0f + 0.5f), (int)(c[1] * 255.0f + 0.5f),
                     (int)(c[2] * 255.0f + 0.5f));
 }
 
 static void svg_points(app_text *svg, const app_plot_desc *d, const plot_axes *axes,
-                       const size_t *front, size_t front_count) {
+                       const size_t *front, size_t front_count, const int *label_x,
+                       const int *label_y) {
     if (d->reference_ms > 0.0) { /* the truth has no error: its time is a line */
         double x = plot_x(axes, d->reference_ms);
         app_text_printf(svg,
@@ -172,8 +203,11 @@ static void svg_points(app_text *svg, const app_plot_desc *d, const plot_axes *a
         app_text_printf(svg, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"4\" fill=\"", x, y);
         svg_color(svg, series_color(d, p->series));
         app_text_printf(svg, "\"/>\n");
-        if (d->pareto && !app_plot_on_front(d->points, d->num_points, i)) continue;
-        app_text_printf(svg, "<text x=\"%.1f\" y=\"%.1f\">", x + 7, y - 6);
+        if (d->pareto && label_x[i] < 0) continue;
+        if (d->pareto) /* the text's baseline, 10 pixels under its top */
+            app_text_printf(svg, "<text x=\"%d\" y=\"%d\">", label_x[i], label_y[i] + 10);
+        else
+            app_text_printf(svg, "<text x=\"%.1f\" y=\"%.1f\">", x + 7, y - 6);
         app_text_xml(svg, p->label);
         app_text_printf(svg, "</text>\n");
     }
@@ -190,7 +224,8 @@ static void svg_points(app_text *svg, const app_plot_desc *d, const plot_axes *a
 }
 
 static meso_result write_png(meso_context *ctx, const app_plot_desc *d, const plot_axes *a,
-                             const size_t *front, size_t front_count, const char *path);
+                             const size_t *front, size_t front_count, const int *label_x,
+                             const int *label_y, const char *path);
 
 meso_result app_plot_write(meso_context *ctx, const app_plot_desc *desc, const char *path,
                            const char *png_path) {
@@ -204,6 +239,13 @@ meso_result app_plot_write(meso_context *ctx, const app_plot_desc *desc, const c
     size_t *front = calloc(desc->num_points + 1, sizeof(*front));
     if (!front) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", path);
     size_t front_count = desc->pareto ? front_order(desc, front) : 0;
+    int *label_x = calloc(2 * desc->num_points + 1, sizeof *label_x);
+    if (!label_x) {
+        free(front);
+        return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", path);
+    }
+    int *label_y = label_x + desc->num_points;
+    if (desc->pareto) place_labels(desc, &axes, front, front_count, label_x, label_y);
     app_text svg = {0};
     app_text_printf(&svg,
                     "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%d\" height=\"%d\" "
@@ -211,11 +253,13 @@ meso_result app_plot_write(meso_context *ctx, const app_plot_desc *desc, const c
                     "<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n",
                     PLOT_WIDTH, PLOT_HEIGHT);
     draw_axes(&svg, &axes, desc->title);
-    svg_points(&svg, desc, &axes, front, front_count);
+    svg_points(&svg, desc, &axes, front, front_count, label_x, label_y);
     app_text_printf(&svg, "</svg>\n");
     meso_result result = app_text_write(ctx, &svg, path);
     app_text_free(&svg);
-    if (result == MESO_OK) result = write_png(ctx, desc, &axes, front, front_count, png_path);
+    if (result == MESO_OK)
+        result = write_png(ctx, desc, &axes, front, front_count, label_x, label_y, png_path);
+    free(label_x);
     free(front);
     return result;
 }
@@ -273,7 +317,8 @@ static void png_front(meso_image *image, const app_plot_desc *d, const plot_axes
 }
 
 static meso_result write_png(meso_context *ctx, const app_plot_desc *d, const plot_axes *a,
-                             const size_t *front, size_t front_count, const char *path) {
+                             const size_t *front, size_t front_count, const int *label_x,
+                             const int *label_y, const char *path) {
     static const float white[3] = {1, 1, 1}, black[3] = {0.15f, 0.15f, 0.15f},
                        grid[3] = {0.87f, 0.87f, 0.87f}, red[3] = {0.8f, 0.0f, 0.0f};
     meso_image *image = NULL;
@@ -317,10 +362,14 @@ static meso_result write_png(meso_context *ctx, const app_plot_desc *d, const pl
         int x = (int)plot_x(a, p->frame_ms);
         double y = plot_y(a, p->psnr_covered_db);
         fill_disc(image, x, y, 4, series_color(d, p->series));
-        if (d->pareto && !app_plot_on_front(d->points, d->num_points, i)) continue;
+        if (d->pareto) {
+            if (label_x[i] >= 0)
+                meso_image_draw_text(image, label_x[i], label_y[i], 1, black, p->label);
+            continue;
+        }
         int width = 6 * (int)strlen(p->label); /* the font's advance is 6 pixels */
-        int label_x = x + 7 + width < x1 ? x + 7 : x - 7 - width;
-        meso_image_draw_text(image, label_x, (int)y - 12, 1, black, p->label);
+        int at = x + 7 + width < x1 ? x + 7 : x - 7 - width;
+        meso_image_draw_text(image, at, (int)y - 12, 1, black, p->label);
     }
     for (int s = 0; d->pareto && s < d->num_series; s++) { /* the legend */
         int y = PLOT_HEIGHT - PLOT_BOTTOM - 12 - 14 * (d->num_series - 1 - s);
