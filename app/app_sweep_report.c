@@ -275,13 +275,16 @@ static void write_json(const sweep_row *rows, size_t count, const char *hash, ap
 
 /* ---- Plots -------------------------------------------------------------------------------- */
 
+/* A point's label: the technique, a space and its options. */
+#define SWEEP_LABEL_MAX (MESO_NAME_MAX + 1 + 256)
+
 /* Whether rows a and b belong to one plot (scene and size). */
 static bool same_group(const sweep_row *a, const sweep_row *b) {
     return strcmp(a->scene, b->scene) == 0 && a->width == b->width && a->height == b->height;
 }
 
 static meso_result write_plot(meso_context *ctx, const char *dir, const sweep_row *rows,
-                              size_t count, size_t first, char (*labels)[300],
+                              size_t count, size_t first, char (*labels)[SWEEP_LABEL_MAX],
                               app_plot_point *points) {
     const char *series[SWEEP_MAX_TECHNIQUES];
     int num_series = 0;
@@ -296,7 +299,7 @@ static meso_result write_plot(meso_context *ctx, const char *dir, const sweep_ro
         if (s == num_series && num_series < SWEEP_MAX_TECHNIQUES)
             series[num_series++] = row->technique;
         size_t p = desc.num_points++;
-        snprintf(labels[p], 300, "%s%s%s", row->technique, row->options[0] ? " " : "",
+        snprintf(labels[p], SWEEP_LABEL_MAX, "%s%s%s", row->technique, row->options[0] ? " " : "",
                  row->options);
         points[p] = (app_plot_point){.label = labels[p],
                                      .frame_ms = row->frame_ms,
@@ -329,7 +332,7 @@ static meso_result write_plots(meso_context *ctx, const char *dir, const sweep_r
     if (!app_path_join(plots, sizeof plots, dir, "plots"))
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: path too long", dir);
     meso_result r = app_make_dir(ctx, plots);
-    char(*labels)[300] = calloc(count, sizeof *labels);
+    char(*labels)[SWEEP_LABEL_MAX] = calloc(count, sizeof *labels);
     app_plot_point *points = calloc(count, sizeof *points);
     if (r == MESO_OK && (!labels || !points))
         r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", dir);

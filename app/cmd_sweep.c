@@ -274,6 +274,17 @@ static void set_view(meso_scene *scene, const meso_camera *home, int view, int c
     scene->camera = view == 0 ? *home : app_camera_from_view(&turned);
 }
 
+/* One view of a job's scene and size, rendered and timed as the sweep file says. */
+static app_compare_all_desc view_desc(const sweep_spec *spec, const sweep_job *job,
+                                      const meso_scene *scene) {
+    return (app_compare_all_desc){.scene = scene,
+                                  .width = job->width,
+                                  .height = job->height,
+                                  .samples = spec->samples,
+                                  .reference_samples = spec->reference_samples,
+                                  .timing_frames = spec->frames};
+}
+
 static meso_result save_srgb(meso_context *ctx, const meso_image *image, const char *dir,
                              const char *name) {
     char path[4096];
@@ -302,15 +313,9 @@ static meso_result render_references(meso_context *ctx, const sweep_spec *spec,
     const char *none[1] = {NULL};
     for (int v = 0; v < spec->orbit && r == MESO_OK; v++) {
         set_view(scene, &home, v, spec->orbit);
-        app_compare_all_desc desc = {.scene = scene,
-                                     .width = job->width,
-                                     .height = job->height,
-                                     .techniques = none,
-                                     .num_techniques = 0,
-                                     .with_reference = true,
-                                     .samples = spec->samples,
-                                     .reference_samples = spec->reference_samples,
-                                     .timing_frames = spec->frames};
+        app_compare_all_desc desc = view_desc(spec, job, scene);
+        desc.techniques = none; /* the reference alone */
+        desc.with_reference = true;
         r = app_compare_all_render(ctx, &desc, &refs->views[v]);
         const app_run *ref = r == MESO_OK ? &refs->views[v].runs[0] : NULL;
         char name[32];
@@ -388,14 +393,10 @@ static meso_result run_job(meso_context *ctx, const sweep_spec *spec, const swee
     int compared = 0;
     for (int v = 0; v < spec->orbit && r == MESO_OK; v++) {
         set_view(scene, &home, v, spec->orbit);
-        app_compare_all_desc desc = {.scene = scene,
-                                     .width = job->width,
-                                     .height = job->height,
-                                     .techniques = technique,
-                                     .num_techniques = 1,
-                                     .samples = spec->samples,
-                                     .timing_frames = spec->frames,
-                                     .settings = &settings};
+        app_compare_all_desc desc = view_desc(spec, job, scene);
+        desc.techniques = technique;
+        desc.num_techniques = 1;
+        desc.settings = &settings;
         app_compare_all now;
         r = app_compare_all_render(ctx, &desc, &now);
         if (r != MESO_OK) break;
