@@ -107,32 +107,37 @@ echo "test-slurm: cold cache, 3 shards at once: $entries bakes stored for $uniqu
 check_same "$work/out"
 
 # ---- 2. a shard cancelled mid-way, submitted again ----
+# the shard with the most jobs, cancelled once it has finished one of them and not all
+victim=0 mine=0
+for k in 0 1 2; do
+    count=$("$meso" sweep "$work/spec.json" --list --shard $k/3 | tail -n +2 | wc -l)
+    if [ "$count" -gt "$mine" ]; then victim=$k mine=$count; fi
+done
+[ "$mine" -ge 2 ] || fail "no shard has 2 jobs to cancel one mid-way"
 array=$(sbatch --parsable --array=0-2 "$sbatch_script" "$work/spec.json" "$work/out2" 3)
-# shard 1 is cancelled once it has finished a job but not all of its jobs
 cancelled=0
-for _ in $(seq 1200); do
-    done_jobs=$( (find "$work/out2/shards/1/jobs" -name result.json 2>/dev/null || true) | wc -l)
+for _ in $(seq 3000); do
+    done_jobs=$( (find "$work/out2/shards/$victim/jobs" -name result.json 2>/dev/null || true) | wc -l)
     if [ "$done_jobs" -ge 1 ]; then
         # stopped at once (SIGSTOP), so the shard cannot finish while the cancel travels
-        scontrol suspend "${array}_1" || true
-        scancel "${array}_1" || true
+        scontrol suspend "${array}_$victim" || true
+        scancel "${array}_$victim" || true
         cancelled=1
         break
     fi
     sleep 0.02
 done
-[ $cancelled -eq 1 ] || fail "shard 1 never finished a job"
+[ $cancelled -eq 1 ] || fail "shard $victim never finished a job"
 wait_for "$array"
-state=$(scontrol -o show job "${array}_1" | grep -o 'JobState=[A-Z_]*')
-finished=$(find "$work/out2/shards/1/jobs" -name result.json | wc -l)
-mine=$("$meso" sweep "$work/spec.json" --list --shard 1/3 | tail -n +2 | wc -l)
-echo "test-slurm: shard 1 $state after $finished of its $mine jobs"
-[ "$state" = "JobState=CANCELLED" ] || fail "shard 1 was not cancelled ($state)"
-[ "$finished" -lt "$mine" ] || fail "shard 1 finished before it was cancelled: no test of the rerun"
-again=$(sbatch --parsable --array=1 "$sbatch_script" "$work/spec.json" "$work/out2" 3)
+state=$(scontrol -o show job "${array}_$victim" | grep -o 'JobState=[A-Z_]*')
+finished=$(find "$work/out2/shards/$victim/jobs" -name result.json | wc -l)
+echo "test-slurm: shard $victim $state after $finished of its $mine jobs"
+[ "$state" = "JobState=CANCELLED" ] || fail "shard $victim was not cancelled ($state)"
+[ "$finished" -lt "$mine" ] || fail "shard $victim finished before it was cancelled: no test of the rerun"
+again=$(sbatch --parsable --array=$victim "$sbatch_script" "$work/spec.json" "$work/out2" 3)
 merge=$(sbatch --parsable --dependency=afterok:"$again" "$sbatch_script" "$work/spec.json" "$work/out2" 3)
 wait_for "$again" "$merge"
-grep -q "$finished already done" "$work"/meso-sweep-"$again"_1.log ||
-    fail "the rerun of shard 1 did not skip its $finished finished jobs: $(head -n 3 "$work"/meso-sweep-"$again"_1.log)"
+grep -q "$finished already done" "$work"/meso-sweep-"$again"_$victim.log ||
+    fail "the rerun of shard $victim did not skip its $finished finished jobs: $(head -n 3 "$work"/meso-sweep-"$again"_$victim.log)"
 check_same "$work/out2"
 echo "test-slurm: passed"
