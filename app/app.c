@@ -440,6 +440,14 @@ bool app_path_join(char *out, size_t out_size, const char *dir, const char *name
     return written >= 0 && (size_t)written < out_size;
 }
 
+void app_path_stem(const char *path, char *out, size_t size) {
+    const char *slash = strrchr(path, '/');
+    const char *base = slash ? slash + 1 : path;
+    const char *dot = strrchr(base, '.');
+    size_t length = dot && dot != base ? (size_t)(dot - base) : strlen(base);
+    snprintf(out, size, "%.*s", (int)length, base);
+}
+
 void app_path_extension(const char *path, char *out, size_t out_size) {
     const char *slash = strrchr(path, '/');
     const char *dot = strrchr(slash ? slash + 1 : path, '.');

@@ -29,6 +29,7 @@ int meso_cmd_cache(int argc, char **argv);
 int meso_cmd_bake(int argc, char **argv);
 int meso_cmd_compare(int argc, char **argv); /* app/cmd_compare.c (the compare helper's) */
 int meso_cmd_view(int argc, char **argv);    /* app/cmd_view.c: needs SDL2 */
+int meso_cmd_sweep(int argc, char **argv);   /* app/cmd_sweep.c */
 
 /* ---- Command-line options ----------------------------------------------------------------- */
 
@@ -148,6 +149,9 @@ meso_result app_make_dir(meso_context *ctx, const char *path);
 /* "dir/name" into out (size out_size); false when it does not fit. */
 bool app_path_join(char *out, size_t out_size, const char *dir, const char *name);
 
+/* A file's name without folder and extension ("bricks-plane"): a scene's name in a batch. */
+void app_path_stem(const char *path, char *out, size_t size);
+
 /* The extension of a path in lower case without the dot ("png"), "" if none. */
 void app_path_extension(const char *path, char *out, size_t out_size);
 
@@ -258,6 +262,9 @@ size_t app_compare_all_count(const app_compare_all_desc *desc);
 meso_result app_compare_all_render(meso_context *ctx, const app_compare_all_desc *desc,
                                    app_compare_all *out);
 void app_compare_all_free(app_compare_all *all);
+/* Compare a rendered run against the rendered reference (linear colour, both coverage masks)
+ * into run->metrics, setting has_metrics; nothing when either did not render. */
+void app_run_compare(meso_context *ctx, app_run *run, const app_run *reference);
 
 /* Print to stderr why runs did not render: "meso: warning: reference not available (...)",
  * "meso: warning: <technique>: failed: ...", and with show_skipped "meso: note: <technique>:
@@ -289,6 +296,36 @@ void app_compare_all_json(const app_compare_all *all, const char *scene_name, ap
  * reference did not render). */
 meso_result app_plot_error_vs_time(meso_context *ctx, const app_compare_all *all,
                                    const char *scene_name, const char *path, const char *png_path);
+
+/* One point of an error-vs-time plot. */
+typedef struct app_plot_point {
+    const char *label; /* drawn beside the point */
+    double frame_ms;   /* > 0 */
+    double psnr_covered_db;
+    int series; /* colour: index into app_plot_desc.series_names (0 with none) */
+} app_plot_point;
+
+typedef struct app_plot_desc {
+    const char *title;
+    const app_plot_point *points;
+    size_t num_points;
+    double reference_ms; /* the truth's frame time, a dashed line (0: none) */
+    /* With a Pareto front: the points no other point beats in both time and error are joined
+     * by a staircase and only they are labelled (a sweep has too many points to label all);
+     * the series are coloured and named in a legend. */
+    bool pareto;
+    const char *const *series_names;
+    int num_series;
+} app_plot_desc;
+
+/* Write an error-vs-time plot as SVG and PNG (atomically). Writes nothing, and removes an
+ * earlier plot at `path`, when no point has a finite PSNR. */
+meso_result app_plot_write(meso_context *ctx, const app_plot_desc *desc, const char *path,
+                           const char *png_path);
+
+/* Whether point i is on the Pareto front of points: no other point is at least as fast and at
+ * least as accurate and strictly better in one of the two. */
+bool app_plot_on_front(const app_plot_point *points, size_t count, size_t i);
 
 /* A sheet of labelled cells saved as sRGB PNG: images are linear RGB, NULL cells are drawn as
  * empty (background grey). */

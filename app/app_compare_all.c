@@ -153,13 +153,16 @@ meso_result app_compare_all_render(meso_context *ctx, const app_compare_all_desc
         app_run *run = &runs[next++];
         render_run(ctx, desc, names[i], desc->samples, run);
         meso_progress_advance(desc->progress, 1);
-        if (!run->rendered || !out->reference_ok) continue;
-        const app_run *ref = &runs[out->reference];
-        meso_compare_desc compare = {.coverage_a = run->coverage, .coverage_b = ref->coverage};
-        if (meso_image_compare(ctx, run->color, ref->color, &compare, &run->metrics) == MESO_OK)
-            run->has_metrics = true;
+        if (out->reference_ok) app_run_compare(ctx, run, &runs[out->reference]);
     }
     return MESO_OK;
+}
+
+void app_run_compare(meso_context *ctx, app_run *run, const app_run *reference) {
+    if (!run->rendered || !reference->rendered) return;
+    meso_compare_desc compare = {.coverage_a = run->coverage, .coverage_b = reference->coverage};
+    if (meso_image_compare(ctx, run->color, reference->color, &compare, &run->metrics) == MESO_OK)
+        run->has_metrics = true;
 }
 
 void app_compare_all_free(app_compare_all *all) {

@@ -1,6 +1,7 @@
 /* meso cache list|clear|size: the bake cache (docs/bake-format.md, "The bake cache"). Only
- * files meso writes there are listed or removed: <kind>-<key>.mesobake and the temporary files
- * of an interrupted write (<name>.mesobake.tmpXXXXXX); anything else in the folder is left. */
+ * files meso writes there are listed or removed: <kind>-<key>.mesobake, the temporary files
+ * of an interrupted write (<name>.mesobake.tmpXXXXXX) and the lock files of claims
+ * (<name>.mesobake.lock); anything else in the folder is left. */
 #include "app.h"
 
 #include <dirent.h>
@@ -31,7 +32,8 @@ typedef struct cache_entry {
 static bool is_cache_file(const char *name) {
     const char *suffix = strstr(name, ".mesobake");
     if (!suffix || suffix == name) return false;
-    return suffix[9] == 0 || strncmp(suffix + 9, ".tmp", 4) == 0;
+    return suffix[9] == 0 || strncmp(suffix + 9, ".tmp", 4) == 0 ||
+           strcmp(suffix + 9, ".lock") == 0; /* a claim's lock file (bake_file.h) */
 }
 
 static int compare_names(const void *a, const void *b) {

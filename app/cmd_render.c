@@ -204,22 +204,13 @@ static int render_all(meso_context *ctx, const meso_scene *scene, const render_o
     return status;
 }
 
-/* A scene's name in a batch: its file name without folder and extension. */
-static void scene_name(const char *path, char *out, size_t size) {
-    const char *slash = strrchr(path, '/');
-    const char *base = slash ? slash + 1 : path;
-    const char *dot = strrchr(base, '.');
-    size_t length = dot && dot != base ? (size_t)(dot - base) : strlen(base);
-    snprintf(out, size, "%.*s", (int)length, base);
-}
-
 /* Two scenes of a batch with one name would write one file: refused before any work. */
 static int check_batch_names(const char *const *paths, int count) {
     for (int a = 0; a < count; a++)
         for (int b = a + 1; b < count; b++) {
             char name_a[256], name_b[256];
-            scene_name(paths[a], name_a, sizeof name_a);
-            scene_name(paths[b], name_b, sizeof name_b);
+            app_path_stem(paths[a], name_a, sizeof name_a);
+            app_path_stem(paths[b], name_b, sizeof name_b);
             if (strcmp(name_a, name_b) == 0)
                 return app_usage_error("render", "%s and %s would both write '%s' into the folder",
                                        paths[a], paths[b], name_a);
@@ -335,7 +326,7 @@ int meso_cmd_render(int argc, char **argv) {
         render_options scene_options = o;
         if (batch_dir) { /* OUT/<name>.png, or the folder OUT/<name> with --techniques */
             char name[256];
-            scene_name(positionals[s], name, sizeof name);
+            app_path_stem(positionals[s], name, sizeof name);
             if (!o.techniques) strncat(name, ".png", sizeof name - strlen(name) - 1);
             if (!app_path_join(output, sizeof output, batch_dir, name)) {
                 status = app_usage_error("render", "%s: output path too long", batch_dir);

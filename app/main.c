@@ -15,6 +15,7 @@ static const command commands[] = {
     {"compare", meso_cmd_compare, "compare images: metrics, difference image, sheet"},
     {"info", meso_cmd_info, "describe a PNG, scene, mesh or bake file"},
     {"demo", meso_cmd_demo, "render the built-in examples with every technique"},
+    {"sweep", meso_cmd_sweep, "scenes x techniques x option grids against the truth, sharded"},
     {"bench", meso_cmd_bench, "time techniques per frame, and their thread scaling"},
     {"bake", meso_cmd_bake, "export the textures the GLSL shaders read (docs/gpu.md)"},
     {"cache", meso_cmd_cache, "list, size or clear the bake cache"},

@@ -25,6 +25,8 @@ packages=(
     libopenexr-dev        # meso bake -o: VDM tables as OpenEXR
     python3-cffi python3-dev python3-setuptools   # the Python package (python/, cffi API mode)
     python3-numpy python3-pytest python3-matplotlib   # its tests and examples (docs/python.md)
+    munge slurmctld slurmd slurm-client   # make test-slurm: a one-node Slurm cluster
+    chromium              # the sweep report's test: index.html in headless Chromium
 )
 
 missing=()

@@ -106,6 +106,22 @@ meso_result meso_bake_cache_load(meso_context *ctx, const char *kind, uint32_t k
 /* Store a bake under (bake->kind, key), atomically. MESO_OK also when the cache is disabled. */
 meso_result meso_bake_cache_save(meso_context *ctx, const meso_bake_file *bake, uint64_t key);
 
+/* An exclusive claim on one cache entry, across threads, processes and machines sharing the
+ * folder: the cached bakes (meso_vdm_bake_cached, ...) hold it from looking the entry up to
+ * storing it, so of several processes needing one missing entry at once one bakes and the
+ * others wait and then load it. It is an advisory lock (flock) on "<entry>.lock", removed by
+ * its holder on release; where locks are not available (some NFS set-ups) the claim is empty
+ * and concurrent bakes of one entry each store the same bytes atomically, which is safe too. */
+typedef struct meso_bake_cache_claim {
+    int fd; /* -1: no claim (cache off, or locks unavailable) */
+    char path[1200];
+} meso_bake_cache_claim;
+/* Wait for and take the claim on (kind, key). Never fails: at worst the claim is empty. */
+void meso_bake_cache_claim_entry(meso_context *ctx, const char *kind, uint64_t key,
+                                 meso_bake_cache_claim *out_claim);
+/* Give the claim up (its lock file removed); an empty claim is fine. */
+void meso_bake_cache_release(meso_bake_cache_claim *claim);
+
 #ifdef __cplusplus
 }
 #endif

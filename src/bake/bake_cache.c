@@ -1,8 +1,10 @@
 /* The bake cache (docs/bake-format.md, "The bake cache"): one file per (kind, key) in a folder
  * from $MESO_CACHE_DIR, $XDG_CACHE_HOME/meso or $HOME/.cache/meso. */
 #include <errno.h>
+#include <fcntl.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -111,5 +113,48 @@ meso_result meso_bake_cache_save(meso_context *ctx, const meso_bake_file *bake, 
     meso_result result = meso_bake_cache_path(ctx, bake->kind, key, path, sizeof(path));
     if (result == MESO_ERROR_UNSUPPORTED) return MESO_OK; /* cache disabled */
     if (result != MESO_OK) return result;
-    return meso_bake_file_save(ctx, bake, path);
+    result = meso_bake_file_save(ctx, bake, path);
+    /* one line a bake stored: how shards sharing a cache count the bakes they duplicated */
+    if (result == MESO_OK) meso_log_info(ctx, "bake cache: stored %s", path);
+    return result;
+}
+
+/* The lock file is removed by the holder before it unlocks, so a waiter that wakes up holding
+ * a lock on a removed (or replaced) file has locked nothing: it checks that the path still
+ * names the file it locked, and starts over otherwise. A process killed while holding the
+ * claim leaves the file, unlocked (the kernel releases the lock): the next claimer locks it,
+ * uses it and removes it. */
+void meso_bake_cache_claim_entry(meso_context *ctx, const char *kind, uint64_t key,
+                                 meso_bake_cache_claim *out) {
+    out->fd = -1;
+    out->path[0] = 0;
+    char entry[1100];
+    if (meso_bake_cache_path(ctx, kind, key, entry, sizeof entry) != MESO_OK) return;
+    int n = snprintf(out->path, sizeof out->path, "%s.lock", entry);
+    if (n < 0 || (size_t)n >= sizeof out->path) return;
+    for (int attempt = 0; attempt < 1000; attempt++) {
+        int fd = open(out->path, O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+        if (fd < 0) return; /* a read-only cache: no claim, bakes are still stored atomically */
+        int locked;
+        while ((locked = flock(fd, LOCK_EX)) != 0 && errno == EINTR) {
+        }
+        if (locked != 0) { /* ENOLCK, EOPNOTSUPP: a file system without locks */
+            close(fd);
+            return;
+        }
+        struct stat held, named;
+        if (fstat(fd, &held) == 0 && stat(out->path, &named) == 0 && held.st_ino == named.st_ino &&
+            held.st_dev == named.st_dev) {
+            out->fd = fd;
+            return;
+        }
+        close(fd); /* the holder before us removed it: claim the new one */
+    }
+}
+
+void meso_bake_cache_release(meso_bake_cache_claim *claim) {
+    if (claim->fd < 0) return;
+    unlink(claim->path);
+    close(claim->fd);
+    claim->fd = -1;
 }

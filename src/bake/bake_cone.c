@@ -204,11 +204,9 @@ static meso_result cone_from_bake_file(meso_context *ctx, const meso_bake_file *
     return MESO_OK;
 }
 
-meso_result meso_bake_cone_cached(meso_context *ctx, const meso_heightfield *heightfield,
-                                  const meso_minmax_pyramid *pyramid, meso_cone_map **out_map) {
-    *out_map = NULL;
-    if (!heightfield) return meso_bake_cone(ctx, heightfield, pyramid, out_map);
-    uint64_t key = cone_cache_key(heightfield->hash);
+static meso_result cone_bake_claimed(meso_context *ctx, const meso_heightfield *heightfield,
+                                     const meso_minmax_pyramid *pyramid, uint64_t key,
+                                     meso_cone_map **out_map) {
     meso_bake_file *cached = NULL;
     meso_result r = meso_bake_cache_load(ctx, MESO_CONE_KIND, MESO_CONE_KIND_VERSION, key,
                                          heightfield->hash, &cached);
@@ -237,6 +235,18 @@ meso_result meso_bake_cone_cached(meso_context *ctx, const meso_heightfield *hei
         meso_log_warning(ctx, "cone: could not store the bake in the cache: %s",
                          meso_context_last_error(ctx));
     return MESO_OK;
+}
+
+meso_result meso_bake_cone_cached(meso_context *ctx, const meso_heightfield *heightfield,
+                                  const meso_minmax_pyramid *pyramid, meso_cone_map **out_map) {
+    *out_map = NULL;
+    if (!heightfield) return meso_bake_cone(ctx, heightfield, pyramid, out_map);
+    uint64_t key = cone_cache_key(heightfield->hash);
+    meso_bake_cache_claim claim;
+    meso_bake_cache_claim_entry(ctx, MESO_CONE_KIND, key, &claim);
+    meso_result result = cone_bake_claimed(ctx, heightfield, pyramid, key, out_map);
+    meso_bake_cache_release(&claim);
+    return result;
 }
 
 size_t meso_cone_map_memory(const meso_cone_map *map) {

@@ -1013,14 +1013,11 @@ meso_result meso_gdm_load(meso_context *ctx, const char *path, meso_gdm **out_gd
     return result;
 }
 
-meso_result meso_gdm_bake_cached(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm **out_gdm) {
-    meso_gdm_desc d;
-    meso_result result = begin_bake(ctx, desc, out_gdm, &d);
-    if (result != MESO_OK) return result;
-    uint64_t key = meso_gdm_cache_key(&d);
+static meso_result gdm_bake_claimed(meso_context *ctx, meso_gdm_desc d, uint64_t key,
+                                    meso_gdm **out_gdm) {
     meso_bake_file *cached = NULL;
-    result = meso_bake_cache_load(ctx, MESO_GDM_KIND, MESO_GDM_KIND_VERSION, key,
-                                  source_hash_of(&d), &cached);
+    meso_result result = meso_bake_cache_load(ctx, MESO_GDM_KIND, MESO_GDM_KIND_VERSION, key,
+                                              source_hash_of(&d), &cached);
     if (result != MESO_OK) return result;
     if (cached) {
         result = meso_gdm_from_bake_file(ctx, cached, "gdm cache entry", out_gdm);
@@ -1037,6 +1034,18 @@ meso_result meso_gdm_bake_cached(meso_context *ctx, const meso_gdm_desc *desc, m
         meso_log_warning(ctx, "gdm: could not store the bake in the cache: %s",
                          meso_context_last_error(ctx));
     return MESO_OK;
+}
+
+meso_result meso_gdm_bake_cached(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm **out_gdm) {
+    meso_gdm_desc d;
+    meso_result result = begin_bake(ctx, desc, out_gdm, &d);
+    if (result != MESO_OK) return result;
+    uint64_t key = meso_gdm_cache_key(&d);
+    meso_bake_cache_claim claim;
+    meso_bake_cache_claim_entry(ctx, MESO_GDM_KIND, key, &claim);
+    result = gdm_bake_claimed(ctx, d, key, out_gdm);
+    meso_bake_cache_release(&claim);
+    return result;
 }
 
 size_t meso_gdm_describe(const meso_bake_file *bake, char *buffer, size_t size) {

@@ -527,10 +527,8 @@ meso_result meso_layers_load(meso_context *ctx, const char *path, meso_layers **
     return r;
 }
 
-meso_result meso_layers_bake_cached(meso_context *ctx, const meso_layers_desc *desc,
-                                    meso_layers **out_map) {
-    *out_map = NULL;
-    uint64_t key = meso_layers_cache_key(desc);
+static meso_result layers_bake_claimed(meso_context *ctx, const meso_layers_desc *desc,
+                                       uint64_t key, meso_layers **out_map) {
     meso_bake_file *cached = NULL;
     /* a layers bake stores its cache key as its source hash (meso_bake_layers) */
     meso_result r =
@@ -552,6 +550,17 @@ meso_result meso_layers_bake_cached(meso_context *ctx, const meso_layers_desc *d
                          meso_context_last_error(ctx));
     free(buf.bytes);
     return MESO_OK;
+}
+
+meso_result meso_layers_bake_cached(meso_context *ctx, const meso_layers_desc *desc,
+                                    meso_layers **out_map) {
+    *out_map = NULL;
+    uint64_t key = meso_layers_cache_key(desc);
+    meso_bake_cache_claim claim;
+    meso_bake_cache_claim_entry(ctx, MESO_LAYERS_KIND, key, &claim);
+    meso_result result = layers_bake_claimed(ctx, desc, key, out_map);
+    meso_bake_cache_release(&claim);
+    return result;
 }
 
 size_t meso_layers_describe(const meso_bake_file *bake, char *buffer, size_t size) {

@@ -646,11 +646,8 @@ static uint64_t cache_key(const meso_rtv_desc *d, uint64_t source_hash) {
     return meso_hash64(more, sizeof more, key);
 }
 
-meso_result meso_rtv_bake_cached(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv **out_rtv) {
-    *out_rtv = NULL;
-    meso_rtv_desc d = desc ? *desc : (meso_rtv_desc){0};
-    uint64_t source = d.heightfield ? d.heightfield->hash : d.solid ? meso_solid_hash(d.solid) : 0;
-    uint64_t key = cache_key(&d, source);
+static meso_result rtv_bake_claimed(meso_context *ctx, meso_rtv_desc d, uint64_t source,
+                                    uint64_t key, meso_rtv **out_rtv) {
     meso_bake_file *cached = NULL;
     meso_result r =
         meso_bake_cache_load(ctx, MESO_RTV_KIND, MESO_RTV_KIND_VERSION, key, source, &cached);
@@ -670,6 +667,18 @@ meso_result meso_rtv_bake_cached(meso_context *ctx, const meso_rtv_desc *desc, m
         meso_log_warning(ctx, "rtv: could not store the bake in the cache: %s",
                          meso_context_last_error(ctx));
     return MESO_OK;
+}
+
+meso_result meso_rtv_bake_cached(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv **out_rtv) {
+    *out_rtv = NULL;
+    meso_rtv_desc d = desc ? *desc : (meso_rtv_desc){0};
+    uint64_t source = d.heightfield ? d.heightfield->hash : d.solid ? meso_solid_hash(d.solid) : 0;
+    uint64_t key = cache_key(&d, source);
+    meso_bake_cache_claim claim;
+    meso_bake_cache_claim_entry(ctx, MESO_RTV_KIND, key, &claim);
+    meso_result result = rtv_bake_claimed(ctx, d, source, key, out_rtv);
+    meso_bake_cache_release(&claim);
+    return result;
 }
 
 size_t meso_rtv_describe(const meso_bake_file *bake, char *buffer, size_t size) {

@@ -884,9 +884,8 @@ meso_result meso_vdm_load(meso_context *ctx, const char *path, meso_vdm **out_vd
     return result;
 }
 
-meso_result meso_vdm_bake_cached(meso_context *ctx, const meso_vdm_desc *desc, meso_vdm **out_vdm) {
-    if (out_vdm) *out_vdm = NULL;
-    uint64_t key = meso_vdm_cache_key(desc);
+static meso_result vdm_bake_claimed(meso_context *ctx, const meso_vdm_desc *desc, uint64_t key,
+                                    meso_vdm **out_vdm) {
     meso_bake_file *cached = NULL;
     meso_result result =
         meso_bake_cache_load(ctx, MESO_VDM_KIND, MESO_VDM_KIND_VERSION, key,
@@ -908,6 +907,16 @@ meso_result meso_vdm_bake_cached(meso_context *ctx, const meso_vdm_desc *desc, m
         meso_log_warning(ctx, "vdm: could not store the bake in the cache: %s",
                          meso_context_last_error(ctx));
     return MESO_OK;
+}
+
+meso_result meso_vdm_bake_cached(meso_context *ctx, const meso_vdm_desc *desc, meso_vdm **out_vdm) {
+    if (out_vdm) *out_vdm = NULL;
+    uint64_t key = meso_vdm_cache_key(desc);
+    meso_bake_cache_claim claim;
+    meso_bake_cache_claim_entry(ctx, MESO_VDM_KIND, key, &claim);
+    meso_result result = vdm_bake_claimed(ctx, desc, key, out_vdm);
+    meso_bake_cache_release(&claim);
+    return result;
 }
 
 size_t meso_vdm_describe(const meso_bake_file *bake, char *buffer, size_t size) {

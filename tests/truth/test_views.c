@@ -553,6 +553,8 @@ int main(int argc, char **argv) {
             o.report = next;
         else if (!strcmp(a, "--images"))
             o.images = next;
+        else if (!strcmp(a, "--csv"))
+            o.csv = next;
         else {
             fprintf(stderr, "test_views: %s: unknown option\n", a);
             return 2;
