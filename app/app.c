@@ -376,15 +376,26 @@ int app_exit_status(meso_result result) {
     return meso_result_is_bad_input(result) ? APP_EXIT_BAD_INPUT : APP_EXIT_FAILURE;
 }
 
-void app_error(const char *format, ...) {
+static void print_line(const char *format, va_list args) {
     char message[2048], escaped[4 * sizeof(message)];
-    va_list args;
-    va_start(args, format);
     vsnprintf(message, sizeof(message), format, args);
-    va_end(args);
     /* One line whatever the arguments hold (a newline in a file name, a terminal escape). */
     meso_text_escape_controls(message, escaped, sizeof(escaped));
     fprintf(stderr, "meso: %s\n", escaped);
+}
+
+void app_error(const char *format, ...) {
+    va_list args;
+    va_start(args, format);
+    print_line(format, args);
+    va_end(args);
+}
+
+void app_note(const char *format, ...) {
+    va_list args;
+    va_start(args, format);
+    print_line(format, args);
+    va_end(args);
 }
 
 /* Whether a message begins with a file name: its first field (up to ": ") has a '.' or a '/',

@@ -136,6 +136,9 @@ int app_fail(meso_context *ctx, meso_result result);
 int app_fail_in(meso_context *ctx, meso_result result, const char *file);
 /* Print one error line "meso: <formatted>" to stderr, control characters escaped. */
 void app_error(const char *format, ...) __attribute__((format(printf, 1, 2)));
+/* A status line on stderr, "meso: <text>", escaped to one line like app_error (an output
+ * name with a newline in it cannot forge a second line). */
+void app_note(const char *format, ...) __attribute__((format(printf, 1, 2)));
 
 /* The exit status for a result: 0, 2 when meso_result_is_bad_input, else 1. */
 int app_exit_status(meso_result result);

@@ -1,4 +1,5 @@
 /* PNG files through libpng: 8/16-bit grey, grey+alpha, RGB, RGBA and palette. */
+#include <errno.h>
 #include <png.h>
 #include <setjmp.h>
 #include <stdlib.h>
@@ -23,6 +24,15 @@ static void on_png_warning(png_structp png, png_const_charp message) {
     (void)png;
     (void)message;
 }
+
+/* libpng's own stdio writer reports only "Write Error": this one says why (a full disk). */
+static void write_to_file(png_structp png, png_bytep data, size_t length) {
+    FILE *file = png_get_io_ptr(png);
+    errno = 0;
+    if (fwrite(data, 1, length, file) != length) png_error(png, strerror(errno ? errno : EIO));
+}
+
+static void flush_file(png_structp png) { fflush((FILE *)png_get_io_ptr(png)); }
 
 static uint32_t read_u32(const unsigned char *p) {
     return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3];
@@ -172,10 +182,10 @@ meso_result meso_image_write_png(meso_context *ctx, const meso_image *image, FIL
         goto fail;
     }
     if (setjmp(png_jmpbuf(png))) {
-        r = meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot write PNG (%s)", path, state.message);
+        r = meso_log_error(ctx, MESO_ERROR_WRITE, "%s: cannot write: %s", path, state.message);
         goto fail;
     }
-    png_init_io(png, file);
+    png_set_write_fn(png, file, write_to_file, flush_file);
     png_set_IHDR(png, info, (png_uint_32)image->width, (png_uint_32)image->height, bit_depth,
                  color_types[channels], PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
                  PNG_FILTER_TYPE_DEFAULT);
@@ -229,8 +239,10 @@ static meso_result save_all(meso_context *ctx, size_t count, const meso_image *c
                               count ? paths[0] : "png", MESO_PNG_SAVE_ALL_MAX);
     meso_atomic_file files[MESO_PNG_SAVE_ALL_MAX] = {{0}};
     meso_result r = MESO_OK;
-    /* Every file is written completely under its temporary name before any is renamed, so a
-     * failure (a missing folder, a full disk) leaves none of them changed. */
+    /* Every file is written completely, flushed and synced under its temporary name before
+     * any is renamed (one group, unless the caller's group holds them already), so a failure
+     * (a missing folder, a full disk) leaves none of them changed. */
+    bool group = meso_atomic_group_begin(ctx);
     for (size_t i = 0; i < count && r == MESO_OK; i++) {
         r = meso_atomic_file_open(ctx, paths[i], &files[i]);
         if (r != MESO_OK) break;
@@ -239,14 +251,13 @@ static meso_result save_all(meso_context *ctx, size_t count, const meso_image *c
         else
             r = meso_image_write_png(ctx, images[i], files[i].file, paths[i],
                                      descs ? &descs[i] : NULL);
+        if (r == MESO_OK) r = meso_atomic_file_commit(ctx, &files[i]);
     }
-    if (r != MESO_OK) {
+    if (r != MESO_OK)
         for (size_t i = 0; i < count; i++) meso_atomic_file_abort(&files[i]); /* zeroed: no-op */
-        return r;
-    }
-    for (size_t i = 0; i < count; i++) {
-        meso_result c = meso_atomic_file_commit(ctx, &files[i]);
-        if (r == MESO_OK) r = c;
+    if (group) {
+        meso_result published = meso_atomic_group_end(ctx, r == MESO_OK);
+        if (r == MESO_OK) r = published;
     }
     return r;
 }

@@ -98,6 +98,54 @@ static void test_a_bad_output_fails_before_any_work_and_writes_nothing(void **st
     assert_false(has_temporaries(dir));
 }
 
+/* A legal name of 252 bytes (NAME_MAX is 255) is written: the temporary name beside it is
+ * short, never the destination's name plus a suffix. A name over the limit is refused before
+ * any work, not after it. */
+static void test_long_output_names_are_written_or_refused_before_the_work(void **state) {
+    (void)state;
+    char name[300], arguments[4096];
+    memset(name, 'a', 248);
+    memcpy(name + 248, ".png", 5);
+    const char *out = test_path(test_temp_dir(), name);
+    unlink(out);
+    snprintf(arguments, sizeof arguments, "render " SCENE " -o %s --size 16x16 --quiet", out);
+    const char *err = NULL;
+    int status = test_run_meso(arguments, &err);
+    if (status != 0) fail_msg("a 252-byte name: status %d: %s", status, err);
+    assert_true(exists(out));
+    unlink(out);
+    memset(name, 'b', 260);
+    memcpy(name + 260, ".png", 5);
+    snprintf(arguments, sizeof arguments,
+             "render " SCENE " -o %s --size 4096x4096 --samples 4 --technique reference",
+             test_path(test_temp_dir(), name));
+    double start = meso_time_seconds();
+    expect_refused(arguments, "File name too long");
+    assert_true(meso_time_seconds() - start < 5.0);
+}
+
+/* The success line escapes the output's name (a newline cannot make it two lines); a loop of
+ * symbolic links at -o is called a loop. */
+static void test_status_lines_escape_names_and_say_what_a_link_loop_is(void **state) {
+    (void)state;
+    const char *dir = test_temp_dir();
+    char arguments[4096];
+    snprintf(arguments, sizeof arguments, "render " SCENE " -o '%s/new\nline.png' --size 16x16",
+             dir);
+    const char *err = NULL;
+    assert_int_equal(test_run_meso(arguments, &err), 0);
+    size_t length = strlen(err);
+    if (length == 0 || memchr(err, '\n', length - 1) || !strstr(err, "new\\nline.png"))
+        fail_msg("want one line naming new\\nline.png, got: %s", err);
+    const char *a = test_path(dir, "loop_a.png"), *b = test_path(dir, "loop_b.png");
+    unlink(a);
+    unlink(b);
+    assert_int_equal(symlink("loop_b.png", a), 0);
+    assert_int_equal(symlink("loop_a.png", b), 0);
+    snprintf(arguments, sizeof arguments, "render " SCENE " -o %s --size 16x16", a);
+    expect_refused(arguments, "loop_a.png: Too many levels of symbolic links");
+}
+
 static void test_outputs_are_regular_files_that_keep_their_mode(void **state) {
     (void)state;
     const char *dir = test_temp_dir();
@@ -334,6 +382,8 @@ int main(void) {
         cmocka_unit_test(test_gltf_buffers_must_be_files_beside_the_gltf),
         cmocka_unit_test(test_a_bad_output_fails_before_any_work_and_writes_nothing),
         cmocka_unit_test(test_outputs_are_regular_files_that_keep_their_mode),
+        cmocka_unit_test(test_long_output_names_are_written_or_refused_before_the_work),
+        cmocka_unit_test(test_status_lines_escape_names_and_say_what_a_link_loop_is),
         cmocka_unit_test(test_a_fifo_as_input_is_refused_without_blocking),
         cmocka_unit_test(test_killed_renders_leave_no_temporary_and_no_partial_file),
         cmocka_unit_test(test_jobs_over_the_memory_budget_are_refused_before_allocating),
