@@ -398,20 +398,18 @@ void app_note(const char *format, ...) {
     va_end(args);
 }
 
-/* Whether a message begins with a file name: its first field (up to ": ") has a '.' or a '/',
- * which the names of objects, keys and modules ("objects[0]", "torus", "render") do not. */
-static bool names_a_file(const char *message) {
-    size_t field = strcspn(message, ":");
-    if (message[field] != ':') return false;
-    for (size_t i = 0; i < field; i++)
-        if (message[i] == '.' || message[i] == '/') return true;
-    return false;
+/* Whether a message already begins with `file` ("scene.json: ..."). Anything else is prefixed
+ * with it, so that the first field is always the file: an object named "x.json" or "a/b"
+ * cannot stand in for the scene. */
+static bool begins_with_file(const char *message, const char *file) {
+    size_t length = strlen(file);
+    return strncmp(message, file, length) == 0 && message[length] == ':';
 }
 
 int app_fail_in(meso_context *ctx, meso_result result, const char *file) {
     const char *message = ctx ? meso_context_last_error(ctx) : "";
     if (!message || !message[0]) message = meso_result_string(result);
-    if (file && !names_a_file(message))
+    if (file && !begins_with_file(message, file))
         app_error("%s: %s", file, message);
     else
         app_error("%s", message);

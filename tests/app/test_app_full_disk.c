@@ -30,8 +30,7 @@ static int mount_small_disk(void **state) {
         return 0;
     }
     if (mount("tmpfs", mount_dir, "tmpfs", 0, "size=2m") != 0) {
-        fprintf(stderr, "test_app_full_disk: skipped: cannot mount a tmpfs: %s\n",
-                strerror(errno));
+        fprintf(stderr, "test_app_full_disk: skipped: cannot mount a tmpfs: %s\n", strerror(errno));
         return 0;
     }
     mounted = true;
@@ -42,8 +41,7 @@ static int mount_small_disk(void **state) {
 static int unmount_small_disk(void **state) {
     (void)state;
     if (mounted && umount2(mount_dir, MNT_DETACH) != 0)
-        fprintf(stderr, "test_app_full_disk: cannot unmount %s: %s\n", mount_dir,
-                strerror(errno));
+        fprintf(stderr, "test_app_full_disk: cannot unmount %s: %s\n", mount_dir, strerror(errno));
     mounted = false;
     return 0;
 }
@@ -172,9 +170,8 @@ static void test_techniques_folder_on_a_full_disk_is_left_as_it_was(void **state
              out);
     assert_int_equal(test_run_meso(arguments, NULL), 0);
     /* keep the first run's files outside the disk */
-    static const char *const names[] = {"flat.png",     "bump.png",    "parallax.png",
-                                        "sheet.png",    "results.csv", "results.json",
-                                        "reference.png"};
+    static const char *const names[] = {"flat.png",    "bump.png",     "parallax.png", "sheet.png",
+                                        "results.csv", "results.json", "reference.png"};
     const size_t count = sizeof names / sizeof names[0];
     char kept[8][1300];
     for (size_t i = 0; i < count; i++) {
