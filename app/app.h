@@ -243,6 +243,12 @@ typedef struct app_compare_all {
 /* The number of runs app_compare_all_render will make for desc (for progress totals). */
 size_t app_compare_all_count(const app_compare_all_desc *desc);
 
+/* Before any work: the sheet of desc's runs (sheet_columns > 0; labels of at most label_lines
+ * lines) within the image limits, and the memory the runs' kept images, one frame and the
+ * sheet need within the budget. MESO_OK, MESO_ERROR_LIMIT (logged, naming `name`). */
+meso_result app_compare_all_check_memory(meso_context *ctx, const app_compare_all_desc *desc,
+                                         int sheet_columns, int label_lines, const char *name);
+
 /* Render the scene with each technique (inapplicable ones are kept as skipped runs with a
  * note) and the reference, time them and compare each against the reference's linear image
  * with both coverage masks. A technique that fails (for any reason) is noted in its run, not

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #define SHEET_COLUMNS 4
+#define SHEET_LABEL_LINES 5 /* app_run_label's longest form */
 #define MAX_BATCH_SCENES 256
 
 typedef struct render_options {
@@ -178,6 +179,10 @@ static int render_all(meso_context *ctx, const meso_scene *scene, const render_o
         .timing_frames = o->frames,
         .settings = &o->settings,
     };
+    /* the sheet's size and the images kept for it are known before the work */
+    result =
+        app_compare_all_check_memory(ctx, &desc, SHEET_COLUMNS, SHEET_LABEL_LINES, scene->path);
+    if (result != MESO_OK) return app_fail_in(ctx, result, scene->path);
     desc.progress = meso_progress_begin(ctx, "render techniques", app_compare_all_count(&desc));
     app_compare_all all;
     result = app_compare_all_render(ctx, &desc, &all);

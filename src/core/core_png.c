@@ -64,6 +64,27 @@ meso_result meso_image_load_png(meso_context *ctx, const char *path, meso_image 
                               (unsigned)declared_width, (unsigned)declared_height,
                               MESO_IMAGE_MAX_SIDE, MESO_IMAGE_MAX_PIXELS);
     }
+    /* The decoded image (floats) and libpng's rows (all of them when interlaced, 16 bits a
+     * value at most) within the memory budget, from the header, before libpng reads on: a PNG
+     * of 82 KB can declare 8192 x 8192 pixels, 768 MiB decoded. The channels after expansion
+     * follow the colour type (a palette may gain alpha: 4). */
+    unsigned char fields[5]; /* bit depth, colour type, compression, filter, interlace */
+    if (fread(fields, 1, 5, file) != 5) {
+        fclose(file);
+        return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: truncated PNG (IHDR)", path);
+    }
+    static const uint64_t channels_of_type[7] = {1, 0, 3, 4, 2, 0, 4};
+    uint64_t declared_channels =
+        fields[1] < 7 && channels_of_type[fields[1]] ? channels_of_type[fields[1]] : 4;
+    uint64_t value_bytes = fields[0] == 16 ? 2 : 1, rows_held = fields[4] ? declared_height : 1;
+    meso_result budget = meso_memory_check(
+        ctx, path,
+        declared_channels * ((uint64_t)declared_width * declared_height * sizeof(float) +
+                             (uint64_t)declared_width * rows_held * value_bytes));
+    if (budget != MESO_OK) {
+        fclose(file);
+        return budget;
+    }
     fseek(file, 8, SEEK_SET);
     png_error_state state = {ctx, path, ""};
     png_structp png =
@@ -109,12 +130,12 @@ meso_result meso_image_load_png(meso_context *ctx, const char *path, meso_image 
         r = meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: unsupported PNG layout", path);
         goto done;
     }
+    bool interlaced = png_get_interlace_type(png, info) != PNG_INTERLACE_NONE;
     meso_image *created = NULL;
     r = meso_image_create(ctx, (int)width, (int)height, channels, &created);
     if (r != MESO_OK) goto done;
     image = created;
     /* Interlaced images need every row in memory at once; others are read row by row. */
-    bool interlaced = png_get_interlace_type(png, info) != PNG_INTERLACE_NONE;
     row = malloc(row_bytes * (interlaced ? height : 1));
     if (!row) {
         r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", path);

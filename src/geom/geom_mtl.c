@@ -103,10 +103,10 @@ static void read_statement(const char *line, meso_mesh_material *m) {
     const char *rest = line + length;
     static const struct {
         const char *keyword, *what;
-    } unused[] = {{"map_Ks", "specular texture"},     {"map_Ke", "emissive texture"},
+    } unused[] = {{"map_Ks", "specular texture"},       {"map_Ke", "emissive texture"},
                   {"map_emissive", "emissive texture"}, {"map_bump", "bump/height texture"},
-                  {"bump", "bump/height texture"},    {"map_d", "opacity texture"},
-                  {"map_Pm", "metallic texture"},     {"map_Pr", "roughness texture"}};
+                  {"bump", "bump/height texture"},      {"map_d", "opacity texture"},
+                  {"map_Pm", "metallic texture"},       {"map_Pr", "roughness texture"}};
     if (keyword_is(line, length, "Kd")) {
         read_color(rest, m);
     } else if (keyword_is(line, length, "map_Kd")) {
@@ -149,8 +149,8 @@ static bool read_library(const char *text, size_t size, const char *name, meso_m
     return found;
 }
 
-meso_result geom_obj_read_material(meso_context *ctx, const char *path, FILE *obj,
-                                   const char *name, meso_mesh_material *out) {
+meso_result geom_obj_read_material(meso_context *ctx, const char *path, FILE *obj, const char *name,
+                                   meso_mesh_material *out) {
     memset(out, 0, sizeof(*out));
     rewind(obj);
     char *line = NULL;
