@@ -345,11 +345,12 @@ bool meso_atomic_group_begin(meso_context *ctx) {
     return opened;
 }
 
-/* Hold a finished file in the group; false when there is no group. */
-static bool hold(meso_context *ctx, meso_atomic_file *f) {
+/* Hold a finished file in the group: 1 held, 0 no group (publish it now), -1 out of memory
+ * (the file is removed: publishing it alone would break the group's all or nothing). */
+static int hold(meso_context *ctx, meso_atomic_file *f) {
     pthread_mutex_lock(&ctx->lock);
     core_atomic_group *g = ctx->atomic_group;
-    bool held = false;
+    int held = g ? -1 : 0;
     if (g && g->count == g->capacity) {
         size_t capacity = g->capacity ? 2 * g->capacity : 32;
         meso_atomic_file *grown = realloc(g->files, capacity * sizeof(*grown));
@@ -358,7 +359,7 @@ static bool hold(meso_context *ctx, meso_atomic_file *f) {
     if (g && g->count < g->capacity) {
         g->files[g->count++] = *f;
         *f = (meso_atomic_file){0};
-        held = true;
+        held = 1;
     }
     pthread_mutex_unlock(&ctx->lock);
     return held;
@@ -398,8 +399,14 @@ meso_result meso_atomic_file_commit(meso_context *ctx, meso_atomic_file *f) {
         record_failure(ctx, r);
         return r;
     }
-    if (hold(ctx, f)) return MESO_OK;
-    return publish(ctx, f);
+    int held = hold(ctx, f);
+    if (held > 0) return MESO_OK;
+    if (held == 0) return publish(ctx, f);
+    r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", f->path);
+    unlink(f->temp_path);
+    release(f);
+    record_failure(ctx, r);
+    return r;
 }
 
 void meso_atomic_file_abort(meso_atomic_file *f) {

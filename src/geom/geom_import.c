@@ -274,7 +274,8 @@ static meso_result check_raw_scene(meso_context *ctx, const char *path,
     return geom_check_counts(ctx, path, num_vertices, num_corners / 3);
 }
 
-static void append_ignored(meso_mesh_material *m, const char *what) {
+void geom_material_ignore(meso_mesh_material *m, const char *what) {
+    if (strstr(m->ignored, what)) return; /* said once (two keys may name one kind) */
     size_t used = strlen(m->ignored);
     snprintf(m->ignored + used, sizeof(m->ignored) - used, "%s%s", used ? ", " : "", what);
 }
@@ -291,10 +292,10 @@ static void read_texture(const struct aiMaterial *material, enum aiTextureType t
     char ignored[96];
     if (path.data[0] == '*' || strncmp(path.data, "data:", 5) == 0) {
         snprintf(ignored, sizeof ignored, "%s (embedded image)", what);
-        append_ignored(m, ignored);
+        geom_material_ignore(m, ignored);
     } else if (path.length >= MESO_MESH_MATERIAL_PATH_MAX) {
         snprintf(ignored, sizeof ignored, "%s (path too long)", what);
-        append_ignored(m, ignored);
+        geom_material_ignore(m, ignored);
     } else {
         memcpy(out, path.data, path.length + 1);
     }
@@ -308,7 +309,7 @@ static void note_other_materials(const import_state *s, unsigned index, meso_mes
         char text[96];
         snprintf(text, sizeof text, "the materials of %zu other mesh%s", others,
                  others == 1 ? "" : "es");
-        append_ignored(m, text);
+        geom_material_ignore(m, text);
     }
 }
 
@@ -354,7 +355,7 @@ static meso_result read_material(meso_context *ctx, const char *path, FILE *obj,
                   {aiTextureType_UNKNOWN, "metallic-roughness texture"}};
     for (size_t u = 0; u < sizeof(unused) / sizeof(unused[0]); u++)
         if (aiGetMaterialTextureCount(material, unused[u].type) > 0)
-            append_ignored(m, unused[u].what);
+            geom_material_ignore(m, unused[u].what);
     note_other_materials(s, index, m);
     return MESO_OK;
 }

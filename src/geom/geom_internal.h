@@ -36,6 +36,9 @@ bool geom_resolve_beside(const char *path, const char *name, char *out, size_t o
  * cut to out_size with " ..." when anything was left out. */
 void geom_import_reason(const char *message, char *out, size_t out_size);
 
+/* Add `what` to the material's list of what the file holds that meso does not use. */
+void geom_material_ignore(meso_mesh_material *m, const char *what);
+
 /* MTL files larger than this are refused (real libraries are kilobytes). */
 #define GEOM_MTL_MAX_BYTES (16u << 20)
 

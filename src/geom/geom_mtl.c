@@ -33,12 +33,6 @@ static bool keyword_is(const char *p, size_t length, const char *word) {
     return strlen(word) == length && strncasecmp(p, word, length) == 0;
 }
 
-static void append_ignored(meso_mesh_material *m, const char *what) {
-    if (strstr(m->ignored, what)) return;
-    size_t used = strlen(m->ignored);
-    snprintf(m->ignored + used, sizeof(m->ignored) - used, "%s%s", used ? ", " : "", what);
-}
-
 /* Kd r [g b]: one value is grey; "Kd spectral" and "Kd xyz" are not colours meso reads. */
 static void read_color(const char *p, meso_mesh_material *m) {
     float rgb[3];
@@ -90,7 +84,7 @@ static void read_texture(const char *p, const char *what, char *out, meso_mesh_m
     char ignored[96];
     if (length >= MESO_MESH_MATERIAL_PATH_MAX) {
         snprintf(ignored, sizeof ignored, "%s (path too long)", what);
-        append_ignored(m, ignored);
+        geom_material_ignore(m, ignored);
         return;
     }
     memcpy(out, name, length);
@@ -115,7 +109,8 @@ static void read_statement(const char *line, meso_mesh_material *m) {
         read_texture(rest, "normal texture", m->normal_map, m);
     } else {
         for (size_t u = 0; u < sizeof(unused) / sizeof(unused[0]); u++)
-            if (keyword_is(line, length, unused[u].keyword)) append_ignored(m, unused[u].what);
+            if (keyword_is(line, length, unused[u].keyword))
+                geom_material_ignore(m, unused[u].what);
     }
 }
 

@@ -140,11 +140,16 @@ static void test_techniques_sheet_and_images_are_checked_before_the_work(void **
     expect_refused_within(argv, 1024.0, "sheet: 16424x");
     assert_true(meso_time_seconds() - start < 10.0);
     /* a smaller sheet fits; the five runs' kept images (335 MB) do not fit the budget */
-    const char *fewer[] = {"render",    MESO_SOURCE_DIR "/examples/bricks-plane.json",
-                           "--techniques", "flat,bump,parallax,relief",
-                           "--size",       "2048x2048",
-                           "--memory-limit", "256M",
-                           "-o",           dir,
+    const char *fewer[] = {"render",
+                           MESO_SOURCE_DIR "/examples/bricks-plane.json",
+                           "--techniques",
+                           "flat,bump,parallax,relief",
+                           "--size",
+                           "2048x2048",
+                           "--memory-limit",
+                           "256M",
+                           "-o",
+                           dir,
                            NULL};
     expect_refused_within(fewer, 256.0, "bricks-plane.json: needs about");
 }
