@@ -8,8 +8,9 @@
  * the diffuse colour (Kd), its texture (map_Kd) and the normal texture (norm, map_Kn), and
  * lists the other textures as ignored. Libraries follow the rule of glTF buffers: a file
  * beside the OBJ or below its folder (no absolute path, no "..", no scheme), a regular file,
- * at most GEOM_MTL_MAX_BYTES. A statement outside a material is ignored; a line is at most
- * 4 KiB (longer ones are ignored).
+ * at most GEOM_MTL_MAX_BYTES; when none defines the material, "<the OBJ's name>.mtl" beside it
+ * is read, as assimp does. A statement outside a material is ignored; a line is at most 4 KiB
+ * (longer ones are ignored).
  */
 #include <errno.h>
 #include <limits.h>
@@ -171,6 +172,23 @@ meso_result geom_obj_read_material(meso_context *ctx, const char *path, FILE *ob
         }
     }
     free(line);
+    /* as assimp does: a library that defines nothing of the name, or is missing, is looked for
+     * once more as the OBJ's own name with .mtl ("model.obj" -> "model.mtl") */
+    size_t length_of_path = strlen(path);
+    char fallback[PATH_MAX];
+    struct stat st;
+    if (!found && r == MESO_OK && length_of_path > 4 && length_of_path < sizeof fallback &&
+        strcasecmp(path + length_of_path - 4, ".obj") == 0) {
+        memcpy(fallback, path, length_of_path - 3);
+        memcpy(fallback + length_of_path - 3, "mtl", 4);
+        if (stat(fallback, &st) == 0 && S_ISREG(st.st_mode)) {
+            char *text = NULL;
+            size_t size = 0;
+            r = meso_file_read(ctx, fallback, GEOM_MTL_MAX_BYTES, &text, &size);
+            if (r == MESO_OK) read_library(text, size, name, out);
+            free(text);
+        }
+    }
     if (r != MESO_OK) memset(out, 0, sizeof(*out));
     return r;
 }

@@ -107,6 +107,17 @@ static void test_obj_materials_are_read_by_meso_from_beside_the_mesh_only(void *
     if (!strstr(said, "base colour 0.5 0.25 1") || !strstr(said, "colour texture bricks.png"))
         fail_msg("meso info said: %s", said);
     free(said);
+    /* a missing library: "<the OBJ's name>.mtl" is read instead, as assimp did */
+    snprintf(text, sizeof text, "mtllib missing.mtl\n%s", geometry);
+    obj = test_path(dir, "d.obj");
+    test_write_file(obj, text, strlen(text));
+    library = "newmtl m\nKd 0.125 0.25 0.5\n";
+    test_write_file(test_path(dir, "d.mtl"), library, strlen(library));
+    snprintf(arguments, sizeof arguments, "%s info %s > %s", MESO_PROGRAM, obj, out);
+    assert_int_equal(system(arguments), 0);
+    said = test_read_file(out, &size);
+    if (!strstr(said, "base colour 0.125 0.25 0.5")) fail_msg("meso info said: %s", said);
+    free(said);
     /* an absolute path or ".." is refused, like a glTF buffer's */
     snprintf(text, sizeof text, "mtllib %s\n%s", test_path(sub, "b.mtl"), geometry);
     obj = test_path(dir, "c.obj");
