@@ -377,31 +377,40 @@ int app_exit_status(meso_result result) {
     return meso_result_is_bad_input(result) ? APP_EXIT_BAD_INPUT : APP_EXIT_FAILURE;
 }
 
-void app_error(const char *format, ...) {
+static void print_line(const char *format, va_list args) {
     char message[2048], escaped[4 * sizeof(message)];
-    va_list args;
-    va_start(args, format);
     vsnprintf(message, sizeof(message), format, args);
-    va_end(args);
     /* One line whatever the arguments hold (a newline in a file name, a terminal escape). */
     meso_text_escape_controls(message, escaped, sizeof(escaped));
     fprintf(stderr, "meso: %s\n", escaped);
 }
 
-/* Whether a message begins with a file name: its first field (up to ": ") has a '.' or a '/',
- * which the names of objects, keys and modules ("objects[0]", "torus", "render") do not. */
-static bool names_a_file(const char *message) {
-    size_t field = strcspn(message, ":");
-    if (message[field] != ':') return false;
-    for (size_t i = 0; i < field; i++)
-        if (message[i] == '.' || message[i] == '/') return true;
-    return false;
+void app_error(const char *format, ...) {
+    va_list args;
+    va_start(args, format);
+    print_line(format, args);
+    va_end(args);
+}
+
+void app_note(const char *format, ...) {
+    va_list args;
+    va_start(args, format);
+    print_line(format, args);
+    va_end(args);
+}
+
+/* Whether a message already begins with `file` ("scene.json: ..."). Anything else is prefixed
+ * with it, so that the first field is always the file: an object named "x.json" or "a/b"
+ * cannot stand in for the scene. */
+static bool begins_with_file(const char *message, const char *file) {
+    size_t length = strlen(file);
+    return strncmp(message, file, length) == 0 && message[length] == ':';
 }
 
 int app_fail_in(meso_context *ctx, meso_result result, const char *file) {
     const char *message = ctx ? meso_context_last_error(ctx) : "";
     if (!message || !message[0]) message = meso_result_string(result);
-    if (file && !names_a_file(message))
+    if (file && !begins_with_file(message, file))
         app_error("%s: %s", file, message);
     else
         app_error("%s", message);

@@ -137,6 +137,9 @@ int app_fail(meso_context *ctx, meso_result result);
 int app_fail_in(meso_context *ctx, meso_result result, const char *file);
 /* Print one error line "meso: <formatted>" to stderr, control characters escaped. */
 void app_error(const char *format, ...) __attribute__((format(printf, 1, 2)));
+/* A status line on stderr, "meso: <text>", escaped to one line like app_error (an output
+ * name with a newline in it cannot forge a second line). */
+void app_note(const char *format, ...) __attribute__((format(printf, 1, 2)));
 
 /* The exit status for a result: 0, 2 when meso_result_is_bad_input, else 1. */
 int app_exit_status(meso_result result);
@@ -254,6 +257,12 @@ typedef struct app_compare_all {
 
 /* The number of runs app_compare_all_render will make for desc (for progress totals). */
 size_t app_compare_all_count(const app_compare_all_desc *desc);
+
+/* Before any work: the sheet of desc's runs (sheet_columns > 0; labels of at most label_lines
+ * lines) within the image limits, and the memory the runs' kept images, one frame and the
+ * sheet need within the budget. MESO_OK, MESO_ERROR_LIMIT (logged, naming `name`). */
+meso_result app_compare_all_check_memory(meso_context *ctx, const app_compare_all_desc *desc,
+                                         int sheet_columns, int label_lines, const char *name);
 
 /* Render the scene with each technique (inapplicable ones are kept as skipped runs with a
  * note) and the reference, time them and compare each against the reference's linear image

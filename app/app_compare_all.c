@@ -36,6 +36,27 @@ size_t app_compare_all_count(const app_compare_all_desc *desc) {
     return technique_names(desc, names, 256) + (desc->with_reference ? 1 : 0);
 }
 
+meso_result app_compare_all_check_memory(meso_context *ctx, const app_compare_all_desc *desc,
+                                         int sheet_columns, int label_lines, const char *name) {
+    size_t runs = app_compare_all_count(desc);
+    if (runs == 0) return MESO_OK;
+    uint64_t pixels = (uint64_t)desc->width * (uint64_t)desc->height;
+    /* every run keeps its colour (RGB) and coverage images in floats until the sheet is made */
+    uint64_t total = runs * pixels * 4 * sizeof(float);
+    /* one frame at a time, at the larger of the two sample counts */
+    int samples = desc->samples > desc->reference_samples ? desc->samples : desc->reference_samples;
+    meso_render_desc frame = {.samples = samples};
+    total += meso_render_memory_estimate(&frame, desc->width, desc->height);
+    if (sheet_columns > 0) { /* the sheet, and its grey cell for a run without an image */
+        int width = 0, height = 0;
+        meso_result r = meso_sheet_size(ctx, runs, sheet_columns, desc->width, desc->height,
+                                        label_lines, &width, &height);
+        if (r != MESO_OK) return r;
+        total += ((uint64_t)width * (uint64_t)height + pixels) * 3 * sizeof(float);
+    }
+    return meso_memory_check(ctx, name, total);
+}
+
 /* Time frames after the first (which is the image kept): the median of up to `frames`, within
  * the budget; a first frame slower than the budget is its own measure. */
 static void time_frames(meso_renderer *renderer, meso_framebuffer *fb, double first_seconds,

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #define SHEET_COLUMNS 4
+#define SHEET_LABEL_LINES 5 /* app_run_label's longest form */
 #define MAX_BATCH_SCENES 256
 
 typedef struct render_options {
@@ -89,11 +90,11 @@ static int render_one(meso_context *ctx, const meso_scene *scene, const render_o
     if (result == MESO_OK) result = meso_framebuffer_save(ctx, fb, &png, o->output, o->coverage);
     if (result == MESO_OK && !quiet) {
         meso_render_stats stats = app_renderer_get_stats(&renderer);
-        fprintf(stderr,
-                "meso: render: %s%s, %dx%d, prepare %.1f ms, frame %.1f ms, %llu triangles -> %s\n",
-                scene_technique(scene, o->technique), app_backend_is_gl(&o->backend) ? " (gl)" : "",
-                width, height, 1000.0 * stats.prepare_seconds, 1000.0 * stats.last_frame_seconds,
-                (unsigned long long)stats.triangles, o->output);
+        app_note("render: %s%s, %dx%d, prepare %.1f ms, frame %.1f ms, %llu triangles -> %s",
+                 scene_technique(scene, o->technique),
+                 app_backend_is_gl(&o->backend) ? " (gl)" : "", width, height,
+                 1000.0 * stats.prepare_seconds, 1000.0 * stats.last_frame_seconds,
+                 (unsigned long long)stats.triangles, o->output);
     }
     int status =
         result == MESO_OK ? APP_EXIT_OK : app_fail_backend(ctx, result, scene->path, &o->backend);
@@ -178,6 +179,10 @@ static int render_all(meso_context *ctx, const meso_scene *scene, const render_o
         .timing_frames = o->frames,
         .settings = &o->settings,
     };
+    /* the sheet's size and the images kept for it are known before the work */
+    result =
+        app_compare_all_check_memory(ctx, &desc, SHEET_COLUMNS, SHEET_LABEL_LINES, scene->path);
+    if (result != MESO_OK) return app_fail_in(ctx, result, scene->path);
     desc.progress = meso_progress_begin(ctx, "render techniques", app_compare_all_count(&desc));
     app_compare_all all;
     result = app_compare_all_render(ctx, &desc, &all);
@@ -191,14 +196,20 @@ static int render_all(meso_context *ctx, const meso_scene *scene, const render_o
         return app_fail_in(ctx, MESO_ERROR_UNSUPPORTED, scene->path);
     }
     if (!quiet) app_compare_all_print_notes(&all, NULL, true);
+    /* The folder's files are published together: none is renamed into place before every one
+     * is written, so a full disk leaves the previous run's files as they were. */
+    bool group = meso_atomic_group_begin(ctx);
     result = app_compare_all_write_images(ctx, &all, o->output, NULL, true);
     if (result == MESO_OK) result = write_reports(ctx, &all, scene, o->output);
+    if (group) {
+        meso_result published = meso_atomic_group_end(ctx, result == MESO_OK);
+        if (result == MESO_OK) result = published;
+    }
     if (result == MESO_OK) print_results(&all);
     if (result == MESO_OK && !quiet)
-        fprintf(stderr,
-                "meso: render: %zu images, sheet.png, results.csv, results.json and "
-                "error-vs-time.svg/.png in %s\n",
-                rendered, o->output);
+        app_note("render: %zu images, sheet.png, results.csv, results.json and "
+                 "error-vs-time.svg/.png in %s",
+                 rendered, o->output);
     int status = result == MESO_OK ? APP_EXIT_OK : app_fail(ctx, result);
     app_compare_all_free(&all);
     return status;

@@ -118,11 +118,10 @@ int app_render_orbit(meso_context *ctx, meso_scene *scene, const meso_render_des
     scene->camera = home;
     if (result == MESO_OK && !quiet) {
         meso_render_stats stats = meso_renderer_get_stats(renderer);
-        fprintf(stderr,
-                "meso: render: %d orbit frames %dx%d, prepare %.1f ms, mean frame %.1f ms -> "
-                "%s/frame-%%04d.png\n",
-                count, width, height, 1000.0 * stats.prepare_seconds,
-                1000.0 * frame_seconds / count, dir);
+        app_note("render: %d orbit frames %dx%d, prepare %.1f ms, mean frame %.1f ms -> "
+                 "%s/frame-%%04d.png",
+                 count, width, height, 1000.0 * stats.prepare_seconds,
+                 1000.0 * frame_seconds / count, dir);
     }
     int status = result == MESO_OK ? APP_EXIT_OK : app_fail(ctx, result);
     meso_framebuffer_destroy(fb);

@@ -54,6 +54,13 @@ typedef struct meso_horizon_map {
 /* desc with zero fields replaced by the defaults (desc may be NULL). Pure. */
 meso_horizon_desc meso_horizon_desc_defaults(const meso_horizon_desc *desc);
 
+/* About how many seconds meso_bake_horizon takes for a width x height field on num_threads
+ * threads (its samples times a measured cost a sample; the 4- and 8-azimuth square case is
+ * faster). meso_bake_horizon says it before baking: a warning when it is 10 s or more, else
+ * an info message. Pure. */
+double meso_horizon_bake_seconds_estimate(int width, int height, const meso_horizon_desc *desc,
+                                          int num_threads);
+
 /* Bake the horizon map of `heightfield` (samples it bilinearly, wrapping as it wraps).
  * desc        Read during the call only; NULL: defaults.
  * out_map     On MESO_OK a new map owned by the caller (meso_horizon_map_destroy); else NULL.

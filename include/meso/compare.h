@@ -51,6 +51,13 @@ meso_result meso_sheet_create(meso_context *ctx, const meso_image *const *images
                               const char *const *labels, size_t count, int columns,
                               meso_image **out_image);
 
+/* The width and height of the sheet meso_sheet_create would make of `count` cells of
+ * cell_width x cell_height with labels of at most `label_lines` lines, before any image
+ * exists (so a command can refuse a sheet over the limits before its work). MESO_OK, or
+ * MESO_ERROR_LIMIT (logged) when a side exceeds MESO_IMAGE_MAX_SIDE. */
+meso_result meso_sheet_size(meso_context *ctx, size_t count, int columns, int cell_width,
+                            int cell_height, int label_lines, int *out_width, int *out_height);
+
 /* Draw text into an RGB(A) image at (x, y) (top-left) in `color`, anti-aliased, with DejaVu
  * Sans Mono (cairo, fontconfig) at 10 * `scale` pixels: 6 * scale pixels a character, lines
  * 12 * scale apart ('\n' starts one). Clipped to the image. Not thread-safe (fontconfig). */

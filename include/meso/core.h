@@ -46,7 +46,8 @@ extern "C" {
     X(MESO_ERROR_OUT_OF_MEMORY, "out of memory")                                                   \
     X(MESO_ERROR_UNSUPPORTED, "unsupported")                                                       \
     X(MESO_ERROR_CANCELLED, "cancelled")                                                           \
-    X(MESO_ERROR_INTERNAL, "internal error")
+    X(MESO_ERROR_INTERNAL, "internal error")                                                       \
+    X(MESO_ERROR_WRITE, "cannot write an output")
 
 typedef enum meso_result {
 #define MESO_RESULT_ENUM(name, text) name,
@@ -58,7 +59,10 @@ typedef enum meso_result {
 const char *meso_result_string(meso_result result);
 
 /* Whether a result is the fault of the input (usage or data), which the CLI reports with exit
- * status 2, rather than of the machine (I/O, memory, internal), reported with status 1. */
+ * status 2, rather than of the machine (a failed write such as a full disk, memory, internal),
+ * reported with status 1. MESO_ERROR_IO is an input that cannot be read or an output refused
+ * before any work (missing folder, not a regular file, name too long); MESO_ERROR_WRITE an
+ * output that could not be written after the work. */
 bool meso_result_is_bad_input(meso_result result);
 
 /* ---- Context ------------------------------------------------------------------------------ */
@@ -185,11 +189,13 @@ double meso_time_seconds(void);
 uint64_t meso_hash64(const void *data, size_t size, uint64_t seed);
 
 /* A file being written beside its destination, unnamed (O_TMPFILE) where the file system
- * allows it, else under a temporary name "<path>.tmpXXXXXX"; commit renames it into place,
- * abort removes it, so an interrupted run never leaves a half-written file. A symbolic link at
- * the destination is written through (the file it points to is replaced, the link stays); a
- * destination that exists and is not a regular file (folder, FIFO, device) is refused. An
- * existing file keeps its permission bits; a new one gets 0666 less the umask. */
+ * allows it, else under a short temporary name ".meso.tmpXXXXXX" in the destination's folder
+ * (never longer than a name the folder accepts, whatever the destination's length); commit
+ * renames it into place, abort removes it, so an interrupted run never leaves a half-written
+ * file. A symbolic link at the destination is written through (the file it points to is
+ * replaced, the link stays); a destination that exists and is not a regular file (folder,
+ * FIFO, device) is refused. An existing file keeps its permission bits; a new one gets 0666
+ * less the umask. */
 typedef struct meso_atomic_file {
     FILE *file;      /* write here */
     char *path;      /* the destination (the link's target when path was a link) */
@@ -200,11 +206,23 @@ typedef struct meso_atomic_file {
 /* Open a temporary file beside `path`. Returns MESO_OK, MESO_ERROR_IO (logged: the folder is
  * missing or not writable, or path is not a regular file) or MESO_ERROR_OUT_OF_MEMORY. */
 meso_result meso_atomic_file_open(meso_context *ctx, const char *path, meso_atomic_file *out_file);
-/* Flush, close and rename into place. Returns MESO_OK or MESO_ERROR_IO (logged); on error the
- * temporary file is removed. Frees the struct's strings in every case. */
+/* Flush, fsync, close and rename into place (or, inside a meso_atomic_group, leave the
+ * complete file under its temporary name until the group ends). Returns MESO_OK or
+ * MESO_ERROR_WRITE (logged with the system's reason, e.g. "No space left on device"); on
+ * error the temporary file is removed. Frees the struct's strings in every case. */
 meso_result meso_atomic_file_commit(meso_context *ctx, meso_atomic_file *file);
 /* Close and remove the temporary file. */
 void meso_atomic_file_abort(meso_atomic_file *file);
+/* A command's outputs published together: between begin and end, every
+ * meso_atomic_file_commit on ctx (from any writer: images, text, sheets) writes its file
+ * completely, flushed and synced, under its temporary name, and only end(publish = true)
+ * renames them all into place; end(false), or a failed commit within the group, removes them
+ * all. So a full disk at the last output leaves every earlier one unchanged. Groups do not
+ * nest: begin returns true when it opened the group, false when one was already open (or out
+ * of memory), and only the caller that opened it ends it. end returns MESO_OK, or the first
+ * failure. */
+bool meso_atomic_group_begin(meso_context *ctx);
+meso_result meso_atomic_group_end(meso_context *ctx, bool publish);
 /* Remove every temporary file of atomic files still open in this process. Async-signal-safe:
  * meant for SIGINT/SIGTERM handlers, which then end the process. Unnamed (O_TMPFILE) files
  * need no removal: the kernel drops them with the process. */
@@ -213,9 +231,10 @@ void meso_atomic_file_remove_temporaries(void);
 meso_result meso_file_write_atomic(meso_context *ctx, const char *path, const void *data,
                                    size_t size);
 /* Check, before any work, that meso_atomic_file_open(path) would succeed: path is absent or a
- * regular file (or a link to one), and its folder exists and is writable. Commands check every
- * output first so that they write all of their outputs or none. MESO_OK or MESO_ERROR_IO
- * (logged, naming path). Thread-safe. */
+ * regular file (or a link to one), its name fits the folder's limit (NAME_MAX) and the whole
+ * path PATH_MAX, and its folder exists and is writable. Commands check every output first so
+ * that they write all of their outputs or none. MESO_OK or MESO_ERROR_IO (logged, naming
+ * path). Thread-safe. */
 meso_result meso_file_check_output(meso_context *ctx, const char *path);
 
 /* Open an input file for reading, refusing anything but a regular file (a FIFO, device or

@@ -1,4 +1,5 @@
 /* The bake file container (docs/bake-format.md): writing, reading, validation. */
+#include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -154,6 +155,7 @@ meso_result meso_bake_file_save(meso_context *ctx, const meso_bake_file *bake, c
     put_u64(header + 56, file_size);
     put_u32(header + 64, (uint32_t)bake->num_arrays);
     put_u32(header + 68, (uint32_t)params_size);
+    errno = 0;
     bool ok = write_hashed(file.file, header, sizeof(header), &hash);
     if (params_size) ok = ok && write_hashed(file.file, bake->params_json, params_size, &hash);
     ok = ok && write_hashed(file.file, zeros, table_offset - (HEADER_BYTES + params_size), &hash);
@@ -179,8 +181,10 @@ meso_result meso_bake_file_save(meso_context *ctx, const meso_bake_file *bake, c
     put_u64(checksum, hash);
     ok = ok && fwrite(checksum, 1, sizeof(checksum), file.file) == sizeof(checksum);
     if (!ok) {
+        int reason = errno ? errno : EIO;
         meso_atomic_file_abort(&file);
-        return meso_log_error(ctx, MESO_ERROR_IO, "%s: write failed", path);
+        return meso_log_error(ctx, MESO_ERROR_WRITE, "%s: cannot write: %s", path,
+                              strerror(reason));
     }
     return meso_atomic_file_commit(ctx, &file);
 }

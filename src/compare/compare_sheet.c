@@ -46,29 +46,17 @@ meso_result meso_image_diff(meso_context *ctx, const meso_image *a, const meso_i
 
 enum { SHEET_PAD = 8 };
 
-meso_result meso_sheet_create(meso_context *ctx, const meso_image *const *images,
-                              const char *const *labels, size_t count, int columns,
-                              meso_image **out_image) {
-    *out_image = NULL;
-    if (!images || count == 0)
-        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "sheet: no images");
+/* The layout of a sheet of `count` cells of cell_w x cell_h with labels label_h high. */
+typedef struct sheet_layout {
+    int cols, step_x, step_y;
+    long width, height;
+} sheet_layout;
+
+static meso_result sheet_lay_out(meso_context *ctx, size_t count, int columns, int cell_w,
+                                 int cell_h, int label_h, sheet_layout *out) {
     if (count > 4096)
         return meso_log_error(ctx, MESO_ERROR_LIMIT, "sheet: %zu images exceed the limit 4096",
                               count);
-    int cell_w = 1, cell_h = 1, label_h = 0;
-    for (size_t i = 0; i < count; i++) {
-        if (images[i]) {
-            cell_w = images[i]->width > cell_w ? images[i]->width : cell_w;
-            cell_h = images[i]->height > cell_h ? images[i]->height : cell_h;
-        }
-    }
-    /* labels at twice the font size on cells wide enough, so they stay readable */
-    int scale = cell_w >= 256 ? 2 : 1;
-    for (size_t i = 0; i < count; i++) {
-        int tw, th;
-        compare_text_size(labels ? labels[i] : NULL, scale, &tw, &th);
-        label_h = th > label_h ? th : label_h;
-    }
     int cols = columns > 0 ? columns : (int)count;
     if ((size_t)cols > count) cols = (int)count;
     int rows = (int)((count + (size_t)cols - 1) / (size_t)cols);
@@ -78,6 +66,52 @@ meso_result meso_sheet_create(meso_context *ctx, const meso_image *const *images
         return meso_log_error(ctx, MESO_ERROR_LIMIT,
                               "sheet: %ldx%ld pixels exceed the limit %d a side", width, height,
                               MESO_IMAGE_MAX_SIDE);
+    *out = (sheet_layout){cols, step_x, step_y, width, height};
+    return MESO_OK;
+}
+
+/* Labels at twice the font size on cells wide enough, so they stay readable. */
+static int label_scale(int cell_w) { return cell_w >= 256 ? 2 : 1; }
+
+meso_result meso_sheet_size(meso_context *ctx, size_t count, int columns, int cell_width,
+                            int cell_height, int label_lines, int *out_width, int *out_height) {
+    *out_width = *out_height = 0;
+    if (count == 0 || cell_width < 1 || cell_height < 1)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "sheet: no images");
+    sheet_layout layout;
+    meso_result r =
+        sheet_lay_out(ctx, count, columns, cell_width, cell_height,
+                      label_lines * COMPARE_FONT_LINE * label_scale(cell_width), &layout);
+    if (r != MESO_OK) return r;
+    *out_width = (int)layout.width;
+    *out_height = (int)layout.height;
+    return MESO_OK;
+}
+
+meso_result meso_sheet_create(meso_context *ctx, const meso_image *const *images,
+                              const char *const *labels, size_t count, int columns,
+                              meso_image **out_image) {
+    *out_image = NULL;
+    if (!images || count == 0)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "sheet: no images");
+    int cell_w = 1, cell_h = 1, label_h = 0;
+    for (size_t i = 0; i < count; i++) {
+        if (images[i]) {
+            cell_w = images[i]->width > cell_w ? images[i]->width : cell_w;
+            cell_h = images[i]->height > cell_h ? images[i]->height : cell_h;
+        }
+    }
+    int scale = label_scale(cell_w);
+    for (size_t i = 0; i < count; i++) {
+        int tw, th;
+        compare_text_size(labels ? labels[i] : NULL, scale, &tw, &th);
+        label_h = th > label_h ? th : label_h;
+    }
+    sheet_layout layout;
+    meso_result laid_out = sheet_lay_out(ctx, count, columns, cell_w, cell_h, label_h, &layout);
+    if (laid_out != MESO_OK) return laid_out;
+    int cols = layout.cols, step_x = layout.step_x, step_y = layout.step_y;
+    long width = layout.width, height = layout.height;
     meso_image *sheet = NULL;
     meso_result result = meso_image_create(ctx, (int)width, (int)height, 3, &sheet);
     if (result != MESO_OK) return result;

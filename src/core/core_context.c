@@ -43,6 +43,7 @@ meso_result meso_context_create(const meso_context_desc *desc, meso_context **ou
 
 void meso_context_destroy(meso_context *ctx) {
     if (!ctx) return;
+    core_atomic_group_free(ctx);
     meso_pool_destroy(ctx->pool);
     pthread_mutex_destroy(&ctx->pool_lock);
     pthread_mutex_destroy(&ctx->lock);

@@ -1,6 +1,7 @@
 /* Environments (include/meso/environment.h): Radiance .hdr maps read with stb_image, OpenEXR
  * maps with the OpenEXR library (core_exr.c), a procedural sky, the spherical-harmonic projection
  * and luminance importance sampling. */
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -462,11 +463,14 @@ meso_result meso_environment_save_hdr(meso_context *ctx, const meso_environment 
     meso_result r = meso_atomic_file_open(ctx, path, &out);
     if (r != MESO_OK) return r;
     write_state ws = {out.file, false};
+    errno = 0;
     const meso_image *map = environment->map;
     if (!stbi_write_hdr_to_func(write_bytes, &ws, map->width, map->height, 3, map->pixels) ||
         ws.failed) {
+        int reason = errno ? errno : EIO;
         meso_atomic_file_abort(&out);
-        return meso_log_error(ctx, MESO_ERROR_IO, "%s: could not write the Radiance file", path);
+        return meso_log_error(ctx, MESO_ERROR_WRITE, "%s: cannot write: %s", path,
+                              strerror(reason));
     }
     return meso_atomic_file_commit(ctx, &out);
 }

@@ -4,6 +4,7 @@
  * interface (ImfCRgbaFile.h), which takes scanline and tiled files, any compression, and
  * turns luminance/chroma files into RGB. */
 #include <ImfCRgbaFile.h>
+#include <errno.h>
 #include <openexr.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -17,16 +18,22 @@
 
 typedef struct exr_stream {
     int fd;
+    int write_errno;   /* the system's reason of a failed write (ENOSPC), or 0 */
     char message[256]; /* the library's last error */
 } exr_stream;
 
+/* The stream being written on this thread. The error handler finds it here rather than through
+ * exr_get_user_data: the library calls the handler while it holds the context's lock (a failed
+ * write inside exr_write_header), and exr_get_user_data takes that lock again, which hung a
+ * write to a full disk forever. A handler must not call back into the library. */
+static _Thread_local exr_stream *current_stream;
+
 static void on_exr_error(exr_const_context_t exr, exr_result_t code, const char *message) {
-    void *user = NULL;
-    if (exr_get_user_data(exr, &user) == EXR_ERR_SUCCESS && user) {
-        exr_stream *stream = user;
+    (void)exr;
+    exr_stream *stream = current_stream;
+    if (stream && !stream->message[0])
         snprintf(stream->message, sizeof(stream->message), "%s",
                  message ? message : exr_get_default_error_message(code));
-    }
 }
 
 /* The library writes the header, the chunks and finally the offset table at given offsets. */
@@ -38,7 +45,8 @@ static int64_t write_at(exr_const_context_t exr, void *user, const void *buffer,
     while (done < size) {
         ssize_t n = pwrite(stream->fd, bytes + done, size - done, (off_t)(offset + done));
         if (n <= 0) {
-            error(exr, EXR_ERR_WRITE_IO, "cannot write (disk full?)");
+            stream->write_errno = n < 0 ? errno : ENOSPC;
+            error(exr, EXR_ERR_WRITE_IO, "%s", strerror(stream->write_errno));
             return -1;
         }
         done += (uint64_t)n;
@@ -68,6 +76,8 @@ static meso_result write_exr_channels(meso_context *ctx, FILE *file, const char 
     /* one chunk of rows in the file's type, interleaved as the pixels are */
     unsigned char *chunk_values = NULL;
     int part = 0;
+    exr_stream *outer_stream = current_stream;
+    current_stream = &stream;
     exr_result_t e = exr_start_write(&exr, path, EXR_WRITE_FILE_DIRECTLY, &init);
     if (e == EXR_ERR_SUCCESS) e = exr_add_part(exr, "", EXR_STORAGE_SCANLINE, &part);
     if (e == EXR_ERR_SUCCESS)
@@ -117,11 +127,15 @@ static meso_result write_exr_channels(meso_context *ctx, FILE *file, const char 
     if (encoder_started) exr_encoding_destroy(exr, &encoder);
     exr_result_t finished = exr ? exr_finish(&exr) : EXR_ERR_SUCCESS; /* writes the offsets */
     if (e == EXR_ERR_SUCCESS) e = finished;
+    current_stream = outer_stream;
     free(chunk_values);
+    if (stream.write_errno)
+        return meso_log_error(ctx, MESO_ERROR_WRITE, "%s: cannot write: %s", path,
+                              strerror(stream.write_errno));
     if (e == EXR_ERR_OUT_OF_MEMORY)
         return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", path);
     if (e != EXR_ERR_SUCCESS)
-        return meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot write OpenEXR (%s)", path,
+        return meso_log_error(ctx, MESO_ERROR_WRITE, "%s: cannot write OpenEXR (%s)", path,
                               stream.message[0] ? stream.message
                                                 : exr_get_default_error_message(e));
     return MESO_OK;

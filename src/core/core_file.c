@@ -87,8 +87,10 @@ static meso_result resolve_output(meso_context *ctx, const char *path, char **ou
     char *target = NULL;
     if (lstat(path, &st) == 0 && S_ISLNK(st.st_mode)) {
         if (stat(path, &st) != 0)
-            return meso_log_error(ctx, MESO_ERROR_IO, "%s: is a symbolic link to a missing file",
-                                  path);
+            return errno == ENOENT
+                       ? meso_log_error(ctx, MESO_ERROR_IO,
+                                        "%s: is a symbolic link to a missing file", path)
+                       : meso_log_error(ctx, MESO_ERROR_IO, "%s: %s", path, strerror(errno));
         target = realpath(path, NULL);
         if (!target)
             return meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot resolve: %s", path,
@@ -111,6 +113,31 @@ static meso_result resolve_output(meso_context *ctx, const char *path, char **ou
     return MESO_OK;
 }
 
+/* The temporary name in the destination's folder: short, so that it fits wherever the
+ * destination's own name fits (a name of NAME_MAX bytes plus a suffix would not). */
+#define TEMP_PREFIX ".meso.tmp"
+#define TEMP_NAME_LENGTH (sizeof(TEMP_PREFIX) - 1 + 6)
+
+/* The destination's name and the temporary's both fit: the name within the folder's
+ * NAME_MAX, each whole path within PATH_MAX. Checked before any work, so that a long name is
+ * refused at once rather than after minutes of rendering. */
+static meso_result check_name_lengths(meso_context *ctx, const char *path, const char *target,
+                                      const char *folder) {
+    const char *slash = strrchr(target, '/');
+    size_t name_length = strlen(slash ? slash + 1 : target);
+    long name_max = pathconf(folder, _PC_NAME_MAX);
+    if (name_max <= 0) name_max = NAME_MAX;
+    if (name_length > (size_t)name_max)
+        return meso_log_error(ctx, MESO_ERROR_IO,
+                              "%s: cannot write: file name too long (%zu bytes, the folder "
+                              "allows %ld)",
+                              path, name_length, name_max);
+    if (strlen(target) >= PATH_MAX || strlen(folder) + 1 + TEMP_NAME_LENGTH >= PATH_MAX)
+        return meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot write: path too long (limit %d)",
+                              path, PATH_MAX - 1);
+    return MESO_OK;
+}
+
 meso_result meso_file_check_output(meso_context *ctx, const char *path) {
     char *target = NULL;
     bool exists = false;
@@ -120,7 +147,7 @@ meso_result meso_file_check_output(meso_context *ctx, const char *path) {
     char folder[PATH_MAX];
     struct stat st;
     if (!folder_of(target, folder, sizeof(folder)))
-        r = meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: path too long", path);
+        r = meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot write: path too long", path);
     else if (stat(folder, &st) != 0)
         r = meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot write: folder %s: %s", path, folder,
                            strerror(errno));
@@ -130,6 +157,8 @@ meso_result meso_file_check_output(meso_context *ctx, const char *path) {
     else if (access(folder, W_OK | X_OK) != 0)
         r = meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot write: folder %s: %s", path, folder,
                            strerror(errno));
+    else
+        r = check_name_lengths(ctx, path, target, folder);
     free(target);
     return r;
 }
@@ -164,6 +193,19 @@ static int open_unnamed(const char *folder) {
 #endif
 }
 
+/* "<folder>/.meso.tmp" followed by six characters from `seed` (a new malloc'ed string). */
+static char *temporary_name(const char *folder, unsigned seed) {
+    size_t size = strlen(folder) + 1 + TEMP_NAME_LENGTH + 1;
+    char *name = malloc(size);
+    if (!name) return NULL;
+    static const char digits[] = "abcdefghijklmnopqrstuvwxyz0123456789";
+    char suffix[7];
+    for (int i = 0; i < 6; i++, seed /= 36) suffix[i] = digits[seed % 36];
+    suffix[6] = 0;
+    snprintf(name, size, "%s/" TEMP_PREFIX "%s", folder, suffix);
+    return name;
+}
+
 meso_result meso_atomic_file_open(meso_context *ctx, const char *path, meso_atomic_file *out_file) {
     *out_file = (meso_atomic_file){0};
     char *dest = NULL;
@@ -175,19 +217,22 @@ meso_result meso_atomic_file_open(meso_context *ctx, const char *path, meso_atom
     char folder[PATH_MAX];
     if (!folder_of(dest, folder, sizeof(folder))) {
         free(dest);
-        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: path too long", path);
+        return meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot write: path too long", path);
+    }
+    if ((r = check_name_lengths(ctx, path, dest, folder)) != MESO_OK) {
+        free(dest);
+        return r;
     }
     int fd = open_unnamed(folder);
     char *temp = NULL;
     int slot = 0;
     if (fd < 0) {
-        size_t length = strlen(dest);
-        temp = malloc(length + 16);
+        temp = temporary_name(folder, 0);
         if (!temp) {
             free(dest);
             return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", path);
         }
-        snprintf(temp, length + 16, "%s.tmpXXXXXX", dest);
+        memcpy(temp + strlen(temp) - 6, "XXXXXX", 6);
         fd = mkostemp(temp, O_CLOEXEC);
         if (fd < 0) {
             r = meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot create: %s", path, strerror(errno));
@@ -221,49 +266,147 @@ static void release(meso_atomic_file *f) {
     *f = (meso_atomic_file){0};
 }
 
-/* Give the unnamed file of `fd` the name f->temp_path (registered), for the rename. linkat
- * straight to the destination would fail when it exists, and rename is what replaces a file
- * atomically. */
+/* Give the unnamed file of `fd` a temporary name (registered) in the destination's folder, for
+ * the rename. linkat straight to the destination would fail when it exists, and rename is what
+ * replaces a file atomically. */
 static bool name_unnamed_file(meso_atomic_file *f, int fd) {
-    char proc_path[64];
+    char proc_path[64], folder[PATH_MAX];
     snprintf(proc_path, sizeof(proc_path), "/proc/self/fd/%d", fd);
-    size_t length = strlen(f->path);
-    f->temp_path = malloc(length + 16);
-    if (!f->temp_path) return false;
-    for (int attempt = 0; attempt < 100; attempt++) {
-        snprintf(f->temp_path, length + 16, "%s.tmp%06x", f->path,
-                 (unsigned)((getpid() * 2654435761u + (unsigned)attempt * 40503u +
-                             (unsigned)(uintptr_t)f) &
-                            0xffffff));
+    if (!folder_of(f->path, folder, sizeof(folder))) {
+        errno = ENAMETOOLONG;
+        return false;
+    }
+    for (unsigned attempt = 0; attempt < 100; attempt++) {
+        f->temp_path = temporary_name(folder, (unsigned)getpid() * 2654435761u + attempt * 40503u +
+                                                  (unsigned)(uintptr_t)f);
+        if (!f->temp_path) return false;
         f->temp_slot = register_temporary(f->temp_path);
         if (linkat(AT_FDCWD, proc_path, AT_FDCWD, f->temp_path, AT_SYMLINK_FOLLOW) == 0)
             return true;
+        int saved = errno;
         unregister_temporary(f->temp_slot);
         f->temp_slot = 0;
+        free(f->temp_path);
+        f->temp_path = NULL;
+        errno = saved;
         if (errno != EEXIST) break;
     }
-    free(f->temp_path);
-    f->temp_path = NULL;
     return false;
 }
 
-meso_result meso_atomic_file_commit(meso_context *ctx, meso_atomic_file *f) {
+/* Flush, sync and close the file and leave it complete under its temporary name; on failure
+ * remove it and log the system's reason. */
+static meso_result finish(meso_context *ctx, meso_atomic_file *f) {
+    errno = 0;
     bool ok = fflush(f->file) == 0 && !ferror(f->file);
-    bool unnamed = f->temp_path == NULL;
-    if (ok && unnamed) ok = name_unnamed_file(f, fileno(f->file));
+    /* On the disk before the rename: a crash after it must not leave an empty file under
+     * the destination's name (ext4 and XFS may order the rename before the data). */
+    if (ok) ok = fsync(fileno(f->file)) == 0 || errno == EINVAL || errno == EROFS;
+    if (ok && f->temp_path == NULL) ok = name_unnamed_file(f, fileno(f->file));
     int saved_errno = errno;
-    ok = fclose(f->file) == 0 && ok;
+    bool closed = fclose(f->file) == 0;
+    if (ok && !closed) saved_errno = errno;
+    ok = ok && closed;
     f->file = NULL;
-    if (!ok || rename(f->temp_path, f->path) != 0) {
-        if (ok || !saved_errno) saved_errno = errno;
-        meso_result r = meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot write: %s", f->path,
-                                       strerror(saved_errno));
-        if (f->temp_path) unlink(f->temp_path);
-        release(f);
-        return r;
+    if (ok) return MESO_OK;
+    meso_result r = meso_log_error(ctx, MESO_ERROR_WRITE, "%s: cannot write: %s", f->path,
+                                   strerror(saved_errno ? saved_errno : EIO));
+    if (f->temp_path) unlink(f->temp_path);
+    release(f);
+    return r;
+}
+
+static meso_result publish(meso_context *ctx, meso_atomic_file *f) {
+    meso_result r = MESO_OK;
+    if (rename(f->temp_path, f->path) != 0) {
+        r = meso_log_error(ctx, MESO_ERROR_WRITE, "%s: cannot write: %s", f->path, strerror(errno));
+        unlink(f->temp_path);
     }
     release(f);
-    return MESO_OK;
+    return r;
+}
+
+/* ---- Groups of outputs published together ------------------------------------------------ */
+
+typedef struct core_atomic_group {
+    meso_atomic_file *files; /* finished, under their temporary names */
+    size_t count, capacity;
+    meso_result failure; /* the first failed commit in the group */
+} core_atomic_group;
+
+bool meso_atomic_group_begin(meso_context *ctx) {
+    bool opened = false;
+    pthread_mutex_lock(&ctx->lock);
+    if (!ctx->atomic_group) {
+        ctx->atomic_group = calloc(1, sizeof(core_atomic_group));
+        opened = ctx->atomic_group != NULL;
+    }
+    pthread_mutex_unlock(&ctx->lock);
+    return opened;
+}
+
+/* Hold a finished file in the group: 1 held, 0 no group (publish it now), -1 out of memory
+ * (the file is removed: publishing it alone would break the group's all or nothing). */
+static int hold(meso_context *ctx, meso_atomic_file *f) {
+    pthread_mutex_lock(&ctx->lock);
+    core_atomic_group *g = ctx->atomic_group;
+    int held = g ? -1 : 0;
+    if (g && g->count == g->capacity) {
+        size_t capacity = g->capacity ? 2 * g->capacity : 32;
+        meso_atomic_file *grown = realloc(g->files, capacity * sizeof(*grown));
+        if (grown) g->files = grown, g->capacity = capacity;
+    }
+    if (g && g->count < g->capacity) {
+        g->files[g->count++] = *f;
+        *f = (meso_atomic_file){0};
+        held = 1;
+    }
+    pthread_mutex_unlock(&ctx->lock);
+    return held;
+}
+
+static void record_failure(meso_context *ctx, meso_result r) {
+    pthread_mutex_lock(&ctx->lock);
+    if (ctx->atomic_group && ctx->atomic_group->failure == MESO_OK) ctx->atomic_group->failure = r;
+    pthread_mutex_unlock(&ctx->lock);
+}
+
+meso_result meso_atomic_group_end(meso_context *ctx, bool publish_all) {
+    pthread_mutex_lock(&ctx->lock);
+    core_atomic_group *g = ctx->atomic_group;
+    ctx->atomic_group = NULL;
+    pthread_mutex_unlock(&ctx->lock);
+    if (!g) return MESO_OK;
+    meso_result r = g->failure;
+    for (size_t i = 0; i < g->count; i++) {
+        if (publish_all && r == MESO_OK) {
+            r = publish(ctx, &g->files[i]);
+        } else {
+            unlink(g->files[i].temp_path);
+            release(&g->files[i]);
+        }
+    }
+    free(g->files);
+    free(g);
+    return r;
+}
+
+void core_atomic_group_free(meso_context *ctx) { meso_atomic_group_end(ctx, false); }
+
+meso_result meso_atomic_file_commit(meso_context *ctx, meso_atomic_file *f) {
+    meso_result r = finish(ctx, f);
+    if (r != MESO_OK) {
+        record_failure(ctx, r);
+        return r;
+    }
+    int held = hold(ctx, f);
+    if (held > 0) return MESO_OK;
+    if (held == 0) return publish(ctx, f);
+    r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", f->path);
+    unlink(f->temp_path);
+    release(f);
+    record_failure(ctx, r);
+    return r;
 }
 
 void meso_atomic_file_abort(meso_atomic_file *f) {
@@ -278,8 +421,9 @@ meso_result meso_file_write_atomic(meso_context *ctx, const char *path, const vo
     meso_result r = meso_atomic_file_open(ctx, path, &f);
     if (r != MESO_OK) return r;
     if (size > 0 && fwrite(data, 1, size, f.file) != size) {
-        r = meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot write: %s", path, strerror(errno));
+        r = meso_log_error(ctx, MESO_ERROR_WRITE, "%s: cannot write: %s", path, strerror(errno));
         meso_atomic_file_abort(&f);
+        record_failure(ctx, r);
         return r;
     }
     return meso_atomic_file_commit(ctx, &f);

@@ -22,9 +22,13 @@ struct meso_context {
     meso_progress_fn on_progress;
     void *progress_user;
     uint64_t memory_limit; /* bytes a job may estimate to need (meso_memory_check) */
-    pthread_mutex_t lock;  /* serialises logging and last_error */
+    pthread_mutex_t lock;  /* serialises logging, last_error and the atomic group */
+    struct core_atomic_group *atomic_group; /* outputs held back until published together */
     char last_error[MESO_MESSAGE_MAX];
     char subject[256]; /* meso_context_set_subject: named in a bake's notice */
 };
+
+/* Remove the files of an atomic group left open (meso_context_destroy). */
+void core_atomic_group_free(meso_context *ctx);
 
 #endif

@@ -1,4 +1,5 @@
 /* PNG files through libpng: 8/16-bit grey, grey+alpha, RGB, RGBA and palette. */
+#include <errno.h>
 #include <png.h>
 #include <setjmp.h>
 #include <stdlib.h>
@@ -23,6 +24,15 @@ static void on_png_warning(png_structp png, png_const_charp message) {
     (void)png;
     (void)message;
 }
+
+/* libpng's own stdio writer reports only "Write Error": this one says why (a full disk). */
+static void write_to_file(png_structp png, png_bytep data, size_t length) {
+    FILE *file = png_get_io_ptr(png);
+    errno = 0;
+    if (fwrite(data, 1, length, file) != length) png_error(png, strerror(errno ? errno : EIO));
+}
+
+static void flush_file(png_structp png) { fflush((FILE *)png_get_io_ptr(png)); }
 
 static uint32_t read_u32(const unsigned char *p) {
     return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3];
@@ -53,6 +63,27 @@ meso_result meso_image_load_png(meso_context *ctx, const char *path, meso_image 
                               "%s: %ux%u exceeds the limit of %d a side and %u pixels", path,
                               (unsigned)declared_width, (unsigned)declared_height,
                               MESO_IMAGE_MAX_SIDE, MESO_IMAGE_MAX_PIXELS);
+    }
+    /* The decoded image (floats) and libpng's rows (all of them when interlaced, 16 bits a
+     * value at most) within the memory budget, from the header, before libpng reads on: a PNG
+     * of 82 KB can declare 8192 x 8192 pixels, 768 MiB decoded. The channels after expansion
+     * follow the colour type (a palette may gain alpha: 4). */
+    unsigned char fields[5]; /* bit depth, colour type, compression, filter, interlace */
+    if (fread(fields, 1, 5, file) != 5) {
+        fclose(file);
+        return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: truncated PNG (IHDR)", path);
+    }
+    static const uint64_t channels_of_type[7] = {1, 0, 3, 4, 2, 0, 4};
+    uint64_t declared_channels =
+        fields[1] < 7 && channels_of_type[fields[1]] ? channels_of_type[fields[1]] : 4;
+    uint64_t value_bytes = fields[0] == 16 ? 2 : 1, rows_held = fields[4] ? declared_height : 1;
+    meso_result budget = meso_memory_check(
+        ctx, path,
+        declared_channels * ((uint64_t)declared_width * declared_height * sizeof(float) +
+                             (uint64_t)declared_width * rows_held * value_bytes));
+    if (budget != MESO_OK) {
+        fclose(file);
+        return budget;
     }
     fseek(file, 8, SEEK_SET);
     png_error_state state = {ctx, path, ""};
@@ -99,12 +130,12 @@ meso_result meso_image_load_png(meso_context *ctx, const char *path, meso_image 
         r = meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: unsupported PNG layout", path);
         goto done;
     }
+    bool interlaced = png_get_interlace_type(png, info) != PNG_INTERLACE_NONE;
     meso_image *created = NULL;
     r = meso_image_create(ctx, (int)width, (int)height, channels, &created);
     if (r != MESO_OK) goto done;
     image = created;
     /* Interlaced images need every row in memory at once; others are read row by row. */
-    bool interlaced = png_get_interlace_type(png, info) != PNG_INTERLACE_NONE;
     row = malloc(row_bytes * (interlaced ? height : 1));
     if (!row) {
         r = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", path);
@@ -172,10 +203,10 @@ meso_result meso_image_write_png(meso_context *ctx, const meso_image *image, FIL
         goto fail;
     }
     if (setjmp(png_jmpbuf(png))) {
-        r = meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot write PNG (%s)", path, state.message);
+        r = meso_log_error(ctx, MESO_ERROR_WRITE, "%s: cannot write: %s", path, state.message);
         goto fail;
     }
-    png_init_io(png, file);
+    png_set_write_fn(png, file, write_to_file, flush_file);
     png_set_IHDR(png, info, (png_uint_32)image->width, (png_uint_32)image->height, bit_depth,
                  color_types[channels], PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
                  PNG_FILTER_TYPE_DEFAULT);
@@ -229,8 +260,10 @@ static meso_result save_all(meso_context *ctx, size_t count, const meso_image *c
                               count ? paths[0] : "png", MESO_PNG_SAVE_ALL_MAX);
     meso_atomic_file files[MESO_PNG_SAVE_ALL_MAX] = {{0}};
     meso_result r = MESO_OK;
-    /* Every file is written completely under its temporary name before any is renamed, so a
-     * failure (a missing folder, a full disk) leaves none of them changed. */
+    /* Every file is written completely, flushed and synced under its temporary name before
+     * any is renamed (one group, unless the caller's group holds them already), so a failure
+     * (a missing folder, a full disk) leaves none of them changed. */
+    bool group = meso_atomic_group_begin(ctx);
     for (size_t i = 0; i < count && r == MESO_OK; i++) {
         r = meso_atomic_file_open(ctx, paths[i], &files[i]);
         if (r != MESO_OK) break;
@@ -239,14 +272,13 @@ static meso_result save_all(meso_context *ctx, size_t count, const meso_image *c
         else
             r = meso_image_write_png(ctx, images[i], files[i].file, paths[i],
                                      descs ? &descs[i] : NULL);
+        if (r == MESO_OK) r = meso_atomic_file_commit(ctx, &files[i]);
     }
-    if (r != MESO_OK) {
+    if (r != MESO_OK)
         for (size_t i = 0; i < count; i++) meso_atomic_file_abort(&files[i]); /* zeroed: no-op */
-        return r;
-    }
-    for (size_t i = 0; i < count; i++) {
-        meso_result c = meso_atomic_file_commit(ctx, &files[i]);
-        if (r == MESO_OK) r = c;
+    if (group) {
+        meso_result published = meso_atomic_group_end(ctx, r == MESO_OK);
+        if (r == MESO_OK) r = published;
     }
     return r;
 }

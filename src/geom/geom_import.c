@@ -6,12 +6,15 @@
  * degenerate-triangle warning name the file.
  */
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
+#include <assimp/cfileio.h>
 #include <assimp/cimport.h>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
@@ -25,6 +28,87 @@ static pthread_mutex_t import_lock = PTHREAD_MUTEX_INITIALIZER;
 
 /* Nodes visited per file at most: a scene graph is a tree, this only stops a corrupt one. */
 #define MAX_NODES (1u << 22)
+
+/* ---- The files assimp may open --------------------------------------------------------- */
+
+/* assimp opens files through these callbacks only: the mesh file itself, and for a glTF the
+ * buffers its screening allowed (files beside it). Every other open fails: an OBJ's material
+ * libraries are read by meso's own MTL reader (geom_mtl.c), never by assimp's parser, which
+ * crashed on malformed ones. Files are opened non-blocking and must be regular (a FIFO would
+ * block the import). */
+typedef struct import_files {
+    const char *path; /* the mesh file */
+    bool others_allowed;
+} import_files;
+
+static FILE *file_of(struct aiFile *f) { return (FILE *)(void *)f->UserData; }
+
+static size_t file_read(struct aiFile *f, char *buffer, size_t size, size_t count) {
+    return size && count ? fread(buffer, size, count, file_of(f)) : 0;
+}
+
+static size_t file_write(struct aiFile *f, const char *buffer, size_t size, size_t count) {
+    (void)f, (void)buffer, (void)size, (void)count;
+    return 0;
+}
+
+static size_t file_tell(struct aiFile *f) {
+    off_t at = ftello(file_of(f));
+    return at < 0 ? 0 : (size_t)at;
+}
+
+static size_t file_size(struct aiFile *f) {
+    struct stat st;
+    return fstat(fileno(file_of(f)), &st) == 0 ? (size_t)st.st_size : 0;
+}
+
+static enum aiReturn file_seek(struct aiFile *f, size_t offset, enum aiOrigin origin) {
+    int whence = origin == aiOrigin_SET ? SEEK_SET : origin == aiOrigin_CUR ? SEEK_CUR : SEEK_END;
+    /* assimp passes a negative relative offset as its size_t image */
+    off_t signed_offset = origin == aiOrigin_SET ? (off_t)offset : (off_t)(ptrdiff_t)offset;
+    return fseeko(file_of(f), signed_offset, whence) == 0 ? aiReturn_SUCCESS : aiReturn_FAILURE;
+}
+
+static void file_flush(struct aiFile *f) { (void)f; }
+
+static struct aiFile *file_open(struct aiFileIO *io, const char *path, const char *mode) {
+    const import_files *rules = (const import_files *)(void *)io->UserData;
+    if (!path || strchr(mode, 'w') || strchr(mode, 'a') ||
+        (strcmp(path, rules->path) != 0 && !rules->others_allowed))
+        return NULL;
+    int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) return NULL;
+    struct stat st;
+    FILE *file = NULL;
+    if (fstat(fd, &st) == 0 && S_ISREG(st.st_mode)) {
+        int flags = fcntl(fd, F_GETFL);
+        if (flags >= 0) fcntl(fd, F_SETFL, flags & ~O_NONBLOCK);
+        file = fdopen(fd, "rb");
+    }
+    struct aiFile *f = file ? malloc(sizeof(*f)) : NULL;
+    if (!f) {
+        if (file)
+            fclose(file);
+        else
+            close(fd);
+        return NULL;
+    }
+    *f = (struct aiFile){file_read,
+                         file_write,
+                         file_tell,
+                         file_size,
+                         file_seek,
+                         file_flush,
+                         (aiUserData)(void *)file};
+    return f;
+}
+
+static void file_close(struct aiFileIO *io, struct aiFile *f) {
+    (void)io;
+    if (!f) return;
+    fclose(file_of(f));
+    free(f);
+}
 
 typedef struct mesh_instance {
     const struct aiMesh *mesh;
@@ -190,7 +274,8 @@ static meso_result check_raw_scene(meso_context *ctx, const char *path,
     return geom_check_counts(ctx, path, num_vertices, num_corners / 3);
 }
 
-static void append_ignored(meso_mesh_material *m, const char *what) {
+void geom_material_ignore(meso_mesh_material *m, const char *what) {
+    if (strstr(m->ignored, what)) return; /* said once (two keys may name one kind) */
     size_t used = strlen(m->ignored);
     snprintf(m->ignored + used, sizeof(m->ignored) - used, "%s%s", used ? ", " : "", what);
 }
@@ -207,10 +292,10 @@ static void read_texture(const struct aiMaterial *material, enum aiTextureType t
     char ignored[96];
     if (path.data[0] == '*' || strncmp(path.data, "data:", 5) == 0) {
         snprintf(ignored, sizeof ignored, "%s (embedded image)", what);
-        append_ignored(m, ignored);
+        geom_material_ignore(m, ignored);
     } else if (path.length >= MESO_MESH_MATERIAL_PATH_MAX) {
         snprintf(ignored, sizeof ignored, "%s (path too long)", what);
-        append_ignored(m, ignored);
+        geom_material_ignore(m, ignored);
     } else {
         memcpy(out, path.data, path.length + 1);
     }
@@ -220,18 +305,37 @@ const char *meso_mesh_material_unused_reason(const char *texture) {
     return texture[0] == '/' || strstr(texture, "..") ? "not beside the mesh file" : NULL;
 }
 
-/* The first instance's material; what else the file holds goes to `ignored`. */
-static void read_material(const struct aiScene *scene, const import_state *s,
-                          meso_mesh_material *m) {
+static void note_other_materials(const import_state *s, unsigned index, meso_mesh_material *m) {
+    size_t others = 0;
+    for (size_t i = 1; i < s->num_instances; i++)
+        others += s->instances[i].mesh->mMaterialIndex != index;
+    if (others) {
+        char text[96];
+        snprintf(text, sizeof text, "the materials of %zu other mesh%s", others,
+                 others == 1 ? "" : "es");
+        geom_material_ignore(m, text);
+    }
+}
+
+/* The first instance's material; what else the file holds goes to `ignored`. An OBJ's
+ * material is read from its MTL by meso (assimp saw only the `usemtl` name). */
+static meso_result read_material(meso_context *ctx, const char *path, FILE *obj,
+                                 const struct aiScene *scene, const import_state *s,
+                                 meso_mesh_material *m) {
     memset(m, 0, sizeof(*m));
-    if (s->num_instances == 0 || !scene->mMaterials) return;
+    if (s->num_instances == 0 || !scene->mMaterials) return MESO_OK;
     unsigned index = s->instances[0].mesh->mMaterialIndex;
-    if (index >= scene->mNumMaterials) return;
+    if (index >= scene->mNumMaterials) return MESO_OK;
     const struct aiMaterial *material = scene->mMaterials[index];
     struct aiString name;
-    if (aiGetMaterialString(material, AI_MATKEY_NAME, &name) == aiReturn_SUCCESS &&
-        strcmp(name.data, AI_DEFAULT_MATERIAL_NAME) == 0)
-        return; /* assimp's stand-in for "no material" */
+    bool named = aiGetMaterialString(material, AI_MATKEY_NAME, &name) == aiReturn_SUCCESS;
+    if (named && strcmp(name.data, AI_DEFAULT_MATERIAL_NAME) == 0)
+        return MESO_OK; /* assimp's stand-in for "no material" */
+    if (obj) {
+        meso_result r = named ? geom_obj_read_material(ctx, path, obj, name.data, m) : MESO_OK;
+        if (r == MESO_OK) note_other_materials(s, index, m);
+        return r;
+    }
     struct aiColor4D color;
     if (aiGetMaterialColor(material, AI_MATKEY_COLOR_DIFFUSE, &color) == aiReturn_SUCCESS &&
         isfinite(color.r) && isfinite(color.g) && isfinite(color.b)) {
@@ -255,15 +359,20 @@ static void read_material(const struct aiScene *scene, const import_state *s,
                   {aiTextureType_UNKNOWN, "metallic-roughness texture"}};
     for (size_t u = 0; u < sizeof(unused) / sizeof(unused[0]); u++)
         if (aiGetMaterialTextureCount(material, unused[u].type) > 0)
-            append_ignored(m, unused[u].what);
-    size_t others = 0;
-    for (size_t i = 1; i < s->num_instances; i++)
-        others += s->instances[i].mesh->mMaterialIndex != index;
-    if (others) {
-        char text[96];
-        snprintf(text, sizeof text, "the materials of %zu other mesh%s", others,
-                 others == 1 ? "" : "es");
-        append_ignored(m, text);
+            geom_material_ignore(m, unused[u].what);
+    note_other_materials(s, index, m);
+    return MESO_OK;
+}
+
+void geom_import_reason(const char *message, char *out, size_t out_size) {
+    if (!message || !message[0]) message = "unknown format";
+    size_t length = strcspn(message, "\r\n");
+    bool cut = message[length + strspn(message + length, " \t\r\n")] != 0 || length + 1 > out_size;
+    if (cut && out_size > 4) {
+        size_t keep = length + 4 < out_size ? length : out_size - 5;
+        snprintf(out, out_size, "%.*s ...", (int)keep, message);
+    } else {
+        snprintf(out, out_size, "%.*s", (int)length, message);
     }
 }
 
@@ -278,9 +387,15 @@ meso_result meso_mesh_load_with_material(meso_context *ctx, const char *path, me
     FILE *probe = NULL; /* a regular file only: assimp would block on a FIFO */
     meso_result opened = meso_file_open_read(ctx, path, &probe);
     if (opened != MESO_OK) return opened;
-    meso_result r = geom_screen_mesh_file(ctx, path, probe);
-    fclose(probe);
+    geom_mesh_kind kind = GEOM_MESH_OTHER;
+    meso_result r = geom_screen_mesh_file(ctx, path, probe, &kind);
+    if (r != MESO_OK || kind != GEOM_MESH_OBJ || !out_material) {
+        fclose(probe);
+        probe = NULL;
+    }
     if (r != MESO_OK) return r;
+    import_files rules = {path, kind == GEOM_MESH_GLTF};
+    struct aiFileIO io = {file_open, file_close, (aiUserData)(void *)&rules};
 
     import_state s = {ctx, path, NULL, 0, 0};
     meso_mesh *mesh = NULL;
@@ -290,12 +405,13 @@ meso_result meso_mesh_load_with_material(meso_context *ctx, const char *path, me
      * which ValidateDataStructure lets through, and without ValidateDataStructure a face index
      * past the vertex count crashes JoinIdenticalVertices (both found by mutating test
      * files). */
-    const struct aiScene *scene = aiImportFile(path, aiProcess_ValidateDataStructure);
+    const struct aiScene *scene = aiImportFileEx(path, aiProcess_ValidateDataStructure, &io);
     if (scene) {
         r = check_raw_scene(ctx, path, scene);
         if (r != MESO_OK) {
             aiReleaseImport(scene);
             pthread_mutex_unlock(&import_lock);
+            if (probe) fclose(probe);
             return r;
         }
         /* On failure this releases the scene itself. */
@@ -304,10 +420,11 @@ meso_result meso_mesh_load_with_material(meso_context *ctx, const char *path, me
                                              aiProcess_GenSmoothNormals | aiProcess_SortByPType);
     }
     if (!scene) {
-        const char *reason = aiGetErrorString();
-        r = meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: cannot read: %s", path,
-                           reason && reason[0] ? reason : "unknown format");
+        char reason[256];
+        geom_import_reason(aiGetErrorString(), reason, sizeof reason);
+        r = meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: cannot read: %s", path, reason);
         pthread_mutex_unlock(&import_lock);
+        if (probe) fclose(probe);
         return r;
     }
     pthread_mutex_unlock(&import_lock);
@@ -339,10 +456,12 @@ meso_result meso_mesh_load_with_material(meso_context *ctx, const char *path, me
     if (r != MESO_OK) goto fail;
     r = meso_mesh_validate(ctx, mesh, path, false);
     if (r != MESO_OK) goto fail;
-    if (out_material) read_material(scene, &s, out_material);
+    if (out_material) r = read_material(ctx, path, probe, scene, &s, out_material);
+    if (r != MESO_OK) goto fail;
     *out_mesh = mesh;
     mesh = NULL;
 fail:
+    if (probe) fclose(probe);
     meso_mesh_destroy(mesh);
     free(s.instances);
     pthread_mutex_lock(&import_lock);

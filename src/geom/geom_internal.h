@@ -9,11 +9,44 @@
 meso_result geom_check_counts(meso_context *ctx, const char *name, uint64_t num_vertices,
                               uint64_t num_triangles);
 
+/* What the screen recognised a mesh file as (by content, glTF JSON and OBJ by extension). */
+typedef enum geom_mesh_kind {
+    GEOM_MESH_OTHER = 0,
+    GEOM_MESH_PLY,
+    GEOM_MESH_GLTF, /* JSON or GLB: its buffers may be files beside it */
+    GEOM_MESH_OBJ,
+} geom_mesh_kind;
+
 /* Check a mesh file's declared sizes against its real size before assimp reads it (PLY
- * element counts, glTF buffers, views and accessors, GLB chunks) and that a glTF's buffers
- * are files beside it (geom_screen.c). `file` is open at any position. MESO_OK, or
- * MESO_ERROR_FORMAT / _LIMIT / _IO logged naming the file. */
-meso_result geom_screen_mesh_file(meso_context *ctx, const char *path, FILE *file);
+ * element counts and ASCII values, glTF buffers, views and accessors, GLB chunks) and that
+ * the files it names (glTF buffers, OBJ material libraries) are files beside it
+ * (geom_screen.c). `file` is open at any position. MESO_OK, or MESO_ERROR_FORMAT / _LIMIT /
+ * _IO logged naming the file; *out_kind says what the file is. */
+meso_result geom_screen_mesh_file(meso_context *ctx, const char *path, FILE *file,
+                                  geom_mesh_kind *out_kind);
+
+/* A file a mesh names (glTF buffer URI, OBJ mtllib) may be read only when it lies beside the
+ * mesh or below its folder: relative, no "..", no scheme (':'), no backslash, no
+ * percent-escaped '.' or '/'. */
+bool geom_name_is_beside(const char *name);
+/* `name` resolved against the folder of `path` into out; false when it does not fit. */
+bool geom_resolve_beside(const char *path, const char *name, char *out, size_t out_size);
+
+/* assimp's error message as a reason: its first line only (it may quote lines of the file),
+ * cut to out_size with " ..." when anything was left out. */
+void geom_import_reason(const char *message, char *out, size_t out_size);
+
+/* Add `what` to the material's list of what the file holds that meso does not use. */
+void geom_material_ignore(meso_mesh_material *m, const char *what);
+
+/* MTL files larger than this are refused (real libraries are kilobytes). */
+#define GEOM_MTL_MAX_BYTES (16u << 20)
+
+/* The material `name` (a `usemtl` name) from the material libraries the OBJ at `path` (open
+ * as `obj`) names, read by meso's own MTL reader (geom_mtl.c); zeroed when no library defines
+ * it. MESO_OK, or the error of a library that cannot be read (logged). */
+meso_result geom_obj_read_material(meso_context *ctx, const char *path, FILE *obj, const char *name,
+                                   meso_mesh_material *out);
 
 /* Free (and NULL) tangents, bitangents, curvature and quadrics: the arrays that depend on the
  * positions, normals or UVs. */

@@ -12,8 +12,9 @@
  *         byteLength must fit in its data, each bufferView in its buffer, each accessor in its
  *         bufferView; accessors without data are bounded by the mesh limits.
  *   OBJ   has no declared counts (what assimp builds grows with the file); the material
- *         libraries it names (mtllib), which assimp opens, must be regular files when they
- *         exist: a FIFO there would block the import forever.
+ *         libraries it names (mtllib), which meso reads itself (geom_mtl.c), follow the rule of
+ *         glTF buffers (beside the OBJ) and must be regular files when they exist; an mtllib
+ *         line with a NUL byte is refused.
  */
 #include <ctype.h>
 #include <errno.h>
@@ -73,8 +74,44 @@ static size_t ply_header_end(const char *buffer) {
     return 0;
 }
 
-static meso_result screen_ply(meso_context *ctx, const char *path, char *buffer,
-                              uint64_t file_size) {
+/* ASCII PLY data: every value a number (a sign, digits, a point, an exponent). assimp 5.2's
+ * ASCII PLY parser leaks the element it was building when a value is not a number; meso
+ * refuses such a file before assimp reads it, naming the line. */
+static meso_result screen_ply_ascii_values(meso_context *ctx, const char *path, FILE *file,
+                                           size_t header_size) {
+    if (fseeko(file, (off_t)header_size, SEEK_SET) != 0)
+        return meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot seek: %s", path, strerror(errno));
+    char token[64];
+    size_t token_length = 0;
+    unsigned long long line = 1;
+    bool bad = false;
+    for (int c = getc(file);; c = getc(file)) {
+        bool blank = c == EOF || c == ' ' || c == '\t' || c == '\n' || c == '\r';
+        if (!blank) {
+            bad = token_length + 1 >= sizeof token || !strchr("0123456789+-.eE", c) || c == 0;
+            if (bad) break;
+            token[token_length++] = (char)c;
+            continue;
+        }
+        if (token_length > 0) {
+            token[token_length] = 0;
+            char *end = NULL;
+            strtod(token, &end);
+            bad = end != token + token_length;
+            if (bad) break;
+            token_length = 0;
+        }
+        if (c == '\n') line++;
+        if (c == EOF) break;
+    }
+    if (bad)
+        return meso_log_error(ctx, MESO_ERROR_FORMAT,
+                              "%s: PLY data line %llu: a value that is not a number", path, line);
+    return MESO_OK;
+}
+
+static meso_result screen_ply(meso_context *ctx, const char *path, char *buffer, uint64_t file_size,
+                              FILE *file) {
     size_t header_size = ply_header_end(buffer);
     if (header_size == 0)
         return meso_log_error(ctx, MESO_ERROR_FORMAT,
@@ -143,13 +180,12 @@ static meso_result screen_ply(meso_context *ctx, const char *path, char *buffer,
                               "%s: truncated PLY: header declares %s%llu bytes, file has %llu",
                               path, declared >= saturated ? "over " : "", declared + header_size,
                               (unsigned long long)file_size);
-    return MESO_OK;
+    return binary ? MESO_OK : screen_ply_ascii_values(ctx, path, file, header_size);
 }
 
 /* ---- OBJ ---------------------------------------------------------------------------------- */
 
-/* `name` resolved against the folder of `path` (absolute names as they are) into out. */
-static bool resolve_beside(const char *path, const char *name, char *out, size_t out_size) {
+bool geom_resolve_beside(const char *path, const char *name, char *out, size_t out_size) {
     const char *slash = strrchr(path, '/');
     int folder = name[0] == '/' || !slash ? 0 : (int)(slash - path) + 1;
     int written = snprintf(out, out_size, "%.*s%s", folder, path, name);
@@ -158,22 +194,36 @@ static bool resolve_beside(const char *path, const char *name, char *out, size_t
 
 static meso_result screen_obj(meso_context *ctx, const char *path, FILE *file) {
     rewind(file);
-    char line[4096];
+    char *line = NULL;
+    size_t capacity = 0;
+    ssize_t length;
     meso_result r = MESO_OK;
-    while (r == MESO_OK && fgets(line, sizeof(line), file)) {
+    for (long number = 1; r == MESO_OK && (length = getline(&line, &capacity, file)) > 0;
+         number++) {
         if (strncmp(line, "mtllib", 6) != 0 || (line[6] != ' ' && line[6] != '\t')) continue;
+        if (memchr(line, 0, (size_t)length)) {
+            r = meso_log_error(ctx, MESO_ERROR_FORMAT,
+                               "%s: line %ld: mtllib: a NUL byte in the name", path, number);
+            break;
+        }
         char *save = NULL;
         for (char *name = strtok_r(line + 7, " \t\r\n", &save); name && r == MESO_OK;
              name = strtok_r(NULL, " \t\r\n", &save)) {
             char full[PATH_MAX];
             struct stat st;
-            if (!resolve_beside(path, name, full, sizeof(full)) || stat(full, &st) != 0)
-                continue; /* missing: assimp goes on without the materials */
-            if (!S_ISREG(st.st_mode))
+            if (!geom_name_is_beside(name))
+                r = meso_log_error(ctx, MESO_ERROR_FORMAT,
+                                   "%s: mtllib %s: must name a file beside the mesh (no absolute "
+                                   "path, no '..', no scheme)",
+                                   path, name);
+            else if (!geom_resolve_beside(path, name, full, sizeof(full)) || stat(full, &st) != 0)
+                continue; /* missing: the mesh has no material from it */
+            else if (!S_ISREG(st.st_mode))
                 r = meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: mtllib %s is not a regular file",
                                    path, full);
         }
     }
+    free(line);
     return r;
 }
 
@@ -193,8 +243,7 @@ static double json_number(const cJSON *object, const char *name, double fallback
     return item->valuedouble;
 }
 
-/* A URI naming a file beside the glTF: relative, no "..", no scheme, no backslash. */
-static bool uri_is_beside(const char *uri) {
+bool geom_name_is_beside(const char *uri) {
     if (!uri[0] || uri[0] == '/' || strchr(uri, '\\') || strchr(uri, ':')) return false;
     for (const char *part = uri; part;) {
         const char *slash = strchr(part, '/');
@@ -229,13 +278,13 @@ static meso_result gltf_buffer_data_size(meso_context *ctx, const char *path, co
         *out_size = (double)strlen(text);
         return MESO_OK;
     }
-    if (!uri_is_beside(text))
+    if (!geom_name_is_beside(text))
         return meso_log_error(ctx, MESO_ERROR_FORMAT,
                               "%s: buffers[%d].uri: must name a file beside the glTF (no "
                               "absolute path, no '..', no scheme)",
                               path, index);
     char full[PATH_MAX];
-    if (!resolve_beside(path, text, full, sizeof(full)))
+    if (!geom_resolve_beside(path, text, full, sizeof(full)))
         return meso_log_error(ctx, MESO_ERROR_FORMAT, "%s: buffers[%d].uri: too long", path, index);
     struct stat st;
     if (stat(full, &st) != 0)
@@ -376,7 +425,9 @@ static bool ends_with_ignoring_case(const char *text, const char *suffix) {
 
 /* ---- Entry -------------------------------------------------------------------------------- */
 
-meso_result geom_screen_mesh_file(meso_context *ctx, const char *path, FILE *file) {
+meso_result geom_screen_mesh_file(meso_context *ctx, const char *path, FILE *file,
+                                  geom_mesh_kind *out_kind) {
+    *out_kind = GEOM_MESH_OTHER;
     struct stat st;
     if (fstat(fileno(file), &st) != 0)
         return meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot stat: %s", path, strerror(errno));
@@ -391,12 +442,16 @@ meso_result geom_screen_mesh_file(meso_context *ctx, const char *path, FILE *fil
                   tolower((unsigned char)buffer[1]) == 'l' &&
                   tolower((unsigned char)buffer[2]) == 'y';
     if (is_ply) {
-        r = screen_ply(ctx, path, buffer, file_size);
+        *out_kind = GEOM_MESH_PLY;
+        r = screen_ply(ctx, path, buffer, file_size, file);
     } else if (size >= 4 && !memcmp(buffer, "glTF", 4)) {
+        *out_kind = GEOM_MESH_GLTF;
         r = screen_glb(ctx, path, file, file_size);
     } else if (ends_with_ignoring_case(path, ".obj")) {
+        *out_kind = GEOM_MESH_OBJ;
         r = screen_obj(ctx, path, file);
     } else if (ends_with_ignoring_case(path, ".gltf")) {
+        *out_kind = GEOM_MESH_GLTF;
         if (file_size > GLTF_JSON_MAX) {
             r = meso_log_error(ctx, MESO_ERROR_LIMIT, "%s: glTF JSON over %u bytes", path,
                                GLTF_JSON_MAX);

@@ -650,7 +650,10 @@ static meso_result create_mesh(const scene_parser *p, const cJSON *obj, const sc
     /* accounted before it is built: a mesh over the budget is never allocated */
     if ((r = scene_account_memory(p, key, meso_shape_memory_estimate(&desc))) != MESO_OK) return r;
     r = meso_mesh_create_shape(p->ctx, &desc, out_mesh);
-    return r == MESO_OK ? r : scene_relog_as_format(p, key, r);
+    /* the generator names the shape ("cylinder: ... vertices exceed the limit"): said at the
+     * object's key of the scene file */
+    if (r == MESO_ERROR_INVALID_ARGUMENT) return scene_relog_as_format(p, key, r);
+    return r == MESO_OK ? r : scene_relog_at_key(p, key, r);
 }
 
 /* Scaled texture coordinates are limited so that u times the largest texture side (16384 =

@@ -65,6 +65,74 @@ static void test_gltf_buffers_must_be_files_beside_the_gltf(void **state) {
     expect_refused("info " BAD "gltf-uri-device.gltf", "gltf-uri-device.gltf: buffers[0].uri");
 }
 
+/* An OBJ's material libraries are read by meso's own MTL reader, never by assimp's parser
+ * (which crashed on a statement before the first newmtl and leaked on a one-byte file), and
+ * only from beside the mesh, as glTF buffers; an ASCII PLY value that is not a number is
+ * refused before assimp (whose parser leaked on it). */
+static void test_obj_materials_are_read_by_meso_from_beside_the_mesh_only(void **state) {
+    (void)state;
+    char dir[1100], arguments[4096];
+    snprintf(dir, sizeof dir, "%s/mtl", test_temp_dir());
+    mkdir(dir, 0755);
+    char sub[1200];
+    snprintf(sub, sizeof sub, "%s/sub", dir);
+    mkdir(sub, 0755);
+    static const char geometry[] = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n"
+                                   "usemtl m\nf 1/1 2/2 3/3\n";
+    char text[1024];
+    snprintf(text, sizeof text, "mtllib a.mtl\n%s", geometry);
+    const char *obj = test_path(dir, "a.obj");
+    test_write_file(obj, text, strlen(text));
+    const char *mtl = test_path(dir, "a.mtl");
+    const char *err = NULL;
+    /* a texture before any newmtl: a segfault inside assimp */
+    test_write_file(mtl, "map_Kd x.png\n", 13);
+    snprintf(arguments, sizeof arguments, "info %s", obj);
+    int status = test_run_meso(arguments, &err);
+    if (status != 0) fail_msg("map_Kd before newmtl: status %d: %s", status, err);
+    test_write_file(mtl, "K", 1);
+    assert_int_equal(test_run_meso(arguments, NULL), 0);
+    /* a library below the mesh's folder is read */
+    snprintf(text, sizeof text, "mtllib sub/b.mtl\n%s", geometry);
+    obj = test_path(dir, "b.obj");
+    test_write_file(obj, text, strlen(text));
+    const char *library = "newmtl m\nKd 0.5 0.25 1\nmap_Kd -s 2 2 1 bricks.png\n";
+    test_write_file(test_path(sub, "b.mtl"), library, strlen(library));
+    char out[1300];
+    snprintf(out, sizeof out, "%s/info.txt", dir);
+    snprintf(arguments, sizeof arguments, "%s info %s > %s", MESO_PROGRAM, obj, out);
+    assert_int_equal(system(arguments), 0);
+    size_t size = 0;
+    char *said = test_read_file(out, &size);
+    if (!strstr(said, "base colour 0.5 0.25 1") || !strstr(said, "colour texture bricks.png"))
+        fail_msg("meso info said: %s", said);
+    free(said);
+    /* a missing library: "<the OBJ's name>.mtl" is read instead, as assimp did */
+    snprintf(text, sizeof text, "mtllib missing.mtl\n%s", geometry);
+    obj = test_path(dir, "d.obj");
+    test_write_file(obj, text, strlen(text));
+    library = "newmtl m\nKd 0.125 0.25 0.5\n";
+    test_write_file(test_path(dir, "d.mtl"), library, strlen(library));
+    snprintf(arguments, sizeof arguments, "%s info %s > %s", MESO_PROGRAM, obj, out);
+    assert_int_equal(system(arguments), 0);
+    said = test_read_file(out, &size);
+    if (!strstr(said, "base colour 0.125 0.25 0.5")) fail_msg("meso info said: %s", said);
+    free(said);
+    /* an absolute path or ".." is refused, like a glTF buffer's */
+    snprintf(text, sizeof text, "mtllib %s\n%s", test_path(sub, "b.mtl"), geometry);
+    obj = test_path(dir, "c.obj");
+    test_write_file(obj, text, strlen(text));
+    snprintf(arguments, sizeof arguments, "info %s", obj);
+    expect_refused(arguments, "c.obj: mtllib /");
+    expect_refused(arguments, "must name a file beside the mesh");
+    snprintf(text, sizeof text, "mtllib ../mtl/a.mtl\n%s", geometry);
+    test_write_file(obj, text, strlen(text));
+    expect_refused(arguments, "c.obj: mtllib ../mtl/a.mtl: must name a file beside the mesh");
+    expect_refused("info " BAD "obj-mtllib-nul.obj", "obj-mtllib-nul.obj: line 1: mtllib: a NUL");
+    expect_refused("info " BAD "ply-ascii-non-numeric.ply",
+                   "ply-ascii-non-numeric.ply: PLY data line 2: a value that is not a number");
+}
+
 static void test_a_bad_output_fails_before_any_work_and_writes_nothing(void **state) {
     (void)state;
     const char *dir = test_temp_dir();
@@ -96,6 +164,54 @@ static void test_a_bad_output_fails_before_any_work_and_writes_nothing(void **st
     assert_int_equal(test_run_meso(arguments, NULL), 0);
     assert_true(exists(diff));
     assert_false(has_temporaries(dir));
+}
+
+/* A legal name of 252 bytes (NAME_MAX is 255) is written: the temporary name beside it is
+ * short, never the destination's name plus a suffix. A name over the limit is refused before
+ * any work, not after it. */
+static void test_long_output_names_are_written_or_refused_before_the_work(void **state) {
+    (void)state;
+    char name[300], arguments[4096];
+    memset(name, 'a', 248);
+    memcpy(name + 248, ".png", 5);
+    const char *out = test_path(test_temp_dir(), name);
+    unlink(out);
+    snprintf(arguments, sizeof arguments, "render " SCENE " -o %s --size 16x16 --quiet", out);
+    const char *err = NULL;
+    int status = test_run_meso(arguments, &err);
+    if (status != 0) fail_msg("a 252-byte name: status %d: %s", status, err);
+    assert_true(exists(out));
+    unlink(out);
+    memset(name, 'b', 260);
+    memcpy(name + 260, ".png", 5);
+    snprintf(arguments, sizeof arguments,
+             "render " SCENE " -o %s --size 4096x4096 --samples 4 --technique reference",
+             test_path(test_temp_dir(), name));
+    double start = meso_time_seconds();
+    expect_refused(arguments, "File name too long");
+    assert_true(meso_time_seconds() - start < 5.0);
+}
+
+/* The success line escapes the output's name (a newline cannot make it two lines); a loop of
+ * symbolic links at -o is called a loop. */
+static void test_status_lines_escape_names_and_say_what_a_link_loop_is(void **state) {
+    (void)state;
+    const char *dir = test_temp_dir();
+    char arguments[4096];
+    snprintf(arguments, sizeof arguments, "render " SCENE " -o '%s/new\nline.png' --size 16x16",
+             dir);
+    const char *err = NULL;
+    assert_int_equal(test_run_meso(arguments, &err), 0);
+    size_t length = strlen(err);
+    if (length == 0 || memchr(err, '\n', length - 1) || !strstr(err, "new\\nline.png"))
+        fail_msg("want one line naming new\\nline.png, got: %s", err);
+    const char *a = test_path(dir, "loop_a.png"), *b = test_path(dir, "loop_b.png");
+    unlink(a);
+    unlink(b);
+    assert_int_equal(symlink("loop_b.png", a), 0);
+    assert_int_equal(symlink("loop_a.png", b), 0);
+    snprintf(arguments, sizeof arguments, "render " SCENE " -o %s --size 16x16", a);
+    expect_refused(arguments, "loop_a.png: Too many levels of symbolic links");
 }
 
 static void test_outputs_are_regular_files_that_keep_their_mode(void **state) {
@@ -282,6 +398,19 @@ static void test_errors_are_one_escaped_line_naming_the_file(void **state) {
              "render " MESO_SOURCE_DIR "/examples/weave-torus.json -o %s --technique bump",
              test_path(test_temp_dir(), "never.png"));
     expect_refused(arguments, "weave-torus.json: torus: technique 'bump' does not accept");
+    /* an object named like a file does not stand in for the scene */
+    scene =
+        write_scene("named.json", "{\"name\": \"x.json\", \"shape\": \"torus\", \"mesostructure\":"
+                                  " {\"solid\": {\"procedural\": \"weave\"}, \"depth\": 0.1}}");
+    snprintf(arguments, sizeof arguments, "render %s -o %s --technique bump", scene,
+             test_path(test_temp_dir(), "never.png"));
+    expect_refused(arguments, "named.json: x.json: technique 'bump' does not accept");
+    /* a shape over the mesh limits is said at the object's key of the scene file */
+    scene = write_scene("long_cylinder.json",
+                        "{\"shape\": \"cylinder\", \"segments\": 4096, \"height\": 30}");
+    snprintf(arguments, sizeof arguments, "info %s --memory-limit 64G", scene);
+    expect_refused(arguments,
+                   "long_cylinder.json: objects[0]: cylinder: 133545812 vertices exceed");
 }
 
 static void test_non_standard_json_numbers_are_refused_with_the_key_path(void **state) {
@@ -325,15 +454,18 @@ static void test_every_kept_bad_input_is_refused(void **state) {
         count++;
     }
     closedir(d);
-    assert_true(count >= 16);
+    assert_true(count >= 20);
 }
 
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_meshes_declaring_more_than_they_hold_are_refused),
         cmocka_unit_test(test_gltf_buffers_must_be_files_beside_the_gltf),
+        cmocka_unit_test(test_obj_materials_are_read_by_meso_from_beside_the_mesh_only),
         cmocka_unit_test(test_a_bad_output_fails_before_any_work_and_writes_nothing),
         cmocka_unit_test(test_outputs_are_regular_files_that_keep_their_mode),
+        cmocka_unit_test(test_long_output_names_are_written_or_refused_before_the_work),
+        cmocka_unit_test(test_status_lines_escape_names_and_say_what_a_link_loop_is),
         cmocka_unit_test(test_a_fifo_as_input_is_refused_without_blocking),
         cmocka_unit_test(test_killed_renders_leave_no_temporary_and_no_partial_file),
         cmocka_unit_test(test_jobs_over_the_memory_budget_are_refused_before_allocating),

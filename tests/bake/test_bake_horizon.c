@@ -129,6 +129,54 @@ static void test_bake_keeps_to_the_memory_budget(void **state) {
     meso_context_destroy(tiny);
 }
 
+typedef struct said {
+    char warning[512];
+    int progress_calls;
+} said;
+
+static void keep_warning(void *user, meso_log_level level, const char *message) {
+    said *s = user;
+    if (level == MESO_LOG_WARNING && !s->warning[0])
+        snprintf(s->warning, sizeof s->warning, "%s", message);
+}
+
+static bool cancel_at_once(void *user, const char *label, double fraction) {
+    (void)label, (void)fraction;
+    ((said *)user)->progress_calls++;
+    return true;
+}
+
+/* A bake of minutes (2048^2 texels, 64 azimuths to 4096 texels) is said before it starts, with
+ * its estimate, and reports progress (here cancelled at the first report). */
+static void test_a_long_bake_is_announced_with_its_estimate(void **state) {
+    (void)state;
+    meso_horizon_desc long_bake = {.num_azimuths = 64, .max_distance = 4096.0f};
+    double seconds = meso_horizon_bake_seconds_estimate(2048, 2048, &long_bake, 2);
+    assert_true(seconds > 60.0 && seconds < 1000.0);
+    /* the estimate grows with the work: 4 times the texels, 4 times the time */
+    assert_true(fabs(meso_horizon_bake_seconds_estimate(1024, 1024, &long_bake, 2) * 4.0 -
+                     seconds) <= 1e-6 * seconds);
+    said s = {{0}, 0};
+    meso_context_desc desc = {.num_threads = 1,
+                              .log = keep_warning,
+                              .log_user = &s,
+                              .progress = MESO_PROGRESS_NEVER,
+                              .on_progress = cancel_at_once,
+                              .progress_user = &s};
+    meso_context *ctx = NULL;
+    assert_int_equal(meso_context_create(&desc, &ctx), MESO_OK);
+    meso_heightfield *hf = make_field(ctx, 2048, 2048, 0.0f);
+    meso_horizon_map *map = NULL;
+    assert_int_equal(meso_bake_horizon(ctx, hf, &long_bake, &map), MESO_ERROR_CANCELLED);
+    assert_null(map);
+    if (!strstr(s.warning, "horizon map: 2048 x 2048 texels x 64 azimuths to 4096 texels: about") ||
+        !strstr(s.warning, "s of baking on 1 thread (--progress shows it)"))
+        fail_msg("warning: '%s'", s.warning);
+    assert_true(s.progress_calls >= 1);
+    meso_heightfield_destroy(hf);
+    meso_context_destroy(ctx);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_flat_field_has_horizon_zero_everywhere),
@@ -136,6 +184,7 @@ int main(void) {
         cmocka_unit_test(test_bad_desc_fields_are_named),
         cmocka_unit_test(test_one_and_two_threads_bake_the_same_bytes),
         cmocka_unit_test(test_bake_keeps_to_the_memory_budget),
+        cmocka_unit_test(test_a_long_bake_is_announced_with_its_estimate),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -207,9 +207,25 @@ static void test_counts_over_the_limit_are_refused_before_allocating(void **stat
     meso_context_destroy(ctx);
 }
 
+/* assimp's error text may quote lines of the file: only its first line is kept, cut short. */
+static void test_assimp_reasons_are_one_line_cut_short(void **state) {
+    (void)state;
+    char out[32];
+    geom_import_reason("OBJ: bad line\nmeso: forged second line", out, sizeof out);
+    assert_string_equal(out, "OBJ: bad line ...");
+    geom_import_reason("a reason far longer than the thirty-two bytes given", out, sizeof out);
+    assert_string_equal(out, "a reason far longer than th ...");
+    assert_int_equal(strlen(out), sizeof out - 1);
+    geom_import_reason(NULL, out, sizeof out);
+    assert_string_equal(out, "unknown format");
+    geom_import_reason("short\r\n", out, sizeof out);
+    assert_string_equal(out, "short");
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_obj_with_uvs_loads_as_triangles_with_uvs),
+        cmocka_unit_test(test_assimp_reasons_are_one_line_cut_short),
         cmocka_unit_test(test_obj_without_uvs_loads_but_cannot_carry_a_mesostructure),
         cmocka_unit_test(test_obj_with_nan_coordinate_is_rejected_naming_the_file),
         cmocka_unit_test(test_degenerate_triangle_is_dropped_with_one_warning),

@@ -4,6 +4,7 @@
 #include "displace_common.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
@@ -210,8 +211,25 @@ typedef struct tess_memo_slot {
     uint32_t tag;
 } tess_memo_slot;
 
+/* What one output triangle of a run costs at most, all told: its share of the output's
+ * vertices and indices in the job and again in the joined mesh, of the record kept for the
+ * replay, of the memo and of the traversal's nodes (about half a vertex each). A run stops
+ * with MESO_ERROR_LIMIT once its triangles would need more than the memory limit: levels and
+ * thresholds can ask for 4^max_level triangles a base triangle (8.6 G on a 64-segment plane at
+ * level 10), far more than the machine holds. Measured peak of such a refused run: within the
+ * limit (docs/robustness.md). */
+#define TESS_BYTES_PER_TRIANGLE 512
+/* Jobs add their triangles to the run's shared count in blocks of this many, as each block is
+ * complete (an atomic add per triangle would bounce a cache line between the workers). The
+ * count lags the truth by less than a block a job (256 jobs: 65,536 triangles, 32 MB), and its
+ * final value does not depend on the order, so whether a run exceeds the bound does not
+ * depend on the threads. */
+#define TESS_COUNT_STEP 256
+
 typedef struct tess_job {
-    size_t first, count; /* base triangles */
+    size_t first, count;          /* base triangles */
+    atomic_size_t *run_triangles; /* the run's shared count (steps of TESS_COUNT_STEP) */
+    size_t max_triangles;         /* the run's bound */
     size_t num_vertices, cap_vertices, num_triangles, cap_triangles;
     meso_vec3 *positions, *normals, *tangents, *bitangents;
     meso_vec2 *uvs;
@@ -238,6 +256,8 @@ struct displace_tessellator {
     int num_threads;
     tess_scratch *scratch;
     size_t num_jobs;
+    atomic_size_t run_triangles; /* output triangles of the run so far (tess_job) */
+    size_t max_triangles;
     tess_job *jobs;
     displace_vertex *corners; /* the base mesh's vertices, displaced, vertex_static applied */
     bool corners_ready;
@@ -411,7 +431,10 @@ static void *record_room(tess_scratch *s, void *log, size_t *cap, size_t count, 
 }
 
 static bool emit_triangle(tess_scratch *s, tess_job *job, const tess_entry *e) {
-    if (job->num_triangles >= MESO_MESH_MAX_TRIANGLES) {
+    if ((job->num_triangles + 1) % TESS_COUNT_STEP == 0 &&
+        atomic_fetch_add_explicit(job->run_triangles, TESS_COUNT_STEP, memory_order_relaxed) +
+                TESS_COUNT_STEP >
+            job->max_triangles) {
         job->result = MESO_ERROR_LIMIT;
         return false;
     }
@@ -988,6 +1011,8 @@ static void run_job(void *user, size_t index, int thread_index) {
      * threads slower than one. */
     tess_job job = t->jobs[index];
     tess_scratch s = t->scratch[thread_index];
+    job.run_triangles = &t->run_triangles;
+    job.max_triangles = t->max_triangles;
     job.num_vertices = job.num_triangles = 0;
     memset(&job.stats, 0, sizeof(job.stats));
     job.result = MESO_OK;
@@ -1060,6 +1085,10 @@ meso_result displace_tessellator_run(meso_context *ctx, displace_tessellator *t,
         }
         t->corners_ready = true;
     }
+    uint64_t affordable = meso_context_memory_limit(ctx) / TESS_BYTES_PER_TRIANGLE;
+    t->max_triangles =
+        affordable < MESO_MESH_MAX_TRIANGLES ? (size_t)affordable : (size_t)MESO_MESH_MAX_TRIANGLES;
+    atomic_store(&t->run_triangles, 0);
     run_args args = {t};
     meso_parallel_for(ctx, t->num_jobs, run_job, &args);
     t->tests = NULL;
@@ -1068,8 +1097,17 @@ meso_result displace_tessellator_run(meso_context *ctx, displace_tessellator *t,
     for (size_t j = 0; j < t->num_jobs; j++) { /* fixed order: deterministic sums */
         tess_job *job = &t->jobs[j];
         if (job->result == MESO_ERROR_LIMIT)
-            return meso_log_error(ctx, MESO_ERROR_LIMIT, "%s: tessellation: more than %u triangles",
-                                  t->surface->object->name, MESO_MESH_MAX_TRIANGLES);
+            return t->max_triangles < MESO_MESH_MAX_TRIANGLES
+                       ? meso_log_error(ctx, MESO_ERROR_LIMIT,
+                                        "%s: tessellation: more than %zu triangles, which need "
+                                        "more memory than the limit of %.1f MiB "
+                                        "(--memory-limit; lower max_level or raise the "
+                                        "thresholds)",
+                                        t->surface->object->name, t->max_triangles,
+                                        (double)meso_context_memory_limit(ctx) / 1048576.0)
+                       : meso_log_error(ctx, MESO_ERROR_LIMIT,
+                                        "%s: tessellation: more than %u triangles",
+                                        t->surface->object->name, MESO_MESH_MAX_TRIANGLES);
         if (job->result != MESO_OK)
             return meso_log_error(ctx, job->result, "%s: tessellation output",
                                   t->surface->object->name);
@@ -1196,6 +1234,9 @@ meso_result displace_shadows_draw_light(meso_context *ctx, displace_shadows *sha
                                         const displace_light_map *map) {
     size_t size = (size_t)shadows->options.size, count = (size_t)scene->num_lights;
     if (shadows->depth_lights < scene->num_lights) { /* first use, or the scene gained lights */
+        /* lights x size^2 floats: 16 lights at 8192^2 are 4.3 GB, checked before allocating */
+        meso_result r = meso_memory_check(ctx, "shadow maps", count * size * size * sizeof(float));
+        if (r != MESO_OK) return r;
         float *grown = realloc(shadows->depth, count * size * size * sizeof(float));
         if (!grown)
             return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "shadow maps: %zu x %zu x %zu",
