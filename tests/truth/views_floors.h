@@ -32,10 +32,10 @@ typedef struct views_limit {
 
 #define OPEN_BORDER                                                                                \
     "open border: no skirt from the displaced surface down the shell's cut, so the truth seen "    \
-    "through the cut (a tube's rim, the teapot's lid) is background; and a sphere's pole, "       \
+    "through the cut (a tube's rim, the teapot's lid) is background; and a sphere's pole, "        \
     "whose duplicated vertices take different heights (docs/techniques/displacement.md)"
 #define LAYERS_CURVED                                                                              \
-    "a curved or see-through solid: a ray through a gap of the near wall meets the far wall "       \
+    "a curved or see-through solid: a ray through a gap of the near wall meets the far wall "      \
     "in the tangent-plane search, off where the shell curves (docs/techniques/relief_layers.md)"
 #define GDM_SOLIDS                                                                                 \
     "a solid's thin parts: single pixels where the hit refinement misses a thread's or bar's "     \
