@@ -7,8 +7,8 @@
  *             neighbours covered) and its footprint (for per-pixel techniques the base mesh,
  *             less a band of 2 pixels inside its outline) where the reference covers the
  *             whole 3 x 3 around them;
- *   specks:   pixels that differ by more than SPECK_THRESHOLD (sRGB luma) from
- *             all 8 neighbours and from the reference, where the reference is smooth;
+ *   specks:   pixels inside the drawing that differ by more than SPECK_THRESHOLD (sRGB luma)
+ *             from all 8 neighbours and from the reference, where the reference is smooth;
  *   floors:   covered PSNR and coverage IoU above the technique's floor (views_floors.h).
  *
  *   test_views [--views K] [--size N] [--seed S] [--examples a,b] [--techniques a,b]
@@ -218,9 +218,11 @@ static long count_pinholes(const frame_images *t, const frame_images *r,
     return count;
 }
 
-/* A speck: a covered pixel where the reference is smooth (its 3 x 3 within SPECK_SMOOTH of
- * its centre, all covered) but the technique's pixel lies farther than SPECK_THRESHOLD from
- * the reference's and from each of its own 8 neighbours: a dark dot on a lit wall. Where the
+/* A speck: a pixel inside the technique's drawing (its 3 x 3 covered) where the reference is
+ * smooth (its 3 x 3 within SPECK_SMOOTH of its centre, all covered) but the technique's pixel
+ * lies farther than SPECK_THRESHOLD from the reference's and from each of its own 8
+ * neighbours: a dark dot on a lit wall. A lone covered pixel at an outline is coverage, which
+ * the IoU measures. Where the
  * reference itself varies from pixel to pixel -- point-sampled texture detail, mortar lines,
  * highlights on minified bumps -- a pixel that differs is aliasing of the truth's own detail
  * (docs/techniques.md), not a speck. */
@@ -237,7 +239,7 @@ static long count_specks(const frame_images *t, const frame_images *r, int w, in
             for (int dy = -1; dy <= 1 && alone; dy++)
                 for (int dx = -1; dx <= 1 && alone; dx++) {
                     size_t q = (size_t)(y + dy) * (size_t)w + (size_t)(x + dx);
-                    alone = covered(r->coverage, q) &&
+                    alone = covered(r->coverage, q) && covered(t->coverage, q) &&
                             pixel_distance(r->color, q, r->color, p) <= SPECK_SMOOTH &&
                             (q == p || pixel_distance(t->color, p, t->color, q) > SPECK_THRESHOLD);
                 }
