@@ -44,6 +44,16 @@ typedef struct views_limit {
     "no self-shadows: a texel facing the light inside the truth's shadow (bump mapping and "       \
     "parallax mapping as published)"
 
+#define OFF_BOX_BORDER                                                                             \
+    "an open border off the UV box (the teapot's lid rim): the per-pixel search does not draw "    \
+    "the shell's side seen through the gap (docs/techniques/relief.md, Open borders)"
+#define POLE                                                                                       \
+    "a sphere's pole, where the map's texels shrink below a pixel: a lone lit bump top where "     \
+    "the truth's pixel is in shadow (point sampling)"
+#define HORIZON_AZIMUTHS                                                                           \
+    "horizon maps keep the horizon in a few azimuths: a texel lit where the truth's is shadowed "  \
+    "(Max 1988; Sloan & Cohen 2000)"
+
 static const views_limit views_limits[] = {
     {"bark-cylinder", "displacement", OPEN_BORDER},
     {"bark-cylinder", "tessellation", OPEN_BORDER},
@@ -65,6 +75,18 @@ static const views_limit views_limits[] = {
     {"weave-torus", "gdm", GDM_SOLIDS},
     {"bricks-teapot", "bump", NO_SHADOWS},
     {"bricks-teapot", "parallax", NO_SHADOWS},
+    {"bricks-plane", "horizon", HORIZON_AZIMUTHS},
+    {"bricks-teapot", "horizon", HORIZON_AZIMUTHS},
+    {"bumps-sphere", "horizon", HORIZON_AZIMUTHS},
+    {"bricks-teapot", "relief", OFF_BOX_BORDER},
+    {"bricks-teapot", "relief_exact", OFF_BOX_BORDER},
+    {"bricks-teapot", "relief_layers", OFF_BOX_BORDER},
+    {"bricks-teapot", "vdm", OFF_BOX_BORDER},
+    {"bumps-sphere", "relief", POLE},
+    {"bumps-sphere", "relief_exact", POLE},
+    {"bumps-sphere", "relief_layers", POLE},
+    {"bumps-sphere", "vdm", POLE},
+    {"chainmail-plane", "gdm", GDM_SOLIDS},
 };
 
 static inline views_floor views_floor_of(const char *example, const char *technique) {
