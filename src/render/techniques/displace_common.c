@@ -980,7 +980,10 @@ static bool replay_traversal(const displace_tessellator *t, tess_scratch *s, tes
 static bool tessellate_triangle(const displace_tessellator *t, tess_scratch *s, tess_job *job,
                                 size_t triangle) {
     tess_record *r = job->records ? &job->records[triangle - job->first] : NULL;
-    if (r && r->valid && replay_traversal(t, s, job, r)) return true;
+    if (r && r->valid && replay_traversal(t, s, job, r)) {
+        job->stats.replayed++;
+        return true;
+    }
     size_t v0 = job->num_vertices, t0 = job->num_triangles, memo_used = job->memo_used;
     uint64_t counters[DISPLACE_NUM_COUNTERS], grid_limited = job->stats.grid_limited;
     memcpy(counters, job->stats.counters, sizeof(counters));
@@ -1118,6 +1121,7 @@ meso_result displace_tessellator_run(meso_context *ctx, displace_tessellator *t,
         for (int d = 0; d < DISPLACE_MAX_DEPTH; d++) stats.per_depth[d] += job->stats.per_depth[d];
         for (int c = 0; c < DISPLACE_NUM_COUNTERS; c++) stats.counters[c] += job->stats.counters[c];
         stats.grid_limited += job->stats.grid_limited;
+        stats.replayed += job->stats.replayed;
     }
     if (triangles > MESO_MESH_MAX_TRIANGLES || vertices > MESO_MESH_MAX_VERTICES)
         return meso_log_error(ctx, MESO_ERROR_LIMIT,
