@@ -1155,13 +1155,21 @@ static meso_mat4 ortho(float left, float right, float bottom, float top, float z
     return r;
 }
 
+/* fminf and fmaxf as x86-64's C library computes them (the MINSS / MAXSS result, or the operand
+ * that is not a NaN), without a call a coordinate: the bounds are taken over every vertex of
+ * the camera's mesh each time a moving camera redraws the map. x is never a NaN here. */
+static inline float bound_min(float x, float y) { return x < y || y != y ? x : y; }
+static inline float bound_max(float x, float y) { return x > y || y != y ? x : y; }
+
 static void mesh_bounds(const meso_mesh *mesh, meso_vec3 *lo, meso_vec3 *hi) {
     *lo = (meso_vec3){INFINITY, INFINITY, INFINITY};
     *hi = (meso_vec3){-INFINITY, -INFINITY, -INFINITY};
     for (size_t i = 0; i < mesh->num_vertices; i++) {
         meso_vec3 p = mesh->positions[i];
-        lo->x = fminf(lo->x, p.x), lo->y = fminf(lo->y, p.y), lo->z = fminf(lo->z, p.z);
-        hi->x = fmaxf(hi->x, p.x), hi->y = fmaxf(hi->y, p.y), hi->z = fmaxf(hi->z, p.z);
+        lo->x = bound_min(lo->x, p.x), lo->y = bound_min(lo->y, p.y);
+        lo->z = bound_min(lo->z, p.z);
+        hi->x = bound_max(hi->x, p.x), hi->y = bound_max(hi->y, p.y);
+        hi->z = bound_max(hi->z, p.z);
     }
 }
 
