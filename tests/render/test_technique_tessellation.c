@@ -380,6 +380,118 @@ static void test_tessellation_block_shading_matches_per_fragment(void **state) {
     fixture_check_block_shading(technique, "max_level");
 }
 
+/* ---- A moving camera: frames of an orbit against fresh renderers ------------------------- */
+
+/* The info lines of a context, the last tessellation line kept: "... base triangles replayed R
+ * of B". */
+typedef struct replay_log {
+    unsigned long long replayed, base;
+    int lines;
+} replay_log;
+
+static void capture_replays(void *user, meso_log_level level, const char *message) {
+    replay_log *log = user;
+    const char *at = strstr(message, "base triangles replayed ");
+    if (level != MESO_LOG_INFO || !at) return;
+    if (sscanf(at, "base triangles replayed %llu of %llu", &log->replayed, &log->base) == 2)
+        log->lines++;
+}
+
+static meso_scene *orbit_scene(meso_context *ctx) {
+    /* the teapot in bricks (examples/bricks-teapot.json, smaller): open borders, seams and
+     * a self-shadowing surface under the default options (shadow map of the camera's mesh) */
+    const char *json =
+        "{\"image\": {\"width\": 96, \"height\": 96},"
+        " \"camera\": {\"eye\": [0, 1.8, 3.6], \"target\": [0, 0.1, 0], \"fov_y_deg\": 40},"
+        " \"lights\": [{\"type\": \"directional\", \"direction\": [-0.6, 0.7, 0.5]}],"
+        " \"objects\": [{\"shape\": \"teapot\", \"uv_scale\": [2, 2],"
+        "   \"material\": {\"color_map\": \"mesostructure\"},"
+        "   \"mesostructure\": {\"height_map\": {\"procedural\": \"bricks\","
+        "                       \"resolution\": 128}, \"depth\": 0.05},"
+        "   \"technique\": \"tessellation\","
+        "   \"technique_options\": {\"shadow_map_size\": 512}}]}";
+    meso_scene *scene = NULL;
+    meso_result r = meso_scene_parse(ctx, json, "orbit.json", ".", &scene);
+    if (r != MESO_OK) fail_msg("parse: %s", meso_context_last_error(ctx));
+    return scene;
+}
+
+/* The eye turned by `turns` of a turn about the vertical axis through the target (meso bench
+ * --orbit turns the camera so, frame after frame). */
+static meso_vec3 orbit_eye(meso_vec3 eye, meso_vec3 target, float turns) {
+    float c = cosf(2.0f * MESO_PI * turns), s = sinf(2.0f * MESO_PI * turns);
+    meso_vec3 d = meso_vec3_sub(eye, target);
+    return meso_vec3_add(target, (meso_vec3){c * d.x + s * d.z, d.y, -s * d.x + c * d.z});
+}
+
+static meso_framebuffer *render_frame(meso_context *ctx, meso_renderer *renderer,
+                                      const meso_scene *scene) {
+    meso_framebuffer *fb = NULL;
+    assert_int_equal(meso_framebuffer_create(ctx, scene->width, scene->height, &fb), MESO_OK);
+    meso_result r = meso_renderer_render(renderer, fb);
+    if (r != MESO_OK) fail_msg("render: %s", meso_context_last_error(ctx));
+    return fb;
+}
+
+/* One renderer drawing frame after frame of an orbit keeps the tessellator's traversals and
+ * replays those whose vetoes still answer alike, and redraws the shadow map from each frame's
+ * mesh: every frame must be, byte for byte, the frame of a renderer made for that view alone
+ * (2 threads against 1). Steps of 1/120 and 1/30 of a turn, then the camera standing still:
+ * a still camera replays every base triangle, a moving one some but not all. */
+static void test_tessellation_orbit_frames_equal_fresh_renders(void **state) {
+    (void)state;
+    replay_log log = {0};
+    meso_context *kept_ctx = NULL;
+    meso_context_desc desc = {.num_threads = 2,
+                              .log = capture_replays,
+                              .log_user = &log,
+                              .progress = MESO_PROGRESS_NEVER};
+    assert_int_equal(meso_context_create(&desc, &kept_ctx), MESO_OK);
+    meso_context *fresh_ctx = test_context(1);
+    meso_scene *kept_scene = orbit_scene(kept_ctx);
+    meso_scene *fresh_scene = orbit_scene(fresh_ctx);
+    const meso_camera home = kept_scene->camera;
+    meso_renderer *kept = NULL;
+    assert_int_equal(meso_renderer_create(kept_ctx, kept_scene, &(meso_render_desc){0}, &kept),
+                     MESO_OK);
+    /* frame k at turns[k]: small steps, larger ones, then standing still */
+    const float turns[] = {0.0f,       1.0f / 120,  2.0f / 120,  3.0f / 120,  4.0f / 120,
+                           8.0f / 120, 12.0f / 120, 16.0f / 120, 16.0f / 120, 16.0f / 120};
+    const int frames = (int)(sizeof(turns) / sizeof(turns[0]));
+    int moving_replays = 0;
+    for (int k = 0; k < frames; k++) {
+        meso_camera camera = home;
+        camera.eye = orbit_eye(home.eye, home.target, turns[k]);
+        kept_scene->camera = camera;
+        fresh_scene->camera = camera;
+        int lines = log.lines;
+        meso_framebuffer *a = render_frame(kept_ctx, kept, kept_scene);
+        assert_int_equal(log.lines, lines + 1);
+        meso_renderer *fresh = NULL;
+        assert_int_equal(
+            meso_renderer_create(fresh_ctx, fresh_scene, &(meso_render_desc){0}, &fresh), MESO_OK);
+        meso_framebuffer *b = render_frame(fresh_ctx, fresh, fresh_scene);
+        size_t pixels = (size_t)a->width * (size_t)a->height;
+        assert_memory_equal(a->color, b->color, pixels * 3 * sizeof(float));
+        assert_memory_equal(a->depth, b->depth, pixels * sizeof(float));
+        bool still = k > 0 && turns[k] == turns[k - 1];
+        if (still) assert_int_equal(log.replayed, log.base);
+        if (k > 0 && !still) {
+            assert_true(log.replayed < log.base);
+            moving_replays += log.replayed > 0;
+        }
+        meso_framebuffer_destroy(a);
+        meso_framebuffer_destroy(b);
+        meso_renderer_destroy(fresh);
+    }
+    assert_true(moving_replays > 0); /* small steps leave most of the far side as it was */
+    meso_renderer_destroy(kept);
+    meso_scene_destroy(kept_scene);
+    meso_scene_destroy(fresh_scene);
+    meso_context_destroy(kept_ctx);
+    meso_context_destroy(fresh_ctx);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_tessellation_sphere_has_no_cracks_for_every_test_combination),
@@ -395,6 +507,7 @@ int main(void) {
         cmocka_unit_test(test_tessellation_shades_a_lit_flat_surface_unshadowed),
         cmocka_unit_test(test_tessellation_shadows_follow_a_turned_light),
         cmocka_unit_test(test_tessellation_light_view_shadows_do_not_depend_on_the_camera),
+        cmocka_unit_test(test_tessellation_orbit_frames_equal_fresh_renders),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -980,7 +980,10 @@ static bool replay_traversal(const displace_tessellator *t, tess_scratch *s, tes
 static bool tessellate_triangle(const displace_tessellator *t, tess_scratch *s, tess_job *job,
                                 size_t triangle) {
     tess_record *r = job->records ? &job->records[triangle - job->first] : NULL;
-    if (r && r->valid && replay_traversal(t, s, job, r)) return true;
+    if (r && r->valid && replay_traversal(t, s, job, r)) {
+        job->stats.replayed++;
+        return true;
+    }
     size_t v0 = job->num_vertices, t0 = job->num_triangles, memo_used = job->memo_used;
     uint64_t counters[DISPLACE_NUM_COUNTERS], grid_limited = job->stats.grid_limited;
     memcpy(counters, job->stats.counters, sizeof(counters));
@@ -1118,6 +1121,7 @@ meso_result displace_tessellator_run(meso_context *ctx, displace_tessellator *t,
         for (int d = 0; d < DISPLACE_MAX_DEPTH; d++) stats.per_depth[d] += job->stats.per_depth[d];
         for (int c = 0; c < DISPLACE_NUM_COUNTERS; c++) stats.counters[c] += job->stats.counters[c];
         stats.grid_limited += job->stats.grid_limited;
+        stats.replayed += job->stats.replayed;
     }
     if (triangles > MESO_MESH_MAX_TRIANGLES || vertices > MESO_MESH_MAX_VERTICES)
         return meso_log_error(ctx, MESO_ERROR_LIMIT,
@@ -1151,13 +1155,21 @@ static meso_mat4 ortho(float left, float right, float bottom, float top, float z
     return r;
 }
 
+/* fminf and fmaxf as x86-64's C library computes them (the MINSS / MAXSS result, or the operand
+ * that is not a NaN), without a call a coordinate: the bounds are taken over every vertex of
+ * the camera's mesh each time a moving camera redraws the map. x is never a NaN here. */
+static inline float bound_min(float x, float y) { return x < y || y != y ? x : y; }
+static inline float bound_max(float x, float y) { return x > y || y != y ? x : y; }
+
 static void mesh_bounds(const meso_mesh *mesh, meso_vec3 *lo, meso_vec3 *hi) {
     *lo = (meso_vec3){INFINITY, INFINITY, INFINITY};
     *hi = (meso_vec3){-INFINITY, -INFINITY, -INFINITY};
     for (size_t i = 0; i < mesh->num_vertices; i++) {
         meso_vec3 p = mesh->positions[i];
-        lo->x = fminf(lo->x, p.x), lo->y = fminf(lo->y, p.y), lo->z = fminf(lo->z, p.z);
-        hi->x = fmaxf(hi->x, p.x), hi->y = fmaxf(hi->y, p.y), hi->z = fmaxf(hi->z, p.z);
+        lo->x = bound_min(lo->x, p.x), lo->y = bound_min(lo->y, p.y);
+        lo->z = bound_min(lo->z, p.z);
+        hi->x = bound_max(hi->x, p.x), hi->y = bound_max(hi->y, p.y);
+        hi->z = bound_max(hi->z, p.z);
     }
 }
 

@@ -204,6 +204,7 @@ typedef struct displace_tess_stats {
     uint64_t vertices;
     uint64_t per_depth[DISPLACE_MAX_DEPTH]; /* emitted triangles by recursion depth */
     uint64_t grid_limited;                  /* midpoints not on the grid (recursion limit) */
+    uint64_t replayed; /* base triangles whose last traversal was replayed (unchanged) */
     uint64_t counters[DISPLACE_NUM_COUNTERS];
 } displace_tess_stats;
 

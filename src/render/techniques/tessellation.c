@@ -393,13 +393,14 @@ static meso_result tessellation_geometry(meso_context *ctx, void *state, const m
         "%s: tessellation: %llu triangles (per level %s) in %.2f ms; edges %llu: "
         "limit test rejected %llu, view test rejected %llu, long edges split %llu, "
         "normal test proposed %llu, area test proposed %llu (of the rest), no detail %llu, "
-        "inserted %llu, recursion limit %llu",
+        "inserted %llu, recursion limit %llu; base triangles replayed %llu of %zu",
         s->surface.object->name, (unsigned long long)s->stats.triangles, levels,
         1e3 * (tessellated - start), (unsigned long long)c[COUNT_EDGES],
         (unsigned long long)c[COUNT_LIMIT_VETO], (unsigned long long)c[COUNT_VIEW_VETO],
         (unsigned long long)c[COUNT_SPAN_YES], (unsigned long long)c[COUNT_NORMAL_YES],
         (unsigned long long)c[COUNT_AREA_YES], (unsigned long long)c[COUNT_NO_DETAIL],
-        (unsigned long long)c[COUNT_INSERTED], (unsigned long long)s->stats.grid_limited);
+        (unsigned long long)c[COUNT_INSERTED], (unsigned long long)s->stats.grid_limited,
+        (unsigned long long)s->stats.replayed, s->surface.base->num_triangles);
     *out_mesh = s->mesh;
     return MESO_OK;
 }
