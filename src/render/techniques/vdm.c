@@ -69,6 +69,24 @@ static inline v8f load8h(const uint16_t *p) {
 static inline float sum8(v8f v) {
     return ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]));
 }
+/* sum8 of each of eight vectors, lane k holding v[k]'s: the same additions in the same order
+ * (AVX: horizontal adds pair neighbours as sum8 does), so the same bits. */
+static inline v8f sum8_each(const v8f v[8]) {
+#if defined(__AVX__)
+    __m256 h01 = _mm256_hadd_ps((__m256)v[0], (__m256)v[1]);
+    __m256 h23 = _mm256_hadd_ps((__m256)v[2], (__m256)v[3]);
+    __m256 h45 = _mm256_hadd_ps((__m256)v[4], (__m256)v[5]);
+    __m256 h67 = _mm256_hadd_ps((__m256)v[6], (__m256)v[7]);
+    /* lanes 0-3: (v0 + v1) + (v2 + v3) of v[0..3], lanes 4-7: (v4 + v5) + (v6 + v7) */
+    __m256 g0 = _mm256_hadd_ps(h01, h23), g1 = _mm256_hadd_ps(h45, h67);
+    __m256 lo = _mm256_permute2f128_ps(g0, g1, 0x20), hi = _mm256_permute2f128_ps(g0, g1, 0x31);
+    return (v8f)_mm256_add_ps(lo, hi);
+#else
+    v8f out;
+    for (int k = 0; k < 8; k++) out[k] = sum8(v[k]);
+    return out;
+#endif
+}
 
 typedef struct vdm_options {
     bool compressed, shadows, silhouettes, curvature, silhouette_filter, mipmap;
@@ -363,27 +381,42 @@ static inline float lookup(const vdm_state *s, meso_vec2 uv, float theta, float 
                cs.w[1] * load8(s->eigen_t + (size_t)cs.col[1] * lanes + 8 * j) +
                cs.w[2] * load8(s->eigen_t + (size_t)cs.col[2] * lanes + 8 * j) +
                cs.w[3] * load8(s->eigen_t + (size_t)cs.col[3] * lanes + 8 * j);
-    v8f w[MAX_CHUNKS] = {{0}}; /* W interpolated, for theta_MVM */
+    /* W interpolated, for theta_MVM between the texels (silhouette_filter 1) */
+    bool mix_w = out_max_theta && !nearest;
+    v8f w[MAX_CHUNKS] = {{0}};
     float wx[2] = {1.0f - a.x.w, a.x.w}, wy[2] = {1.0f - a.y.w, a.y.w};
     float wp[2] = {1.0f - a.phi.w, a.phi.w};
-    int ix[2] = {a.x.i0, a.x.i1}, iy[2] = {a.y.i0, a.y.i1}, ip[2] = {a.phi.i0, a.phi.i1};
-    float d = 0.0f;
+    /* a corner's row: ((iy lw + ix) num_phi + ip) lanes, as level_row */
+    size_t np = (size_t)v->num_phi, lws = (size_t)lw;
+    size_t rx[2] = {(size_t)a.x.i0, (size_t)a.x.i1};
+    size_t ry[2] = {(size_t)a.y.i0 * lws, (size_t)a.y.i1 * lws};
+    size_t rp[2] = {(size_t)a.phi.i0, (size_t)a.phi.i1};
+    /* the corners' weights wx wy wp, corner k at (x k & 1, y k >> 1 & 1, phi k >> 2) */
+    v8f cw = (v8f){wx[0], wx[1], wx[0], wx[1], wx[0], wx[1], wx[0], wx[1]} *
+             (v8f){wy[0], wy[0], wy[1], wy[1], wy[0], wy[0], wy[1], wy[1]} *
+             (v8f){wp[0], wp[0], wp[0], wp[0], wp[1], wp[1], wp[1], wp[1]};
+    /* corners of weight 0 are skipped unless their d is asked for */
+    int used = out_corners ? 0xff : v8_mask_bits(cw != 0.0f);
+    v8f dot[8];
+#pragma GCC unroll 8
     for (int corner = 0; corner < 8; corner++) {
-        float cw = wx[corner & 1] * wy[(corner >> 1) & 1] * wp[corner >> 2];
-        if (cw == 0.0f && !out_corners) continue;
-        const uint16_t *row = weights + level_row(lw, v->num_phi, ix[corner & 1],
-                                                  iy[(corner >> 1) & 1], ip[corner >> 2]) *
-                                            lanes;
-        v8f dot = {0};
+        dot[corner] = (v8f){0};
+        if (!(used >> corner & 1)) continue;
+        const uint16_t *row =
+            weights +
+            ((ry[(corner >> 1) & 1] + rx[corner & 1]) * np + rp[corner >> 2]) * (size_t)lanes;
         for (int j = 0; j < chunks; j++) {
             v8f wj = load8h(row + 8 * j);
-            dot += wj * e[j];
-            w[j] += cw * wj;
+            dot[corner] += wj * e[j];
+            if (mix_w) w[j] += cw[corner] * wj;
         }
-        float corner_d = sum8(dot);
-        if (out_corners) out_corners[corner] = corner_d;
-        d += cw * corner_d;
     }
+    /* every corner's sum8 at once */
+    v8f corner_d = sum8_each(dot), weighted = cw * corner_d;
+    float d = 0.0f;
+    for (int corner = 0; corner < 8; corner++)
+        if (used >> corner & 1) d += weighted[corner];
+    if (out_corners) memcpy(out_corners, &corner_d, sizeof corner_d);
     if (out_max_theta) {
         /* theta_MVM = sum_i W^i E^i_MVM(c), with W interpolated or of the nearest texel */
         if (nearest) {
