@@ -470,49 +470,102 @@ static inline bool sorted_corners(const float in[8], float out[8]) {
     return out[7] - out[0] >= 0.02f;
 }
 
+/* One side's texel pair of meso_heightfield_wrap_pair for eight lanes: the same indices. */
+static inline void wrap_pair8(meso_wrap wrap, v8i i, int n, v8i *out_i0, v8i *out_i1) {
+    v8i i1 = i + 1;
+    /* (unsigned)i < n - 1: inside, the pair i, i + 1 */
+    int outside = v8_mask_bits((i < 0) | (i >= v8i_splat(n - 1)));
+    if (outside && wrap == MESO_WRAP_CLAMP) {
+        v8i zero = v8i_splat(0), last = v8i_splat(n - 1);
+        i = (v8i)v8_select(i < zero, (v8f)zero, v8_select(i > last, (v8f)last, (v8f)i));
+        i1 = (v8i)v8_select(i1 < zero, (v8f)zero, v8_select(i1 > last, (v8f)last, (v8f)i1));
+    } else if (outside && (n & (n - 1)) == 0) { /* i % n, made non-negative, is i & (n - 1) */
+        i &= n - 1;
+        i1 = (i + 1) & (n - 1);
+    } else if (outside) {
+        for (int k = 0; k < 8; k++) {
+            if (!(outside >> k & 1)) continue;
+            int w = i[k] % n;
+            w += w < 0 ? n : 0;
+            i[k] = w;
+            i1[k] = w + 1 == n ? 0 : w + 1;
+        }
+    }
+    *out_i0 = i, *out_i1 = i1;
+}
+
+/* meso_heightfield_sample at eight (u, v) at once, with the same operations in the same order
+ * per lane, so the same bits. */
+static inline v8f heightfield_sample8(const meso_heightfield *hf, v8f u, v8f v) {
+    if ((size_t)hf->width * (size_t)hf->height > (size_t)INT32_MAX) { /* 32-bit gathers */
+        v8f h;
+        for (int k = 0; k < 8; k++) h[k] = meso_heightfield_sample(hf, u[k], v[k]);
+        return h;
+    }
+    v8f x = u * (float)hf->width - 0.5f;
+    v8f y = (1.0f - v) * (float)hf->height - 0.5f;
+    v8f fx = v8_floor(x), fy = v8_floor(y);
+    v8f tx = x - fx, ty = y - fy;
+    v8i i0, i1, j0, j1;
+    wrap_pair8(hf->wrap, __builtin_convertvector(fx, v8i), hf->width, &i0, &i1);
+    wrap_pair8(hf->wrap, __builtin_convertvector(fy, v8i), hf->height, &j0, &j1);
+    v8i row0 = j0 * hf->width, row1 = j1 * hf->width;
+    v8f h00 = v8_gather(hf->heights, row0 + i0), h10 = v8_gather(hf->heights, row0 + i1);
+    v8f h01 = v8_gather(hf->heights, row1 + i0), h11 = v8_gather(hf->heights, row1 + i1);
+    v8f top = h00 + (h10 - h00) * tx, bottom = h01 + (h11 - h01) * tx;
+    return top + (bottom - top) * ty;
+}
+
 /* r(t) of refine_hit: >= 0 where the point t shell depths along the ray is below the surface. */
 #define RESIDUAL(t)                                                                                \
     ((t)*vb.z - (1.0f - meso_heightfield_sample(hf, uv.x - (t)*step_u, uv.y - (t)*step_v)))
+/* RESIDUAL at eight t at once (the same bits per lane). */
+#define RESIDUAL8(t)                                                                               \
+    ((t)*vb.z - (1.0f - heightfield_sample8(hf, uv.x - (t)*step_u, uv.y - (t)*step_v)))
 
 static float refine_hit(const meso_heightfield *hf, meso_vec2 uv, meso_vec3 vb, float depth_tiles,
                         const float corners_in[8], float d, int steps, float past_every_corner) {
     float corners[8];
     if (!sorted_corners(corners_in, corners)) return d;
     float step_u = depth_tiles * vb.x, step_v = depth_tiles * vb.y;
-    float lo = 0.0f, r_lo = RESIDUAL(0.0f);
-    if (r_lo >= 0.0f) return 0.0f;
-    float hi = -1.0f, r_hi = 0.0f;
-    for (int i = 0; i < 8 && hi < 0.0f; i++) {
-        if (corners[i] <= lo) continue;
-        /* half-way first where the gap is wide: a thin tip the ray clips between two
-         * corners' distances would otherwise be stepped over */
-        float start = lo, gap = corners[i] - lo;
+    /* The probes in their order, each taken while every one before it was above the surface:
+     * t = 0, then from each corner beyond the last probe back to it in 1 to 4 parts (half-way
+     * first where the gap is wide: a thin tip the ray clips between two corners' distances
+     * would otherwise be stepped over), then, above the surface at every candidate, 4 steps
+     * further on. They are evaluated eight at a time up to the first below the surface: the
+     * same probes and the same first one as probing one by one. */
+    float probe[1 + 8 * 4 + 4];
+    int num_probes = 0;
+    float last = 0.0f;
+    probe[num_probes++] = 0.0f;
+    for (int i = 0; i < 8; i++) {
+        if (corners[i] <= last) continue;
+        float start = last, gap = corners[i] - last;
         int inner = gap > 0.3f ? 3 : (gap > 0.2f ? 2 : (gap > 0.1f ? 1 : 0));
-        for (int k = 1; k <= inner + 1; k++) {
-            float x = start + gap * (float)k / (float)(inner + 1), r = RESIDUAL(x);
-            if (r >= 0.0f) {
-                hi = x;
-                r_hi = r;
-                break;
-            }
-            lo = x;
-            r_lo = r;
-        }
+        for (int k = 1; k <= inner + 1; k++)
+            last = probe[num_probes++] = start + gap * (float)k / (float)(inner + 1);
     }
-    if (hi < 0.0f) { /* above the surface at every candidate: a few steps further on */
-        float stride = fmaxf(corners[7] - corners[0], 0.125f);
-        for (int k = 1; k <= 4 && hi < 0.0f; k++) {
-            float x = corners[7] + stride * (float)k, r = RESIDUAL(x);
-            if (r >= 0.0f) {
-                hi = x;
-                r_hi = r;
-            } else {
-                lo = x;
-                r_lo = r;
-            }
-        }
-        if (hi < 0.0f) return isnan(past_every_corner) ? corners[7] : past_every_corner;
+    float stride = fmaxf(corners[7] - corners[0], 0.125f);
+    for (int k = 1; k <= 4; k++) probe[num_probes++] = corners[7] + stride * (float)k;
+    float residual[8], r_prev = 0.0f;
+    int first = -1, base = 0;
+    for (; base < num_probes && first < 0; base += 8) {
+        v8f t;
+        for (int k = 0; k < 8; k++) t[k] = probe[base + k < num_probes ? base + k : base];
+        v8f r = RESIDUAL8(t);
+        int valid = num_probes - base >= 8 ? 0xff : (1 << (num_probes - base)) - 1;
+        int below = v8_mask_bits(r >= 0.0f) & valid;
+        memcpy(residual, &r, sizeof residual);
+        if (below)
+            first = base + __builtin_ctz((unsigned)below);
+        else
+            r_prev = residual[7];
     }
+    if (first == 0) return 0.0f; /* below the surface where the ray enters */
+    if (first < 0) return isnan(past_every_corner) ? corners[7] : past_every_corner;
+    float hi = probe[first], r_hi = residual[first - (base - 8)];
+    float lo = probe[first - 1];
+    float r_lo = first - 1 >= base - 8 ? residual[first - 1 - (base - 8)] : r_prev;
     int side = 0;
     for (int k = 0; k < steps; k++) {
         float x = lo + (hi - lo) * r_lo / (r_lo - r_hi);
@@ -547,11 +600,17 @@ static bool blocked_before(const meso_heightfield *hf, meso_vec2 uv, meso_vec3 v
     float corners[8];
     if (!sorted_corners(corners_in, corners)) return d < limit;
     float step_u = depth_tiles * vb.x, step_v = depth_tiles * vb.y;
-    for (int k = 1; k <= steps; k++)
-        if (RESIDUAL(limit * (float)k / (float)steps) > 0.0f) return true;
+    /* whether any probe is below: eight probes at a time */
+    const v8f lane = {0, 1, 2, 3, 4, 5, 6, 7};
+    for (int k = 1; k <= steps; k += 8) {
+        v8f t = limit * ((float)k + lane) / (float)steps;
+        int valid = steps - k + 1 >= 8 ? 0xff : (1 << (steps - k + 1)) - 1;
+        if (v8_mask_bits(RESIDUAL8(t) > 0.0f) & valid) return true;
+    }
     return false;
 }
 #undef RESIDUAL
+#undef RESIDUAL8
 
 /* VDM §3.2: c_V = (c_max (V.C_max)^2 + c_min (V.C_min)^2) / (1 - (V.N)^2) at one vertex. */
 static inline float curvature_along(const meso_mesh *mesh, uint32_t vertex, meso_vec3 eye) {
