@@ -383,7 +383,9 @@ static inline float lookup(const vdm_state *s, meso_vec2 uv, float theta, float 
                cs.w[3] * load8(s->eigen_t + (size_t)cs.col[3] * lanes + 8 * j);
     /* W interpolated, for theta_MVM between the texels (silhouette_filter 1) */
     bool mix_w = out_max_theta && !nearest;
-    v8f w[MAX_CHUNKS] = {{0}};
+    v8f w[MAX_CHUNKS];
+    if (mix_w)
+        for (int j = 0; j < chunks; j++) w[j] = (v8f){0};
     float wx[2] = {1.0f - a.x.w, a.x.w}, wy[2] = {1.0f - a.y.w, a.y.w};
     float wp[2] = {1.0f - a.phi.w, a.phi.w};
     /* a corner's row: ((iy lw + ix) num_phi + ip) lanes, as level_row */
@@ -405,6 +407,10 @@ static inline float lookup(const vdm_state *s, meso_vec2 uv, float theta, float 
         const uint16_t *row =
             weights +
             ((ry[(corner >> 1) & 1] + rx[corner & 1]) * np + rp[corner >> 2]) * (size_t)lanes;
+        if (chunks == 1 && !mix_w) { /* the paper's 8 eigenfunctions */
+            dot[corner] += load8h(row) * e[0];
+            continue;
+        }
         for (int j = 0; j < chunks; j++) {
             v8f wj = load8h(row + 8 * j);
             dot[corner] += wj * e[j];
@@ -455,13 +461,16 @@ static inline float lookup(const vdm_state *s, meso_vec2 uv, float theta, float 
 /* The 8 corner values, clamped to >= 0 and sorted ascending; false when they agree within 1/50
  * shell depth (the table is smooth there: its interpolated d is used as the paper does). */
 static inline bool sorted_corners(const float in[8], float out[8]) {
-    float lo = in[0], hi = in[0];
+    v8f c;
+    memcpy(&c, in, sizeof c);
+    /* the table's corners are finite: fminf and fmaxf are plain comparisons there */
+    float lo = c[0], hi = c[0];
     for (int i = 1; i < 8; i++) {
-        lo = fminf(lo, in[i]);
-        hi = fmaxf(hi, in[i]);
+        lo = c[i] < lo ? c[i] : lo;
+        hi = c[i] > hi ? c[i] : hi;
     }
-    if (fmaxf(hi, 0.0f) - fmaxf(lo, 0.0f) < 0.02f) return false; /* most pixels: no sort */
-    for (int i = 0; i < 8; i++) {                                /* insertion sort */
+    if ((hi > 0.0f ? hi : 0.0f) - (lo > 0.0f ? lo : 0.0f) < 0.02f) return false; /* most pixels */
+    for (int i = 0; i < 8; i++) { /* insertion sort */
         float x = in[i] > 0.0f ? in[i] : 0.0f;
         int j = i;
         for (; j > 0 && out[j - 1] > x; j--) out[j] = out[j - 1];
