@@ -70,6 +70,31 @@ static void test_app_bench_prints_table_and_writes_json(void **state) {
     free(json);
 }
 
+/* --busy: the header names the spinning thread beside the runs, the JSON says so, and the
+ * rows are still there (the spinner stops with the bench: the command returns). */
+static void test_app_bench_busy_runs_a_spinner_beside(void **state) {
+    (void)state;
+    static char out[65536];
+    const char *json_path = test_path(test_temp_dir(), "bench-busy.json");
+    char args[4096];
+    snprintf(args, sizeof(args),
+             "bench %s --techniques flat --frames 2 --size 32x32 --threads 2 --busy --json %s",
+             BRICKS, json_path);
+    assert_int_equal(run_capture_stdout(args, out, sizeof(out)), 0);
+    if (!strstr(out, "a spinning thread")) fail_msg("no spinner in:\n%s", out);
+    assert_non_null(strstr(out, "flat"));
+    char *json = read_text(json_path);
+    if (!strstr(json, "\"busy\": true")) fail_msg("bench.json lacks busy:\n%s", json);
+    free(json);
+    snprintf(args, sizeof(args), "bench %s --techniques flat --frames 1 --size 32x32 --json %s",
+             BRICKS, json_path);
+    assert_int_equal(run_capture_stdout(args, out, sizeof(out)), 0);
+    assert_null(strstr(out, "a spinning thread"));
+    json = read_text(json_path);
+    if (!strstr(json, "\"busy\": false")) fail_msg("bench.json lacks busy:\n%s", json);
+    free(json);
+}
+
 /* --profile: a cost row per technique whose covered pixels lie within the frame, and the
  * nominal search steps of a fixed-step search (relief: 16 linear + 6 binary + 16 shadow
  * steps toward the scene's one light; 40 + 6 + 20 with --set). */
@@ -210,6 +235,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_app_info_says_where_the_shell_folds),
         cmocka_unit_test(test_app_bench_prints_table_and_writes_json),
+        cmocka_unit_test(test_app_bench_busy_runs_a_spinner_beside),
         cmocka_unit_test(test_app_bench_profile_reports_cost_per_pixel),
         cmocka_unit_test(test_app_bench_orbit_turns_the_camera),
         cmocka_unit_test(test_app_bench_unknown_technique_is_usage_error),
