@@ -390,12 +390,19 @@ static void search(const void *user, const relief_batch *batches, int count, v8f
                    int *out_hit) {
     const layers_state *s = user;
     bool floor_solid = s->heightfield || s->missed_floor;
-    if (layers_one_quad(s))
+    /* the curvature's scale of the texture walk is exactly 1 where `lateral` is 0 (a plane,
+     * or "curved": 0): those searches skip its division, with the same t */
+    bool curved = false;
+    for (int g = 0; g < count; ++g) curved |= v8_mask_bits(batches[g].lateral != 0.0f) != 0;
+    if (layers_one_quad(s) && curved)
         relief_search8_batches(s, layers_inside_quad, true, floor_solid, batches, count,
                                s->linear_steps, s->binary_steps, out_t, out_hit);
+    else if (layers_one_quad(s))
+        relief_search8_batches(s, layers_inside_quad, false, floor_solid, batches, count,
+                               s->linear_steps, s->binary_steps, out_t, out_hit);
     else
-        relief_search8_batches(s, layers_inside, true, floor_solid, batches, count, s->linear_steps,
-                               s->binary_steps, out_t, out_hit);
+        relief_search8_batches(s, layers_inside, curved, floor_solid, batches, count,
+                               s->linear_steps, s->binary_steps, out_t, out_hit);
 }
 
 /* Self-shadows (§3.1): relief's shadow search with the multilayer inside test. The sample's
