@@ -470,12 +470,23 @@ static inline bool sorted_corners(const float in[8], float out[8]) {
         hi = c[i] > hi ? c[i] : hi;
     }
     if ((hi > 0.0f ? hi : 0.0f) - (lo > 0.0f ? lo : 0.0f) < 0.02f) return false; /* most pixels */
-    for (int i = 0; i < 8; i++) { /* insertion sort */
-        float x = in[i] > 0.0f ? in[i] : 0.0f;
-        int j = i;
-        for (; j > 0 && out[j - 1] > x; j--) out[j] = out[j - 1];
-        out[j] = x;
-    }
+    /* clamped to >= 0 (no -0 left, no NaN) and sorted by a bitonic network: the values in
+     * ascending order, as any sort gives them */
+    v8f x = v8_select(c > 0.0f, c, v8_splat(0.0f));
+    /* each stage: lane i meets lane i ^ j and keeps the larger where its mask is set */
+#define SORT_STAGE(p0, p1, p2, p3, p4, p5, p6, p7, m0, m1, m2, m3, m4, m5, m6, m7)                 \
+    do {                                                                                           \
+        v8f other = __builtin_shuffle(x, (v8i){p0, p1, p2, p3, p4, p5, p6, p7});                   \
+        x = v8_select((v8i){m0, m1, m2, m3, m4, m5, m6, m7}, v8_max(x, other), v8_min(x, other));  \
+    } while (0)
+    SORT_STAGE(1, 0, 3, 2, 5, 4, 7, 6, 0, -1, -1, 0, 0, -1, -1, 0);
+    SORT_STAGE(2, 3, 0, 1, 6, 7, 4, 5, 0, 0, -1, -1, -1, -1, 0, 0);
+    SORT_STAGE(1, 0, 3, 2, 5, 4, 7, 6, 0, -1, 0, -1, -1, 0, -1, 0);
+    SORT_STAGE(4, 5, 6, 7, 0, 1, 2, 3, 0, 0, 0, 0, -1, -1, -1, -1);
+    SORT_STAGE(2, 3, 0, 1, 6, 7, 4, 5, 0, 0, -1, -1, 0, 0, -1, -1);
+    SORT_STAGE(1, 0, 3, 2, 5, 4, 7, 6, 0, -1, 0, -1, 0, -1, 0, -1);
+#undef SORT_STAGE
+    memcpy(out, &x, sizeof x);
     return out[7] - out[0] >= 0.02f;
 }
 
