@@ -266,6 +266,15 @@ typedef struct texel_axes {
     meso_axis x, y, phi;
 } texel_axes;
 
+/* meso_axis_wrap, with a mask instead of the integer division where n is a power of two (the
+ * same index: i % n made non-negative is i & (n - 1) in two's complement). */
+static inline meso_axis axis_wrap(float x, int n) {
+    if (n & (n - 1)) return meso_axis_wrap(x, n);
+    float f = floorf(x);
+    int i = (int)f & (n - 1);
+    return (meso_axis){i, (i + 1) & (n - 1), x - f};
+}
+
 static inline texel_axes texel_axes_of(const vdm_state *s, meso_vec2 uv, float phi, int width,
                                        int height) {
     const meso_vdm_view *v = &s->view;
@@ -275,10 +284,10 @@ static inline texel_axes texel_axes_of(const vdm_state *s, meso_vec2 uv, float p
         a.x = meso_axis_clamp(x, width);
         a.y = meso_axis_clamp(y, height);
     } else {
-        a.x = meso_axis_wrap(x, width);
-        a.y = meso_axis_wrap(y, height);
+        a.x = axis_wrap(x, width);
+        a.y = axis_wrap(y, height);
     }
-    a.phi = meso_axis_wrap(phi * (float)v->num_phi / (2.0f * MESO_PI), v->num_phi);
+    a.phi = axis_wrap(phi * (float)v->num_phi / (2.0f * MESO_PI), v->num_phi);
     return a;
 }
 
@@ -390,9 +399,10 @@ static inline float lookup(const vdm_state *s, meso_vec2 uv, float theta, float 
     float wp[2] = {1.0f - a.phi.w, a.phi.w};
     /* a corner's row: ((iy lw + ix) num_phi + ip) lanes, as level_row */
     size_t np = (size_t)v->num_phi, lws = (size_t)lw;
-    size_t rx[2] = {(size_t)a.x.i0, (size_t)a.x.i1};
-    size_t ry[2] = {(size_t)a.y.i0 * lws, (size_t)a.y.i1 * lws};
-    size_t rp[2] = {(size_t)a.phi.i0, (size_t)a.phi.i1};
+    size_t y0 = (size_t)a.y.i0 * lws, y1 = (size_t)a.y.i1 * lws;
+    size_t x0 = (size_t)a.x.i0, x1 = (size_t)a.x.i1;
+    const size_t xy[4] = {(y0 + x0) * np, (y0 + x1) * np, (y1 + x0) * np, (y1 + x1) * np};
+    const size_t rp[2] = {(size_t)a.phi.i0, (size_t)a.phi.i1};
     /* the corners' weights wx wy wp, corner k at (x k & 1, y k >> 1 & 1, phi k >> 2) */
     v8f cw = (v8f){wx[0], wx[1], wx[0], wx[1], wx[0], wx[1], wx[0], wx[1]} *
              (v8f){wy[0], wy[0], wy[1], wy[1], wy[0], wy[0], wy[1], wy[1]} *
@@ -404,9 +414,7 @@ static inline float lookup(const vdm_state *s, meso_vec2 uv, float theta, float 
     for (int corner = 0; corner < 8; corner++) {
         dot[corner] = (v8f){0};
         if (!(used >> corner & 1)) continue;
-        const uint16_t *row =
-            weights +
-            ((ry[(corner >> 1) & 1] + rx[corner & 1]) * np + rp[corner >> 2]) * (size_t)lanes;
+        const uint16_t *row = weights + (xy[corner & 3] + rp[corner >> 2]) * (size_t)lanes;
         if (chunks == 1 && !mix_w) { /* the paper's 8 eigenfunctions */
             dot[corner] += load8h(row) * e[0];
             continue;
@@ -420,6 +428,7 @@ static inline float lookup(const vdm_state *s, meso_vec2 uv, float theta, float 
     /* every corner's sum8 at once */
     v8f corner_d = sum8_each(dot), weighted = cw * corner_d;
     float d = 0.0f;
+#pragma GCC unroll 8
     for (int corner = 0; corner < 8; corner++)
         if (used >> corner & 1) d += weighted[corner];
     if (out_corners) memcpy(out_corners, &corner_d, sizeof corner_d);
