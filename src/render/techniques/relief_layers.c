@@ -384,6 +384,12 @@ static bool layers_one_quad(const layers_state *s) {
     return !s->filter && !s->heightfield && s->groups == 1;
 }
 
+/* The same test for a height field's map (one layer, bilinear), unrolled. */
+__attribute__((always_inline)) static inline v8i layers_inside_height(const void *field, v8f x,
+                                                                      v8f y, v8f d, v8f *out_f) {
+    return layers_inside_core(field, x, y, d, out_f, 1, false, true);
+}
+
 /* relief's search with the multilayer inside test; a height field's floor is solid, and so is
  * a solid's with "missed": 1 (drawn there). */
 static void search(const void *user, const relief_batch *batches, int count, v8f *out_t,
@@ -399,6 +405,9 @@ static void search(const void *user, const relief_batch *batches, int count, v8f
                                s->linear_steps, s->binary_steps, out_t, out_hit);
     else if (layers_one_quad(s))
         relief_search8_batches(s, layers_inside_quad, false, floor_solid, batches, count,
+                               s->linear_steps, s->binary_steps, out_t, out_hit);
+    else if (s->heightfield && s->num_layers == 1)
+        relief_search8_batches(s, layers_inside_height, curved, floor_solid, batches, count,
                                s->linear_steps, s->binary_steps, out_t, out_hit);
     else
         relief_search8_batches(s, layers_inside, curved, floor_solid, batches, count,
@@ -418,10 +427,14 @@ static void shadow(const void *user, const relief_shadow_batch *batches, int cou
             out_blocked[g] = batches[g].active_bits;
             continue;
         }
-        out_blocked[g] =
-            layers_one_quad(s)
-                ? relief_shadow_walk8(s, layers_inside_quad, &batches[g], s->shadow_steps)
-                : relief_shadow_walk8(s, layers_inside, &batches[g], s->shadow_steps);
+        if (layers_one_quad(s))
+            out_blocked[g] =
+                relief_shadow_walk8(s, layers_inside_quad, &batches[g], s->shadow_steps);
+        else if (s->heightfield && s->num_layers == 1)
+            out_blocked[g] =
+                relief_shadow_walk8(s, layers_inside_height, &batches[g], s->shadow_steps);
+        else
+            out_blocked[g] = relief_shadow_walk8(s, layers_inside, &batches[g], s->shadow_steps);
     }
 }
 
