@@ -1,12 +1,17 @@
 /* meso bench: median time per frame of techniques on scenes, and their thread scaling. */
+#define _GNU_SOURCE /* pthread_attr_setaffinity_np: --busy pins its spinner */
 #include "app.h"
 #include "app_backend.h"
 #include "render_camera.h"
 
 #include <math.h>
+#include <pthread.h>
+#include <sched.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 #if defined(__x86_64__) || defined(__i386__)
 #include <x86intrin.h>
 #define BENCH_HAS_TSC 1
@@ -46,6 +51,9 @@ static const app_command_help bench_help = {
         "thread counts see the same views): what a technique keeps from one frame to the next\n"
         "while the view stays (tessellation's traversals, shadow maps of the camera's mesh)\n"
         "then counts as it would in an animation.\n\n"
+        "With --busy a CPU-bound thread spins on the last CPU beside every run (pinned there),\n"
+        "as another program would: the scaling column then says whether N threads still beat\n"
+        "one when a core is shared (docs/performance.md, \"How to measure\").\n\n"
         "With --profile each row also gives the cost model of docs/performance.md, from the\n"
         "one-thread run: covered pixels of the frame, fragments shaded a covered pixel,\n"
         "nanoseconds and time-stamp-counter cycles a covered pixel, for techniques whose\n"
@@ -71,6 +79,7 @@ typedef struct bench_options {
     const char *backends;  /* --backend: "cpu", "gl" or "cpu,gl" */
     const char *shader_dir;
     int orbit; /* frames a turn of the camera about its target; 0: a still camera */
+    bool busy; /* a spinning thread on the last CPU beside the runs */
 } bench_options;
 
 typedef struct bench_row {
@@ -95,6 +104,47 @@ typedef struct bench_scene {
     char name[MESO_NAME_MAX];
     meso_scene *scene;
 } bench_scene;
+
+/* --busy: a thread that spins until told to stop, pinned to one CPU (the last; -1 when the
+ * pinning failed and it runs wherever the scheduler puts it). */
+typedef struct bench_spinner {
+    pthread_t thread;
+    atomic_bool stop;
+    bool running;
+    int cpu;
+} bench_spinner;
+
+static void *spinner_main(void *arg) {
+    bench_spinner *spinner = arg;
+    volatile uint64_t count = 0;
+    while (!atomic_load_explicit(&spinner->stop, memory_order_relaxed)) count++;
+    return NULL;
+}
+
+static bool spinner_start(bench_spinner *spinner) {
+    atomic_init(&spinner->stop, false);
+    spinner->running = false;
+    long cpus = sysconf(_SC_NPROCESSORS_ONLN);
+    spinner->cpu = cpus > 0 && cpus <= CPU_SETSIZE ? (int)cpus - 1 : -1;
+    pthread_attr_t attr;
+    if (pthread_attr_init(&attr) != 0) return false;
+    if (spinner->cpu >= 0) {
+        cpu_set_t set;
+        CPU_ZERO(&set);
+        CPU_SET(spinner->cpu, &set);
+        if (pthread_attr_setaffinity_np(&attr, sizeof set, &set) != 0) spinner->cpu = -1;
+    }
+    spinner->running = pthread_create(&spinner->thread, &attr, spinner_main, spinner) == 0;
+    pthread_attr_destroy(&attr);
+    return spinner->running;
+}
+
+static void spinner_stop(bench_spinner *spinner) {
+    if (!spinner->running) return;
+    atomic_store(&spinner->stop, true);
+    pthread_join(spinner->thread, NULL);
+    spinner->running = false;
+}
 
 /* With --orbit, the camera of the run's frame-th frame (warm-up frames counted): turned
  * frame/orbit of a turn from the scene's own (app_render_orbit's turntable). */
@@ -288,8 +338,10 @@ static meso_result write_json(meso_context *ctx, const char *path, const bench_r
     app_text_json_number(&json, load);
     app_text_printf(&json,
                     ",\n  \"threads\": %d,\n  \"width\": %d,\n  \"height\": %d,\n"
-                    "  \"warmup_frames\": %d,\n  \"orbit\": %d,\n  \"runs\": [",
-                    threads, o->size.width, o->size.height, WARMUP_FRAMES, o->orbit);
+                    "  \"warmup_frames\": %d,\n  \"orbit\": %d,\n  \"busy\": %s,\n"
+                    "  \"runs\": [",
+                    threads, o->size.width, o->size.height, WARMUP_FRAMES, o->orbit,
+                    o->busy ? "true" : "false");
     for (size_t i = 0; i < count; i++) {
         const bench_row *r = &rows[i];
         app_text_printf(&json, "%s\n    {\"scene\": ", i ? "," : "");
@@ -382,6 +434,8 @@ int meso_cmd_bench(int argc, char **argv) {
         {"--orbit", NULL, APP_OPTION_INT, &o.orbit, "N",
          "turn the camera about its target by 1/N of a turn every frame", "a still camera", 1,
          1000000},
+        {"--busy", NULL, APP_OPTION_FLAG, &o.busy, NULL,
+         "a CPU-bound thread spins on the last CPU beside every run", NULL, 0, 0},
     };
     app_globals globals;
     const char *paths[MAX_SCENES];
@@ -419,6 +473,16 @@ int meso_cmd_bench(int argc, char **argv) {
                              ? load_scenes(ctx, paths, num_paths, scenes, &num_scenes)
                              : MESO_ERROR_OUT_OF_MEMORY;
 
+    bench_spinner spinner = {0};
+    if (result == MESO_OK && o.busy && !spinner_start(&spinner))
+        result = meso_log_error(ctx, MESO_ERROR_IO, "bench: --busy: cannot start a thread");
+    char busy_text[96] = "";
+    if (o.busy && spinner.cpu >= 0)
+        snprintf(busy_text, sizeof(busy_text), "; a spinning thread on CPU %d beside the runs",
+                 spinner.cpu);
+    else if (o.busy)
+        snprintf(busy_text, sizeof(busy_text), "; a spinning thread beside the runs (not pinned)");
+
     char machine[320], date[32];
     app_machine_description(machine, sizeof(machine));
     time_t now = time(NULL);
@@ -431,12 +495,12 @@ int meso_cmd_bench(int argc, char **argv) {
                  o.orbit);
     if (result == MESO_OK)
         printf("machine: %s; %d worker thread(s); load average %.2f at the start\n"
-               "%dx%d, %d warm-up frames, median of %s per run, %s\n\n",
+               "%dx%d, %d warm-up frames, median of %s per run, %s%s\n\n",
                machine, threads, load, o.size.width, o.size.height, WARMUP_FRAMES,
                o.frames          ? "--frames frames"
                : o.seconds > 0.0 ? "--seconds of frames"
                                  : "at least 30 frames and 1 s (at most 10 s)",
-               orbit_text);
+               orbit_text, busy_text);
 
     meso_progress *progress = NULL;
     if (result == MESO_OK)
@@ -465,6 +529,7 @@ int meso_cmd_bench(int argc, char **argv) {
         }
     }
     meso_progress_end(progress);
+    spinner_stop(&spinner);
     if (result == MESO_OK && num_rows == 0)
         result = meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
                                 "bench: no technique could draw the scenes");

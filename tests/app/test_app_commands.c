@@ -48,25 +48,47 @@ static void test_app_info_says_where_the_shell_folds(void **state) {
     if (!strstr(out, "shell: does not fold")) fail_msg("folds in:\n%s", out);
 }
 
+/* meso bench on bricks-plane with `options` and --json: its stdout in out, its JSON returned
+ * (free it). */
+static char *bench_with_json(const char *options, char *out, size_t size) {
+    const char *json_path = test_path(test_temp_dir(), "bench.json");
+    char args[4096];
+    snprintf(args, sizeof(args), "bench %s %s --json %s", BRICKS, options, json_path);
+    assert_int_equal(run_capture_stdout(args, out, size), 0);
+    return read_text(json_path);
+}
+
 static void test_app_bench_prints_table_and_writes_json(void **state) {
     (void)state;
     static char out[65536];
-    const char *json_path = test_path(test_temp_dir(), "bench.json");
-    char args[4096];
-    snprintf(args, sizeof(args),
-             "bench %s --techniques flat,bump --frames 2 --size 32x32 --threads 2 --json %s",
-             BRICKS, json_path);
-    assert_int_equal(run_capture_stdout(args, out, sizeof(out)), 0);
+    char *json = bench_with_json("--techniques flat,bump --frames 2 --size 32x32 --threads 2", out,
+                                 sizeof(out));
     assert_non_null(strstr(out, "machine:"));
     assert_non_null(strstr(out, "bricks-plane"));
     assert_non_null(strstr(out, "flat"));
     assert_non_null(strstr(out, "bump"));
-    char *json = read_text(json_path);
     static const char *const keys[] = {"\"machine\"",   "\"threads\": 2",         "\"width\": 32",
                                        "\"median_ms\"", "\"median_ms_1_thread\"", "\"scaling\"",
                                        "\"fps\"",       "\"frames\": 2"};
     for (size_t i = 0; i < sizeof(keys) / sizeof(keys[0]); i++)
         if (!strstr(json, keys[i])) fail_msg("bench.json lacks %s:\n%s", keys[i], json);
+    free(json);
+}
+
+/* --busy: the header names the spinning thread beside the runs, the JSON says so, and the
+ * rows are still there (the spinner stops with the bench: the command returns). */
+static void test_app_bench_busy_runs_a_spinner_beside(void **state) {
+    (void)state;
+    static char out[65536];
+    char *json = bench_with_json("--techniques flat --frames 2 --size 32x32 --threads 2 --busy",
+                                 out, sizeof(out));
+    if (!strstr(out, "a spinning thread")) fail_msg("no spinner in:\n%s", out);
+    assert_non_null(strstr(out, "flat"));
+    if (!strstr(json, "\"busy\": true")) fail_msg("bench.json lacks busy:\n%s", json);
+    free(json);
+    json = bench_with_json("--techniques flat --frames 1 --size 32x32", out, sizeof(out));
+    assert_null(strstr(out, "a spinning thread"));
+    if (!strstr(json, "\"busy\": false")) fail_msg("bench.json lacks busy:\n%s", json);
     free(json);
 }
 
@@ -210,6 +232,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_app_info_says_where_the_shell_folds),
         cmocka_unit_test(test_app_bench_prints_table_and_writes_json),
+        cmocka_unit_test(test_app_bench_busy_runs_a_spinner_beside),
         cmocka_unit_test(test_app_bench_profile_reports_cost_per_pixel),
         cmocka_unit_test(test_app_bench_orbit_turns_the_camera),
         cmocka_unit_test(test_app_bench_unknown_technique_is_usage_error),

@@ -287,15 +287,38 @@ typedef struct relief_batch {
     int floor_bits; /* lanes whose search ends on the floor */
 } relief_batch;
 
+/* The inside test of a search (relief_search8_core): at texel-centre positions (x, y) and
+ * depths d (shell units) of eight lanes, the mask of lanes at or below the surface and in
+ * *out_f a signed distance to it (>= 0 inside, < 0 outside) whose root the secant step finds.
+ * A height field's is relief_height_inside8; relief_layers' counts a multilayer map's layers. */
+typedef v8i (*relief_inside8_fn)(const void *field, v8f x, v8f y, v8f d, v8f *out_f);
+
+/* A height field's inside test: below the surface where d >= 1 - h, f = d + h - 1. */
+__attribute__((always_inline)) static inline v8i relief_height_inside8(const void *field, v8f x,
+                                                                       v8f y, v8f d, v8f *out_f) {
+    v8f f = d + relief_sample8(field, x, y) - 1.0f;
+    *out_f = f;
+    return f >= 0.0f;
+}
+
+/* The factor on the tangent-plane texture offset of a ray point at depth d (curved_uv). */
+static inline v8f relief_lateral_scale(const relief_batch *b, v8f d) {
+    return 1.0f / (1.0f - b->lateral * v8_max(d, v8_splat(0.0f)));
+}
+
 /* Relief mapping's search (Policarpo et al. 2005, as in Policarpo & Oliveira 2006 §2.1 and
- * Appendix A): `linear_steps` uniform steps along the ray until the first sample below the
- * surface, then `binary_steps` halvings of that bracket, then one secant step between the
- * bracket's ends (exact where the surface is planar, e.g. h constant). For `count` (1 or 2)
- * batches: writes t of the hit per lane and the bits of the lanes that hit (the others left
- * the shell: silhouette). */
+ * Appendix A; for a multilayer map the same Algorithms 1 and 2 of §3.1 with its inside test):
+ * `linear_steps` uniform steps along the ray until the first sample inside, then
+ * `binary_steps` halvings of that bracket, then one secant step between the bracket's ends
+ * (exact where the surface is planar, e.g. h constant). For `count` (1 or 2) batches: writes t
+ * of the hit per lane and the bits of the lanes that hit (the others left the shell:
+ * silhouette). `curved`: the texture walk scaled by the curvature (relief_lateral_scale);
+ * `floor_solid`: the last linear step counts as inside on the lanes whose ray ends on the
+ * shell's floor (a height field's floor is solid). */
 __attribute__((always_inline)) static inline void
-relief_search8_body(const relief_heights *m, const relief_batch *batches, int count,
-                    int linear_steps, int binary_steps, v8f *out_t, int *out_hit) {
+relief_search8_core(const void *field, relief_inside8_fn inside, bool curved, bool floor_solid,
+                    const relief_batch *batches, int count, int linear_steps, int binary_steps,
+                    v8f *out_t, int *out_hit) {
     /* Two batches are stepped in turn: a binary step's lookup depends on the one before, so
      * one batch alone waits on each gather; interleaved, the processor overlaps the two
      * chains. Each batch's arithmetic is unchanged, so are its results. */
@@ -306,14 +329,15 @@ relief_search8_body(const relief_heights *m, const relief_batch *batches, int co
         const relief_batch *batch = &batches[g];
         all[g] = (1 << batch->count) - 1;
         lanes[g] = v8_mask_from_bits(all[g]);
-        floor_mask[g] = v8_mask_from_bits(batch->floor_bits);
+        floor_mask[g] = v8_mask_from_bits(floor_solid ? batch->floor_bits : 0);
         /* t = 0: a texel at full height is hit where the ray enters (h = 1: exactly the
          * mesh). */
-        v8f h = relief_sample8(m, batch->x0, batch->y0);
-        found[g] = ((h >= 1.0f) | v8_mask_from_bits(batch->flat_bits)) & lanes[g];
+        v8f f;
+        v8i in = inside(field, batch->x0, batch->y0, v8_splat(0.0f), &f);
+        found[g] = (in | v8_mask_from_bits(batch->flat_bits)) & lanes[g];
         t_lo[g] = v8_splat(0.0f), t_hi[g] = v8_splat(0.0f), f_lo[g] = v8_splat(-1.0f);
-        f_hi[g] = h - 1.0f;
-        t_prev[g] = v8_splat(0.0f), f_prev[g] = h - 1.0f;
+        f_hi[g] = f;
+        t_prev[g] = v8_splat(0.0f), f_prev[g] = f;
     }
     v8f inv_n = v8_splat(1.0f / (float)linear_steps);
     for (int k = 1; k <= linear_steps; ++k) {
@@ -324,9 +348,10 @@ relief_search8_body(const relief_heights *m, const relief_batch *batches, int co
             const relief_batch *batch = &batches[g];
             v8f t = batch->t_end * ((float)k * inv_n);
             v8f d = t * (batch->a - batch->b * t);
-            v8f h = relief_sample8(m, batch->x0 + batch->xd * t, batch->y0 + batch->yd * t);
-            v8f f = d + h - 1.0f; /* >= 0: at or below the surface */
-            v8i below = f >= 0.0f;
+            v8f tt = curved ? t * relief_lateral_scale(batch, d) : t;
+            v8f f;
+            v8i below =
+                inside(field, batch->x0 + batch->xd * tt, batch->y0 + batch->yd * tt, d, &f);
             if (k == linear_steps) below |= floor_mask[g]; /* d = 1 there, whatever rounding */
             v8i fresh = below & ~found[g] & lanes[g];
             t_lo[g] = v8_select(fresh, t_prev[g], t_lo[g]);
@@ -349,9 +374,10 @@ relief_search8_body(const relief_heights *m, const relief_batch *batches, int co
             const relief_batch *batch = &batches[g];
             v8f t = (t_lo[g] + t_hi[g]) * 0.5f;
             v8f d = t * (batch->a - batch->b * t);
-            v8f h = relief_sample8(m, batch->x0 + batch->xd * t, batch->y0 + batch->yd * t);
-            v8f f = d + h - 1.0f;
-            v8i below = f >= 0.0f;
+            v8f tt = curved ? t * relief_lateral_scale(batch, d) : t;
+            v8f f;
+            v8i below =
+                inside(field, batch->x0 + batch->xd * tt, batch->y0 + batch->yd * tt, d, &f);
             t_hi[g] = v8_select(below, t, t_hi[g]);
             f_hi[g] = v8_select(below, f, f_hi[g]);
             t_lo[g] = v8_select(below, t_lo[g], t);
@@ -359,33 +385,45 @@ relief_search8_body(const relief_heights *m, const relief_batch *batches, int co
         }
     }
     for (int g = 0; g < count; ++g) {
-        /* Secant between the bracket's ends: f_lo < 0 <= f_hi. */
+        /* Secant between the bracket's ends: f_lo <= 0 <= f_hi, so w lies in [0, 1] (the clamp
+         * only turns -0 into 0, which moves no t). */
         v8f span = f_hi[g] - f_lo[g];
         v8f w = v8_select(span > 1e-12f, -f_lo[g] / v8_max(span, v8_splat(1e-12f)), v8_splat(1.0f));
+        w = v8_min(v8_max(w, v8_splat(0.0f)), v8_splat(1.0f));
         v8f t = t_lo[g] + (t_hi[g] - t_lo[g]) * w;
         out_t[g] = v8_select(t_hi[g] <= t_lo[g], t_hi[g], t);
         out_hit[g] = v8_mask_bits(found[g]) & all[g];
     }
 }
 
+/* relief_search8_core for one or two batches with `count` a constant, which unrolls the loops
+ * over the batches: their state stays in registers. */
+__attribute__((always_inline)) static inline void
+relief_search8_batches(const void *field, relief_inside8_fn inside, bool curved, bool floor_solid,
+                       const relief_batch *batches, int count, int linear_steps, int binary_steps,
+                       v8f *out_t, int *out_hit) {
+    if (count == 2)
+        relief_search8_core(field, inside, curved, floor_solid, batches, 2, linear_steps,
+                            binary_steps, out_t, out_hit);
+    else
+        relief_search8_core(field, inside, curved, floor_solid, batches, 1, linear_steps,
+                            binary_steps, out_t, out_hit);
+}
+
+/* relief's search on a height field. */
 static inline void relief_search8x2(const relief_heights *m, const relief_batch *batches, int count,
                                     int linear_steps, int binary_steps, v8f *out_t, int *out_hit) {
-    /* A constant count unrolls the loops over the batches: their state stays in registers. The
-     * wrap as a constant too (a copy of the map whose `clamp` the compiler sees): the samples
+    /* The wrap as a constant (a copy of the map whose `clamp` the compiler sees): the samples
      * skip its test. */
     relief_heights fixed = *m;
     if (m->clamp) {
         fixed.clamp = true;
-        if (count == 2)
-            relief_search8_body(&fixed, batches, 2, linear_steps, binary_steps, out_t, out_hit);
-        else
-            relief_search8_body(&fixed, batches, 1, linear_steps, binary_steps, out_t, out_hit);
+        relief_search8_batches(&fixed, relief_height_inside8, false, true, batches, count,
+                               linear_steps, binary_steps, out_t, out_hit);
     } else {
         fixed.clamp = false;
-        if (count == 2)
-            relief_search8_body(&fixed, batches, 2, linear_steps, binary_steps, out_t, out_hit);
-        else
-            relief_search8_body(&fixed, batches, 1, linear_steps, binary_steps, out_t, out_hit);
+        relief_search8_batches(&fixed, relief_height_inside8, false, true, batches, count,
+                               linear_steps, binary_steps, out_t, out_hit);
     }
 }
 
@@ -416,15 +454,21 @@ typedef struct relief_shadow_batch {
  * search's error), and a light ray leaving it must not find it again. */
 #define RELIEF_SHADOW_BIAS 0.004f
 
-__attribute__((always_inline)) static inline int
-relief_shadow_search8_body(const relief_heights *m, const relief_shadow_batch *s, int steps) {
+/* Self-shadowing by a second linear search toward the light (Policarpo & Oliveira 2006 §2.1;
+ * for a multilayer map §3.1, last paragraphs, with its inside test): blocked where a sample lies
+ * inside by more than the bias. Returns the bits of blocked lanes. */
+__attribute__((always_inline)) static inline int relief_shadow_walk8(const void *field,
+                                                                     relief_inside8_fn inside,
+                                                                     const relief_shadow_batch *s,
+                                                                     int steps) {
     int blocked = 0, pending = s->active_bits;
     float inv = 1.0f / (float)steps;
     /* Sample k = steps is on the mesh (d = 0): nothing is above it. */
     for (int k = 1; k < steps && pending; ++k) {
         float frac = (float)k * inv;
-        v8f h = relief_sample8(m, s->x + s->xd * frac, s->y + s->yd * frac);
-        v8f f = (s->d + s->bulge * frac) * (1.0f - frac) + h - 1.0f;
+        v8f f;
+        inside(field, s->x + s->xd * frac, s->y + s->yd * frac,
+               (s->d + s->bulge * frac) * (1.0f - frac), &f);
         int bits = v8_mask_bits(f > RELIEF_SHADOW_BIAS) & pending;
         blocked |= bits;
         pending &= ~bits;
@@ -432,17 +476,16 @@ relief_shadow_search8_body(const relief_heights *m, const relief_shadow_batch *s
     return blocked;
 }
 
-/* Self-shadowing by a second linear search toward the light (Policarpo & Oliveira 2006 §2.1):
- * blocked where a sample lies below the surface. Returns the bits of blocked lanes. */
+/* relief's shadow search on a height field. */
 static inline int relief_shadow_search8(const relief_heights *m, const relief_shadow_batch *s,
                                         int steps) {
     relief_heights fixed = *m; /* the wrap as a constant, as in relief_search8x2 */
     if (m->clamp) {
         fixed.clamp = true;
-        return relief_shadow_search8_body(&fixed, s, steps);
+        return relief_shadow_walk8(&fixed, relief_height_inside8, s, steps);
     }
     fixed.clamp = false;
-    return relief_shadow_search8_body(&fixed, s, steps);
+    return relief_shadow_walk8(&fixed, relief_height_inside8, s, steps);
 }
 
 /* The maximum mip-map of a height field (Tevs et al. 2008) with per-level tables for lookups
@@ -826,11 +869,6 @@ typedef struct relief_params {
     bool curved_uv;
     meso_uv_domain domain; /* hits past its open sides miss */
 } relief_params;
-
-/* The factor on the tangent-plane texture offset of a ray point at depth d (curved_uv). */
-static inline v8f relief_lateral_scale(const relief_batch *b, v8f d) {
-    return 1.0f / (1.0f - b->lateral * v8_max(d, v8_splat(0.0f)));
-}
 
 /* The view rays of eight fragments (see the top of this file). */
 static inline void relief_batch_setup(const relief_heights *m, const meso_object *object,

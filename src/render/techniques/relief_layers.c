@@ -12,9 +12,6 @@
 #include "meso/bake_layers.h"
 #include "relief_common.h"
 
-/* Depth bias of the "inside" test of shadow rays, shell units (relief's, same reason). */
-#define LAYERS_SHADOW_BIAS RELIEF_SHADOW_BIAS
-
 /* The map as padded planes: plane k of a quantity is (W + 1) x (H + 1) floats whose last row
  * and column repeat the wrapped first ones (or the clamped last ones), as relief_heights. */
 typedef struct layers_state {
@@ -309,9 +306,6 @@ static inline v8f layers_plane8(const layers_state *s, const float *plane, const
     return v8_select(full, mixed, near);
 }
 
-/* §3.1: inside where d lies between an entry and its exit, i.e. an odd number of the texel's
- * depths are <= d. Returns the mask and f: + or - the distance in depth to the nearest layer
- * (the secant step's function; for a height field exactly relief's d + h - 1). */
 /* Group g of four layers of the nearest texels of eight lanes, as four vectors: eight 16-byte
  * loads and a transpose (AVX), or four gathers. */
 static inline void layers_quad8(const layers_state *s, v8i nearest, int g, v8f out[4]) {
@@ -339,21 +333,28 @@ static inline void layers_quad8(const layers_state *s, v8i nearest, int g, v8f o
 #endif
 }
 
-static inline v8i layers_inside8(const layers_state *s, v8f x, v8f y, v8f d, v8f *out_f) {
+/* §3.1: inside where d lies between an entry and its exit, i.e. an odd number of the texel's
+ * depths are <= d. Returns the mask and f: + or - the distance in depth to the nearest layer
+ * (the secant step's function; for a height field exactly relief's d + h - 1). The
+ * map's layer count and kind are arguments: constants where the caller knows them, so the loop
+ * over the layers unrolls and the tests of the kind vanish. */
+__attribute__((always_inline)) static inline v8i layers_inside_core(const layers_state *s, v8f x,
+                                                                    v8f y, v8f d, v8f *out_f,
+                                                                    int layers, bool quads,
+                                                                    bool heightfield) {
     layers_cell c = layers_locate8(s, x, y);
     v8i odd = v8i_splat(0);
     v8f nearest = v8_splat(2.0f);
     /* unused layers (1.0) must not count at the floor itself (d = 1) */
-    v8f dt = s->heightfield ? d : v8_min(d, v8_splat(0.99999f));
+    v8f dt = heightfield ? d : v8_min(d, v8_splat(0.99999f));
     v8f quad[4];
-    bool quads = !s->filter && !s->heightfield;
-    for (int k = 0; k < s->num_layers; k++) {
+    for (int k = 0; k < layers; k++) {
         if (quads && (k & 3) == 0) layers_quad8(s, c.nearest, k >> 2, quad);
         v8f D = quads ? quad[k & 3] : layers_plane8(s, s->depth[k], s->depth[k], c);
         odd ^= dt >= D;
         v8f gap = d - D;
         gap = v8_select(gap < 0.0f, -gap, gap);
-        v8i present = s->heightfield ? v8i_splat(-1) : D < 1.0f;
+        v8i present = heightfield ? v8i_splat(-1) : D < 1.0f;
         nearest = v8_select(present & (gap < nearest), gap, nearest);
     }
     nearest = v8_min(nearest, v8_splat(1.0f));
@@ -361,86 +362,79 @@ static inline v8i layers_inside8(const layers_state *s, v8f x, v8f y, v8f d, v8f
     return odd;
 }
 
+/* The inside test of the searches (relief_inside8_fn), any map. */
+static v8i layers_inside(const void *field, v8f x, v8f y, v8f d, v8f *out_f) {
+    const layers_state *s = field;
+    return layers_inside_core(s, x, y, d, out_f, s->num_layers, !s->filter && !s->heightfield,
+                              s->heightfield);
+}
+
 /* ---- Search (§3.1, Algorithms 1 and 2) ---------------------------------------------------- */
 
-static int layers_search8(const layers_state *s, const relief_batch *batch, v8f *out_t) {
-    int all = (1 << batch->count) - 1;
-    v8i lanes = v8_mask_from_bits(all);
-    v8i floor_mask = v8_mask_from_bits(s->heightfield || s->missed_floor ? batch->floor_bits : 0);
-    v8f f;
-    v8i found = (layers_inside8(s, batch->x0, batch->y0, v8_splat(0.0f), &f) |
-                 v8_mask_from_bits(batch->flat_bits)) &
-                lanes;
-    v8f t_lo = v8_splat(0.0f), t_hi = v8_splat(0.0f), f_lo = v8_splat(-1.0f), f_hi = f;
-    v8f inv_n = v8_splat(1.0f / (float)s->linear_steps);
-    v8f t_prev = v8_splat(0.0f), f_prev = f;
-    /* Algorithm 1: move forward while outside */
-    for (int k = 1; k <= s->linear_steps && v8_mask_bits(found) != all; ++k) {
-        v8f t = batch->t_end * ((float)k * inv_n);
-        v8f d = t * (batch->a - batch->b * t);
-        v8f tt = t * relief_lateral_scale(batch, d);
-        v8i in = layers_inside8(s, batch->x0 + batch->xd * tt, batch->y0 + batch->yd * tt, d, &f);
-        if (k == s->linear_steps) in |= floor_mask; /* a height field's floor is solid */
-        v8i fresh = in & ~found & lanes;
-        t_lo = v8_select(fresh, t_prev, t_lo);
-        f_lo = v8_select(fresh, f_prev, f_lo);
-        t_hi = v8_select(fresh, t, t_hi);
-        f_hi = v8_select(fresh, v8_max(f, v8_splat(0.0f)), f_hi);
-        found |= fresh;
-        t_prev = t;
-        f_prev = f;
-    }
-    /* Algorithm 2: halve the bracket, keeping its outside and inside ends */
-    for (int k = 0; k < s->binary_steps; ++k) {
-        v8f t = (t_lo + t_hi) * 0.5f;
-        v8f d = t * (batch->a - batch->b * t);
-        v8f tt = t * relief_lateral_scale(batch, d);
-        v8i in = layers_inside8(s, batch->x0 + batch->xd * tt, batch->y0 + batch->yd * tt, d, &f);
-        t_hi = v8_select(in, t, t_hi);
-        f_hi = v8_select(in, f, f_hi);
-        t_lo = v8_select(in, t_lo, t);
-        f_lo = v8_select(in, f_lo, f);
-    }
-    /* secant between the ends, as relief (exact for planar layers) */
-    v8f span = f_hi - f_lo;
-    v8f w = v8_select(span > 1e-12f, -f_lo / v8_max(span, v8_splat(1e-12f)), v8_splat(1.0f));
-    w = v8_min(v8_max(w, v8_splat(0.0f)), v8_splat(1.0f));
-    *out_t = v8_select(t_hi <= t_lo, t_hi, t_lo + (t_hi - t_lo) * w);
-    return v8_mask_bits(found) & all;
+/* The same test for the usual map, a solid read at its nearest texels (filter 0) with at most
+ * four layers, all in one quad: the four are tested unrolled, the unused ones too, which hold
+ * 1.0 (fill_planes) and so neither count (dt < 1) nor are present, as the loop to num_layers
+ * leaves them: the same result. */
+__attribute__((always_inline)) static inline v8i layers_inside_quad(const void *field, v8f x, v8f y,
+                                                                    v8f d, v8f *out_f) {
+    return layers_inside_core(field, x, y, d, out_f, 4, true, false);
 }
 
+static bool layers_one_quad(const layers_state *s) {
+    return !s->filter && !s->heightfield && s->groups == 1;
+}
+
+/* The same test for a height field's map (one layer, bilinear), unrolled. */
+__attribute__((always_inline)) static inline v8i layers_inside_height(const void *field, v8f x,
+                                                                      v8f y, v8f d, v8f *out_f) {
+    return layers_inside_core(field, x, y, d, out_f, 1, false, true);
+}
+
+/* relief's search with the multilayer inside test; a height field's floor is solid, and so is
+ * a solid's with "missed": 1 (drawn there). */
 static void search(const void *user, const relief_batch *batches, int count, v8f *out_t,
                    int *out_hit) {
-    for (int g = 0; g < count; ++g) out_hit[g] = layers_search8(user, &batches[g], &out_t[g]);
+    const layers_state *s = user;
+    bool floor_solid = s->heightfield || s->missed_floor;
+    /* the curvature's scale of the texture walk is exactly 1 where `lateral` is 0 (a plane,
+     * or "curved": 0): those searches skip its division, with the same t */
+    bool curved = false;
+    for (int g = 0; g < count; ++g) curved |= v8_mask_bits(batches[g].lateral != 0.0f) != 0;
+    if (layers_one_quad(s) && curved)
+        relief_search8_batches(s, layers_inside_quad, true, floor_solid, batches, count,
+                               s->linear_steps, s->binary_steps, out_t, out_hit);
+    else if (layers_one_quad(s))
+        relief_search8_batches(s, layers_inside_quad, false, floor_solid, batches, count,
+                               s->linear_steps, s->binary_steps, out_t, out_hit);
+    else if (s->heightfield && s->num_layers == 1)
+        relief_search8_batches(s, layers_inside_height, curved, floor_solid, batches, count,
+                               s->linear_steps, s->binary_steps, out_t, out_hit);
+    else
+        relief_search8_batches(s, layers_inside, curved, floor_solid, batches, count,
+                               s->linear_steps, s->binary_steps, out_t, out_hit);
 }
 
-/* Self-shadows (§3.1): blocked where a sample of the light ray lies inside by more than the
- * bias. The sample's depth is relief's, d (1 - s) + bulge s (1 - s) (relief_shadow_batch): on
- * a curved mesh the surface falls away from the light ray, which so runs deeper than the
- * straight line; without the bulge a sphere's bumps lost shadows that relief and the reference
- * draw. */
+/* Self-shadows (§3.1): relief's shadow search with the multilayer inside test. The sample's
+ * depth is relief's, d (1 - s) + bulge s (1 - s) (relief_shadow_batch): on a curved mesh the
+ * surface falls away from the light ray, which so runs deeper than the straight line; without
+ * the bulge a sphere's bumps lost shadows that relief and the reference draw. */
 static void shadow(const void *user, const relief_shadow_batch *batches, int count,
                    int *out_blocked) {
     const layers_state *s = user;
     for (int g = 0; g < count; ++g) {
-        const relief_shadow_batch *b = &batches[g];
         if (s->enclosed) { /* light reaches the inside of a closed mesh only through its other
                               walls, which this map does not hold: taken as blocked */
-            out_blocked[g] = b->active_bits;
+            out_blocked[g] = batches[g].active_bits;
             continue;
         }
-        int blocked = 0, pending = b->active_bits;
-        float inv = 1.0f / (float)s->shadow_steps;
-        for (int k = 1; k < s->shadow_steps && pending; ++k) {
-            float frac = (float)k * inv;
-            v8f f;
-            layers_inside8(s, b->x + b->xd * frac, b->y + b->yd * frac,
-                           (b->d + b->bulge * frac) * (1.0f - frac), &f);
-            int bits = v8_mask_bits(f > LAYERS_SHADOW_BIAS) & pending;
-            blocked |= bits;
-            pending &= ~bits;
-        }
-        out_blocked[g] = blocked;
+        if (layers_one_quad(s))
+            out_blocked[g] =
+                relief_shadow_walk8(s, layers_inside_quad, &batches[g], s->shadow_steps);
+        else if (s->heightfield && s->num_layers == 1)
+            out_blocked[g] =
+                relief_shadow_walk8(s, layers_inside_height, &batches[g], s->shadow_steps);
+        else
+            out_blocked[g] = relief_shadow_walk8(s, layers_inside, &batches[g], s->shadow_steps);
     }
 }
 

@@ -69,6 +69,24 @@ static inline v8f load8h(const uint16_t *p) {
 static inline float sum8(v8f v) {
     return ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]));
 }
+/* sum8 of each of eight vectors, lane k holding v[k]'s: the same additions in the same order
+ * (AVX: horizontal adds pair neighbours as sum8 does), so the same bits. */
+static inline v8f sum8_each(const v8f v[8]) {
+#if defined(__AVX__)
+    __m256 h01 = _mm256_hadd_ps((__m256)v[0], (__m256)v[1]);
+    __m256 h23 = _mm256_hadd_ps((__m256)v[2], (__m256)v[3]);
+    __m256 h45 = _mm256_hadd_ps((__m256)v[4], (__m256)v[5]);
+    __m256 h67 = _mm256_hadd_ps((__m256)v[6], (__m256)v[7]);
+    /* lanes 0-3: (v0 + v1) + (v2 + v3) of v[0..3], lanes 4-7: (v4 + v5) + (v6 + v7) */
+    __m256 g0 = _mm256_hadd_ps(h01, h23), g1 = _mm256_hadd_ps(h45, h67);
+    __m256 lo = _mm256_permute2f128_ps(g0, g1, 0x20), hi = _mm256_permute2f128_ps(g0, g1, 0x31);
+    return (v8f)_mm256_add_ps(lo, hi);
+#else
+    v8f out;
+    for (int k = 0; k < 8; k++) out[k] = sum8(v[k]);
+    return out;
+#endif
+}
 
 typedef struct vdm_options {
     bool compressed, shadows, silhouettes, curvature, silhouette_filter, mipmap;
@@ -248,6 +266,15 @@ typedef struct texel_axes {
     meso_axis x, y, phi;
 } texel_axes;
 
+/* meso_axis_wrap, with a mask instead of the integer division where n is a power of two (the
+ * same index: i % n made non-negative is i & (n - 1) in two's complement). */
+static inline meso_axis axis_wrap(float x, int n) {
+    if (n & (n - 1)) return meso_axis_wrap(x, n);
+    float f = floorf(x);
+    int i = (int)f & (n - 1);
+    return (meso_axis){i, (i + 1) & (n - 1), x - f};
+}
+
 static inline texel_axes texel_axes_of(const vdm_state *s, meso_vec2 uv, float phi, int width,
                                        int height) {
     const meso_vdm_view *v = &s->view;
@@ -257,10 +284,10 @@ static inline texel_axes texel_axes_of(const vdm_state *s, meso_vec2 uv, float p
         a.x = meso_axis_clamp(x, width);
         a.y = meso_axis_clamp(y, height);
     } else {
-        a.x = meso_axis_wrap(x, width);
-        a.y = meso_axis_wrap(y, height);
+        a.x = axis_wrap(x, width);
+        a.y = axis_wrap(y, height);
     }
-    a.phi = meso_axis_wrap(phi * (float)v->num_phi / (2.0f * MESO_PI), v->num_phi);
+    a.phi = axis_wrap(phi * (float)v->num_phi / (2.0f * MESO_PI), v->num_phi);
     return a;
 }
 
@@ -363,27 +390,48 @@ static inline float lookup(const vdm_state *s, meso_vec2 uv, float theta, float 
                cs.w[1] * load8(s->eigen_t + (size_t)cs.col[1] * lanes + 8 * j) +
                cs.w[2] * load8(s->eigen_t + (size_t)cs.col[2] * lanes + 8 * j) +
                cs.w[3] * load8(s->eigen_t + (size_t)cs.col[3] * lanes + 8 * j);
-    v8f w[MAX_CHUNKS] = {{0}}; /* W interpolated, for theta_MVM */
+    /* W interpolated, for theta_MVM between the texels (silhouette_filter 1) */
+    bool mix_w = out_max_theta && !nearest;
+    v8f w[MAX_CHUNKS];
+    if (mix_w)
+        for (int j = 0; j < chunks; j++) w[j] = (v8f){0};
     float wx[2] = {1.0f - a.x.w, a.x.w}, wy[2] = {1.0f - a.y.w, a.y.w};
     float wp[2] = {1.0f - a.phi.w, a.phi.w};
-    int ix[2] = {a.x.i0, a.x.i1}, iy[2] = {a.y.i0, a.y.i1}, ip[2] = {a.phi.i0, a.phi.i1};
-    float d = 0.0f;
+    /* a corner's row: ((iy lw + ix) num_phi + ip) lanes, as level_row */
+    size_t np = (size_t)v->num_phi, lws = (size_t)lw;
+    size_t y0 = (size_t)a.y.i0 * lws, y1 = (size_t)a.y.i1 * lws;
+    size_t x0 = (size_t)a.x.i0, x1 = (size_t)a.x.i1;
+    const size_t xy[4] = {(y0 + x0) * np, (y0 + x1) * np, (y1 + x0) * np, (y1 + x1) * np};
+    const size_t rp[2] = {(size_t)a.phi.i0, (size_t)a.phi.i1};
+    /* the corners' weights wx wy wp, corner k at (x k & 1, y k >> 1 & 1, phi k >> 2) */
+    v8f cw = (v8f){wx[0], wx[1], wx[0], wx[1], wx[0], wx[1], wx[0], wx[1]} *
+             (v8f){wy[0], wy[0], wy[1], wy[1], wy[0], wy[0], wy[1], wy[1]} *
+             (v8f){wp[0], wp[0], wp[0], wp[0], wp[1], wp[1], wp[1], wp[1]};
+    /* corners of weight 0 are skipped unless their d is asked for */
+    int used = out_corners ? 0xff : v8_mask_bits(cw != 0.0f);
+    v8f dot[8];
+#pragma GCC unroll 8
     for (int corner = 0; corner < 8; corner++) {
-        float cw = wx[corner & 1] * wy[(corner >> 1) & 1] * wp[corner >> 2];
-        if (cw == 0.0f && !out_corners) continue;
-        const uint16_t *row = weights + level_row(lw, v->num_phi, ix[corner & 1],
-                                                  iy[(corner >> 1) & 1], ip[corner >> 2]) *
-                                            lanes;
-        v8f dot = {0};
+        dot[corner] = (v8f){0};
+        if (!(used >> corner & 1)) continue;
+        const uint16_t *row = weights + (xy[corner & 3] + rp[corner >> 2]) * (size_t)lanes;
+        if (chunks == 1 && !mix_w) { /* the paper's 8 eigenfunctions */
+            dot[corner] += load8h(row) * e[0];
+            continue;
+        }
         for (int j = 0; j < chunks; j++) {
             v8f wj = load8h(row + 8 * j);
-            dot += wj * e[j];
-            w[j] += cw * wj;
+            dot[corner] += wj * e[j];
+            if (mix_w) w[j] += cw[corner] * wj;
         }
-        float corner_d = sum8(dot);
-        if (out_corners) out_corners[corner] = corner_d;
-        d += cw * corner_d;
     }
+    /* every corner's sum8 at once */
+    v8f corner_d = sum8_each(dot), weighted = cw * corner_d;
+    float d = 0.0f;
+#pragma GCC unroll 8
+    for (int corner = 0; corner < 8; corner++)
+        if (used >> corner & 1) d += weighted[corner];
+    if (out_corners) memcpy(out_corners, &corner_d, sizeof corner_d);
     if (out_max_theta) {
         /* theta_MVM = sum_i W^i E^i_MVM(c), with W interpolated or of the nearest texel */
         if (nearest) {
@@ -422,64 +470,131 @@ static inline float lookup(const vdm_state *s, meso_vec2 uv, float theta, float 
 /* The 8 corner values, clamped to >= 0 and sorted ascending; false when they agree within 1/50
  * shell depth (the table is smooth there: its interpolated d is used as the paper does). */
 static inline bool sorted_corners(const float in[8], float out[8]) {
-    float lo = in[0], hi = in[0];
+    v8f c;
+    memcpy(&c, in, sizeof c);
+    /* the table's corners are finite: fminf and fmaxf are plain comparisons there */
+    float lo = c[0], hi = c[0];
     for (int i = 1; i < 8; i++) {
-        lo = fminf(lo, in[i]);
-        hi = fmaxf(hi, in[i]);
+        lo = c[i] < lo ? c[i] : lo;
+        hi = c[i] > hi ? c[i] : hi;
     }
-    if (fmaxf(hi, 0.0f) - fmaxf(lo, 0.0f) < 0.02f) return false; /* most pixels: no sort */
-    for (int i = 0; i < 8; i++) {                                /* insertion sort */
-        float x = in[i] > 0.0f ? in[i] : 0.0f;
-        int j = i;
-        for (; j > 0 && out[j - 1] > x; j--) out[j] = out[j - 1];
-        out[j] = x;
-    }
+    if ((hi > 0.0f ? hi : 0.0f) - (lo > 0.0f ? lo : 0.0f) < 0.02f) return false; /* most pixels */
+    /* clamped to >= 0 (no -0 left, no NaN) and sorted by a bitonic network: the values in
+     * ascending order, as any sort gives them */
+    v8f x = v8_select(c > 0.0f, c, v8_splat(0.0f));
+    /* each stage: lane i meets lane i ^ j and keeps the larger where its mask is set */
+#define SORT_STAGE(p0, p1, p2, p3, p4, p5, p6, p7, m0, m1, m2, m3, m4, m5, m6, m7)                 \
+    do {                                                                                           \
+        v8f other = __builtin_shuffle(x, (v8i){p0, p1, p2, p3, p4, p5, p6, p7});                   \
+        x = v8_select((v8i){m0, m1, m2, m3, m4, m5, m6, m7}, v8_max(x, other), v8_min(x, other));  \
+    } while (0)
+    SORT_STAGE(1, 0, 3, 2, 5, 4, 7, 6, 0, -1, -1, 0, 0, -1, -1, 0);
+    SORT_STAGE(2, 3, 0, 1, 6, 7, 4, 5, 0, 0, -1, -1, -1, -1, 0, 0);
+    SORT_STAGE(1, 0, 3, 2, 5, 4, 7, 6, 0, -1, 0, -1, -1, 0, -1, 0);
+    SORT_STAGE(4, 5, 6, 7, 0, 1, 2, 3, 0, 0, 0, 0, -1, -1, -1, -1);
+    SORT_STAGE(2, 3, 0, 1, 6, 7, 4, 5, 0, 0, -1, -1, 0, 0, -1, -1);
+    SORT_STAGE(1, 0, 3, 2, 5, 4, 7, 6, 0, -1, 0, -1, 0, -1, 0, -1);
+#undef SORT_STAGE
+    memcpy(out, &x, sizeof x);
     return out[7] - out[0] >= 0.02f;
+}
+
+/* One side's texel pair of meso_heightfield_wrap_pair for eight lanes: the same indices. */
+static inline void wrap_pair8(meso_wrap wrap, v8i i, int n, v8i *out_i0, v8i *out_i1) {
+    v8i i1 = i + 1;
+    /* (unsigned)i < n - 1: inside, the pair i, i + 1 */
+    int outside = v8_mask_bits((i < 0) | (i >= v8i_splat(n - 1)));
+    if (outside && wrap == MESO_WRAP_CLAMP) {
+        v8i zero = v8i_splat(0), last = v8i_splat(n - 1);
+        i = (v8i)v8_select(i < zero, (v8f)zero, v8_select(i > last, (v8f)last, (v8f)i));
+        i1 = (v8i)v8_select(i1 < zero, (v8f)zero, v8_select(i1 > last, (v8f)last, (v8f)i1));
+    } else if (outside && (n & (n - 1)) == 0) { /* i % n, made non-negative, is i & (n - 1) */
+        i &= n - 1;
+        i1 = (i + 1) & (n - 1);
+    } else if (outside) {
+        for (int k = 0; k < 8; k++) {
+            if (!(outside >> k & 1)) continue;
+            int w = i[k] % n;
+            w += w < 0 ? n : 0;
+            i[k] = w;
+            i1[k] = w + 1 == n ? 0 : w + 1;
+        }
+    }
+    *out_i0 = i, *out_i1 = i1;
+}
+
+/* meso_heightfield_sample at eight (u, v) at once, with the same operations in the same order
+ * per lane, so the same bits. */
+static inline v8f heightfield_sample8(const meso_heightfield *hf, v8f u, v8f v) {
+    if ((size_t)hf->width * (size_t)hf->height > (size_t)INT32_MAX) { /* 32-bit gathers */
+        v8f h;
+        for (int k = 0; k < 8; k++) h[k] = meso_heightfield_sample(hf, u[k], v[k]);
+        return h;
+    }
+    v8f x = u * (float)hf->width - 0.5f;
+    v8f y = (1.0f - v) * (float)hf->height - 0.5f;
+    v8f fx = v8_floor(x), fy = v8_floor(y);
+    v8f tx = x - fx, ty = y - fy;
+    v8i i0, i1, j0, j1;
+    wrap_pair8(hf->wrap, __builtin_convertvector(fx, v8i), hf->width, &i0, &i1);
+    wrap_pair8(hf->wrap, __builtin_convertvector(fy, v8i), hf->height, &j0, &j1);
+    v8i row0 = j0 * hf->width, row1 = j1 * hf->width;
+    v8f h00 = v8_gather(hf->heights, row0 + i0), h10 = v8_gather(hf->heights, row0 + i1);
+    v8f h01 = v8_gather(hf->heights, row1 + i0), h11 = v8_gather(hf->heights, row1 + i1);
+    v8f top = h00 + (h10 - h00) * tx, bottom = h01 + (h11 - h01) * tx;
+    return top + (bottom - top) * ty;
 }
 
 /* r(t) of refine_hit: >= 0 where the point t shell depths along the ray is below the surface. */
 #define RESIDUAL(t)                                                                                \
     ((t)*vb.z - (1.0f - meso_heightfield_sample(hf, uv.x - (t)*step_u, uv.y - (t)*step_v)))
+/* RESIDUAL at eight t at once (the same bits per lane). */
+#define RESIDUAL8(t)                                                                               \
+    ((t)*vb.z - (1.0f - heightfield_sample8(hf, uv.x - (t)*step_u, uv.y - (t)*step_v)))
 
 static float refine_hit(const meso_heightfield *hf, meso_vec2 uv, meso_vec3 vb, float depth_tiles,
                         const float corners_in[8], float d, int steps, float past_every_corner) {
     float corners[8];
     if (!sorted_corners(corners_in, corners)) return d;
     float step_u = depth_tiles * vb.x, step_v = depth_tiles * vb.y;
-    float lo = 0.0f, r_lo = RESIDUAL(0.0f);
-    if (r_lo >= 0.0f) return 0.0f;
-    float hi = -1.0f, r_hi = 0.0f;
-    for (int i = 0; i < 8 && hi < 0.0f; i++) {
-        if (corners[i] <= lo) continue;
-        /* half-way first where the gap is wide: a thin tip the ray clips between two
-         * corners' distances would otherwise be stepped over */
-        float start = lo, gap = corners[i] - lo;
+    /* The probes in their order, each taken while every one before it was above the surface:
+     * t = 0, then from each corner beyond the last probe back to it in 1 to 4 parts (half-way
+     * first where the gap is wide: a thin tip the ray clips between two corners' distances
+     * would otherwise be stepped over), then, above the surface at every candidate, 4 steps
+     * further on. They are evaluated eight at a time up to the first below the surface: the
+     * same probes and the same first one as probing one by one. */
+    float probe[1 + 8 * 4 + 4];
+    int num_probes = 0;
+    float last = 0.0f;
+    probe[num_probes++] = 0.0f;
+    for (int i = 0; i < 8; i++) {
+        if (corners[i] <= last) continue;
+        float start = last, gap = corners[i] - last;
         int inner = gap > 0.3f ? 3 : (gap > 0.2f ? 2 : (gap > 0.1f ? 1 : 0));
-        for (int k = 1; k <= inner + 1; k++) {
-            float x = start + gap * (float)k / (float)(inner + 1), r = RESIDUAL(x);
-            if (r >= 0.0f) {
-                hi = x;
-                r_hi = r;
-                break;
-            }
-            lo = x;
-            r_lo = r;
-        }
+        for (int k = 1; k <= inner + 1; k++)
+            last = probe[num_probes++] = start + gap * (float)k / (float)(inner + 1);
     }
-    if (hi < 0.0f) { /* above the surface at every candidate: a few steps further on */
-        float stride = fmaxf(corners[7] - corners[0], 0.125f);
-        for (int k = 1; k <= 4 && hi < 0.0f; k++) {
-            float x = corners[7] + stride * (float)k, r = RESIDUAL(x);
-            if (r >= 0.0f) {
-                hi = x;
-                r_hi = r;
-            } else {
-                lo = x;
-                r_lo = r;
-            }
-        }
-        if (hi < 0.0f) return isnan(past_every_corner) ? corners[7] : past_every_corner;
+    float stride = fmaxf(corners[7] - corners[0], 0.125f);
+    for (int k = 1; k <= 4; k++) probe[num_probes++] = corners[7] + stride * (float)k;
+    float residual[8], r_prev = 0.0f;
+    int first = -1, base = 0;
+    for (; base < num_probes && first < 0; base += 8) {
+        v8f t;
+        for (int k = 0; k < 8; k++) t[k] = probe[base + k < num_probes ? base + k : base];
+        v8f r = RESIDUAL8(t);
+        int valid = num_probes - base >= 8 ? 0xff : (1 << (num_probes - base)) - 1;
+        int below = v8_mask_bits(r >= 0.0f) & valid;
+        memcpy(residual, &r, sizeof residual);
+        if (below)
+            first = base + __builtin_ctz((unsigned)below);
+        else
+            r_prev = residual[7];
     }
+    if (first == 0) return 0.0f; /* below the surface where the ray enters */
+    if (first < 0) return isnan(past_every_corner) ? corners[7] : past_every_corner;
+    float hi = probe[first], r_hi = residual[first - (base - 8)];
+    float lo = probe[first - 1];
+    float r_lo = first - 1 >= base - 8 ? residual[first - 1 - (base - 8)] : r_prev;
     int side = 0;
     for (int k = 0; k < steps; k++) {
         float x = lo + (hi - lo) * r_lo / (r_lo - r_hi);
@@ -514,11 +629,17 @@ static bool blocked_before(const meso_heightfield *hf, meso_vec2 uv, meso_vec3 v
     float corners[8];
     if (!sorted_corners(corners_in, corners)) return d < limit;
     float step_u = depth_tiles * vb.x, step_v = depth_tiles * vb.y;
-    for (int k = 1; k <= steps; k++)
-        if (RESIDUAL(limit * (float)k / (float)steps) > 0.0f) return true;
+    /* whether any probe is below: eight probes at a time */
+    const v8f lane = {0, 1, 2, 3, 4, 5, 6, 7};
+    for (int k = 1; k <= steps; k += 8) {
+        v8f t = limit * ((float)k + lane) / (float)steps;
+        int valid = steps - k + 1 >= 8 ? 0xff : (1 << (steps - k + 1)) - 1;
+        if (v8_mask_bits(RESIDUAL8(t) > 0.0f) & valid) return true;
+    }
     return false;
 }
 #undef RESIDUAL
+#undef RESIDUAL8
 
 /* VDM §3.2: c_V = (c_max (V.C_max)^2 + c_min (V.C_min)^2) / (1 - (V.N)^2) at one vertex. */
 static inline float curvature_along(const meso_mesh *mesh, uint32_t vertex, meso_vec3 eye) {
