@@ -1003,49 +1003,43 @@ meso_result meso_gdm_from_bake_file(meso_context *ctx, const meso_bake_file *bak
     return MESO_OK;
 }
 
-meso_result meso_gdm_load(meso_context *ctx, const char *path, meso_gdm **out_gdm) {
-    if (out_gdm) *out_gdm = NULL;
-    meso_bake_file *bake = NULL;
-    meso_result result = meso_bake_file_load(ctx, path, &bake);
-    if (result != MESO_OK) return result;
-    result = meso_gdm_from_bake_file(ctx, bake, path, out_gdm);
-    meso_bake_file_destroy(bake);
-    return result;
+/* The steps of meso_bake_cache_run for a gdm; desc: the completed meso_gdm_desc. */
+static meso_result gdm_from_file(meso_context *ctx, const meso_bake_file *bake, const char *where,
+                                 const void *desc, void *out) {
+    (void)desc;
+    return meso_gdm_from_bake_file(ctx, bake, where, out);
 }
 
-static meso_result gdm_bake_claimed(meso_context *ctx, meso_gdm_desc d, uint64_t key,
-                                    meso_gdm **out_gdm) {
-    meso_bake_file *cached = NULL;
-    meso_result result = meso_bake_cache_load(ctx, MESO_GDM_KIND, MESO_GDM_KIND_VERSION, key,
-                                              source_hash_of(&d), &cached);
-    if (result != MESO_OK) return result;
-    if (cached) {
-        result = meso_gdm_from_bake_file(ctx, cached, "gdm cache entry", out_gdm);
-        meso_bake_file_destroy(cached);
-        if (result == MESO_OK) return MESO_OK;
-        meso_log_warning(ctx, "gdm: cache entry unusable, baking again: %s",
-                         meso_context_last_error(ctx));
-    }
-    if ((result = meso_bake_gdm(ctx, &d, out_gdm)) != MESO_OK) return result;
+static meso_result gdm_bake(meso_context *ctx, const void *desc, void *out) {
+    return meso_bake_gdm(ctx, desc, out);
+}
+
+static meso_result gdm_store(meso_context *ctx, const meso_cached_bake *entry, const void *out) {
     char params[1024];
     float report[REPORT_FLOATS];
-    meso_bake_file bake = to_bake_file(*out_gdm, params, sizeof(params), report);
-    if (meso_bake_cache_save(ctx, &bake, key) != MESO_OK)
-        meso_log_warning(ctx, "gdm: could not store the bake in the cache: %s",
-                         meso_context_last_error(ctx));
-    return MESO_OK;
+    meso_bake_file bake = to_bake_file(*(meso_gdm *const *)out, params, sizeof(params), report);
+    return meso_bake_cache_save(ctx, &bake, entry->key);
+}
+
+meso_result meso_gdm_load(meso_context *ctx, const char *path, meso_gdm **out_gdm) {
+    if (out_gdm) *out_gdm = NULL;
+    return meso_bake_load_with(ctx, path, gdm_from_file, NULL, out_gdm);
 }
 
 meso_result meso_gdm_bake_cached(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm **out_gdm) {
     meso_gdm_desc d;
     meso_result result = begin_bake(ctx, desc, out_gdm, &d);
     if (result != MESO_OK) return result;
-    uint64_t key = meso_gdm_cache_key(&d);
-    meso_bake_cache_claim claim;
-    meso_bake_cache_claim_entry(ctx, MESO_GDM_KIND, key, &claim);
-    result = gdm_bake_claimed(ctx, d, key, out_gdm);
-    meso_bake_cache_release(&claim);
-    return result;
+    meso_cached_bake entry = {MESO_GDM_KIND,
+                              MESO_GDM_KIND_VERSION,
+                              "gdm",
+                              meso_gdm_cache_key(&d),
+                              source_hash_of(&d),
+                              &d,
+                              gdm_from_file,
+                              gdm_bake,
+                              gdm_store};
+    return meso_bake_cache_run(ctx, &entry, out_gdm);
 }
 
 size_t meso_gdm_describe(const meso_bake_file *bake, char *buffer, size_t size) {

@@ -874,49 +874,41 @@ meso_result meso_vdm_from_bake_file(meso_context *ctx, const meso_bake_file *bak
     return MESO_OK;
 }
 
-meso_result meso_vdm_load(meso_context *ctx, const char *path, meso_vdm **out_vdm) {
-    if (out_vdm) *out_vdm = NULL;
-    meso_bake_file *bake = NULL;
-    meso_result result = meso_bake_file_load(ctx, path, &bake);
-    if (result != MESO_OK) return result;
-    result = meso_vdm_from_bake_file(ctx, bake, path, out_vdm);
-    meso_bake_file_destroy(bake);
-    return result;
+/* The steps of meso_bake_cache_run for a vdm; desc: the caller's meso_vdm_desc. */
+static meso_result vdm_from_file(meso_context *ctx, const meso_bake_file *bake, const char *where,
+                                 const void *desc, void *out) {
+    (void)desc;
+    return meso_vdm_from_bake_file(ctx, bake, where, out);
 }
 
-static meso_result vdm_bake_claimed(meso_context *ctx, const meso_vdm_desc *desc, uint64_t key,
-                                    meso_vdm **out_vdm) {
-    meso_bake_file *cached = NULL;
-    meso_result result =
-        meso_bake_cache_load(ctx, MESO_VDM_KIND, MESO_VDM_KIND_VERSION, key,
-                             desc->heightfield ? desc->heightfield->hash : 0, &cached);
-    if (result != MESO_OK) return result;
-    if (cached) {
-        result = meso_vdm_from_bake_file(ctx, cached, "vdm cache entry", out_vdm);
-        meso_bake_file_destroy(cached);
-        if (result == MESO_OK) return MESO_OK;
-        meso_log_warning(ctx, "vdm: cache entry unusable, baking again: %s",
-                         meso_context_last_error(ctx));
-    }
-    result = meso_bake_vdm(ctx, desc, out_vdm);
-    if (result != MESO_OK) return result;
+static meso_result vdm_bake(meso_context *ctx, const void *desc, void *out) {
+    return meso_bake_vdm(ctx, desc, out);
+}
+
+static meso_result vdm_store(meso_context *ctx, const meso_cached_bake *entry, const void *out) {
     char params[2048];
     float report[REPORT_FLOATS];
-    meso_bake_file bake = to_bake_file(*out_vdm, params, sizeof(params), report);
-    if (meso_bake_cache_save(ctx, &bake, key) != MESO_OK)
-        meso_log_warning(ctx, "vdm: could not store the bake in the cache: %s",
-                         meso_context_last_error(ctx));
-    return MESO_OK;
+    meso_bake_file bake = to_bake_file(*(meso_vdm *const *)out, params, sizeof(params), report);
+    return meso_bake_cache_save(ctx, &bake, entry->key);
+}
+
+meso_result meso_vdm_load(meso_context *ctx, const char *path, meso_vdm **out_vdm) {
+    if (out_vdm) *out_vdm = NULL;
+    return meso_bake_load_with(ctx, path, vdm_from_file, NULL, out_vdm);
 }
 
 meso_result meso_vdm_bake_cached(meso_context *ctx, const meso_vdm_desc *desc, meso_vdm **out_vdm) {
     if (out_vdm) *out_vdm = NULL;
-    uint64_t key = meso_vdm_cache_key(desc);
-    meso_bake_cache_claim claim;
-    meso_bake_cache_claim_entry(ctx, MESO_VDM_KIND, key, &claim);
-    meso_result result = vdm_bake_claimed(ctx, desc, key, out_vdm);
-    meso_bake_cache_release(&claim);
-    return result;
+    meso_cached_bake entry = {MESO_VDM_KIND,
+                              MESO_VDM_KIND_VERSION,
+                              "vdm",
+                              meso_vdm_cache_key(desc),
+                              desc && desc->heightfield ? desc->heightfield->hash : 0,
+                              desc,
+                              vdm_from_file,
+                              vdm_bake,
+                              vdm_store};
+    return meso_bake_cache_run(ctx, &entry, out_vdm);
 }
 
 size_t meso_vdm_describe(const meso_bake_file *bake, char *buffer, size_t size) {
