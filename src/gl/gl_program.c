@@ -22,13 +22,6 @@ const char *gl_shader_builtin(const char *name) {
     return NULL;
 }
 
-bool meso_gl_technique_supported(const char *technique) {
-    char name[96];
-    if (!technique || snprintf(name, sizeof name, "%s.frag", technique) >= (int)sizeof name)
-        return false;
-    return gl_shader_builtin(name) != NULL;
-}
-
 /* The files of one stage, in order, with their text (owned when read from a folder). */
 typedef struct shader_files {
     int count;
