@@ -9,8 +9,10 @@ static const gl_technique gl_technique_bump = {.drawn = true};
 static const gl_technique gl_technique_horizon = {.drawn = false};
 static const gl_technique gl_technique_parallax = {.drawn = true};
 static const gl_technique gl_technique_relief = {.drawn = true};
-static const gl_technique gl_technique_relief_exact = {
-    .drawn = true, .create = gl_max_mip_create, .bind = gl_max_mip_bind, .destroy = gl_max_mip_destroy};
+static const gl_technique gl_technique_relief_exact = {.drawn = true,
+                                                       .create = gl_max_mip_create,
+                                                       .bind = gl_max_mip_bind,
+                                                       .destroy = gl_max_mip_destroy};
 static const gl_technique gl_technique_relief_layers = {.drawn = true,
                                                         .both_faces = true,
                                                         .create = gl_layers_create,
