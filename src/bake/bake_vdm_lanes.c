@@ -1,5 +1,5 @@
 /* The compressed VDM laid out for dot-product lookups (bake_vdm.h, meso_vdm_lanes): read by
- * the CPU technique (src/render/techniques/vdm.c) and uploaded as textures by the GL back end,
+ * the CPU technique (src/techniques/vdm.c) and uploaded as textures by the GL back end,
  * so both reconstruct d from the same half-float weights. */
 #include <stdlib.h>
 #include <string.h>

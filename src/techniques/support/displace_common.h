@@ -1,7 +1,7 @@
 /* Shared code of the two geometry techniques, `displacement` (uniform) and `tessellation`
  * (Doggett & Hirche 2000): vertex displacement (docs/design.md), the recursive midpoint tessellator
  * with its triangle stack, shading with the height field's normal, and shadow maps of the
- * displaced mesh. Private to src/render/techniques.
+ * displaced mesh. Private to src/techniques.
  *
  * Crack-freeness (Doggett & Hirche 2000, "Approach": "avoid cracks between triangles by only
  * evaluating the edge"): every vertex record is computed from the two records of the edge it

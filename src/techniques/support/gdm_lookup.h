@@ -1,4 +1,4 @@
-/* The gdm technique's 8-wide lookup of a compressed GDM (private to src/render/techniques and
+/* The gdm technique's 8-wide lookup of a compressed GDM (private to src/techniques and
  * its test): the same d as meso_gdm_lookup (bake_gdm.h: axes, interpolation over x, y, z,
  * theta and phi, §4.1's d = sum_i W_i(x, y, phi) E_i(z, theta)), from a copy of the view laid
  * out for vector loads: W padded to whole groups of 8 eigen-maps a row, E transposed so that
