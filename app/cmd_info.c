@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include "meso/prism.h"
 
 static const app_command_help info_help = {
     .name = "info",

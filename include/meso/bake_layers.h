@@ -40,7 +40,6 @@
 #define MESO_BAKE_LAYERS_H
 
 #include "meso/bake_file.h"
-#include "meso/bake_isosurface.h"
 #include "meso/core.h"
 #include "meso/mesostructure.h"
 

@@ -12,6 +12,7 @@
 #include "bake_internal.h"
 #include "meso/bake_cone.h"
 #include "meso/bake_file.h"
+#include "meso/bake_minmax.h"
 
 /* A depth-first walk holds at most 3 siblings a level plus the node opened. */
 #define STACK_NODES (4 * MESO_MINMAX_MAX_LEVELS)

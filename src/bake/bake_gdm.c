@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "bake_internal.h"
+#include "meso/bake_isosurface.h"
 
 #define TWO_PI (2.0 * MESO_PI_D)
 

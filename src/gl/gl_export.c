@@ -8,6 +8,7 @@
 #include <cjson/cJSON.h>
 
 #include "meso/bake_minmax.h"
+#include "meso/prism.h"
 
 #include "gl_internal.h"
 

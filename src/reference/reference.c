@@ -19,6 +19,7 @@
 #include <string.h>
 
 #include "reference_internal.h"
+#include "meso/bake_isosurface.h"
 
 #define REFERENCE_LOW_QUALITY_TRIANGLES 2000000
 

@@ -28,6 +28,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "meso/bake_isosurface.h"
 #include "meso/prism.h"
 #include "reference_internal.h"
 

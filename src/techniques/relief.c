@@ -5,6 +5,7 @@
  * quadrics (Oliveira & Policarpo 2005). The shared code is in relief_common.h; this file holds
  * the options and the linear + binary search. docs/techniques/relief.md. */
 #include "relief_common.h"
+#include "meso/bake_minmax.h"
 
 typedef struct relief_options {
     int linear_steps, binary_steps, shadow_steps;

@@ -32,6 +32,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include "meso/bake_sat.h"
 
 enum {
     COUNT_EDGES,      /* edges evaluated (midpoints computed) */

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "meso/bake_cone.h"
+#include "meso/bake_minmax.h"
 #include "test_util.h"
 
 static meso_heightfield *random_field(meso_context *ctx, int w, int h, meso_wrap wrap,

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "test_util.h"
+#include "meso/bake_horizon.h"
 
 static meso_heightfield *make_field(meso_context *ctx, int w, int h, float value) {
     meso_heightfield *hf = NULL;

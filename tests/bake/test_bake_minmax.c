@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "test_util.h"
+#include "meso/bake_minmax.h"
 
 static meso_heightfield *random_field(meso_context *ctx, int w, int h, meso_wrap wrap,
                                       unsigned seed) {

@@ -12,6 +12,7 @@
 
 #include "relief_common.h"
 #include "test_util.h"
+#include "meso/bake_minmax.h"
 
 typedef struct bounds_case {
     meso_context *ctx;

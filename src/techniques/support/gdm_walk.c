@@ -3,6 +3,7 @@
 
 #include <stdlib.h>
 #include <string.h>
+#include "meso/prism.h"
 
 /* A fin triangle's key: its three vertex positions' bits, sorted, and its face. Twins have
  * equal keys. */

@@ -62,9 +62,6 @@ typedef struct meso_isosurface {
     uint32_t *column_offsets; /* resolution_u * resolution_v + 1 entries */
 } meso_isosurface;
 
-/* A scalar field over texture space, negative inside; must be periodic in u and v (period 1). */
-typedef float (*meso_scalar_field_fn)(void *user, meso_vec3 uvw);
-
 /* The desc with zero fields replaced by the defaults. Pure. */
 meso_isosurface_desc meso_isosurface_desc_defaults(const meso_isosurface_desc *desc);
 
