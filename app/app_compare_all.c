@@ -9,6 +9,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include "meso/runtime.h"
 
 #define DEFAULT_TIMING_FRAMES 5
 #define DEFAULT_TIMING_BUDGET_SECONDS 2.0

@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+#include "meso/runtime.h"
 
 static const app_command_help compare_help = {
     .name = "compare",

@@ -67,6 +67,7 @@ int meso_cmd_view(int argc, char **argv) {
 #else
 
 #include <SDL.h>
+#include "meso/runtime.h"
 
 #define MAX_TIMED_FRAMES 100000
 #define NOTICE_SECONDS 3.0

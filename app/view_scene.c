@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "render_camera.h"
+#include "meso/runtime.h"
 
 /* ---- Scene copies ------------------------------------------------------------------------- */
 

@@ -10,7 +10,9 @@
 #include <unistd.h>
 
 #include "bake_internal.h"
+#include "meso/bake_cache.h"
 #include "meso/bake_file.h"
+#include "meso/runtime.h"
 
 /* mkdir -p for the cache folder; existing folders are fine. */
 static bool make_dirs(char *path) {

@@ -10,9 +10,11 @@
 #include <string.h>
 
 #include "bake_internal.h"
+#include "meso/bake_cache.h"
 #include "meso/bake_cone.h"
 #include "meso/bake_file.h"
 #include "meso/bake_minmax.h"
+#include "meso/runtime.h"
 
 /* A depth-first walk holds at most 3 siblings a level plus the node opened. */
 #define STACK_NODES (4 * MESO_MINMAX_MAX_LEVELS)

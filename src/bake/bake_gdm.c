@@ -15,7 +15,9 @@
 #include <string.h>
 
 #include "bake_internal.h"
+#include "meso/bake_cache.h"
 #include "meso/bake_isosurface.h"
+#include "meso/runtime.h"
 
 #define TWO_PI (2.0 * MESO_PI_D)
 

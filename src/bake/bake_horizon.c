@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "meso/bake_horizon.h"
+#include "meso/runtime.h"
 
 #define DEFAULT_AZIMUTHS 8
 #define DEFAULT_DISTANCE 64.0f

@@ -5,6 +5,7 @@
 #include <math.h>
 
 #include "meso/bake.h"
+#include "meso/runtime.h"
 
 /* A tall table streamed by rows: fill(user, first, count, out) writes rows [first, first +
  * count) row-major (count x columns floats) into out. Called from worker threads on disjoint

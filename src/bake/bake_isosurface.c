@@ -24,6 +24,7 @@
 #include <string.h>
 
 #include "meso/bake_isosurface.h"
+#include "meso/runtime.h"
 
 /* Dual contouring's settings (cell_vertex_position): at most this many regula falsi steps for an
  * edge's crossing, the gradient's difference step and the pull toward the crossings' mean, in

@@ -15,7 +15,9 @@
 #include <string.h>
 
 #include "bake_internal.h"
+#include "meso/bake_cache.h"
 #include "meso/bake_layers.h"
+#include "meso/runtime.h"
 
 #define DEFAULT_SIDE 256
 #define DEFAULT_LAYERS 4

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "meso/bake_minmax.h"
+#include "meso/runtime.h"
 
 #define SERIAL_BELOW_CELLS (256 * 256)
 

@@ -9,7 +9,9 @@
 #include <stdio.h>
 
 #include "bake_internal.h"
+#include "meso/bake_cache.h"
 #include "meso/bake_rtv.h"
+#include "meso/runtime.h"
 
 typedef struct rtv_job {
     meso_rtv_desc desc;

@@ -1,6 +1,7 @@
 /* Summed-area table of a height field: the "Local Area Average Height Test" of Doggett &
  * Hirche 2000 reads box averages from it in constant time (Crow 1984). */
 #include "meso/bake_sat.h"
+#include "meso/runtime.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -6,6 +6,8 @@
 #include <string.h>
 
 #include "bake_internal.h"
+#include "meso/bake_cache.h"
+#include "meso/runtime.h"
 
 #define HALF_PI (0.5 * MESO_PI_D)
 #define TWO_PI (2.0 * MESO_PI_D)

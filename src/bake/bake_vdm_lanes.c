@@ -5,6 +5,8 @@
 #include <string.h>
 
 #include "bake_internal.h"
+#include "meso/bake_vdm_lanes.h"
+#include "meso/runtime.h"
 
 void meso_vdm_lanes_deinit(meso_vdm_lanes *l) {
     for (int i = 0; i < l->num_levels; i++) free(l->level_weights[i]);

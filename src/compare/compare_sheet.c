@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "compare_internal.h"
+#include "meso/runtime.h"
 
 static float colour_channel(const meso_image *image, int x, int y, int c) {
     const float *p = meso_image_at(image, x, y);

@@ -8,7 +8,9 @@
 #include <cjson/cJSON.h>
 
 #include "meso/bake_minmax.h"
+#include "meso/runtime.h"
 #include "meso/prism.h"
+#include "meso/texture.h"
 
 #include "gl_internal.h"
 

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "meso/bake_gdm.h"
+#include "meso/runtime.h"
 #include "meso/prism.h"
 
 #include "gl_internal.h"

@@ -12,6 +12,7 @@
 #include "meso/bake_gdm.h"
 #include "meso/bake_layers.h"
 #include "meso/bake_vdm.h"
+#include "meso/bake_vdm_lanes.h"
 #include "meso/prism.h"
 #include "meso/gl.h"
 

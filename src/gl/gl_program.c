@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "gl_internal.h"
+#include "meso/runtime.h"
 
 #define GL_MAX_SHADER_FILES 8
 #define GL_SHADER_MAX_BYTES (1u << 20) /* a shader file read from --shader-dir */

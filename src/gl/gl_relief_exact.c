@@ -4,6 +4,7 @@
 #include <stdlib.h>
 
 #include "meso/bake_minmax.h"
+#include "meso/runtime.h"
 
 #include "gl_internal.h"
 

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "meso/bake_layers.h"
+#include "meso/runtime.h"
 
 #include "gl_internal.h"
 

@@ -9,6 +9,8 @@
 #include <string.h>
 
 #include "gl_internal.h"
+#include "meso/runtime.h"
+#include "meso/texture.h"
 
 #define GL_MAX_OPTIONS 32 /* rows of any technique's option table */
 #define GL_FLOATS_PER_VERTEX 24

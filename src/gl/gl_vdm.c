@@ -7,6 +7,8 @@
 #include <string.h>
 
 #include "meso/bake_vdm.h"
+#include "meso/bake_vdm_lanes.h"
+#include "meso/runtime.h"
 
 #include "gl_internal.h"
 

@@ -20,6 +20,7 @@
 
 #include "reference_internal.h"
 #include "meso/bake_isosurface.h"
+#include "meso/runtime.h"
 
 #define REFERENCE_LOW_QUALITY_TRIANGLES 2000000
 

@@ -36,6 +36,7 @@
 #include <string.h>
 
 #include "reference_internal.h"
+#include "meso/runtime.h"
 
 typedef struct hf_edge {
     uint64_t key;  /* low vertex << 32 | high vertex */

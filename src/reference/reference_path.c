@@ -30,6 +30,7 @@
 #include <string.h>
 
 #include "meso/bake_rtv.h"
+#include "meso/runtime.h"
 #include "reference_internal.h"
 #include "render_gi.h"
 

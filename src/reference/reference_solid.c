@@ -29,6 +29,7 @@
 #include <string.h>
 
 #include "meso/bake_isosurface.h"
+#include "meso/runtime.h"
 #include "meso/prism.h"
 #include "reference_internal.h"
 

@@ -3,6 +3,7 @@
  * so there is no parallax, no self-shadowing and no silhouette (docs/techniques/bump.md).
  * Eight fragments at a time on the relief family's padded height field, like parallax. */
 #include "relief_common.h"
+#include "meso/runtime.h"
 
 typedef struct bump_state {
     relief_heights heights;

@@ -9,6 +9,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include "meso/runtime.h"
 
 /* The automatic level keeps the whole object under this many triangles. */
 #define DISPLACEMENT_AUTO_BUDGET (1u << 21)

@@ -15,6 +15,7 @@
 #include "gdm_shell_shadow.h"
 #include "gdm_walk.h"
 #include "meso/bake_gdm.h"
+#include "meso/runtime.h"
 #include "meso/prism.h"
 #include "render_internal.h"
 

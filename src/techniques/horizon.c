@@ -6,6 +6,7 @@
  * with a smooth step of SOFT_RADIANS so the shadow edge does not alias (Sloan & Cohen §3).
  * The bake is src/bake/bake_horizon.c. docs/techniques/horizon.md. */
 #include "meso/bake_horizon.h"
+#include "meso/runtime.h"
 #include "relief_common.h"
 
 /* Half-width of the smooth transition at the horizon, in sin of the angle between the light

@@ -7,6 +7,7 @@
  * No self-shadow, no silhouette, no depth correction: that is the method.
  * docs/techniques/parallax.md. */
 #include "relief_common.h"
+#include "meso/runtime.h"
 
 typedef struct parallax_options {
     bool offset_limiting;

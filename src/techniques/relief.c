@@ -6,6 +6,7 @@
  * the options and the linear + binary search. docs/techniques/relief.md. */
 #include "relief_common.h"
 #include "meso/bake_minmax.h"
+#include "meso/runtime.h"
 
 typedef struct relief_options {
     int linear_steps, binary_steps, shadow_steps;

@@ -12,6 +12,7 @@
 
 #include "meso/bake_cone.h"
 #include "meso/bake_minmax.h"
+#include "meso/runtime.h"
 #include "relief_common.h"
 
 /* Clamp-to-edge fields are not periodic, so the pyramid's wrapped cells do not bound them; they

@@ -10,6 +10,7 @@
  * shell's floor with the mesh's normal (§3.1's base texture). docs/techniques/relief_layers.md.
  */
 #include "meso/bake_layers.h"
+#include "meso/runtime.h"
 #include "relief_common.h"
 
 /* Depth bias of the "inside" test of shadow rays, shell units (relief's, same reason). */

@@ -33,6 +33,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "meso/bake_sat.h"
+#include "meso/runtime.h"
 
 enum {
     COUNT_EDGES,      /* edges evaluated (midpoints computed) */

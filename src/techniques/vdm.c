@@ -12,6 +12,8 @@
 #endif
 
 #include "meso/bake_vdm.h"
+#include "meso/bake_vdm_lanes.h"
+#include "meso/runtime.h"
 #include "render_internal.h"
 #include "render_simd.h"
 

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "test_util.h"
+#include "meso/runtime.h"
 
 #define PI MESO_PI_D
 

@@ -8,6 +8,8 @@
 #include <unistd.h>
 
 #include "test_util.h"
+#include "meso/bake_cache.h"
+#include "meso/runtime.h"
 
 static meso_heightfield *make_bumps(int side) {
     meso_heightfield *hf = calloc(1, sizeof(*hf));

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "test_util.h"
+#include "meso/runtime.h"
 
 #define HALF_PI (0.5 * MESO_PI_D)
 

@@ -8,6 +8,7 @@
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
+#include "meso/runtime.h"
 
 /* ---- The displaced surface ---------------------------------------------------------------- */
 

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "meso/bake_rtv.h"
+#include "meso/runtime.h"
 #include "meso/prism.h"
 #include "render_environment.h"
 #include "render_gi.h"

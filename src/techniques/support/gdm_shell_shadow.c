@@ -10,6 +10,7 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include "meso/runtime.h"
 #include "meso/prism.h"
 
 /* Prisms a light ray may cross before the answer is "visible": a walk stuck on a fin's plane

@@ -26,6 +26,7 @@
 #include <string.h>
 
 #include "meso/bake_minmax.h"
+#include "meso/runtime.h"
 #include "render_shading.h"
 
 #define RELIEF_LANES V8_LANES
