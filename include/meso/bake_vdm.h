@@ -23,10 +23,10 @@
  *     length of one tile), positive convex; c_k uniform in [curvature_min, curvature_max].
  *   - theta_MVM in radians.
  *
- * Defaults (meso_query_vdm_defaults): 128 x 128 texels, 32 theta x 8 phi views, 16 curvatures
+ * Defaults (meso_vdm_desc_defaults): 128 x 128 texels, 32 theta x 8 phi views, 16 curvatures
  * in [-2, 3], depth 0.05 tile, ray step 0.5 texel, 8 VDM and 4 MVM eigenfunctions.
  *
- * Threads: meso_bake_vdm uses every worker of ctx; lookups are pure and thread-safe.
+ * Threads: meso_vdm_bake uses every worker of ctx; lookups are pure and thread-safe.
  */
 #ifndef MESO_BAKE_VDM_H
 #define MESO_BAKE_VDM_H
@@ -52,7 +52,7 @@ extern "C" {
 #define MESO_VDM_MAX_RAW_FLOATS (UINT64_C(1) << 28) /* keep_raw: 1 GiB of floats */
 #define MESO_VDM_RMSE_COUNT 16
 
-/* Zero fields take the defaults of meso_query_vdm_defaults(). */
+/* Zero fields take the defaults of meso_vdm_desc_defaults(). */
 typedef struct meso_vdm_desc {
     const meso_heightfield *heightfield; /* required; read during the call only */
     float depth;                         /* shell thickness in tiles (0.05) */
@@ -71,7 +71,7 @@ typedef struct meso_vdm_desc {
 } meso_vdm_desc;
 
 /* The desc with zero fields replaced by their defaults; NULL: all defaults. Pure. */
-meso_vdm_desc meso_query_vdm_defaults(const meso_vdm_desc *desc);
+meso_vdm_desc meso_vdm_desc_defaults(const meso_vdm_desc *desc);
 
 typedef struct meso_vdm meso_vdm;
 
@@ -107,13 +107,13 @@ typedef struct meso_vdm_compression {
 /* Bake the view-dependent displacement map of a height field (VDM §3.1, Appendix, §3.3).
  *
  * desc      Read during the call only. Zero fields take the defaults of
- *           meso_query_vdm_defaults(): 128x128 texels, 32x8 views, 16 curvatures.
+ *           meso_vdm_desc_defaults(): 128x128 texels, 32x8 views, 16 curvatures.
  * out_vdm   On MESO_OK a new map owned by the caller (meso_vdm_destroy); NULL otherwise.
  * Returns   MESO_OK, MESO_ERROR_INVALID_ARGUMENT (the log names the field), MESO_ERROR_LIMIT,
  *           MESO_ERROR_OUT_OF_MEMORY, MESO_ERROR_CANCELLED, MESO_ERROR_INTERNAL (LAPACK).
  * Threads   Uses every worker of ctx; output identical for any thread count; a progress bar.
  */
-meso_result meso_bake_vdm(meso_context *ctx, const meso_vdm_desc *desc, meso_vdm **out_vdm);
+meso_result meso_vdm_bake(meso_context *ctx, const meso_vdm_desc *desc, meso_vdm **out_vdm);
 void meso_vdm_destroy(meso_vdm *vdm);
 
 /* The parameters the map was baked with (heightfield NULL). */

@@ -133,8 +133,8 @@ static void bake_cone_row(void *user, size_t job, int thread_index) {
     }
 }
 
-meso_result meso_bake_cone(meso_context *ctx, const meso_heightfield *heightfield,
-                           const meso_minmax_pyramid *pyramid, meso_cone_map **out_map) {
+meso_result meso_cone_map_bake(meso_context *ctx, const meso_heightfield *heightfield,
+                               const meso_minmax_pyramid *pyramid, meso_cone_map **out_map) {
     *out_map = NULL;
     if (!heightfield || !heightfield->heights || heightfield->width <= 0 ||
         heightfield->height <= 0)
@@ -221,7 +221,7 @@ static meso_result cone_from_file(meso_context *ctx, const meso_bake_file *bake,
 
 static meso_result cone_bake(meso_context *ctx, const void *desc, void *out) {
     const cone_source *source = desc;
-    return meso_bake_cone(ctx, source->heightfield, source->pyramid, out);
+    return meso_cone_map_bake(ctx, source->heightfield, source->pyramid, out);
 }
 
 static meso_result cone_store(meso_context *ctx, const meso_cached_bake *entry, const void *out) {
@@ -239,10 +239,10 @@ static meso_result cone_store(meso_context *ctx, const meso_cached_bake *entry, 
     return meso_bake_cache_save(ctx, &bake, entry->key);
 }
 
-meso_result meso_bake_cone_cached(meso_context *ctx, const meso_heightfield *heightfield,
-                                  const meso_minmax_pyramid *pyramid, meso_cone_map **out_map) {
+meso_result meso_cone_map_bake_cached(meso_context *ctx, const meso_heightfield *heightfield,
+                                      const meso_minmax_pyramid *pyramid, meso_cone_map **out_map) {
     *out_map = NULL;
-    if (!heightfield) return meso_bake_cone(ctx, heightfield, pyramid, out_map);
+    if (!heightfield) return meso_cone_map_bake(ctx, heightfield, pyramid, out_map);
     cone_source source = {heightfield, pyramid};
     meso_cached_bake entry = {MESO_CONE_KIND,
                               MESO_CONE_KIND_VERSION,

@@ -3,7 +3,7 @@
  * ("Bake and compression") has the measurements behind the choices below.
  *
  * Rays are traced with Embree against a watertight triangle surface of the solid (the dual
- * contouring of meso_bake_isosurface for solids, the texel-centre grid for height fields), inside
+ * contouring of meso_isosurface_bake for solids, the texel-centre grid for height fields), inside
  * the tile's column 0 <= u, v <= 1 and wrapped across its sides (GDM §3.1: the volume surrounded by
  * identical tiles). Whether a voxel is inside is decided on the source itself (the solid's
  * distance, w >= 1 - h), and a ray that starts outside it takes the first hit where it enters
@@ -49,7 +49,7 @@ struct meso_gdm {
     meso_gdm_compression compression;
 };
 
-meso_gdm_desc meso_query_gdm_defaults(const meso_gdm_desc *desc) {
+meso_gdm_desc meso_gdm_desc_defaults(const meso_gdm_desc *desc) {
     meso_gdm_desc d = desc ? *desc : (meso_gdm_desc){0};
     if (d.width == 0) d.width = 64;
     if (d.height == 0) d.height = d.width;
@@ -109,7 +109,7 @@ static uint64_t source_hash_of(const meso_gdm_desc *d) {
 }
 
 uint64_t meso_gdm_cache_key(const meso_gdm_desc *desc) {
-    meso_gdm_desc d = meso_query_gdm_defaults(desc);
+    meso_gdm_desc d = meso_gdm_desc_defaults(desc);
     uint64_t h = source_hash_of(&d);
     int32_t ints[] = {d.width,
                       d.height,
@@ -314,7 +314,7 @@ static meso_result surface_build(meso_context *ctx, const meso_gdm_desc *d, uint
     if (d->solid) {
         meso_isosurface_desc iso_desc = surface_cells_of(d);
         meso_isosurface *iso = NULL;
-        meso_result result = meso_bake_isosurface(ctx, d->solid, &iso_desc, &iso);
+        meso_result result = meso_isosurface_bake(ctx, d->solid, &iso_desc, &iso);
         if (result != MESO_OK) {
             surface_release(s);
             return result;
@@ -573,12 +573,12 @@ static meso_result begin_bake(meso_context *ctx, const meso_gdm_desc *desc, meso
     if (out_gdm) *out_gdm = NULL;
     if (!out_gdm || !desc)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "gdm: NULL desc or out_gdm");
-    *out_desc = meso_query_gdm_defaults(desc);
+    *out_desc = meso_gdm_desc_defaults(desc);
     meso_result result = check_source(ctx, out_desc);
     return result == MESO_OK ? check_desc(ctx, "gdm", out_desc) : result;
 }
 
-meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm **out_gdm) {
+meso_result meso_gdm_bake(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm **out_gdm) {
     meso_gdm_desc d;
     meso_result result = begin_bake(ctx, desc, out_gdm, &d);
     if (result != MESO_OK) return result;
@@ -1014,7 +1014,7 @@ static meso_result gdm_from_file(meso_context *ctx, const meso_bake_file *bake, 
 }
 
 static meso_result gdm_bake(meso_context *ctx, const void *desc, void *out) {
-    return meso_bake_gdm(ctx, desc, out);
+    return meso_gdm_bake(ctx, desc, out);
 }
 
 static meso_result gdm_store(meso_context *ctx, const meso_cached_bake *entry, const void *out) {

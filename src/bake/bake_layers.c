@@ -264,7 +264,7 @@ static void bake_row(void *user, size_t job, int thread_index) {
     meso_progress_advance(b->progress, 1);
 }
 
-meso_result meso_bake_layers(meso_context *ctx, const meso_layers_desc *desc,
+meso_result meso_layers_bake(meso_context *ctx, const meso_layers_desc *desc,
                              meso_layers **out_map) {
     *out_map = NULL;
     meso_layers_desc d = meso_layers_desc_defaults(desc);
@@ -528,7 +528,7 @@ static meso_result layers_from_file(meso_context *ctx, const meso_bake_file *bak
 }
 
 static meso_result layers_bake(meso_context *ctx, const void *desc, void *out) {
-    return meso_bake_layers(ctx, desc, out);
+    return meso_layers_bake(ctx, desc, out);
 }
 
 static meso_result layers_store(meso_context *ctx, const meso_cached_bake *entry, const void *out) {
@@ -549,7 +549,7 @@ meso_result meso_layers_bake_cached(meso_context *ctx, const meso_layers_desc *d
                                     meso_layers **out_map) {
     *out_map = NULL;
     uint64_t key = meso_layers_cache_key(desc);
-    /* a layers bake stores its cache key as its source hash (meso_bake_layers) */
+    /* a layers bake stores its cache key as its source hash (meso_layers_bake) */
     meso_cached_bake entry = {MESO_LAYERS_KIND,
                               MESO_LAYERS_KIND_VERSION,
                               "relief_layers",

@@ -349,7 +349,7 @@ done:
     return r;
 }
 
-meso_result meso_bake_rtv(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv **out_rtv) {
+meso_result meso_rtv_bake(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv **out_rtv) {
     *out_rtv = NULL;
     meso_rtv_desc d = desc ? *desc : (meso_rtv_desc){0};
     if (!d.width) d.width = 32;
@@ -646,7 +646,7 @@ static meso_result rtv_from_file(meso_context *ctx, const meso_bake_file *bake, 
 }
 
 static meso_result rtv_bake(meso_context *ctx, const void *desc, void *out) {
-    return meso_bake_rtv(ctx, desc, out);
+    return meso_rtv_bake(ctx, desc, out);
 }
 
 static meso_result rtv_store(meso_context *ctx, const meso_cached_bake *entry, const void *out) {

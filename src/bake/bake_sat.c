@@ -6,7 +6,7 @@
 #include <math.h>
 #include <stdlib.h>
 
-meso_result meso_bake_sat(meso_context *ctx, const meso_heightfield *heightfield,
+meso_result meso_sat_bake(meso_context *ctx, const meso_heightfield *heightfield,
                           meso_sat **out_sat) {
     if (out_sat) *out_sat = NULL;
     if (!out_sat || !heightfield || !heightfield->heights)

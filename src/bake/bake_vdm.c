@@ -27,7 +27,7 @@ struct meso_vdm {
     meso_vdm_compression compression;
 };
 
-meso_vdm_desc meso_query_vdm_defaults(const meso_vdm_desc *desc) {
+meso_vdm_desc meso_vdm_desc_defaults(const meso_vdm_desc *desc) {
     meso_vdm_desc d = desc ? *desc : (meso_vdm_desc){0};
     if (d.depth == 0.0f) d.depth = 0.05f;
     if (d.width == 0) d.width = 128;
@@ -108,7 +108,7 @@ static meso_result check_desc(meso_context *ctx, const char *name, const meso_vd
 }
 
 uint64_t meso_vdm_cache_key(const meso_vdm_desc *desc) {
-    meso_vdm_desc d = meso_query_vdm_defaults(desc);
+    meso_vdm_desc d = meso_vdm_desc_defaults(desc);
     uint64_t h = MESO_HASH_SEED;
     uint64_t source = d.heightfield ? d.heightfield->hash : 0;
     h = meso_hash64(&source, sizeof(source), h);
@@ -419,10 +419,10 @@ static void balance_mvm(void *user, const double *column_energy, float *column_s
     for (int c = 0; c < columns; c++) column_scale[c] = c < vdm_columns ? 1.0f : mvm_scale;
 }
 
-meso_result meso_bake_vdm(meso_context *ctx, const meso_vdm_desc *desc, meso_vdm **out_vdm) {
+meso_result meso_vdm_bake(meso_context *ctx, const meso_vdm_desc *desc, meso_vdm **out_vdm) {
     if (out_vdm) *out_vdm = NULL;
     if (!out_vdm) return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "vdm: out_vdm is NULL");
-    meso_vdm_desc d = meso_query_vdm_defaults(desc);
+    meso_vdm_desc d = meso_vdm_desc_defaults(desc);
     if (!d.heightfield || !d.heightfield->heights || d.heightfield->width < 1 ||
         d.heightfield->height < 1)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "vdm: heightfield: missing");
@@ -884,7 +884,7 @@ static meso_result vdm_from_file(meso_context *ctx, const meso_bake_file *bake, 
 }
 
 static meso_result vdm_bake(meso_context *ctx, const void *desc, void *out) {
-    return meso_bake_vdm(ctx, desc, out);
+    return meso_vdm_bake(ctx, desc, out);
 }
 
 static meso_result vdm_store(meso_context *ctx, const meso_cached_bake *entry, const void *out) {

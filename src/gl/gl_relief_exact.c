@@ -1,5 +1,5 @@
 /* The GL side of `relief_exact` (shaders/relief_exact.frag): the height field's maximum
- * mip-map (meso_bake_minmax, the CPU technique's pyramid) as the mip levels of one R32F
+ * mip-map (meso_minmax_pyramid_bake, the CPU technique's pyramid) as the mip levels of one R32F
  * texture. */
 #include <stdlib.h>
 
@@ -23,7 +23,7 @@ static meso_result max_mip_upload(meso_context *ctx, const meso_object *object, 
                               "sides (this one is %d x %d)",
                               object->name, w, h);
     meso_minmax_pyramid *pyramid = NULL;
-    meso_result r = meso_bake_minmax(ctx, hf, &pyramid);
+    meso_result r = meso_minmax_pyramid_bake(ctx, hf, &pyramid);
     if (r != MESO_OK) return r;
     glGenTextures(1, out_texture);
     glBindTexture(GL_TEXTURE_2D, *out_texture);

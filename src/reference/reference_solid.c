@@ -427,7 +427,7 @@ meso_result reference_build_solid(meso_context *ctx, const meso_reference_desc *
                                       .column_offsets = model_columns};
     } else {
         result =
-            meso_bake_isosurface_function(ctx, ref->field, ref->field_user, &idesc, &extracted);
+            meso_isosurface_bake_function(ctx, ref->field, ref->field_user, &idesc, &extracted);
         if (result != MESO_OK) return result;
     }
     const meso_isosurface *iso = model ? &model_iso : extracted;

@@ -51,7 +51,8 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
     if ((r = relief_heights_init(ctx, object, &s->heights)) != MESO_OK) goto fail;
     meso_horizon_desc desc = {.num_azimuths = options.num_azimuths,
                               .max_distance = (float)options.max_distance};
-    if ((r = meso_bake_horizon(ctx, object->mesostructure.height_field, &desc, &s->map)) != MESO_OK)
+    if ((r = meso_horizon_map_bake(ctx, object->mesostructure.height_field, &desc, &s->map)) !=
+        MESO_OK)
         goto fail;
     *out_state = s;
     return MESO_OK;

@@ -57,8 +57,8 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
                                          &s->options)) != MESO_OK ||
         (r = relief_heights_init(ctx, object, &s->heights)) != MESO_OK)
         goto fail;
-    if (s->options.shadows &&
-        (r = meso_bake_minmax(ctx, object->mesostructure.height_field, &s->pyramid)) != MESO_OK)
+    if (s->options.shadows && (r = meso_minmax_pyramid_bake(ctx, object->mesostructure.height_field,
+                                                            &s->pyramid)) != MESO_OK)
         goto fail;
     if (s->pyramid) relief_maxmip_init(s->pyramid, &s->maxmip);
     s->params.shadows = s->options.shadows;

@@ -722,14 +722,15 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
     exact_state *s = calloc(1, sizeof *s);
     if (!s) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
     if ((r = relief_heights_init(ctx, object, &s->heights)) != MESO_OK ||
-        (r = meso_bake_minmax(ctx, object->mesostructure.height_field, &s->pyramid)) != MESO_OK)
+        (r = meso_minmax_pyramid_bake(ctx, object->mesostructure.height_field, &s->pyramid)) !=
+            MESO_OK)
         goto fail;
     int w = s->heights.width, h = s->heights.height;
     s->power_of_two = (w & (w - 1)) == 0 && (h & (h - 1)) == 0;
     if (s->power_of_two && !s->heights.clamp) {
         meso_cone_map *cones = NULL;
-        if ((r = meso_bake_cone_cached(ctx, object->mesostructure.height_field, s->pyramid,
-                                       &cones)) != MESO_OK)
+        if ((r = meso_cone_map_bake_cached(ctx, object->mesostructure.height_field, s->pyramid,
+                                           &cones)) != MESO_OK)
             goto fail;
         r = cone_codes_init(ctx, object, cones, s);
         meso_cone_map_destroy(cones);

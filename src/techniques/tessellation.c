@@ -257,7 +257,7 @@ static meso_result tessellation_prepare(meso_context *ctx, const meso_scene *sce
     if (s->max_level < 0) /* automatic: down to texel density (the limit test stops there) */
         s->max_level = displace_texel_level(&s->surface, DISPLACE_MAX_LEVEL);
     if (s->area_test && s->surface.heightfield &&
-        (r = meso_bake_sat(ctx, s->surface.heightfield, &s->sat)) != MESO_OK)
+        (r = meso_sat_bake(ctx, s->surface.heightfield, &s->sat)) != MESO_OK)
         goto fail;
     if ((r = displace_tessellator_create(ctx, &s->surface, s->max_level, &s->tessellator)))
         goto fail;

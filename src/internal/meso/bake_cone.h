@@ -25,8 +25,8 @@
  *
  * Usage
  *   meso_minmax_pyramid *p = NULL;  meso_cone_map *c = NULL;
- *   meso_bake_minmax(ctx, heightfield, &p);
- *   meso_bake_cone(ctx, heightfield, p, &c);
+ *   meso_minmax_pyramid_bake(ctx, heightfield, &p);
+ *   meso_cone_map_bake(ctx, heightfield, p, &c);
  *   float top = c->cells[2 * (j * c->width + i)], slope = c->cells[2 * (j * c->width + i) + 1];
  *   meso_cone_map_destroy(c);
  *
@@ -57,20 +57,20 @@ typedef struct meso_cone_map {
 } meso_cone_map;
 
 /* Bake the cone map of `heightfield` (MESO_WRAP_REPEAT or DEFAULT) from its pyramid `pyramid`
- * (meso_bake_minmax of the same field).
+ * (meso_minmax_pyramid_bake of the same field).
  * out_map      On MESO_OK a new map owned by the caller (meso_cone_map_destroy); NULL otherwise.
  * Returns      MESO_OK, MESO_ERROR_INVALID_ARGUMENT (NULL or empty field, a clamped field, a
  *              pyramid of another field), MESO_ERROR_OUT_OF_MEMORY.
  * Threads      Uses every worker of ctx; safe on different contexts at once. */
-meso_result meso_bake_cone(meso_context *ctx, const meso_heightfield *heightfield,
-                           const meso_minmax_pyramid *pyramid, meso_cone_map **out_map);
+meso_result meso_cone_map_bake(meso_context *ctx, const meso_heightfield *heightfield,
+                               const meso_minmax_pyramid *pyramid, meso_cone_map **out_map);
 
-/* meso_bake_cone through the bake cache (bake_cache: kind "cone", keyed by the field's hash and
+/* meso_cone_map_bake through the bake cache (bake_cache: kind "cone", keyed by the field's hash and
  * the radius): a cached map is loaded instead of baked, a new one stored (a failure to store is
- * a warning). Same results, errors and threads as meso_bake_cone; an unusable entry is baked
+ * a warning). Same results, errors and threads as meso_cone_map_bake; an unusable entry is baked
  * again with a warning. */
-meso_result meso_bake_cone_cached(meso_context *ctx, const meso_heightfield *heightfield,
-                                  const meso_minmax_pyramid *pyramid, meso_cone_map **out_map);
+meso_result meso_cone_map_bake_cached(meso_context *ctx, const meso_heightfield *heightfield,
+                                      const meso_minmax_pyramid *pyramid, meso_cone_map **out_map);
 
 /* Bytes held by the map (0 for NULL). */
 size_t meso_cone_map_memory(const meso_cone_map *map);

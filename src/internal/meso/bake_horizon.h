@@ -14,7 +14,7 @@
  *
  * Usage
  *   meso_horizon_map *map = NULL;
- *   meso_bake_horizon(ctx, heightfield, &(meso_horizon_desc){.num_azimuths = 8}, &map);
+ *   meso_horizon_map_bake(ctx, heightfield, &(meso_horizon_desc){.num_azimuths = 8}, &map);
  *   float s = map->slopes[((size_t)j * map->width + i) * map->num_azimuths + k];
  *   meso_horizon_map_destroy(map);
  *
@@ -54,9 +54,9 @@ typedef struct meso_horizon_map {
 /* desc with zero fields replaced by the defaults (desc may be NULL). Pure. */
 meso_horizon_desc meso_horizon_desc_defaults(const meso_horizon_desc *desc);
 
-/* About how many seconds meso_bake_horizon takes for a width x height field on num_threads
+/* About how many seconds meso_horizon_map_bake takes for a width x height field on num_threads
  * threads (its samples times a measured cost a sample; the 4- and 8-azimuth square case is
- * faster). meso_bake_horizon says it before baking: a warning when it is 10 s or more, else
+ * faster). meso_horizon_map_bake says it before baking: a warning when it is 10 s or more, else
  * an info message. Pure. */
 double meso_horizon_bake_seconds_estimate(int width, int height, const meso_horizon_desc *desc,
                                           int num_threads);
@@ -68,8 +68,8 @@ double meso_horizon_bake_seconds_estimate(int width, int height, const meso_hori
  *             "horizon: num_azimuths: ..."), MESO_ERROR_LIMIT, MESO_ERROR_OUT_OF_MEMORY,
  *             MESO_ERROR_CANCELLED (progress callback).
  * Threads     Uses every worker of ctx; safe on different contexts at once. */
-meso_result meso_bake_horizon(meso_context *ctx, const meso_heightfield *heightfield,
-                              const meso_horizon_desc *desc, meso_horizon_map **out_map);
+meso_result meso_horizon_map_bake(meso_context *ctx, const meso_heightfield *heightfield,
+                                  const meso_horizon_desc *desc, meso_horizon_map **out_map);
 
 /* The slope toward azimuth `phi` (radians, any value) at texel (i, j), linearly interpolated
  * between the two nearest baked azimuths. Pure, thread-safe. */

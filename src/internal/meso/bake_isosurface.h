@@ -27,7 +27,7 @@
  *
  * Usage
  *   meso_isosurface *iso = NULL;
- *   meso_bake_isosurface(ctx, solid, &(meso_isosurface_desc){0}, &iso);  // 128 x 128 x 32
+ *   meso_isosurface_bake(ctx, solid, &(meso_isosurface_desc){0}, &iso);  // 128 x 128 x 32
  *   ...
  *   meso_isosurface_destroy(iso);
  *
@@ -69,13 +69,13 @@ meso_isosurface_desc meso_isosurface_desc_defaults(const meso_isosurface_desc *d
  * out_isosurface: on MESO_OK a new mesh owned by the caller (meso_isosurface_destroy).
  * Returns MESO_OK, MESO_ERROR_INVALID_ARGUMENT (NULL solid), MESO_ERROR_LIMIT (resolution,
  * naming the field), MESO_ERROR_OUT_OF_MEMORY. */
-meso_result meso_bake_isosurface(meso_context *ctx, const meso_solid *solid,
+meso_result meso_isosurface_bake(meso_context *ctx, const meso_solid *solid,
                                  const meso_isosurface_desc *desc,
                                  meso_isosurface **out_isosurface);
 
 /* The same for any periodic field (tests build a slab or a sphere with it). `field` is called
  * from several threads at once and must be pure. */
-meso_result meso_bake_isosurface_function(meso_context *ctx, meso_scalar_field_fn field, void *user,
+meso_result meso_isosurface_bake_function(meso_context *ctx, meso_scalar_field_fn field, void *user,
                                           const meso_isosurface_desc *desc,
                                           meso_isosurface **out_isosurface);
 

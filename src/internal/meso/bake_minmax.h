@@ -12,7 +12,7 @@
  *
  * Usage
  *   meso_minmax_pyramid *p = NULL;
- *   meso_bake_minmax(ctx, heightfield, &p);
+ *   meso_minmax_pyramid_bake(ctx, heightfield, &p);
  *   float top = p->levels[p->num_levels - 1].max[0];   // max height of the whole field
  *   meso_minmax_pyramid_destroy(p);
  *
@@ -54,8 +54,8 @@ typedef struct meso_minmax_pyramid {
  * Returns      MESO_OK, MESO_ERROR_INVALID_ARGUMENT (NULL or empty field, naming it),
  *              MESO_ERROR_LIMIT (a side above MESO_MINMAX_MAX_SIDE), MESO_ERROR_OUT_OF_MEMORY.
  * Threads      Uses every worker of ctx; safe on different contexts at once. */
-meso_result meso_bake_minmax(meso_context *ctx, const meso_heightfield *heightfield,
-                             meso_minmax_pyramid **out_pyramid);
+meso_result meso_minmax_pyramid_bake(meso_context *ctx, const meso_heightfield *heightfield,
+                                     meso_minmax_pyramid **out_pyramid);
 /* Bytes held by the pyramid (0 for NULL). */
 size_t meso_minmax_pyramid_memory(const meso_minmax_pyramid *pyramid);
 /* NULL does nothing. */

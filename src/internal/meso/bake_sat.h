@@ -8,7 +8,7 @@
  *
  * Usage
  *   meso_sat *sat = NULL;
- *   if (meso_bake_sat(ctx, heightfield, &sat) != MESO_OK) return ...;
+ *   if (meso_sat_bake(ctx, heightfield, &sat) != MESO_OK) return ...;
  *   float a = meso_sat_box_average(sat, u, v, 4.0f);  // mean height over a 9 x 9 texel box
  *   meso_sat_destroy(sat);
  *
@@ -24,7 +24,7 @@
  *   MESO_SAT_MAX_TEXELS texels (width * height), checked before allocating.
  *
  * Ownership and threads
- *   meso_bake_sat returns a new table owned by the caller (meso_sat_destroy; NULL is fine).
+ *   meso_sat_bake returns a new table owned by the caller (meso_sat_destroy; NULL is fine).
  *   Queries are pure and thread-safe.
  */
 #ifndef MESO_BAKE_SAT_H
@@ -51,7 +51,7 @@ typedef struct meso_sat {
  * Returns MESO_OK, MESO_ERROR_INVALID_ARGUMENT (NULL or empty field), MESO_ERROR_LIMIT (more
  * than MESO_SAT_MAX_TEXELS texels, before allocating), MESO_ERROR_OUT_OF_MEMORY; *out_sat is
  * NULL on failure. Single-threaded (linear time). */
-meso_result meso_bake_sat(meso_context *ctx, const meso_heightfield *heightfield,
+meso_result meso_sat_bake(meso_context *ctx, const meso_heightfield *heightfield,
                           meso_sat **out_sat);
 void meso_sat_destroy(meso_sat *sat);
 
