@@ -47,7 +47,9 @@ static meso_result max_mip_upload(meso_context *ctx, const meso_object *object, 
 meso_result gl_max_mip_create(meso_context *ctx, const meso_scene *scene, const meso_object *object,
                               const meso_technique_info *info, const double *options, void **out,
                               size_t *memory) {
-    (void)scene, (void)info, (void)options;
+    (void)scene;
+    (void)info;
+    (void)options;
     *out = NULL;
     gl_max_mip *m = calloc(1, sizeof *m);
     if (!m) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
