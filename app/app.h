@@ -10,6 +10,7 @@
 #define MESO_APP_H
 
 #include <meso/meso.h>
+#include "meso/runtime.h"
 
 /* ---- Exit statuses ------------------------------------------------------------------------ */
 

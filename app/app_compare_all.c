@@ -9,6 +9,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include "meso/runtime.h"
 
 #define DEFAULT_TIMING_FRAMES 5
 #define DEFAULT_TIMING_BUDGET_SECONDS 2.0
@@ -49,8 +50,8 @@ meso_result app_compare_all_check_memory(meso_context *ctx, const app_compare_al
     total += meso_render_memory_estimate(&frame, desc->width, desc->height);
     if (sheet_columns > 0) { /* the sheet, and its grey cell for a run without an image */
         int width = 0, height = 0;
-        meso_result r = meso_sheet_size(ctx, runs, sheet_columns, desc->width, desc->height,
-                                        label_lines, &width, &height);
+        meso_result r = meso_compare_sheet_size(ctx, runs, sheet_columns, desc->width, desc->height,
+                                                label_lines, &width, &height);
         if (r != MESO_OK) return r;
         total += ((uint64_t)width * (uint64_t)height + pixels) * 3 * sizeof(float);
     }
@@ -238,8 +239,8 @@ static void format_db(char *out, size_t out_size, double db) {
         snprintf(out, out_size, "%.1f", db);
 }
 
-/* Characters a label line may hold under a cell `width` pixels wide: meso_sheet_create draws
- * its 5x7 font with a 6-pixel advance, doubled on cells 256 pixels wide or more. */
+/* Characters a label line may hold under a cell `width` pixels wide: meso_compare_sheet_create
+ * draws its 5x7 font with a 6-pixel advance, doubled on cells 256 pixels wide or more. */
 static int label_chars(int width) { return width >= 256 ? width / 12 : width / 6; }
 
 void app_run_label(const app_run *run, const char *prefix, int cell_width, char *out,
@@ -401,7 +402,7 @@ meso_result app_sheet_save(meso_context *ctx, const meso_image *const *images,
     if (result == MESO_OK) {
         for (size_t i = 0; i < (size_t)width * (size_t)height * 3; i++) empty->pixels[i] = 0.02f;
         for (size_t i = 0; i < count; i++) cells[i] = images[i] ? images[i] : empty;
-        result = meso_sheet_create(ctx, cells, labels, count, columns, &sheet);
+        result = meso_compare_sheet_create(ctx, cells, labels, count, columns, &sheet);
     }
     /* The cells are linear: the sheet is encoded once, on saving. */
     meso_png_desc srgb = {.encoding = MESO_ENCODING_SRGB};

@@ -11,6 +11,7 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include "meso/runtime.h"
 
 /* Write every asset under dir ("dir/assets/..." in the folder `assets`, made here); the paths
  * written into written[]. */

@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include "meso/runtime.h"
 
 #define PLOT_WIDTH 720
 #define PLOT_HEIGHT 460

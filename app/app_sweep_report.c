@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include "meso/runtime.h"
 
 /* ---- result.json -------------------------------------------------------------------------- */
 

@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include "meso/runtime.h"
 
 /* Print "meso: <file>: <key>: <reason>" and return the bad-input status. */
 static int spec_error(const char *file, const char *key, const char *format, ...)

@@ -3,6 +3,7 @@
 #include "app.h"
 
 #include <string.h>
+#include "meso/runtime.h"
 
 static const app_command_help bake_help = {
     .name = "bake",

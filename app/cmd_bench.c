@@ -20,6 +20,7 @@
 #endif
 
 #include "examples_embedded.h"
+#include "meso/runtime.h"
 
 #define MAX_SCENES 64
 #define MAX_TECHNIQUES 64

@@ -10,6 +10,8 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <time.h>
+#include "meso/bake_cache.h"
+#include "meso/runtime.h"
 
 static const app_command_help cache_help = {
     .name = "cache",

@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+#include "meso/runtime.h"
 
 static const app_command_help compare_help = {
     .name = "compare",
@@ -182,7 +183,7 @@ int meso_cmd_compare(int argc, char **argv) {
                  diff_scale, psnr, psnr_covered, r.ssim, r.coverage_iou, r.max_error);
         const meso_image *cells[3] = {a, b, diff};
         const char *labels[3] = {label_a, label_b, label_d};
-        result = meso_sheet_create(ctx, cells, labels, 3, 3, &sheet);
+        result = meso_compare_sheet_create(ctx, cells, labels, 3, 3, &sheet);
     }
     if (result == MESO_OK && (diff_path || sheet_path)) {
         /* linear: the difference's colours as designed, the sheet's values as the files give */

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "examples_embedded.h"
+#include "meso/runtime.h"
 
 #define MAX_RUNS 64
 

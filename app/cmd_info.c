@@ -6,6 +6,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include "meso/runtime.h"
+#include "meso/prism.h"
+#include "meso/texture.h"
 
 static const app_command_help info_help = {
     .name = "info",

@@ -6,6 +6,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include "meso/runtime.h"
 
 #define SHEET_COLUMNS 4
 #define SHEET_LABEL_LINES 5 /* app_run_label's longest form */

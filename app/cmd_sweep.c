@@ -13,6 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include "meso/runtime.h"
 
 typedef enum partition {
     PARTITION_COST = 0, /* contiguous runs of jobs of about equal estimated cost */

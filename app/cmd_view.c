@@ -67,6 +67,7 @@ int meso_cmd_view(int argc, char **argv) {
 #else
 
 #include <SDL.h>
+#include "meso/runtime.h"
 
 #define MAX_TIMED_FRAMES 100000
 #define NOTICE_SECONDS 3.0
@@ -155,17 +156,17 @@ static void update_title(viewer *v, bool force) {
     if (!force && now - v->title_time < 0.25) return; /* a title is a round trip to X */
     v->title_time = now;
     const char *technique = view_state_technique(&v->state);
-    const view_technique_knobs *knobs = view_technique_knobs_find(technique);
+    const view_technique_knobs knobs = view_technique_knobs_find(technique);
     char option[96] = "", reference[160] = "", switches[64] = "";
-    if (knobs->main_option)
-        snprintf(option, sizeof(option), " %s %g", knobs->main_option,
+    if (knobs.main_option)
+        snprintf(option, sizeof(option), " %s %g", knobs.main_option,
                  view_state_main_option(&v->state));
-    if (knobs->has_shadows || knobs->has_silhouettes)
+    if (knobs.has_shadows || knobs.has_silhouettes)
         snprintf(switches, sizeof(switches), "%s%s%s | ",
-                 knobs->has_shadows ? (v->state.shadows ? "shadows" : "no shadows") : "",
-                 knobs->has_shadows && knobs->has_silhouettes ? ", " : "",
-                 knobs->has_silhouettes ? (v->state.silhouettes ? "silhouettes" : "no silhouettes")
-                                        : "");
+                 knobs.has_shadows ? (v->state.shadows ? "shadows" : "no shadows") : "",
+                 knobs.has_shadows && knobs.has_silhouettes ? ", " : "",
+                 knobs.has_silhouettes ? (v->state.silhouettes ? "silhouettes" : "no silhouettes")
+                                       : "");
     if (v->job) {
         double fraction, seconds;
         view_reference_poll(v->job, &fraction, &seconds);
@@ -470,10 +471,10 @@ static void explain_refusal(viewer *v, view_action action) {
         return notice(v, "%s has no silhouettes switch", technique);
     case VIEW_ACTION_OPTION_UP:
     case VIEW_ACTION_OPTION_DOWN:
-        if (!view_technique_knobs_find(technique)->main_option)
+        if (!view_technique_knobs_find(technique).main_option)
             return notice(v, "%s has no main option to step", technique);
         return notice(v, "%s: %s is at its limit", technique,
-                      view_technique_knobs_find(technique)->main_option);
+                      view_technique_knobs_find(technique).main_option);
     case VIEW_ACTION_CYCLE_DISPLAY:
         return notice(v, "no reference yet: press C");
     default:
@@ -788,10 +789,10 @@ static void init_state(viewer *v, const char *const *names, int count, int initi
     v->state.shadows = view_scene_initial_option(scene, own, "shadows", 1) != 0.0;
     v->state.silhouettes = view_scene_initial_option(scene, own, "silhouettes", 1) != 0.0;
     for (int i = 0; i < count; i++) {
-        const view_technique_knobs *knobs = view_technique_knobs_find(names[i]);
-        if (knobs->main_option)
+        const view_technique_knobs knobs = view_technique_knobs_find(names[i]);
+        if (knobs.main_option)
             v->state.main_option[i] =
-                view_scene_initial_option(scene, names[i], knobs->main_option, knobs->main_default);
+                view_scene_initial_option(scene, names[i], knobs.main_option, knobs.main_default);
     }
     v->state.adaptive = !v->options->fixed_resolution;
     v->resolution = (view_resolution){1.0, 1.0 / v->options->target_fps};

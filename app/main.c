@@ -3,6 +3,7 @@
 
 #include <signal.h>
 #include <string.h>
+#include "meso/runtime.h"
 
 typedef struct command {
     const char *name;

@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include "meso/runtime.h"
 
 bool app_parse_vec3(const char *text, meso_vec3 *out) {
     double v[3];

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "view_scene.h"
+#include "meso/runtime.h"
 
 struct view_reference {
     pthread_t thread;

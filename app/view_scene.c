@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "render_camera.h"
+#include "meso/runtime.h"
 
 /* ---- Scene copies ------------------------------------------------------------------------- */
 
@@ -52,19 +53,18 @@ meso_result view_scene_create(meso_context *ctx, const meso_scene *source, const
     copy->scene = *source;
     copy->scene.objects = copy->objects;
     copy->source = source;
-    const view_technique_knobs *knobs = view_technique_knobs_find(technique);
+    const view_technique_knobs knobs = view_technique_knobs_find(technique);
     for (int i = 0; i < source->num_objects; i++) {
         meso_object *object = &copy->objects[i];
         *object = source->objects[i];
         if (!technique) continue;
         if (!state) continue;
-        if (knobs->has_shadows) set_option(object, technique, "shadows", state->shadows);
-        if (knobs->has_silhouettes)
-            set_option(object, technique, "silhouettes", state->silhouettes);
-        if (knobs->main_option) {
+        if (knobs.has_shadows) set_option(object, technique, "shadows", state->shadows);
+        if (knobs.has_silhouettes) set_option(object, technique, "silhouettes", state->silhouettes);
+        if (knobs.main_option) {
             for (int t = 0; t < state->num_techniques; t++)
                 if (!strcmp(state->techniques[t], technique))
-                    set_option(object, technique, knobs->main_option, state->main_option[t]);
+                    set_option(object, technique, knobs.main_option, state->main_option[t]);
         }
     }
     if (state) view_scene_set_view(copy, state);

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "meso/math.h"
+#include "meso/render.h"
 
 #define DEGREES (MESO_PI_D / 180.0)
 #define ORBIT_DEGREES_PER_PIXEL 0.4
@@ -114,23 +115,39 @@ view_vec3 view_light_turn(view_vec3 direction, const view_camera *camera, double
 
 /* ---- Techniques and their switches -------------------------------------------------------- */
 
-/* What the techniques read (docs/techniques/<name>.md; the defaults are theirs). A technique
- * missing here draws with its own options only. */
-static const view_technique_knobs known_knobs[] = {
-    {"relief", true, true, "linear_steps", 16, 2, 256, 2.0, 0},
-    {"relief_exact", true, true, NULL, 0, 0, 0, 0, 0},
-    {"vdm", true, true, "eigenfunctions", 8, 1, 64, 0, 1},
-    {"tessellation", true, false, "view_threshold", 2.0, 0.25, 64, 2.0, 0},
-    {"displacement", true, false, NULL, 0, 0, 0, 0, 0},
+/* The option + / - step, by technique, and how: by a factor (> 1), else by a step. Its
+ * default and range are the technique's option table's (meso_technique_find_option). */
+static const struct main_option {
+    const char *technique, *option;
+    double factor, step;
+} main_options[] = {
+    {"relief", "linear_steps", 2.0, 0},
+    {"vdm", "eigenfunctions", 0, 1},
+    {"tessellation", "view_threshold", 2.0, 0},
     /* refine_steps 0 is the paper's table-only hit (docs/techniques/gdm.md) */
-    {"gdm", true, false, "refine_steps", 6, 0, 32, 0, 1},
+    {"gdm", "refine_steps", 0, 1},
 };
 
-const view_technique_knobs *view_technique_knobs_find(const char *technique) {
-    for (size_t i = 0; i < sizeof(known_knobs) / sizeof(known_knobs[0]); i++)
-        if (technique && !strcmp(known_knobs[i].technique, technique)) return &known_knobs[i];
-    static const view_technique_knobs nothing = {0};
-    return &nothing;
+view_technique_knobs view_technique_knobs_find(const char *technique) {
+    view_technique_knobs knobs = {.technique = technique};
+    const meso_technique_info *info = meso_technique_find(technique);
+    if (!info) return knobs;
+    knobs.has_shadows = meso_technique_find_option(info, "shadows") != NULL;
+    knobs.has_silhouettes = meso_technique_find_option(info, "silhouettes") != NULL;
+    for (size_t i = 0; i < sizeof(main_options) / sizeof(main_options[0]); i++) {
+        const meso_technique_option *row =
+            strcmp(main_options[i].technique, info->name) == 0
+                ? meso_technique_find_option(info, main_options[i].option)
+                : NULL;
+        if (!row) continue;
+        knobs.main_option = row->name;
+        knobs.main_default = row->default_value;
+        knobs.main_min = row->min;
+        knobs.main_max = row->max;
+        knobs.main_factor = main_options[i].factor;
+        knobs.main_step = main_options[i].step;
+    }
+    return knobs;
 }
 
 /* ---- Key bindings ------------------------------------------------------------------------- */
@@ -202,7 +219,7 @@ void view_state_init(view_state *state, const view_camera *camera, const view_ve
     if (num_techniques > VIEW_MAX_TECHNIQUES) num_techniques = VIEW_MAX_TECHNIQUES;
     for (int i = 0; i < num_techniques; i++) {
         state->techniques[i] = techniques[i];
-        state->main_option[i] = view_technique_knobs_find(techniques[i])->main_default;
+        state->main_option[i] = view_technique_knobs_find(techniques[i]).main_default;
     }
     state->num_techniques = num_techniques;
     state->technique = initial >= 0 && initial < num_techniques ? initial : 0;
@@ -214,8 +231,8 @@ const char *view_state_technique(const view_state *state) {
 }
 
 double view_state_main_option(const view_state *state) {
-    const view_technique_knobs *knobs = view_technique_knobs_find(view_state_technique(state));
-    return knobs->main_option ? state->main_option[state->technique] : NAN;
+    const view_technique_knobs knobs = view_technique_knobs_find(view_state_technique(state));
+    return knobs.main_option ? state->main_option[state->technique] : NAN;
 }
 
 static bool select_technique(view_state *state, int index) {
@@ -225,13 +242,13 @@ static bool select_technique(view_state *state, int index) {
 }
 
 static bool step_main_option(view_state *state, int direction) {
-    const view_technique_knobs *knobs = view_technique_knobs_find(view_state_technique(state));
-    if (!knobs->main_option) return false;
+    const view_technique_knobs knobs = view_technique_knobs_find(view_state_technique(state));
+    if (!knobs.main_option) return false;
     double *value = &state->main_option[state->technique];
-    double next = knobs->main_factor > 1.0
-                      ? (direction > 0 ? *value * knobs->main_factor : *value / knobs->main_factor)
-                      : *value + direction * knobs->main_step;
-    next = clamp(next, knobs->main_min, knobs->main_max);
+    double next = knobs.main_factor > 1.0
+                      ? (direction > 0 ? *value * knobs.main_factor : *value / knobs.main_factor)
+                      : *value + direction * knobs.main_step;
+    next = clamp(next, knobs.main_min, knobs.main_max);
     if (next == *value) return false;
     *value = next;
     return true;
@@ -244,7 +261,7 @@ static void view_moved(view_state *state) {
 }
 
 bool view_state_apply(view_state *state, view_action action, int argument) {
-    const view_technique_knobs *knobs = view_technique_knobs_find(view_state_technique(state));
+    const view_technique_knobs knobs = view_technique_knobs_find(view_state_technique(state));
     switch (action) {
     case VIEW_ACTION_RESET:
         state->camera = state->home_camera;
@@ -261,11 +278,11 @@ bool view_state_apply(view_state *state, view_action action, int argument) {
     case VIEW_ACTION_SELECT_TECHNIQUE:
         return select_technique(state, argument);
     case VIEW_ACTION_TOGGLE_SHADOWS:
-        if (!knobs->has_shadows) return false;
+        if (!knobs.has_shadows) return false;
         state->shadows = !state->shadows;
         return true;
     case VIEW_ACTION_TOGGLE_SILHOUETTES:
-        if (!knobs->has_silhouettes) return false;
+        if (!knobs.has_silhouettes) return false;
         state->silhouettes = !state->silhouettes;
         return true;
     case VIEW_ACTION_TOGGLE_WIREFRAME:

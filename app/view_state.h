@@ -68,9 +68,10 @@ typedef struct view_technique_knobs {
     double main_step;
 } view_technique_knobs;
 
-/* The knobs of a technique; a technique the viewer knows nothing about has none (a struct
- * with every field 0 but `technique`). Never NULL. */
-const view_technique_knobs *view_technique_knobs_find(const char *technique);
+/* The knobs of a technique, from its option table: the switches it has, and the main option
+ * the viewer steps with its default and range; an unknown technique has none (every field 0
+ * but `technique`). */
+view_technique_knobs view_technique_knobs_find(const char *technique);
 
 /* ---- Key bindings ------------------------------------------------------------------------- */
 

@@ -39,7 +39,7 @@ int main(int argc, char **argv) {
     meso_result r = meso_heightfield_create_procedural(ctx, &bark_desc, &bark, NULL);
     if (r == MESO_OK) {
         desc.heightfield = bark, desc.aspect = 0.08f / 1.07f;
-        if ((r = meso_bake_rtv(ctx, &desc, &rtv)) == MESO_OK) report("bark-cylinder", rtv);
+        if ((r = meso_rtv_bake(ctx, &desc, &rtv)) == MESO_OK) report("bark-cylinder", rtv);
         meso_rtv_destroy(rtv);
         rtv = NULL;
     }
@@ -48,7 +48,7 @@ int main(int argc, char **argv) {
         (r = meso_solid_create_procedural(ctx, &(meso_solid_desc){.kind = MESO_SOLID_WEAVE},
                                           &weave)) == MESO_OK) {
         desc.heightfield = NULL, desc.solid = weave, desc.aspect = 0.2f;
-        if ((r = meso_bake_rtv(ctx, &desc, &rtv)) == MESO_OK) report("weave-teapot", rtv);
+        if ((r = meso_rtv_bake(ctx, &desc, &rtv)) == MESO_OK) report("weave-teapot", rtv);
         meso_rtv_destroy(rtv);
     }
     if (r != MESO_OK) fprintf(stderr, "meso: %s\n", meso_context_last_error(ctx));

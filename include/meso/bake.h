@@ -5,13 +5,11 @@
  * and type, and a checksum. Readers validate every size against the file's length before
  * allocating. Bakes are cached by the hash of source + parameters.
  *
- * The representations have a header each, included here:
+ * The representations an application may bake, save and load have a header each, included
+ * here (the techniques' own maps, horizon, min-max, summed-area, cone and isosurface, are the
+ * renderer's internals: src/internal/meso):
  *   bake_file.h        the container (docs/bake-format.md) and the bake cache
  *   bake_vdm.h         view-dependent displacement maps + MVM, SVD-compressed (VDM §3)
- *   bake_horizon.h     horizon maps (Max 1988; Sloan & Cohen 2000)
- *   bake_minmax.h      min-max mip pyramids of height fields (hierarchical ray tracing)
- *   bake_sat.h         summed-area tables of height fields (Crow 1984)
- *   bake_isosurface.h  isosurfaces of solid mesostructure, extracted in texture space
  *   bake_layers.h      multilayer relief maps of solids and height fields (Policarpo & Oliveira §3)
  *   bake_gdm.h         generalized displacement maps of solids and height fields, SVD-compressed
  *                      (GDM §3.1, §4.1)
@@ -22,10 +20,6 @@
 
 #include "meso/bake_file.h"
 #include "meso/bake_vdm.h"
-#include "meso/bake_isosurface.h"
-#include "meso/bake_horizon.h"
-#include "meso/bake_minmax.h"
-#include "meso/bake_sat.h"
 #include "meso/bake_layers.h"
 #include "meso/bake_gdm.h"
 #include "meso/bake_rtv.h"

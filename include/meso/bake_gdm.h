@@ -20,7 +20,7 @@
  *     -cos theta) in (u, v, w): theta = 0 points up, out of the surface (toward -w), theta = pi
  *     down into it; theta_t = (t + 0.5) pi / num_theta, phi_p = p 2 pi / num_phi.
  *
- * Threads: meso_bake_gdm uses every worker of ctx; output identical for any thread count;
+ * Threads: meso_gdm_bake uses every worker of ctx; output identical for any thread count;
  * lookups are pure and thread-safe.
  */
 #ifndef MESO_BAKE_GDM_H
@@ -50,7 +50,7 @@ extern "C" {
  * stops after this distance (texture units): d is at most this. */
 #define MESO_GDM_MAX_RAY_LENGTH 16.0f
 
-/* Zero fields take the defaults of meso_query_gdm_defaults(). Exactly one of heightfield and
+/* Zero fields take the defaults of meso_gdm_desc_defaults(). Exactly one of heightfield and
  * solid is set. */
 typedef struct meso_gdm_desc {
     const meso_heightfield *heightfield; /* read during the call only */
@@ -66,7 +66,7 @@ typedef struct meso_gdm_desc {
 } meso_gdm_desc;
 
 /* The desc with zero fields replaced by their defaults; NULL: all defaults. Pure. */
-meso_gdm_desc meso_query_gdm_defaults(const meso_gdm_desc *desc);
+meso_gdm_desc meso_gdm_desc_defaults(const meso_gdm_desc *desc);
 
 typedef struct meso_gdm meso_gdm;
 
@@ -93,7 +93,7 @@ typedef struct meso_gdm_compression {
 /* Bake the GDM of a solid or a height field (§3.1) and compress it (§4.1).
  *
  * Rays are traced with Embree against a watertight triangle surface of the source: the
- * solid's dual-contoured surface (meso_bake_isosurface, 2x finer than the voxels and at least 128 x
+ * solid's dual-contoured surface (meso_isosurface_bake, 2x finer than the voxels and at least 128 x
  * 128 x 64 cells a tile) or the height field's texel-centre triangles (at most 1024 a side). A
  * voxel inside the source (meso_solid_distance <= 0; w >= 1 - h) gets 0 without a ray; a ray
  * from outside takes the first point where it enters that surface.
@@ -106,7 +106,7 @@ typedef struct meso_gdm_compression {
  * Threads   Uses every worker of ctx (rays from its pool; Embree's BVH is built on one thread
  *           so that it is the same tree for any count); output identical for any thread
  *           count; a progress bar "gdm bake". Safe on different contexts at once. */
-meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm **out_gdm);
+meso_result meso_gdm_bake(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm **out_gdm);
 /* Free; NULL does nothing. */
 void meso_gdm_destroy(meso_gdm *gdm);
 /* The parameters the map was baked with (sources NULL; keep_raw true when the raw table is
@@ -129,7 +129,7 @@ meso_result meso_gdm_load(meso_context *ctx, const char *path, meso_gdm **out_gd
 meso_result meso_gdm_from_bake_file(meso_context *ctx, const meso_bake_file *bake, const char *name,
                                     meso_gdm **out_gdm);
 /* The cached map of desc, or a new bake stored in the cache (docs/bake-format.md); an
- * unusable cache entry is a warning and baked again. Same results as meso_bake_gdm. */
+ * unusable cache entry is a warning and baked again. Same results as meso_gdm_bake. */
 meso_result meso_gdm_bake_cached(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm **out_gdm);
 
 /* d at continuous uvw (u, v repeat; w clamped to [0, 1]) along the (u, v, w) direction

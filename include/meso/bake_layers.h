@@ -40,7 +40,6 @@
 #define MESO_BAKE_LAYERS_H
 
 #include "meso/bake_file.h"
-#include "meso/bake_isosurface.h"
 #include "meso/core.h"
 #include "meso/mesostructure.h"
 
@@ -102,12 +101,12 @@ meso_layers_desc meso_layers_desc_defaults(const meso_layers_desc *desc);
  *          names it, "relief_layers: num_layers: ..."), MESO_ERROR_LIMIT,
  *          MESO_ERROR_OUT_OF_MEMORY.
  * Threads  Uses every worker of ctx; safe on different contexts at once. */
-meso_result meso_bake_layers(meso_context *ctx, const meso_layers_desc *desc,
+meso_result meso_layers_bake(meso_context *ctx, const meso_layers_desc *desc,
                              meso_layers **out_map);
 /* The cache key of desc (source hash and every parameter). Pure. */
 uint64_t meso_layers_cache_key(const meso_layers_desc *desc);
-/* meso_bake_layers through the bake cache (bake_file.h): a valid cached entry is loaded, else
- * the map is baked and stored. Same results as meso_bake_layers. */
+/* meso_layers_bake through the bake cache (bake_file.h): a valid cached entry is loaded, else
+ * the map is baked and stored. Same results as meso_layers_bake. */
 meso_result meso_layers_bake_cached(meso_context *ctx, const meso_layers_desc *desc,
                                     meso_layers **out_map);
 

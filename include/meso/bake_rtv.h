@@ -43,7 +43,7 @@
  * of a closed mesh seen through the holes, meso_gi_vertex_radiance_through_shell). A ray that
  * stays inside the shell for `max_tiles` tiles is taken to escape.
  *
- * Threads: meso_bake_rtv uses every worker of ctx, output identical for any thread count;
+ * Threads: meso_rtv_bake uses every worker of ctx, output identical for any thread count;
  * meso_rtv_evaluate is pure and thread-safe.
  */
 #ifndef MESO_BAKE_RTV_H
@@ -91,10 +91,10 @@ typedef struct meso_rtv {
 /* Bake. Errors: MESO_ERROR_INVALID_ARGUMENT naming the field ("rtv: aspect: 0 is not in
  * (0, 100]"), MESO_ERROR_LIMIT (voxels above MESO_RTV_MAX_VOXELS or the memory budget),
  * MESO_ERROR_OUT_OF_MEMORY. *out_rtv is NULL on failure. */
-meso_result meso_bake_rtv(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv **out_rtv);
+meso_result meso_rtv_bake(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv **out_rtv);
 void meso_rtv_destroy(meso_rtv *rtv);
 
-/* meso_bake_rtv through the bake cache (bake_file.h): keyed by the source's hash and every
+/* meso_rtv_bake through the bake cache (bake_file.h): keyed by the source's hash and every
  * desc field; a cached RTV has no `coefficients` and bake_seconds 0. */
 meso_result meso_rtv_bake_cached(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv **out_rtv);
 

@@ -23,10 +23,10 @@
  *     length of one tile), positive convex; c_k uniform in [curvature_min, curvature_max].
  *   - theta_MVM in radians.
  *
- * Defaults (meso_query_vdm_defaults): 128 x 128 texels, 32 theta x 8 phi views, 16 curvatures
+ * Defaults (meso_vdm_desc_defaults): 128 x 128 texels, 32 theta x 8 phi views, 16 curvatures
  * in [-2, 3], depth 0.05 tile, ray step 0.5 texel, 8 VDM and 4 MVM eigenfunctions.
  *
- * Threads: meso_bake_vdm uses every worker of ctx; lookups are pure and thread-safe.
+ * Threads: meso_vdm_bake uses every worker of ctx; lookups are pure and thread-safe.
  */
 #ifndef MESO_BAKE_VDM_H
 #define MESO_BAKE_VDM_H
@@ -52,7 +52,7 @@ extern "C" {
 #define MESO_VDM_MAX_RAW_FLOATS (UINT64_C(1) << 28) /* keep_raw: 1 GiB of floats */
 #define MESO_VDM_RMSE_COUNT 16
 
-/* Zero fields take the defaults of meso_query_vdm_defaults(). */
+/* Zero fields take the defaults of meso_vdm_desc_defaults(). */
 typedef struct meso_vdm_desc {
     const meso_heightfield *heightfield; /* required; read during the call only */
     float depth;                         /* shell thickness in tiles (0.05) */
@@ -71,7 +71,7 @@ typedef struct meso_vdm_desc {
 } meso_vdm_desc;
 
 /* The desc with zero fields replaced by their defaults; NULL: all defaults. Pure. */
-meso_vdm_desc meso_query_vdm_defaults(const meso_vdm_desc *desc);
+meso_vdm_desc meso_vdm_desc_defaults(const meso_vdm_desc *desc);
 
 typedef struct meso_vdm meso_vdm;
 
@@ -107,13 +107,13 @@ typedef struct meso_vdm_compression {
 /* Bake the view-dependent displacement map of a height field (VDM §3.1, Appendix, §3.3).
  *
  * desc      Read during the call only. Zero fields take the defaults of
- *           meso_query_vdm_defaults(): 128x128 texels, 32x8 views, 16 curvatures.
+ *           meso_vdm_desc_defaults(): 128x128 texels, 32x8 views, 16 curvatures.
  * out_vdm   On MESO_OK a new map owned by the caller (meso_vdm_destroy); NULL otherwise.
  * Returns   MESO_OK, MESO_ERROR_INVALID_ARGUMENT (the log names the field), MESO_ERROR_LIMIT,
  *           MESO_ERROR_OUT_OF_MEMORY, MESO_ERROR_CANCELLED, MESO_ERROR_INTERNAL (LAPACK).
  * Threads   Uses every worker of ctx; output identical for any thread count; a progress bar.
  */
-meso_result meso_bake_vdm(meso_context *ctx, const meso_vdm_desc *desc, meso_vdm **out_vdm);
+meso_result meso_vdm_bake(meso_context *ctx, const meso_vdm_desc *desc, meso_vdm **out_vdm);
 void meso_vdm_destroy(meso_vdm *vdm);
 
 /* The parameters the map was baked with (heightfield NULL). */
@@ -140,26 +140,6 @@ meso_result meso_vdm_bake_cached(meso_context *ctx, const meso_vdm_desc *desc, m
 float meso_vdm_lookup(const meso_vdm *vdm, float u, float v, float theta, float phi, float c,
                       int num_eigen, bool raw);
 float meso_vdm_max_theta(const meso_vdm *vdm, float u, float v, float phi, float c, bool raw);
-
-/* The compressed table laid out for lookups of k VDM and m MVM eigenfunctions as dot products
- * of `lanes` = max(k, m) rounded up to 8 numbers (§3.3's reconstruction d = sum_i W^i E^i):
- * W per (x, y, phi) as IEEE half floats with its mip pyramid (§4: "VDM as a texture map is
- * easily anti-aliased by mip-mapping": d is linear in W, so box-filtering W filters the table
- * exactly; 2 x 2 boxes in float, odd sizes wrapped), and E_VDM, E_MVM transposed, zero past
- * k and m. What the CPU technique and the GL back end both read, so they read the same bits. */
-#define MESO_VDM_MAX_LEVELS 12
-typedef struct meso_vdm_lanes {
-    int lanes;
-    int num_levels; /* 1 without mipmap */
-    int level_width[MESO_VDM_MAX_LEVELS], level_height[MESO_VDM_MAX_LEVELS];
-    uint16_t *level_weights[MESO_VDM_MAX_LEVELS]; /* [height][width][num_phi][lanes] */
-    float *eigen_t; /* [num_theta * num_curvatures][lanes] (column c * num_theta + t) */
-    float *mvm_t;   /* [num_curvatures][lanes] */
-} meso_vdm_lanes;
-/* MESO_OK or MESO_ERROR_OUT_OF_MEMORY (logged, naming `name`); k, m at most the view's. */
-meso_result meso_vdm_lanes_init(meso_context *ctx, const meso_vdm_view *view, int k, int m,
-                                bool mipmap, const char *name, meso_vdm_lanes *out);
-void meso_vdm_lanes_deinit(meso_vdm_lanes *lanes);
 
 /* A text report of a bake file of kind "vdm" for `meso info`: parameters, raw and compressed
  * size, RMSE for k = 1..16. Writes at most size bytes (NUL-terminated) like snprintf and

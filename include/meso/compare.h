@@ -47,16 +47,17 @@ meso_result meso_image_diff(meso_context *ctx, const meso_image *a, const meso_i
 /* A sheet: images laid out in `columns` columns (0: all in one row), each with its label (lines
  * separated by '\n') drawn beneath in meso's built-in bitmap font. Images may differ in size;
  * cells take the largest. RGB, values as given (linear or encoded: the caller's choice). */
-meso_result meso_sheet_create(meso_context *ctx, const meso_image *const *images,
-                              const char *const *labels, size_t count, int columns,
-                              meso_image **out_image);
+meso_result meso_compare_sheet_create(meso_context *ctx, const meso_image *const *images,
+                                      const char *const *labels, size_t count, int columns,
+                                      meso_image **out_image);
 
-/* The width and height of the sheet meso_sheet_create would make of `count` cells of
+/* The width and height of the sheet meso_compare_sheet_create would make of `count` cells of
  * cell_width x cell_height with labels of at most `label_lines` lines, before any image
  * exists (so a command can refuse a sheet over the limits before its work). MESO_OK, or
  * MESO_ERROR_LIMIT (logged) when a side exceeds MESO_IMAGE_MAX_SIDE. */
-meso_result meso_sheet_size(meso_context *ctx, size_t count, int columns, int cell_width,
-                            int cell_height, int label_lines, int *out_width, int *out_height);
+meso_result meso_compare_sheet_size(meso_context *ctx, size_t count, int columns, int cell_width,
+                                    int cell_height, int label_lines, int *out_width,
+                                    int *out_height);
 
 /* Draw text into an RGB(A) image at (x, y) (top-left) in `color`, anti-aliased, with DejaVu
  * Sans Mono (cairo, fontconfig) at 10 * `scale` pixels: 6 * scale pixels a character, lines

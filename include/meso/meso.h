@@ -24,7 +24,6 @@
 #include "meso/sh.h"
 #include "meso/environment.h"
 #include "meso/geom.h"
-#include "meso/prism.h"
 #include "meso/mesostructure.h"
 #include "meso/bake.h"
 #include "meso/scene.h"

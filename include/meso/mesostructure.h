@@ -238,6 +238,9 @@ typedef struct meso_solid_shape {
 } meso_solid_shape;
 meso_solid_shape meso_solid_get_shape(const meso_solid *solid);
 
+/* A scalar field over texture space, negative inside; must be periodic in u and v (period 1). */
+typedef float (*meso_scalar_field_fn)(void *user, meso_vec3 uvw);
+
 #ifdef __cplusplus
 }
 #endif

@@ -5,7 +5,7 @@
  *   meso_renderer_create(ctx, scene, &(meso_render_desc){.technique = "relief"}, &r);
  *   meso_framebuffer_create(ctx, scene->width, scene->height, &fb);
  *   meso_renderer_render(r, fb);             // as often as you like: prepared once
- *   meso_framebuffer_save_png(ctx, fb, scene, "out.png", NULL);
+ *   meso_framebuffer_save_png(ctx, fb, scene->encoding, "out.png", NULL);
  *
  * A renderer prepares every object once (bakes maps, per-vertex data) and then draws frames:
  * per-pixel techniques run in meso's tiled multithreaded rasterizer; `reference` ray traces

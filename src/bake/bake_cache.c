@@ -2,13 +2,17 @@
  * from $MESO_CACHE_DIR, $XDG_CACHE_HOME/meso or $HOME/.cache/meso. */
 #include <errno.h>
 #include <fcntl.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "bake_internal.h"
+#include "meso/bake_cache.h"
 #include "meso/bake_file.h"
+#include "meso/runtime.h"
 
 /* mkdir -p for the cache folder; existing folders are fine. */
 static bool make_dirs(char *path) {
@@ -157,4 +161,46 @@ void meso_bake_cache_release(meso_bake_cache_claim *claim) {
     unlink(claim->path);
     close(claim->fd);
     claim->fd = -1;
+}
+
+static meso_result load_or_bake(meso_context *ctx, const meso_cached_bake *e, void *out) {
+    meso_bake_file *cached = NULL;
+    meso_result result =
+        meso_bake_cache_load(ctx, e->kind, e->kind_version, e->key, e->source_hash, &cached);
+    if (result != MESO_OK) return result;
+    if (cached) {
+        char where[96];
+        snprintf(where, sizeof where, "%s cache entry", e->label);
+        result = e->from_file(ctx, cached, where, e->desc, out);
+        meso_bake_file_destroy(cached);
+        if (result == MESO_OK || result == MESO_ERROR_OUT_OF_MEMORY) return result;
+        meso_log_warning(ctx, "%s: cache entry unusable, baking again: %s", e->label,
+                         meso_context_last_error(ctx));
+    }
+    if ((result = e->bake(ctx, e->desc, out)) != MESO_OK) return result;
+    if (e->store(ctx, e, out) != MESO_OK)
+        meso_log_warning(ctx, "%s: could not store the bake in the cache: %s", e->label,
+                         meso_context_last_error(ctx));
+    return MESO_OK;
+}
+
+meso_result meso_bake_cache_run(meso_context *ctx, const meso_cached_bake *entry, void *out) {
+    meso_bake_cache_claim claim;
+    meso_bake_cache_claim_entry(ctx, entry->kind, entry->key, &claim);
+    meso_result result = load_or_bake(ctx, entry, out);
+    meso_bake_cache_release(&claim);
+    return result;
+}
+
+meso_result
+meso_bake_load_with(meso_context *ctx, const char *path,
+                    meso_result (*from_file)(meso_context *ctx, const meso_bake_file *bake,
+                                             const char *where, const void *desc, void *out),
+                    const void *desc, void *out) {
+    meso_bake_file *bake = NULL;
+    meso_result result = meso_bake_file_load(ctx, path, &bake);
+    if (result != MESO_OK) return result;
+    result = from_file(ctx, bake, path, desc, out);
+    meso_bake_file_destroy(bake);
+    return result;
 }

@@ -10,8 +10,11 @@
 #include <string.h>
 
 #include "bake_internal.h"
+#include "meso/bake_cache.h"
 #include "meso/bake_cone.h"
 #include "meso/bake_file.h"
+#include "meso/bake_minmax.h"
+#include "meso/runtime.h"
 
 /* A depth-first walk holds at most 3 siblings a level plus the node opened. */
 #define STACK_NODES (4 * MESO_MINMAX_MAX_LEVELS)
@@ -130,8 +133,8 @@ static void bake_cone_row(void *user, size_t job, int thread_index) {
     }
 }
 
-meso_result meso_bake_cone(meso_context *ctx, const meso_heightfield *heightfield,
-                           const meso_minmax_pyramid *pyramid, meso_cone_map **out_map) {
+meso_result meso_cone_map_bake(meso_context *ctx, const meso_heightfield *heightfield,
+                               const meso_minmax_pyramid *pyramid, meso_cone_map **out_map) {
     *out_map = NULL;
     if (!heightfield || !heightfield->heights || heightfield->width <= 0 ||
         heightfield->height <= 0)
@@ -204,49 +207,53 @@ static meso_result cone_from_bake_file(meso_context *ctx, const meso_bake_file *
     return MESO_OK;
 }
 
-static meso_result cone_bake_claimed(meso_context *ctx, const meso_heightfield *heightfield,
-                                     const meso_minmax_pyramid *pyramid, uint64_t key,
-                                     meso_cone_map **out_map) {
-    meso_bake_file *cached = NULL;
-    meso_result r = meso_bake_cache_load(ctx, MESO_CONE_KIND, MESO_CONE_KIND_VERSION, key,
-                                         heightfield->hash, &cached);
-    if (r != MESO_OK) return r;
-    if (cached) {
-        r = cone_from_bake_file(ctx, cached, heightfield, out_map);
-        meso_bake_file_destroy(cached);
-        if (r == MESO_OK) return MESO_OK;
-        if (r == MESO_ERROR_OUT_OF_MEMORY) return r;
-        meso_log_warning(ctx, "cone: cache entry unusable, baking again: %s",
-                         meso_context_last_error(ctx));
-    }
-    if ((r = meso_bake_cone(ctx, heightfield, pyramid, out_map)) != MESO_OK) return r;
-    meso_bake_file bake = {.kind = MESO_CONE_KIND,
-                           .kind_version = MESO_CONE_KIND_VERSION,
-                           .source_hash = heightfield->hash,
-                           .params_json = "{}",
-                           .num_arrays = 1};
-    bake.arrays[0] =
-        (meso_bake_array){.name = "cells",
-                          .type = MESO_BAKE_F32,
-                          .num_dims = 3,
-                          .dims = {(uint64_t)heightfield->height, (uint64_t)heightfield->width, 2},
-                          .data = (*out_map)->cells};
-    if (meso_bake_cache_save(ctx, &bake, key) != MESO_OK)
-        meso_log_warning(ctx, "cone: could not store the bake in the cache: %s",
-                         meso_context_last_error(ctx));
-    return MESO_OK;
+/* The steps of meso_bake_cache_run for a cone map; desc: a cone_source. */
+typedef struct cone_source {
+    const meso_heightfield *heightfield;
+    const meso_minmax_pyramid *pyramid;
+} cone_source;
+
+static meso_result cone_from_file(meso_context *ctx, const meso_bake_file *bake, const char *where,
+                                  const void *desc, void *out) {
+    (void)where;
+    return cone_from_bake_file(ctx, bake, ((const cone_source *)desc)->heightfield, out);
 }
 
-meso_result meso_bake_cone_cached(meso_context *ctx, const meso_heightfield *heightfield,
-                                  const meso_minmax_pyramid *pyramid, meso_cone_map **out_map) {
+static meso_result cone_bake(meso_context *ctx, const void *desc, void *out) {
+    const cone_source *source = desc;
+    return meso_cone_map_bake(ctx, source->heightfield, source->pyramid, out);
+}
+
+static meso_result cone_store(meso_context *ctx, const meso_cached_bake *entry, const void *out) {
+    const meso_cone_map *map = *(meso_cone_map *const *)out;
+    meso_bake_file bake = {.kind = MESO_CONE_KIND,
+                           .kind_version = MESO_CONE_KIND_VERSION,
+                           .source_hash = entry->source_hash,
+                           .params_json = "{}",
+                           .num_arrays = 1};
+    bake.arrays[0] = (meso_bake_array){.name = "cells",
+                                       .type = MESO_BAKE_F32,
+                                       .num_dims = 3,
+                                       .dims = {(uint64_t)map->height, (uint64_t)map->width, 2},
+                                       .data = map->cells};
+    return meso_bake_cache_save(ctx, &bake, entry->key);
+}
+
+meso_result meso_cone_map_bake_cached(meso_context *ctx, const meso_heightfield *heightfield,
+                                      const meso_minmax_pyramid *pyramid, meso_cone_map **out_map) {
     *out_map = NULL;
-    if (!heightfield) return meso_bake_cone(ctx, heightfield, pyramid, out_map);
-    uint64_t key = cone_cache_key(heightfield->hash);
-    meso_bake_cache_claim claim;
-    meso_bake_cache_claim_entry(ctx, MESO_CONE_KIND, key, &claim);
-    meso_result result = cone_bake_claimed(ctx, heightfield, pyramid, key, out_map);
-    meso_bake_cache_release(&claim);
-    return result;
+    if (!heightfield) return meso_cone_map_bake(ctx, heightfield, pyramid, out_map);
+    cone_source source = {heightfield, pyramid};
+    meso_cached_bake entry = {MESO_CONE_KIND,
+                              MESO_CONE_KIND_VERSION,
+                              "cone",
+                              cone_cache_key(heightfield->hash),
+                              heightfield->hash,
+                              &source,
+                              cone_from_file,
+                              cone_bake,
+                              cone_store};
+    return meso_bake_cache_run(ctx, &entry, out_map);
 }
 
 size_t meso_cone_map_memory(const meso_cone_map *map) {

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "bake_internal.h"
+#include "meso/runtime.h"
 #include "meso/math.h"
 
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__

@@ -3,7 +3,7 @@
  * ("Bake and compression") has the measurements behind the choices below.
  *
  * Rays are traced with Embree against a watertight triangle surface of the solid (the dual
- * contouring of meso_bake_isosurface for solids, the texel-centre grid for height fields), inside
+ * contouring of meso_isosurface_bake for solids, the texel-centre grid for height fields), inside
  * the tile's column 0 <= u, v <= 1 and wrapped across its sides (GDM §3.1: the volume surrounded by
  * identical tiles). Whether a voxel is inside is decided on the source itself (the solid's
  * distance, w >= 1 - h), and a ray that starts outside it takes the first hit where it enters
@@ -15,6 +15,9 @@
 #include <string.h>
 
 #include "bake_internal.h"
+#include "meso/bake_cache.h"
+#include "meso/bake_isosurface.h"
+#include "meso/runtime.h"
 
 #define TWO_PI (2.0 * MESO_PI_D)
 
@@ -46,7 +49,7 @@ struct meso_gdm {
     meso_gdm_compression compression;
 };
 
-meso_gdm_desc meso_query_gdm_defaults(const meso_gdm_desc *desc) {
+meso_gdm_desc meso_gdm_desc_defaults(const meso_gdm_desc *desc) {
     meso_gdm_desc d = desc ? *desc : (meso_gdm_desc){0};
     if (d.width == 0) d.width = 64;
     if (d.height == 0) d.height = d.width;
@@ -106,7 +109,7 @@ static uint64_t source_hash_of(const meso_gdm_desc *d) {
 }
 
 uint64_t meso_gdm_cache_key(const meso_gdm_desc *desc) {
-    meso_gdm_desc d = meso_query_gdm_defaults(desc);
+    meso_gdm_desc d = meso_gdm_desc_defaults(desc);
     uint64_t h = source_hash_of(&d);
     int32_t ints[] = {d.width,
                       d.height,
@@ -311,7 +314,7 @@ static meso_result surface_build(meso_context *ctx, const meso_gdm_desc *d, uint
     if (d->solid) {
         meso_isosurface_desc iso_desc = surface_cells_of(d);
         meso_isosurface *iso = NULL;
-        meso_result result = meso_bake_isosurface(ctx, d->solid, &iso_desc, &iso);
+        meso_result result = meso_isosurface_bake(ctx, d->solid, &iso_desc, &iso);
         if (result != MESO_OK) {
             surface_release(s);
             return result;
@@ -570,12 +573,12 @@ static meso_result begin_bake(meso_context *ctx, const meso_gdm_desc *desc, meso
     if (out_gdm) *out_gdm = NULL;
     if (!out_gdm || !desc)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "gdm: NULL desc or out_gdm");
-    *out_desc = meso_query_gdm_defaults(desc);
+    *out_desc = meso_gdm_desc_defaults(desc);
     meso_result result = check_source(ctx, out_desc);
     return result == MESO_OK ? check_desc(ctx, "gdm", out_desc) : result;
 }
 
-meso_result meso_bake_gdm(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm **out_gdm) {
+meso_result meso_gdm_bake(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm **out_gdm) {
     meso_gdm_desc d;
     meso_result result = begin_bake(ctx, desc, out_gdm, &d);
     if (result != MESO_OK) return result;
@@ -1003,49 +1006,43 @@ meso_result meso_gdm_from_bake_file(meso_context *ctx, const meso_bake_file *bak
     return MESO_OK;
 }
 
-meso_result meso_gdm_load(meso_context *ctx, const char *path, meso_gdm **out_gdm) {
-    if (out_gdm) *out_gdm = NULL;
-    meso_bake_file *bake = NULL;
-    meso_result result = meso_bake_file_load(ctx, path, &bake);
-    if (result != MESO_OK) return result;
-    result = meso_gdm_from_bake_file(ctx, bake, path, out_gdm);
-    meso_bake_file_destroy(bake);
-    return result;
+/* The steps of meso_bake_cache_run for a gdm; desc: the completed meso_gdm_desc. */
+static meso_result gdm_from_file(meso_context *ctx, const meso_bake_file *bake, const char *where,
+                                 const void *desc, void *out) {
+    (void)desc;
+    return meso_gdm_from_bake_file(ctx, bake, where, out);
 }
 
-static meso_result gdm_bake_claimed(meso_context *ctx, meso_gdm_desc d, uint64_t key,
-                                    meso_gdm **out_gdm) {
-    meso_bake_file *cached = NULL;
-    meso_result result = meso_bake_cache_load(ctx, MESO_GDM_KIND, MESO_GDM_KIND_VERSION, key,
-                                              source_hash_of(&d), &cached);
-    if (result != MESO_OK) return result;
-    if (cached) {
-        result = meso_gdm_from_bake_file(ctx, cached, "gdm cache entry", out_gdm);
-        meso_bake_file_destroy(cached);
-        if (result == MESO_OK) return MESO_OK;
-        meso_log_warning(ctx, "gdm: cache entry unusable, baking again: %s",
-                         meso_context_last_error(ctx));
-    }
-    if ((result = meso_bake_gdm(ctx, &d, out_gdm)) != MESO_OK) return result;
+static meso_result gdm_bake(meso_context *ctx, const void *desc, void *out) {
+    return meso_gdm_bake(ctx, desc, out);
+}
+
+static meso_result gdm_store(meso_context *ctx, const meso_cached_bake *entry, const void *out) {
     char params[1024];
     float report[REPORT_FLOATS];
-    meso_bake_file bake = to_bake_file(*out_gdm, params, sizeof(params), report);
-    if (meso_bake_cache_save(ctx, &bake, key) != MESO_OK)
-        meso_log_warning(ctx, "gdm: could not store the bake in the cache: %s",
-                         meso_context_last_error(ctx));
-    return MESO_OK;
+    meso_bake_file bake = to_bake_file(*(meso_gdm *const *)out, params, sizeof(params), report);
+    return meso_bake_cache_save(ctx, &bake, entry->key);
+}
+
+meso_result meso_gdm_load(meso_context *ctx, const char *path, meso_gdm **out_gdm) {
+    if (out_gdm) *out_gdm = NULL;
+    return meso_bake_load_with(ctx, path, gdm_from_file, NULL, out_gdm);
 }
 
 meso_result meso_gdm_bake_cached(meso_context *ctx, const meso_gdm_desc *desc, meso_gdm **out_gdm) {
     meso_gdm_desc d;
     meso_result result = begin_bake(ctx, desc, out_gdm, &d);
     if (result != MESO_OK) return result;
-    uint64_t key = meso_gdm_cache_key(&d);
-    meso_bake_cache_claim claim;
-    meso_bake_cache_claim_entry(ctx, MESO_GDM_KIND, key, &claim);
-    result = gdm_bake_claimed(ctx, d, key, out_gdm);
-    meso_bake_cache_release(&claim);
-    return result;
+    meso_cached_bake entry = {MESO_GDM_KIND,
+                              MESO_GDM_KIND_VERSION,
+                              "gdm",
+                              meso_gdm_cache_key(&d),
+                              source_hash_of(&d),
+                              &d,
+                              gdm_from_file,
+                              gdm_bake,
+                              gdm_store};
+    return meso_bake_cache_run(ctx, &entry, out_gdm);
 }
 
 size_t meso_gdm_describe(const meso_bake_file *bake, char *buffer, size_t size) {

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "meso/bake_horizon.h"
+#include "meso/runtime.h"
 
 #define DEFAULT_AZIMUTHS 8
 #define DEFAULT_DISTANCE 64.0f
@@ -157,8 +158,8 @@ static void bake_row(void *user, size_t job, int thread_index) {
     if (meso_progress_advance(w->progress, 1)) atomic_store(&w->cancelled, 1);
 }
 
-meso_result meso_bake_horizon(meso_context *ctx, const meso_heightfield *heightfield,
-                              const meso_horizon_desc *desc, meso_horizon_map **out_map) {
+meso_result meso_horizon_map_bake(meso_context *ctx, const meso_heightfield *heightfield,
+                                  const meso_horizon_desc *desc, meso_horizon_map **out_map) {
     meso_horizon_map *map = NULL;
     float *padded = NULL, dir_x[MESO_HORIZON_MAX_AZIMUTHS], dir_y[MESO_HORIZON_MAX_AZIMUTHS];
     meso_result result;

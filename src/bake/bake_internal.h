@@ -5,6 +5,7 @@
 #include <math.h>
 
 #include "meso/bake.h"
+#include "meso/runtime.h"
 
 /* A tall table streamed by rows: fill(user, first, count, out) writes rows [first, first +
  * count) row-major (count x columns floats) into out. Called from worker threads on disjoint
@@ -48,5 +49,35 @@ const void *meso_bake_file_expect(const meso_bake_file *bake, const char *name, 
 void meso_bake_round_to_halves(float *values, uint16_t *out_halves, size_t count);
 /* Widen count IEEE halves to floats. */
 void meso_bake_halves_to_floats(const uint16_t *halves, float *out_values, size_t count);
+
+/* ---- The cached bakes (meso_<kind>_bake_cached) -------------------------------------------- */
+
+/* One kind's cached bake: the cache entry (kind, key) made from source_hash, and the three
+ * steps the cache runs for it. `out` is the caller's `meso_<kind> **`, `desc` its request. */
+typedef struct meso_cached_bake {
+    const char *kind; /* MESO_<KIND>_KIND */
+    uint32_t kind_version;
+    const char *label; /* the messages' prefix: "gdm", "relief_layers" ... */
+    uint64_t key, source_hash;
+    const void *desc;
+    /* the bake from a loaded cache file (where names it in messages) into *out */
+    meso_result (*from_file)(meso_context *ctx, const meso_bake_file *bake, const char *where,
+                             const void *desc, void *out);
+    /* a fresh bake into *out */
+    meso_result (*bake)(meso_context *ctx, const void *desc, void *out);
+    /* store the bake *out under (kind, key) with meso_bake_cache_save */
+    meso_result (*store)(meso_context *ctx, const struct meso_cached_bake *entry, const void *out);
+} meso_cached_bake;
+
+/* Load the entry's bake from the cache, or bake it and store it, holding the entry's claim
+ * (meso_bake_cache_claim_entry) throughout so concurrent callers bake it once. An unusable
+ * entry is baked again and a failed store only warns: the cache never fails a bake. */
+meso_result meso_bake_cache_run(meso_context *ctx, const meso_cached_bake *entry, void *out);
+/* Load the bake file at path and convert it with from_file (as meso_<kind>_load). */
+meso_result
+meso_bake_load_with(meso_context *ctx, const char *path,
+                    meso_result (*from_file)(meso_context *ctx, const meso_bake_file *bake,
+                                             const char *where, const void *desc, void *out),
+                    const void *desc, void *out);
 
 #endif

@@ -24,6 +24,7 @@
 #include <string.h>
 
 #include "meso/bake_isosurface.h"
+#include "meso/runtime.h"
 
 /* Dual contouring's settings (cell_vertex_position): at most this many regula falsi steps for an
  * edge's crossing, the gradient's difference step and the pull toward the crossings' mean, in
@@ -330,7 +331,7 @@ static void quads_column(void *user, size_t job, int thread_index) {
 
 /* ---- Entry points ------------------------------------------------------------------------- */
 
-meso_result meso_bake_isosurface_function(meso_context *ctx, meso_scalar_field_fn field, void *user,
+meso_result meso_isosurface_bake_function(meso_context *ctx, meso_scalar_field_fn field, void *user,
                                           const meso_isosurface_desc *desc,
                                           meso_isosurface **out_isosurface) {
     *out_isosurface = NULL;
@@ -438,10 +439,10 @@ static float solid_field(void *user, meso_vec3 uvw) {
     return meso_solid_distance((const meso_solid *)user, uvw);
 }
 
-meso_result meso_bake_isosurface(meso_context *ctx, const meso_solid *solid,
+meso_result meso_isosurface_bake(meso_context *ctx, const meso_solid *solid,
                                  const meso_isosurface_desc *desc,
                                  meso_isosurface **out_isosurface) {
     *out_isosurface = NULL;
     if (!solid) return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "isosurface: no solid");
-    return meso_bake_isosurface_function(ctx, solid_field, (void *)solid, desc, out_isosurface);
+    return meso_isosurface_bake_function(ctx, solid_field, (void *)solid, desc, out_isosurface);
 }

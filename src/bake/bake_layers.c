@@ -14,7 +14,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bake_internal.h"
+#include "meso/bake_cache.h"
 #include "meso/bake_layers.h"
+#include "meso/runtime.h"
 
 #define DEFAULT_SIDE 256
 #define DEFAULT_LAYERS 4
@@ -261,7 +264,7 @@ static void bake_row(void *user, size_t job, int thread_index) {
     meso_progress_advance(b->progress, 1);
 }
 
-meso_result meso_bake_layers(meso_context *ctx, const meso_layers_desc *desc,
+meso_result meso_layers_bake(meso_context *ctx, const meso_layers_desc *desc,
                              meso_layers **out_map) {
     *out_map = NULL;
     meso_layers_desc d = meso_layers_desc_defaults(desc);
@@ -517,50 +520,46 @@ meso_result meso_layers_from_bake_file(meso_context *ctx, const meso_bake_file *
     return MESO_OK;
 }
 
-meso_result meso_layers_load(meso_context *ctx, const char *path, meso_layers **out_map) {
-    *out_map = NULL;
-    meso_bake_file *bake = NULL;
-    meso_result r = meso_bake_file_load(ctx, path, &bake);
-    if (r != MESO_OK) return r;
-    r = meso_layers_from_bake_file(ctx, bake, path, out_map);
-    meso_bake_file_destroy(bake);
+/* The steps of meso_bake_cache_run for relief_layers; desc: the caller's meso_layers_desc. */
+static meso_result layers_from_file(meso_context *ctx, const meso_bake_file *bake,
+                                    const char *where, const void *desc, void *out) {
+    (void)desc;
+    return meso_layers_from_bake_file(ctx, bake, where, out);
+}
+
+static meso_result layers_bake(meso_context *ctx, const void *desc, void *out) {
+    return meso_layers_bake(ctx, desc, out);
+}
+
+static meso_result layers_store(meso_context *ctx, const meso_cached_bake *entry, const void *out) {
+    file_buffers buf;
+    meso_bake_file bake;
+    meso_result r = to_bake_file(ctx, *(meso_layers *const *)out, &buf, &bake);
+    if (r == MESO_OK) r = meso_bake_cache_save(ctx, &bake, entry->key);
+    free(buf.bytes);
     return r;
 }
 
-static meso_result layers_bake_claimed(meso_context *ctx, const meso_layers_desc *desc,
-                                       uint64_t key, meso_layers **out_map) {
-    meso_bake_file *cached = NULL;
-    /* a layers bake stores its cache key as its source hash (meso_bake_layers) */
-    meso_result r =
-        meso_bake_cache_load(ctx, MESO_LAYERS_KIND, MESO_LAYERS_KIND_VERSION, key, key, &cached);
-    if (r != MESO_OK) return r;
-    if (cached) {
-        r = meso_layers_from_bake_file(ctx, cached, "relief_layers cache entry", out_map);
-        meso_bake_file_destroy(cached);
-        if (r == MESO_OK) return MESO_OK;
-        meso_log_warning(ctx, "relief_layers: cache entry unusable, baking again: %s",
-                         meso_context_last_error(ctx));
-    }
-    if ((r = meso_bake_layers(ctx, desc, out_map)) != MESO_OK) return r;
-    file_buffers buf;
-    meso_bake_file bake;
-    if (to_bake_file(ctx, *out_map, &buf, &bake) != MESO_OK ||
-        meso_bake_cache_save(ctx, &bake, key) != MESO_OK)
-        meso_log_warning(ctx, "relief_layers: could not store the bake in the cache: %s",
-                         meso_context_last_error(ctx));
-    free(buf.bytes);
-    return MESO_OK;
+meso_result meso_layers_load(meso_context *ctx, const char *path, meso_layers **out_map) {
+    *out_map = NULL;
+    return meso_bake_load_with(ctx, path, layers_from_file, NULL, out_map);
 }
 
 meso_result meso_layers_bake_cached(meso_context *ctx, const meso_layers_desc *desc,
                                     meso_layers **out_map) {
     *out_map = NULL;
     uint64_t key = meso_layers_cache_key(desc);
-    meso_bake_cache_claim claim;
-    meso_bake_cache_claim_entry(ctx, MESO_LAYERS_KIND, key, &claim);
-    meso_result result = layers_bake_claimed(ctx, desc, key, out_map);
-    meso_bake_cache_release(&claim);
-    return result;
+    /* a layers bake stores its cache key as its source hash (meso_layers_bake) */
+    meso_cached_bake entry = {MESO_LAYERS_KIND,
+                              MESO_LAYERS_KIND_VERSION,
+                              "relief_layers",
+                              key,
+                              key,
+                              desc,
+                              layers_from_file,
+                              layers_bake,
+                              layers_store};
+    return meso_bake_cache_run(ctx, &entry, out_map);
 }
 
 size_t meso_layers_describe(const meso_bake_file *bake, char *buffer, size_t size) {

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "meso/bake_minmax.h"
+#include "meso/runtime.h"
 
 #define SERIAL_BELOW_CELLS (256 * 256)
 
@@ -62,8 +63,8 @@ static void bake_parent_row(void *user, size_t job, int thread_index) {
     }
 }
 
-meso_result meso_bake_minmax(meso_context *ctx, const meso_heightfield *heightfield,
-                             meso_minmax_pyramid **out_pyramid) {
+meso_result meso_minmax_pyramid_bake(meso_context *ctx, const meso_heightfield *heightfield,
+                                     meso_minmax_pyramid **out_pyramid) {
     meso_minmax_pyramid *p = NULL;
     *out_pyramid = NULL;
     if (!heightfield || !heightfield->heights || heightfield->width <= 0 ||

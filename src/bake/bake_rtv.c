@@ -9,7 +9,9 @@
 #include <stdio.h>
 
 #include "bake_internal.h"
+#include "meso/bake_cache.h"
 #include "meso/bake_rtv.h"
+#include "meso/runtime.h"
 
 typedef struct rtv_job {
     meso_rtv_desc desc;
@@ -347,7 +349,7 @@ done:
     return r;
 }
 
-meso_result meso_bake_rtv(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv **out_rtv) {
+meso_result meso_rtv_bake(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv **out_rtv) {
     *out_rtv = NULL;
     meso_rtv_desc d = desc ? *desc : (meso_rtv_desc){0};
     if (!d.width) d.width = 32;
@@ -626,16 +628,6 @@ done:
     return r;
 }
 
-meso_result meso_rtv_load(meso_context *ctx, const char *path, meso_rtv **out_rtv) {
-    *out_rtv = NULL;
-    meso_bake_file *bake = NULL;
-    meso_result r = meso_bake_file_load(ctx, path, &bake);
-    if (r != MESO_OK) return r;
-    r = meso_rtv_from_bake_file(ctx, bake, path, out_rtv);
-    meso_bake_file_destroy(bake);
-    return r;
-}
-
 /* The cache key: the source's hash and every field that changes the table. */
 static uint64_t cache_key(const meso_rtv_desc *d, uint64_t source_hash) {
     float fields[6] = {d->aspect,        (float)d->width,      (float)d->height,
@@ -646,39 +638,39 @@ static uint64_t cache_key(const meso_rtv_desc *d, uint64_t source_hash) {
     return meso_hash64(more, sizeof more, key);
 }
 
-static meso_result rtv_bake_claimed(meso_context *ctx, meso_rtv_desc d, uint64_t source,
-                                    uint64_t key, meso_rtv **out_rtv) {
-    meso_bake_file *cached = NULL;
-    meso_result r =
-        meso_bake_cache_load(ctx, MESO_RTV_KIND, MESO_RTV_KIND_VERSION, key, source, &cached);
-    if (r != MESO_OK) return r;
-    if (cached) {
-        r = meso_rtv_from_bake_file(ctx, cached, "rtv cache entry", out_rtv);
-        meso_bake_file_destroy(cached);
-        if (r == MESO_OK) return MESO_OK;
-        meso_log_warning(ctx, "rtv: cache entry unusable, baking again: %s",
-                         meso_context_last_error(ctx));
-    }
-    if ((r = meso_bake_rtv(ctx, &d, out_rtv)) != MESO_OK) return r;
+/* The steps of meso_bake_cache_run for an rtv; desc: the caller's meso_rtv_desc. */
+static meso_result rtv_from_file(meso_context *ctx, const meso_bake_file *bake, const char *where,
+                                 const void *desc, void *out) {
+    (void)desc;
+    return meso_rtv_from_bake_file(ctx, bake, where, out);
+}
+
+static meso_result rtv_bake(meso_context *ctx, const void *desc, void *out) {
+    return meso_rtv_bake(ctx, desc, out);
+}
+
+static meso_result rtv_store(meso_context *ctx, const meso_cached_bake *entry, const void *out) {
     int32_t shape[5];
-    meso_bake_file bake = to_bake_file(*out_rtv, shape);
-    bake.source_hash = source;
-    if (meso_bake_cache_save(ctx, &bake, key) != MESO_OK)
-        meso_log_warning(ctx, "rtv: could not store the bake in the cache: %s",
-                         meso_context_last_error(ctx));
-    return MESO_OK;
+    meso_bake_file bake = to_bake_file(*(meso_rtv *const *)out, shape);
+    bake.source_hash = entry->source_hash;
+    return meso_bake_cache_save(ctx, &bake, entry->key);
+}
+
+meso_result meso_rtv_load(meso_context *ctx, const char *path, meso_rtv **out_rtv) {
+    *out_rtv = NULL;
+    return meso_bake_load_with(ctx, path, rtv_from_file, NULL, out_rtv);
 }
 
 meso_result meso_rtv_bake_cached(meso_context *ctx, const meso_rtv_desc *desc, meso_rtv **out_rtv) {
     *out_rtv = NULL;
     meso_rtv_desc d = desc ? *desc : (meso_rtv_desc){0};
     uint64_t source = d.heightfield ? d.heightfield->hash : d.solid ? meso_solid_hash(d.solid) : 0;
-    uint64_t key = cache_key(&d, source);
-    meso_bake_cache_claim claim;
-    meso_bake_cache_claim_entry(ctx, MESO_RTV_KIND, key, &claim);
-    meso_result result = rtv_bake_claimed(ctx, d, source, key, out_rtv);
-    meso_bake_cache_release(&claim);
-    return result;
+    meso_cached_bake entry = {MESO_RTV_KIND, MESO_RTV_KIND_VERSION,
+                              "rtv",         cache_key(&d, source),
+                              source,        &d,
+                              rtv_from_file, rtv_bake,
+                              rtv_store};
+    return meso_bake_cache_run(ctx, &entry, out_rtv);
 }
 
 size_t meso_rtv_describe(const meso_bake_file *bake, char *buffer, size_t size) {

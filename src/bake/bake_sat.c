@@ -1,11 +1,12 @@
 /* Summed-area table of a height field: the "Local Area Average Height Test" of Doggett &
  * Hirche 2000 reads box averages from it in constant time (Crow 1984). */
 #include "meso/bake_sat.h"
+#include "meso/runtime.h"
 
 #include <math.h>
 #include <stdlib.h>
 
-meso_result meso_bake_sat(meso_context *ctx, const meso_heightfield *heightfield,
+meso_result meso_sat_bake(meso_context *ctx, const meso_heightfield *heightfield,
                           meso_sat **out_sat) {
     if (out_sat) *out_sat = NULL;
     if (!out_sat || !heightfield || !heightfield->heights)

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "bake_internal.h"
+#include "meso/runtime.h"
 
 /* Rows filled by one job of the parallel loop, and rows handed to BLAS at once. Both fixed:
  * the sums BLAS forms then do not depend on the number of threads. */

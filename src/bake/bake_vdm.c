@@ -6,6 +6,8 @@
 #include <string.h>
 
 #include "bake_internal.h"
+#include "meso/bake_cache.h"
+#include "meso/runtime.h"
 
 #define HALF_PI (0.5 * MESO_PI_D)
 #define TWO_PI (2.0 * MESO_PI_D)
@@ -25,7 +27,7 @@ struct meso_vdm {
     meso_vdm_compression compression;
 };
 
-meso_vdm_desc meso_query_vdm_defaults(const meso_vdm_desc *desc) {
+meso_vdm_desc meso_vdm_desc_defaults(const meso_vdm_desc *desc) {
     meso_vdm_desc d = desc ? *desc : (meso_vdm_desc){0};
     if (d.depth == 0.0f) d.depth = 0.05f;
     if (d.width == 0) d.width = 128;
@@ -106,7 +108,7 @@ static meso_result check_desc(meso_context *ctx, const char *name, const meso_vd
 }
 
 uint64_t meso_vdm_cache_key(const meso_vdm_desc *desc) {
-    meso_vdm_desc d = meso_query_vdm_defaults(desc);
+    meso_vdm_desc d = meso_vdm_desc_defaults(desc);
     uint64_t h = MESO_HASH_SEED;
     uint64_t source = d.heightfield ? d.heightfield->hash : 0;
     h = meso_hash64(&source, sizeof(source), h);
@@ -417,10 +419,10 @@ static void balance_mvm(void *user, const double *column_energy, float *column_s
     for (int c = 0; c < columns; c++) column_scale[c] = c < vdm_columns ? 1.0f : mvm_scale;
 }
 
-meso_result meso_bake_vdm(meso_context *ctx, const meso_vdm_desc *desc, meso_vdm **out_vdm) {
+meso_result meso_vdm_bake(meso_context *ctx, const meso_vdm_desc *desc, meso_vdm **out_vdm) {
     if (out_vdm) *out_vdm = NULL;
     if (!out_vdm) return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "vdm: out_vdm is NULL");
-    meso_vdm_desc d = meso_query_vdm_defaults(desc);
+    meso_vdm_desc d = meso_vdm_desc_defaults(desc);
     if (!d.heightfield || !d.heightfield->heights || d.heightfield->width < 1 ||
         d.heightfield->height < 1)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "vdm: heightfield: missing");
@@ -874,49 +876,41 @@ meso_result meso_vdm_from_bake_file(meso_context *ctx, const meso_bake_file *bak
     return MESO_OK;
 }
 
-meso_result meso_vdm_load(meso_context *ctx, const char *path, meso_vdm **out_vdm) {
-    if (out_vdm) *out_vdm = NULL;
-    meso_bake_file *bake = NULL;
-    meso_result result = meso_bake_file_load(ctx, path, &bake);
-    if (result != MESO_OK) return result;
-    result = meso_vdm_from_bake_file(ctx, bake, path, out_vdm);
-    meso_bake_file_destroy(bake);
-    return result;
+/* The steps of meso_bake_cache_run for a vdm; desc: the caller's meso_vdm_desc. */
+static meso_result vdm_from_file(meso_context *ctx, const meso_bake_file *bake, const char *where,
+                                 const void *desc, void *out) {
+    (void)desc;
+    return meso_vdm_from_bake_file(ctx, bake, where, out);
 }
 
-static meso_result vdm_bake_claimed(meso_context *ctx, const meso_vdm_desc *desc, uint64_t key,
-                                    meso_vdm **out_vdm) {
-    meso_bake_file *cached = NULL;
-    meso_result result =
-        meso_bake_cache_load(ctx, MESO_VDM_KIND, MESO_VDM_KIND_VERSION, key,
-                             desc->heightfield ? desc->heightfield->hash : 0, &cached);
-    if (result != MESO_OK) return result;
-    if (cached) {
-        result = meso_vdm_from_bake_file(ctx, cached, "vdm cache entry", out_vdm);
-        meso_bake_file_destroy(cached);
-        if (result == MESO_OK) return MESO_OK;
-        meso_log_warning(ctx, "vdm: cache entry unusable, baking again: %s",
-                         meso_context_last_error(ctx));
-    }
-    result = meso_bake_vdm(ctx, desc, out_vdm);
-    if (result != MESO_OK) return result;
+static meso_result vdm_bake(meso_context *ctx, const void *desc, void *out) {
+    return meso_vdm_bake(ctx, desc, out);
+}
+
+static meso_result vdm_store(meso_context *ctx, const meso_cached_bake *entry, const void *out) {
     char params[2048];
     float report[REPORT_FLOATS];
-    meso_bake_file bake = to_bake_file(*out_vdm, params, sizeof(params), report);
-    if (meso_bake_cache_save(ctx, &bake, key) != MESO_OK)
-        meso_log_warning(ctx, "vdm: could not store the bake in the cache: %s",
-                         meso_context_last_error(ctx));
-    return MESO_OK;
+    meso_bake_file bake = to_bake_file(*(meso_vdm *const *)out, params, sizeof(params), report);
+    return meso_bake_cache_save(ctx, &bake, entry->key);
+}
+
+meso_result meso_vdm_load(meso_context *ctx, const char *path, meso_vdm **out_vdm) {
+    if (out_vdm) *out_vdm = NULL;
+    return meso_bake_load_with(ctx, path, vdm_from_file, NULL, out_vdm);
 }
 
 meso_result meso_vdm_bake_cached(meso_context *ctx, const meso_vdm_desc *desc, meso_vdm **out_vdm) {
     if (out_vdm) *out_vdm = NULL;
-    uint64_t key = meso_vdm_cache_key(desc);
-    meso_bake_cache_claim claim;
-    meso_bake_cache_claim_entry(ctx, MESO_VDM_KIND, key, &claim);
-    meso_result result = vdm_bake_claimed(ctx, desc, key, out_vdm);
-    meso_bake_cache_release(&claim);
-    return result;
+    meso_cached_bake entry = {MESO_VDM_KIND,
+                              MESO_VDM_KIND_VERSION,
+                              "vdm",
+                              meso_vdm_cache_key(desc),
+                              desc && desc->heightfield ? desc->heightfield->hash : 0,
+                              desc,
+                              vdm_from_file,
+                              vdm_bake,
+                              vdm_store};
+    return meso_bake_cache_run(ctx, &entry, out_vdm);
 }
 
 size_t meso_vdm_describe(const meso_bake_file *bake, char *buffer, size_t size) {

@@ -1,10 +1,12 @@
 /* The compressed VDM laid out for dot-product lookups (bake_vdm.h, meso_vdm_lanes): read by
- * the CPU technique (src/render/techniques/vdm.c) and uploaded as textures by the GL back end,
+ * the CPU technique (src/techniques/vdm.c) and uploaded as textures by the GL back end,
  * so both reconstruct d from the same half-float weights. */
 #include <stdlib.h>
 #include <string.h>
 
 #include "bake_internal.h"
+#include "meso/bake_vdm_lanes.h"
+#include "meso/runtime.h"
 
 void meso_vdm_lanes_deinit(meso_vdm_lanes *l) {
     for (int i = 0; i < l->num_levels; i++) free(l->level_weights[i]);

@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "compare_internal.h"
+#include "meso/runtime.h"
 
 enum { SSIM_RADIUS = 5 };
 

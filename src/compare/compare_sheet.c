@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "compare_internal.h"
+#include "meso/runtime.h"
 
 static float colour_channel(const meso_image *image, int x, int y, int c) {
     const float *p = meso_image_at(image, x, y);
@@ -73,8 +74,9 @@ static meso_result sheet_lay_out(meso_context *ctx, size_t count, int columns, i
 /* Labels at twice the font size on cells wide enough, so they stay readable. */
 static int label_scale(int cell_w) { return cell_w >= 256 ? 2 : 1; }
 
-meso_result meso_sheet_size(meso_context *ctx, size_t count, int columns, int cell_width,
-                            int cell_height, int label_lines, int *out_width, int *out_height) {
+meso_result meso_compare_sheet_size(meso_context *ctx, size_t count, int columns, int cell_width,
+                                    int cell_height, int label_lines, int *out_width,
+                                    int *out_height) {
     *out_width = *out_height = 0;
     if (count == 0 || cell_width < 1 || cell_height < 1)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "sheet: no images");
@@ -88,9 +90,9 @@ meso_result meso_sheet_size(meso_context *ctx, size_t count, int columns, int ce
     return MESO_OK;
 }
 
-meso_result meso_sheet_create(meso_context *ctx, const meso_image *const *images,
-                              const char *const *labels, size_t count, int columns,
-                              meso_image **out_image) {
+meso_result meso_compare_sheet_create(meso_context *ctx, const meso_image *const *images,
+                                      const char *const *labels, size_t count, int columns,
+                                      meso_image **out_image) {
     *out_image = NULL;
     if (!images || count == 0)
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "sheet: no images");

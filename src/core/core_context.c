@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "core_internal.h"
+#include "meso/runtime.h"
 
 static const char *const result_strings[] = {
 #define MESO_RESULT_STRING(name, text) text,

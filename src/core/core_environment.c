@@ -10,6 +10,7 @@
 #include <stb_image.h>
 #include <stb_image_write.h>
 
+#include "meso/runtime.h"
 #include "meso/environment.h"
 #include "meso/image.h"
 

@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "core_internal.h"
+#include "meso/runtime.h"
 #include "meso/image.h"
 
 typedef struct exr_stream {

@@ -19,6 +19,7 @@
 #include <unistd.h>
 
 #include "core_internal.h"
+#include "meso/runtime.h"
 
 /* ---- Registry of live temporary names (for signal handlers) ------------------------------- */
 

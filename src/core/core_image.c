@@ -5,7 +5,9 @@
 #include <string.h>
 
 #include "core_internal.h"
+#include "meso/runtime.h"
 #include "meso/image.h"
+#include "meso/texture.h"
 
 meso_result meso_image_create(meso_context *ctx, int width, int height, int channels,
                               meso_image **out_image) {

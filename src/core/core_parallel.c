@@ -14,6 +14,7 @@
 #include <time.h>
 
 #include "core_internal.h"
+#include "meso/runtime.h"
 
 struct meso_pool {
     pthread_mutex_t lock;

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "core_internal.h"
+#include "meso/runtime.h"
 #include "meso/image.h"
 
 typedef struct png_error_state {

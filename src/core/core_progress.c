@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include "core_internal.h"
+#include "meso/runtime.h"
 
 #define PROGRESS_DELAY_SECONDS 1.0 /* no bar for work shorter than this */
 #define PROGRESS_REDRAW_SECONDS 0.1

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "geom_internal.h"
+#include "meso/runtime.h"
 
 #define JOB_SIZE 4096
 

@@ -21,6 +21,7 @@
 #include <assimp/scene.h>
 
 #include "geom_internal.h"
+#include "meso/runtime.h"
 
 /* assimp's C API keeps its last error in one global string (and its loggers are global), so
  * imports are serialised to keep meso_mesh_load thread-safe. */

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "geom_internal.h"
+#include "meso/runtime.h"
 
 /* A triangle is degenerate when its area is below this fraction of its longest edge squared:
  * float positions of collinear points typed in a file carry relative errors of a few 1e-8, so

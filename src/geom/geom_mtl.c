@@ -21,6 +21,7 @@
 #include <sys/stat.h>
 
 #include "geom_internal.h"
+#include "meso/runtime.h"
 
 #define MTL_LINE_MAX 4096
 

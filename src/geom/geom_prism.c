@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "geom_internal.h"
+#include "meso/runtime.h"
 #include "meso/prism.h"
 
 /* ---- One prism ----------------------------------------------------------------------------- */

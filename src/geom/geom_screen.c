@@ -26,6 +26,7 @@
 #include <cjson/cJSON.h>
 
 #include "geom_internal.h"
+#include "meso/runtime.h"
 
 /* A PLY header longer than this is refused (real headers are a few hundred bytes). */
 #define PLY_HEADER_MAX 65536

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "geom_internal.h"
+#include "meso/runtime.h"
 
 /* Tessellation bounds: enough for any use, small enough that the counts stay far below the
  * mesh limits, so the limit check never has to reject a shape a user could reasonably ask

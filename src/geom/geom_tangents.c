@@ -8,6 +8,7 @@
 #include <stdlib.h>
 
 #include "geom_internal.h"
+#include "meso/runtime.h"
 
 /* Triangles and vertices per parallel job: fixed, so the result is independent of the thread
  * count (every job writes its own range). */

@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "geom_internal.h"
+#include "meso/runtime.h"
 
 #define TEAPOT_PATCHES 32
 

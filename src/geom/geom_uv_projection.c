@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "geom_internal.h"
+#include "meso/runtime.h"
 
 static const char *const projection_names[] = {"none", "box", "cylindrical", "spherical", "planar"};
 

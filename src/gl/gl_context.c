@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "gl_internal.h"
+#include "meso/runtime.h"
 
 /* The display of the surfaceless platform, else of the first device; EGL_NO_DISPLAY when the
  * client has neither extension. */

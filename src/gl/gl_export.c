@@ -8,6 +8,9 @@
 #include <cjson/cJSON.h>
 
 #include "meso/bake_minmax.h"
+#include "meso/runtime.h"
+#include "meso/prism.h"
+#include "meso/texture.h"
 
 #include "gl_internal.h"
 
@@ -148,7 +151,7 @@ static meso_result export_vdm(export_object *e, const meso_object *object,
  * u_max_mip. */
 static meso_result export_max_mip(export_object *e, const meso_object *object) {
     meso_minmax_pyramid *pyramid = NULL;
-    meso_result r = meso_bake_minmax(e->ctx, object->mesostructure.height_field, &pyramid);
+    meso_result r = meso_minmax_pyramid_bake(e->ctx, object->mesostructure.height_field, &pyramid);
     for (int l = 0; r == MESO_OK && l < pyramid->num_levels; l++) {
         char suffix[32];
         snprintf(suffix, sizeof suffix, ".max-mip-%d.exr", l);

@@ -10,19 +10,20 @@
 #include <string.h>
 
 #include "meso/bake_gdm.h"
+#include "meso/runtime.h"
 #include "meso/prism.h"
 
 #include "gl_internal.h"
 
 enum { UNIT_FIRST = 2, NUM_BUFFERS = 6 }; /* weights, eigen, normals, prisms, faces, grid */
 
-struct gl_gdm {
+typedef struct gl_gdm {
     GLuint buffers[NUM_BUFFERS], textures[NUM_BUFFERS];
     meso_prism_layer *layer;
     int width, height, layers, num_theta, num_phi, chunks;
     bool heightfield;
     meso_solid_shape shape;
-};
+} gl_gdm;
 
 meso_result gl_gdm_bake(meso_context *ctx, const meso_scene *scene, const meso_object *object,
                         const meso_technique_info *info, const double *options, gl_gdm_table *out) {
@@ -231,7 +232,7 @@ done:
 }
 
 meso_result gl_gdm_create(meso_context *ctx, const meso_scene *scene, const meso_object *object,
-                          const meso_technique_info *info, const double *options, gl_gdm **out,
+                          const meso_technique_info *info, const double *options, void **out,
                           size_t *memory) {
     *out = NULL;
     gl_gdm_table table;
@@ -265,9 +266,11 @@ meso_result gl_gdm_create(meso_context *ctx, const meso_scene *scene, const meso
     return MESO_OK;
 }
 
-const meso_mesh *gl_gdm_faces(const gl_gdm *g) { return g->layer->faces; }
+const meso_mesh *gl_gdm_faces(const void *data) { return ((const gl_gdm *)data)->layer->faces; }
 
-void gl_gdm_bind(const gl_gdm *g, GLuint program) {
+void gl_gdm_bind(const void *data, GLuint program, float pixel_size) {
+    (void)pixel_size;
+    const gl_gdm *g = data;
     static const char *const names[NUM_BUFFERS] = {"u_gdm_weights", "u_gdm_eigen", "u_gdm_normals",
                                                    "u_gdm_prisms",  "u_gdm_faces", "u_solid_grid"};
     for (int i = 0; i < NUM_BUFFERS; i++) {
@@ -296,7 +299,8 @@ void gl_gdm_bind(const gl_gdm *g, GLuint program) {
     glUniform1i(glGetUniformLocation(program, "u_solid_grid_clamped"), s->grid_clamped);
 }
 
-void gl_gdm_destroy(gl_gdm *g) {
+void gl_gdm_destroy(void *data) {
+    gl_gdm *g = data;
     if (!g) return;
     for (int i = 0; i < NUM_BUFFERS; i++) {
         if (g->textures[i]) glDeleteTextures(1, &g->textures[i]);

@@ -12,6 +12,7 @@
 #include "meso/bake_gdm.h"
 #include "meso/bake_layers.h"
 #include "meso/bake_vdm.h"
+#include "meso/bake_vdm_lanes.h"
 #include "meso/prism.h"
 #include "meso/gl.h"
 
@@ -72,11 +73,36 @@ meso_result gl_check_upload(meso_context *ctx, const meso_object *object, const 
  * technique has no such option. */
 double gl_option_value(const meso_technique_info *info, const double *values, const char *name);
 
-/* ---- Per-technique data (gl_<technique>.c) ------------------------------------------------ */
+/* ---- The techniques (gl_techniques.c) ------------------------------------------------------ */
+
+/* The GL side of one technique of technique_list.h: whether it has a fragment shader
+ * (shaders/<name>.frag) and the data it keeps for an object, each step NULL when it keeps
+ * none. `out` of create receives the data; memory grows by the bytes the GL holds. */
+typedef struct gl_technique {
+    bool drawn;      /* it has a shader: the back end draws it */
+    bool both_faces; /* back faces drawn too (relief_layers: render_internal.h, both_faces) */
+    meso_result (*create)(meso_context *ctx, const meso_scene *scene, const meso_object *object,
+                          const meso_technique_info *info, const double *options, void **out,
+                          size_t *memory);
+    /* the faces to draw instead of the object's mesh; NULL: the mesh */
+    const meso_mesh *(*faces)(const void *data);
+    /* bind its textures and set its uniforms on `program` (current) */
+    void (*bind)(const void *data, GLuint program, float pixel_size);
+    void (*destroy)(void *data);
+} gl_technique;
+
+/* The GL side of the technique `info` (from meso_technique_find) and its index in
+ * technique_list.h into *out_index; NULL for a technique outside the list (reference). */
+const gl_technique *gl_technique_of(const meso_technique_info *info, size_t *out_index);
+
+/* ---- Per-technique data (gl_<technique>.c), each with gl_technique's steps ----------------- */
 
 /* relief_exact: the maximum mip-map as the mip levels of an R32F texture (unit 2). */
-meso_result gl_max_mip_create(meso_context *ctx, const meso_object *object, GLuint *out_texture,
-                              int *out_levels, size_t *memory);
+meso_result gl_max_mip_create(meso_context *ctx, const meso_scene *scene, const meso_object *object,
+                              const meso_technique_info *info, const double *options, void **out,
+                              size_t *memory);
+void gl_max_mip_bind(const void *data, GLuint program, float pixel_size);
+void gl_max_mip_destroy(void *data);
 
 /* relief_layers: the multilayer map (the CPU technique's bake) and, for solids, its mirror
  * (back faces), with the options' automatic values resolved; no GL needed. */
@@ -92,12 +118,11 @@ meso_result gl_layers_bake(meso_context *ctx, const meso_object *object,
 void gl_layers_maps_release(gl_layers_maps *maps);
 
 /* The maps as texture arrays (units 2-5). */
-typedef struct gl_layers gl_layers;
-meso_result gl_layers_create(meso_context *ctx, const meso_object *object,
-                             const meso_technique_info *info, const double *options,
-                             gl_layers **out, size_t *memory);
-void gl_layers_bind(const gl_layers *layers, GLuint program);
-void gl_layers_destroy(gl_layers *layers);
+meso_result gl_layers_create(meso_context *ctx, const meso_scene *scene, const meso_object *object,
+                             const meso_technique_info *info, const double *options, void **out,
+                             size_t *memory);
+void gl_layers_bind(const void *data, GLuint program, float pixel_size);
+void gl_layers_destroy(void *data);
 
 /* vdm: the bake (cached, the CPU technique's bake for the same options) laid out as the CPU
  * technique reads it; no GL needed (texture export uses it too). */
@@ -113,13 +138,11 @@ meso_result gl_vdm_bake(meso_context *ctx, const meso_object *object,
 void gl_vdm_table_release(gl_vdm_table *table);
 
 /* The table uploaded as textures units 2-4. */
-typedef struct gl_vdm gl_vdm;
-meso_result gl_vdm_create(meso_context *ctx, const meso_object *object,
-                          const meso_technique_info *info, const double *options, gl_vdm **out,
+meso_result gl_vdm_create(meso_context *ctx, const meso_scene *scene, const meso_object *object,
+                          const meso_technique_info *info, const double *options, void **out,
                           size_t *memory);
-/* Bind its textures and set its uniforms on `program` (current). */
-void gl_vdm_bind(const gl_vdm *vdm, GLuint program, float pixel_size);
-void gl_vdm_destroy(gl_vdm *vdm);
+void gl_vdm_bind(const void *data, GLuint program, float pixel_size);
+void gl_vdm_destroy(void *data);
 
 /* gdm: the bake (cached, the CPU technique's bake for the same options); no GL needed (texture
  * export uses it too). Refuses compressed 0 and, in a scene with an environment, gi 1 (scene
@@ -147,13 +170,12 @@ float *gl_gdm_prism_texels(const meso_prism_layer *layer, const meso_mesh *mesh)
 float *gl_gdm_face_texels(const meso_prism_layer *layer);
 
 /* The table, the prism layer and the solid uploaded as buffer textures (units 2-7). */
-typedef struct gl_gdm gl_gdm;
 meso_result gl_gdm_create(meso_context *ctx, const meso_scene *scene, const meso_object *object,
-                          const meso_technique_info *info, const double *options, gl_gdm **out,
+                          const meso_technique_info *info, const double *options, void **out,
                           size_t *memory);
 /* The prism faces to draw, in face order (the shader reads gl_PrimitiveID as the face). */
-const meso_mesh *gl_gdm_faces(const gl_gdm *gdm);
-void gl_gdm_bind(const gl_gdm *gdm, GLuint program);
-void gl_gdm_destroy(gl_gdm *gdm);
+const meso_mesh *gl_gdm_faces(const void *data);
+void gl_gdm_bind(const void *data, GLuint program, float pixel_size);
+void gl_gdm_destroy(void *data);
 
 #endif

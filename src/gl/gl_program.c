@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "gl_internal.h"
+#include "meso/runtime.h"
 
 #define GL_MAX_SHADER_FILES 8
 #define GL_SHADER_MAX_BYTES (1u << 20) /* a shader file read from --shader-dir */
@@ -20,13 +21,6 @@ const char *gl_shader_builtin(const char *name) {
     for (size_t i = 0; i < gl_embedded_shader_count; i++)
         if (strcmp(gl_embedded_shaders[i].name, name) == 0) return gl_embedded_shaders[i].text;
     return NULL;
-}
-
-bool meso_gl_technique_supported(const char *technique) {
-    char name[96];
-    if (!technique || snprintf(name, sizeof name, "%s.frag", technique) >= (int)sizeof name)
-        return false;
-    return gl_shader_builtin(name) != NULL;
 }
 
 /* The files of one stage, in order, with their text (owned when read from a folder). */

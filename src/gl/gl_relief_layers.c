@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "meso/bake_layers.h"
+#include "meso/runtime.h"
 
 #include "gl_internal.h"
 
@@ -14,11 +15,11 @@ typedef struct gl_layer_maps {
     GLuint maps, count;
 } gl_layer_maps;
 
-struct gl_layers {
+typedef struct gl_layers {
     gl_layer_maps above, below; /* below.maps == 0: no back faces (a height field) */
     int num_layers, groups, width, height, linear_steps;
     bool clamp, heightfield, impostor, enclosed;
-};
+} gl_layers;
 
 static meso_result upload_map(meso_context *ctx, const meso_object *object, const meso_layers *map,
                               int num_layers, int groups, gl_layer_maps *out, size_t *memory) {
@@ -113,9 +114,10 @@ void gl_layers_maps_release(gl_layers_maps *maps) {
     memset(maps, 0, sizeof *maps);
 }
 
-meso_result gl_layers_create(meso_context *ctx, const meso_object *object,
-                             const meso_technique_info *info, const double *options,
-                             gl_layers **out, size_t *memory) {
+meso_result gl_layers_create(meso_context *ctx, const meso_scene *scene, const meso_object *object,
+                             const meso_technique_info *info, const double *options, void **out,
+                             size_t *memory) {
+    (void)scene;
     *out = NULL;
     gl_layers_maps maps;
     meso_result r = gl_layers_bake(ctx, object, info, options, &maps);
@@ -146,7 +148,9 @@ meso_result gl_layers_create(meso_context *ctx, const meso_object *object,
     return MESO_OK;
 }
 
-void gl_layers_bind(const gl_layers *g, GLuint program) {
+void gl_layers_bind(const void *data, GLuint program, float pixel_size) {
+    (void)pixel_size;
+    const gl_layers *g = data;
     const GLuint units[4] = {g->above.maps, g->above.count, g->below.maps, g->below.count};
     const char *names[4] = {"u_layer_maps", "u_layer_count", "u_layer_maps_below",
                             "u_layer_count_below"};
@@ -170,7 +174,8 @@ void gl_layers_bind(const gl_layers *g, GLuint program) {
     glUniform1i(glGetUniformLocation(program, "u_has_below"), g->below.maps != 0);
 }
 
-void gl_layers_destroy(gl_layers *g) {
+void gl_layers_destroy(void *data) {
+    gl_layers *g = data;
     if (!g) return;
     GLuint textures[4] = {g->above.maps, g->above.count, g->below.maps, g->below.count};
     for (int i = 0; i < 4; i++)

@@ -9,27 +9,22 @@
 #include <string.h>
 
 #include "gl_internal.h"
+#include "meso/runtime.h"
+#include "meso/texture.h"
 
 #define GL_MAX_OPTIONS 32 /* rows of any technique's option table */
 #define GL_FLOATS_PER_VERTEX 24
 
-typedef struct gl_program_slot {
-    char technique[MESO_NAME_MAX];
-    GLuint program;
-} gl_program_slot;
-
 typedef struct gl_object {
     const meso_object *object;
     const meso_technique_info *info;
+    const gl_technique *gl; /* its row in gl_techniques.c */
+    size_t technique;       /* its index in technique_list.h */
+    void *data;             /* the technique's own (gl->create), or NULL */
     GLuint program;
     GLuint vao, vertices, indices;
     GLsizei index_count;
     GLuint color_map, height;
-    gl_vdm *vdm;       /* technique vdm: its table */
-    GLuint max_mip;    /* technique relief_exact: the maximum mip-map */
-    gl_layers *layers; /* technique relief_layers: its maps */
-    gl_gdm *gdm;       /* technique gdm: its table and prisms (their faces are drawn) */
-    int max_mip_levels;
     meso_uv_domain domain; /* the relief family's open sides (meso_mesh_uv_domain) */
     double options[GL_MAX_OPTIONS];
 } gl_object;
@@ -38,8 +33,7 @@ struct meso_gl_renderer {
     meso_context *ctx;
     const meso_scene *scene;
     gl_context gl;
-    gl_program_slot *programs; /* one per technique used */
-    int num_programs;
+    GLuint *programs; /* by technique index; 0: not built yet */
     gl_object *objects;
     int num_objects;
     GLuint framebuffer, color_target, depth_target, depth_buffer;
@@ -113,19 +107,15 @@ meso_result gl_resolve_technique(meso_context *ctx, const meso_object *object,
     return MESO_OK;
 }
 
-static meso_result program_for(meso_gl_renderer *r, const char *technique, const char *shader_dir,
+static meso_result program_for(meso_gl_renderer *r, const gl_object *o, const char *shader_dir,
                                GLuint *out) {
-    for (int i = 0; i < r->num_programs; i++)
-        if (strcmp(r->programs[i].technique, technique) == 0) {
-            *out = r->programs[i].program;
-            return MESO_OK;
-        }
-    meso_result result = gl_program_build(r->ctx, technique, shader_dir, out);
-    if (result != MESO_OK) return result;
-    gl_program_slot *slot = &r->programs[r->num_programs++];
-    snprintf(slot->technique, sizeof slot->technique, "%s", technique);
-    slot->program = *out;
-    return MESO_OK;
+    if (r->programs[o->technique]) {
+        *out = r->programs[o->technique];
+        return MESO_OK;
+    }
+    meso_result result = gl_program_build(r->ctx, o->info->name, shader_dir, out);
+    if (result == MESO_OK) r->programs[o->technique] = *out;
+    return result;
 }
 
 /* The mesh as interleaved vertices: position, normal, tangent, bitangent, uv, quadric,
@@ -206,16 +196,18 @@ static meso_result prepare_object(meso_gl_renderer *r, int index, const meso_gl_
     const meso_object *object = &r->scene->objects[index];
     o->object = object;
     meso_result result;
-    if ((result = gl_resolve_technique(r->ctx, object, &desc->render, &o->info)) != MESO_OK ||
-        (result = meso_technique_options_values(r->ctx, r->scene, index, &desc->render,
+    if ((result = gl_resolve_technique(r->ctx, object, &desc->render, &o->info)) != MESO_OK)
+        return result;
+    o->gl = gl_technique_of(o->info, &o->technique); /* drawn: gl_resolve_technique checked */
+    if ((result = meso_technique_options_values(r->ctx, r->scene, index, &desc->render,
                                                 o->info->name, o->options)) != MESO_OK ||
-        (result = program_for(r, o->info->name, desc->shader_dir, &o->program)) != MESO_OK)
+        (result = program_for(r, o, desc->shader_dir, &o->program)) != MESO_OK)
         return result;
-    if (strcmp(o->info->name, "gdm") == 0 &&
-        (result = gl_gdm_create(r->ctx, r->scene, object, o->info, o->options, &o->gdm,
-                                &r->stats.memory_bytes)) != MESO_OK)
+    if (o->gl->create && (result = o->gl->create(r->ctx, r->scene, object, o->info, o->options,
+                                                 &o->data, &r->stats.memory_bytes)) != MESO_OK)
         return result;
-    if ((result = upload_mesh(r, o, o->gdm ? gl_gdm_faces(o->gdm) : object->mesh)) != MESO_OK)
+    if ((result = upload_mesh(r, o, o->gl->faces ? o->gl->faces(o->data) : object->mesh)) !=
+        MESO_OK)
         return result;
     if (!meso_mesh_uv_domain(object->mesh, &o->domain))
         return meso_log_error(r->ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", object->name);
@@ -228,18 +220,6 @@ static meso_result prepare_object(meso_gl_renderer *r, int index, const meso_gl_
     const meso_heightfield *hf = object->mesostructure.height_field;
     if (hf && (result = upload_texture(r, object, hf->width, hf->height, GL_R32F, GL_RED,
                                        hf->heights, 4, &o->height)) != MESO_OK)
-        return result;
-    if (strcmp(o->info->name, "relief_exact") == 0 &&
-        (result = gl_max_mip_create(r->ctx, object, &o->max_mip, &o->max_mip_levels,
-                                    &r->stats.memory_bytes)) != MESO_OK)
-        return result;
-    if (strcmp(o->info->name, "relief_layers") == 0 &&
-        (result = gl_layers_create(r->ctx, object, o->info, o->options, &o->layers,
-                                   &r->stats.memory_bytes)) != MESO_OK)
-        return result;
-    if (strcmp(o->info->name, "vdm") == 0 &&
-        (result = gl_vdm_create(r->ctx, object, o->info, o->options, &o->vdm,
-                                &r->stats.memory_bytes)) != MESO_OK)
         return result;
     return MESO_OK;
 }
@@ -281,7 +261,7 @@ meso_result meso_gl_renderer_create(meso_context *ctx, const meso_scene *scene,
     meso_gl_renderer *r = calloc(1, sizeof *r);
     size_t slots = scene->num_objects > 0 ? (size_t)scene->num_objects : 1;
     if (!r || !(r->objects = calloc(slots, sizeof *r->objects)) ||
-        !(r->programs = calloc(slots, sizeof *r->programs))) {
+        !(r->programs = calloc(meso_technique_count(), sizeof *r->programs))) {
         result = meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: out of memory", scene->path);
         goto fail;
     }
@@ -447,21 +427,13 @@ meso_result meso_gl_renderer_render(meso_gl_renderer *r, meso_framebuffer *fb) {
         glBindTexture(GL_TEXTURE_2D, o->color_map);
         glActiveTexture(GL_TEXTURE1);
         glBindTexture(GL_TEXTURE_2D, o->height);
-        if (o->vdm) gl_vdm_bind(o->vdm, o->program, camera.pixel_size);
-        if (o->layers) gl_layers_bind(o->layers, o->program);
-        if (o->gdm) gl_gdm_bind(o->gdm, o->program);
+        if (o->gl->bind) o->gl->bind(o->data, o->program, camera.pixel_size);
         /* relief_layers draws back faces too: the far wall of a closed mesh through holes of
          * the near one (render_internal.h, both_faces) */
-        if (o->layers)
+        if (o->gl->both_faces)
             glDisable(GL_CULL_FACE);
         else
             glEnable(GL_CULL_FACE);
-        if (o->max_mip) {
-            glActiveTexture(GL_TEXTURE2);
-            glBindTexture(GL_TEXTURE_2D, o->max_mip);
-            glUniform1i(glGetUniformLocation(o->program, "u_max_mip"), 2);
-            glUniform1i(glGetUniformLocation(o->program, "u_max_mip_levels"), o->max_mip_levels);
-        }
         glBindVertexArray(o->vao);
         glDrawElements(GL_TRIANGLES, o->index_count, GL_UNSIGNED_INT, NULL);
         triangles += (uint64_t)o->index_count / 3;
@@ -521,12 +493,10 @@ void meso_gl_renderer_destroy(meso_gl_renderer *r) {
             if (o->indices) glDeleteBuffers(1, &o->indices);
             if (o->color_map) glDeleteTextures(1, &o->color_map);
             if (o->height) glDeleteTextures(1, &o->height);
-            gl_vdm_destroy(o->vdm);
-            if (o->max_mip) glDeleteTextures(1, &o->max_mip);
-            gl_layers_destroy(o->layers);
-            gl_gdm_destroy(o->gdm);
+            if (o->gl && o->gl->destroy) o->gl->destroy(o->data);
         }
-        for (int i = 0; i < r->num_programs; i++) glDeleteProgram(r->programs[i].program);
+        for (size_t i = 0; r->programs && i < meso_technique_count(); i++)
+            if (r->programs[i]) glDeleteProgram(r->programs[i]);
     }
     gl_context_destroy(&r->gl);
     free(r->readback);

@@ -7,16 +7,18 @@
 #include <string.h>
 
 #include "meso/bake_vdm.h"
+#include "meso/bake_vdm_lanes.h"
+#include "meso/runtime.h"
 
 #include "gl_internal.h"
 
-struct gl_vdm {
+typedef struct gl_vdm {
     GLuint weights, eigen, mvm;
     int chunks, num_levels;
     int level_size[MESO_VDM_MAX_LEVELS][2], level_row[MESO_VDM_MAX_LEVELS];
     float curvature_min, curvature_max, tile_world, depth_tiles;
     bool has_curvature;
-};
+} gl_vdm;
 
 /* Upload the layout: W rows of every level one under the other. */
 static meso_result upload(meso_context *ctx, const meso_object *object, const meso_vdm_view *v,
@@ -139,9 +141,10 @@ void gl_vdm_table_release(gl_vdm_table *table) {
     memset(table, 0, sizeof *table);
 }
 
-meso_result gl_vdm_create(meso_context *ctx, const meso_object *object,
-                          const meso_technique_info *info, const double *options, gl_vdm **out,
+meso_result gl_vdm_create(meso_context *ctx, const meso_scene *scene, const meso_object *object,
+                          const meso_technique_info *info, const double *options, void **out,
                           size_t *memory) {
+    (void)scene;
     *out = NULL;
     gl_vdm_table table;
     meso_result r = gl_vdm_bake(ctx, object, info, options, &table);
@@ -165,7 +168,8 @@ meso_result gl_vdm_create(meso_context *ctx, const meso_object *object,
     return r;
 }
 
-void gl_vdm_bind(const gl_vdm *g, GLuint program, float pixel_size) {
+void gl_vdm_bind(const void *data, GLuint program, float pixel_size) {
+    const gl_vdm *g = data;
     glActiveTexture(GL_TEXTURE2);
     glBindTexture(GL_TEXTURE_2D, g->weights);
     glActiveTexture(GL_TEXTURE3);
@@ -188,7 +192,8 @@ void gl_vdm_bind(const gl_vdm *g, GLuint program, float pixel_size) {
     glUniform1i(glGetUniformLocation(program, "u_has_curvature"), g->has_curvature);
 }
 
-void gl_vdm_destroy(gl_vdm *g) {
+void gl_vdm_destroy(void *data) {
+    gl_vdm *g = data;
     if (!g) return;
     if (g->weights) glDeleteTextures(1, &g->weights);
     if (g->eigen) glDeleteTextures(1, &g->eigen);

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "mesostructure_internal.h"
+#include "meso/runtime.h"
 
 /* ---- Allocation --------------------------------------------------------------------------- */
 

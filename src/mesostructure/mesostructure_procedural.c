@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "mesostructure_internal.h"
+#include "meso/runtime.h"
 
 typedef struct pattern {
     meso_heightfield_desc desc;

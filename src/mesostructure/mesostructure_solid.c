@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "mesostructure_internal.h"
+#include "meso/runtime.h"
 
 /* ---- Kinds and defaults ------------------------------------------------------------------- */
 

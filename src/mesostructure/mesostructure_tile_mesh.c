@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "mesostructure_internal.h"
+#include "meso/runtime.h"
 
 #define DEFAULT_RESOLUTION 96
 #define MAX_CROSSINGS 256

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "raster_internal.h"
+#include "meso/runtime.h"
 
 typedef struct depth_job {
     const raster_bins *bins;

@@ -15,6 +15,7 @@
 
 #if defined(__SSE2__) && defined(__x86_64__)
 #include <emmintrin.h>
+#include "meso/runtime.h"
 #endif
 
 #define MAX_POLYGON 9          /* 3 vertices + one per clip plane (5) + 1 */

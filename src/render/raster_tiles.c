@@ -12,6 +12,7 @@
 
 #include "raster_internal.h"
 #include "render_simd.h"
+#include "meso/runtime.h"
 
 #define TILE_SAMPLES (RASTER_TILE_SIZE * RASTER_TILE_SIZE)
 _Static_assert(TILE_SAMPLES <= MESO_FRAGMENT_BLOCK_CAPACITY, "a batch holds a whole tile");

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "raster_internal.h"
+#include "meso/runtime.h"
 
 float *meso_render_alloc_floats(size_t count) {
     size_t bytes = (count * sizeof(float) + 63u) & ~(size_t)63u;

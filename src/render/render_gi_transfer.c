@@ -7,6 +7,7 @@
 
 #include "reference_internal.h"
 #include "render_gi.h"
+#include "meso/runtime.h"
 
 enum { VERTICES_PER_JOB = 64, CHANNELS = 3 };
 

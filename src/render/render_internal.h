@@ -12,6 +12,7 @@
 
 #include <stddef.h>
 
+#include "meso/runtime.h"
 #include "meso/render.h"
 
 /* ---- The frame ---------------------------------------------------------------------------- */

@@ -7,6 +7,7 @@
 
 #include "raster_internal.h"
 #include "reference_internal.h"
+#include "meso/runtime.h"
 
 #define RENDER_MAX_SAMPLES 256 /* samples a pixel (n = 16 a side) */
 

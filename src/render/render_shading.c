@@ -3,6 +3,7 @@
 
 #include "render_environment.h"
 #include "render_shading.h"
+#include "meso/texture.h"
 
 static inline v8i sel_i(v8i mask, v8i a, v8i b) { return (a & mask) | (b & ~mask); }
 

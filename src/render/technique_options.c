@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "render_internal.h"
+#include "meso/runtime.h"
 
 const meso_technique_option *meso_technique_find_option(const meso_technique_info *technique,
                                                         const char *name) {

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "scene_internal.h"
+#include "meso/runtime.h"
 
 /* ---- Key paths and errors ----------------------------------------------------------------- */
 

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "scene_internal.h"
+#include "meso/runtime.h"
 
 static meso_result parse_image(const scene_parser *p, const cJSON *item, meso_scene *scene) {
     static const char *const keys[] = {"width", "height", "background", "encoding", NULL};

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "scene_internal.h"
+#include "meso/texture.h"
 
 /* ---- Helpers ------------------------------------------------------------------------------ */
 

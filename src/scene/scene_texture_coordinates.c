@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "scene_internal.h"
+#include "meso/runtime.h"
 
 /* The default tile when "uv_projection_scale" is absent: a quarter of the mesh's largest
  * bounding-box side, so that about four tiles cross the object whatever units its file uses. */

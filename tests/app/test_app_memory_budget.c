@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "test_util.h"
+#include "meso/runtime.h"
 
 #define MIB (1024.0 * 1024.0)
 

@@ -127,7 +127,7 @@ static void test_bad_layer_bakes_are_bad_input_and_good_ones_described(void **st
     assert_int_equal(meso_heightfield_create_constant(ctx, 16, 16, 0.25f, &hf), MESO_OK);
     meso_layers *map = NULL;
     meso_layers_desc desc = {.heightfield = hf};
-    assert_int_equal(meso_bake_layers(ctx, &desc, &map), MESO_OK);
+    assert_int_equal(meso_layers_bake(ctx, &desc, &map), MESO_OK);
     const char *good = test_path(test_temp_dir(), "good_layers.mesobake");
     assert_int_equal(meso_layers_save(ctx, map, good), MESO_OK);
     char args[4096];
@@ -164,7 +164,7 @@ static void test_info_reports_sizes_beside_the_paper(void **state) {
     assert_int_equal(meso_heightfield_create_constant(ctx, 16, 16, 0.25f, &hf), MESO_OK);
     meso_layers *map = NULL;
     meso_layers_desc desc = {.heightfield = hf};
-    assert_int_equal(meso_bake_layers(ctx, &desc, &map), MESO_OK);
+    assert_int_equal(meso_layers_bake(ctx, &desc, &map), MESO_OK);
     const char *path = test_path(test_temp_dir(), "info_layers.mesobake");
     assert_int_equal(meso_layers_save(ctx, map, path), MESO_OK);
     char command[4096];

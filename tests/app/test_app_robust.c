@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "test_util.h"
+#include "meso/runtime.h"
 
 #define BAD MESO_SOURCE_DIR "/tests/data/bad/"
 #define SCENE MESO_SOURCE_DIR "/examples/bricks-plane.json"

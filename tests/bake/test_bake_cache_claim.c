@@ -9,6 +9,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "meso/bake_cache.h"
 #include "meso/bake_file.h"
 #include "test_util.h"
 

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "meso/bake_cone.h"
+#include "meso/bake_minmax.h"
 #include "test_util.h"
 
 static meso_heightfield *random_field(meso_context *ctx, int w, int h, meso_wrap wrap,
@@ -33,8 +34,8 @@ static double circle_distance(double x, int c, int period) {
 
 static void bake(meso_context *ctx, const meso_heightfield *hf, meso_minmax_pyramid **out_p,
                  meso_cone_map **out_c) {
-    assert_int_equal(meso_bake_minmax(ctx, hf, out_p), MESO_OK);
-    assert_int_equal(meso_bake_cone(ctx, hf, *out_p, out_c), MESO_OK);
+    assert_int_equal(meso_minmax_pyramid_bake(ctx, hf, out_p), MESO_OK);
+    assert_int_equal(meso_cone_map_bake(ctx, hf, *out_p, out_c), MESO_OK);
 }
 
 /* Every cell against the largest ratio over every texel of the field (the fields are small
@@ -142,8 +143,8 @@ static void test_cached_map_is_the_baked_map(void **state) {
     meso_minmax_pyramid *p = NULL;
     meso_cone_map *baked = NULL, *first = NULL, *second = NULL;
     bake(ctx, hf, &p, &baked);
-    assert_int_equal(meso_bake_cone_cached(ctx, hf, p, &first), MESO_OK);
-    assert_int_equal(meso_bake_cone_cached(ctx, hf, p, &second), MESO_OK);
+    assert_int_equal(meso_cone_map_bake_cached(ctx, hf, p, &first), MESO_OK);
+    assert_int_equal(meso_cone_map_bake_cached(ctx, hf, p, &second), MESO_OK);
     size_t bytes = 2 * 64 * 32 * sizeof(float);
     assert_memory_equal(baked->cells, first->cells, bytes);
     assert_memory_equal(baked->cells, second->cells, bytes);
@@ -164,13 +165,13 @@ static void test_bad_input_is_an_invalid_argument(void **state) {
     meso_heightfield *hf = random_field(ctx, 8, 8, MESO_WRAP_CLAMP, 1u);
     meso_heightfield *other = random_field(ctx, 8, 8, MESO_WRAP_REPEAT, 2u);
     meso_minmax_pyramid *p = NULL;
-    assert_int_equal(meso_bake_minmax(ctx, hf, &p), MESO_OK);
+    assert_int_equal(meso_minmax_pyramid_bake(ctx, hf, &p), MESO_OK);
     meso_cone_map *c = (meso_cone_map *)1;
-    assert_int_equal(meso_bake_cone(ctx, NULL, p, &c), MESO_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(meso_cone_map_bake(ctx, NULL, p, &c), MESO_ERROR_INVALID_ARGUMENT);
     assert_null(c);
-    assert_int_equal(meso_bake_cone(ctx, hf, p, &c), MESO_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(meso_cone_map_bake(ctx, hf, p, &c), MESO_ERROR_INVALID_ARGUMENT);
     assert_non_null(strstr(meso_context_last_error(ctx), "clamp"));
-    assert_int_equal(meso_bake_cone(ctx, other, p, &c), MESO_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(meso_cone_map_bake(ctx, other, p, &c), MESO_ERROR_INVALID_ARGUMENT);
     assert_non_null(strstr(meso_context_last_error(ctx), "pyramid"));
     assert_null(c);
     meso_minmax_pyramid_destroy(p);

@@ -4,6 +4,8 @@
 #include <string.h>
 
 #include "test_util.h"
+#include "meso/bake_cache.h"
+#include "meso/runtime.h"
 
 static float weights[6 * 5];
 static uint8_t labels[7];

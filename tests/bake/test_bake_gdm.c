@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "test_util.h"
+#include "meso/runtime.h"
 
 #define PI MESO_PI_D
 
@@ -95,7 +96,7 @@ static void expect_slab(meso_gdm *gdm, float h) {
 
 static void test_defaults_are_the_papers(void **state) {
     (void)state;
-    meso_gdm_desc d = meso_query_gdm_defaults(NULL);
+    meso_gdm_desc d = meso_gdm_desc_defaults(NULL);
     assert_int_equal(d.width, 64);
     assert_int_equal(d.height, 64);
     assert_int_equal(d.layers, 32);
@@ -103,7 +104,7 @@ static void test_defaults_are_the_papers(void **state) {
     assert_int_equal(d.num_phi, 32);
     assert_true(d.eigenmaps >= 1 && d.eigenmaps <= 16);
     meso_gdm_desc some = {.width = 16, .num_phi = 8};
-    d = meso_query_gdm_defaults(&some);
+    d = meso_gdm_desc_defaults(&some);
     assert_int_equal(d.height, 16);
     assert_int_equal(d.num_phi, 8);
 }
@@ -119,7 +120,7 @@ static void test_slab_solid_gives_the_analytic_distances(void **state) {
     meso_gdm_desc desc = small_desc();
     desc.solid = solid;
     meso_gdm *gdm = NULL;
-    assert_int_equal(meso_bake_gdm(ctx, &desc, &gdm), MESO_OK);
+    assert_int_equal(meso_gdm_bake(ctx, &desc, &gdm), MESO_OK);
     expect_slab(gdm, 0.4f);
     /* the normal of the slab's top, out of the solid: up (-w) */
     meso_vec3 n = meso_gdm_normal(gdm, (meso_vec3){0.3f, 0.7f, 0.75f});
@@ -138,7 +139,7 @@ static void test_constant_height_field_gives_the_analytic_distances(void **state
     meso_gdm_desc desc = small_desc();
     desc.heightfield = hf;
     meso_gdm *gdm = NULL;
-    assert_int_equal(meso_bake_gdm(ctx, &desc, &gdm), MESO_OK);
+    assert_int_equal(meso_gdm_bake(ctx, &desc, &gdm), MESO_OK);
     expect_slab(gdm, 0.3f);
     meso_vec3 n = meso_gdm_normal(gdm, (meso_vec3){0.1f, 0.2f, 0.1f});
     assert_float_equal(n.z, -1.0f, 1e-5f);
@@ -166,7 +167,7 @@ static void test_tile_mesh_box_gives_the_analytic_distances(void **state) {
     meso_gdm_desc desc = small_desc();
     desc.solid = solid;
     meso_gdm *gdm = NULL;
-    assert_int_equal(meso_bake_gdm(ctx, &desc, &gdm), MESO_OK);
+    assert_int_equal(meso_gdm_bake(ctx, &desc, &gdm), MESO_OK);
     meso_gdm_view v = meso_gdm_get_view(gdm);
     int checked = 0;
     for (int j = 6; j <= 9; j++)     /* v in [0.41, 0.59] */
@@ -280,7 +281,7 @@ static void test_weave_entries_match_a_brute_force_march(void **state) {
     meso_gdm_desc desc = small_desc();
     desc.solid = solid;
     meso_gdm *gdm = NULL;
-    assert_int_equal(meso_bake_gdm(ctx, &desc, &gdm), MESO_OK);
+    assert_int_equal(meso_gdm_bake(ctx, &desc, &gdm), MESO_OK);
     expect_close_to_march(gdm, solid, NULL, 1e-3f, 5e-3f, 5e-3f);
     meso_gdm_destroy(gdm);
     meso_solid_destroy(solid);
@@ -294,7 +295,7 @@ static void test_height_field_entries_match_a_brute_force_march(void **state) {
     meso_gdm_desc desc = small_desc();
     desc.heightfield = hf;
     meso_gdm *gdm = NULL;
-    assert_int_equal(meso_bake_gdm(ctx, &desc, &gdm), MESO_OK);
+    assert_int_equal(meso_gdm_bake(ctx, &desc, &gdm), MESO_OK);
     expect_close_to_march(gdm, NULL, hf, 1e-3f, 5e-3f, 5e-3f);
     meso_gdm_destroy(gdm);
     free_heightfield(hf);
@@ -311,7 +312,7 @@ static meso_gdm *bake_weave(meso_context *ctx, meso_solid **out_solid, int eigen
     desc.solid = *out_solid;
     desc.eigenmaps = eigenmaps;
     meso_gdm *gdm = NULL;
-    assert_int_equal(meso_bake_gdm(ctx, &desc, &gdm), MESO_OK);
+    assert_int_equal(meso_gdm_bake(ctx, &desc, &gdm), MESO_OK);
     return gdm;
 }
 
@@ -384,8 +385,8 @@ static void test_same_bytes_for_one_and_two_threads(void **state) {
     desc.heightfield = hf;
     desc.keep_raw = false;
     meso_gdm *c = NULL, *d = NULL;
-    assert_int_equal(meso_bake_gdm(one, &desc, &c), MESO_OK);
-    assert_int_equal(meso_bake_gdm(two, &desc, &d), MESO_OK);
+    assert_int_equal(meso_gdm_bake(one, &desc, &c), MESO_OK);
+    assert_int_equal(meso_gdm_bake(two, &desc, &d), MESO_OK);
     assert_true(same_maps(c, d));
     meso_gdm_destroy(a);
     meso_gdm_destroy(b);
@@ -436,7 +437,7 @@ static const char *save_tiny_bake(meso_context *ctx, meso_heightfield *hf, const
     meso_gdm_desc desc = {
         .heightfield = hf, .width = 8, .layers = 4, .num_theta = 4, .num_phi = 4, .eigenmaps = 2};
     meso_gdm *gdm = NULL;
-    assert_int_equal(meso_bake_gdm(ctx, &desc, &gdm), MESO_OK);
+    assert_int_equal(meso_gdm_bake(ctx, &desc, &gdm), MESO_OK);
     const char *path = test_path(test_temp_dir(), name);
     assert_int_equal(meso_gdm_save(ctx, gdm, path), MESO_OK);
     meso_gdm_destroy(gdm);
@@ -558,16 +559,16 @@ static void test_bad_descs_are_refused_before_allocating(void **state) {
     assert_int_equal(meso_solid_create_procedural(ctx, &(meso_solid_desc){0}, &solid), MESO_OK);
     meso_gdm *gdm = NULL;
     meso_gdm_desc both = {.heightfield = hf, .solid = solid};
-    assert_int_equal(meso_bake_gdm(ctx, &both, &gdm), MESO_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(meso_gdm_bake(ctx, &both, &gdm), MESO_ERROR_INVALID_ARGUMENT);
     assert_null(gdm);
     meso_gdm_desc none = {0};
-    assert_int_equal(meso_bake_gdm(ctx, &none, &gdm), MESO_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(meso_gdm_bake(ctx, &none, &gdm), MESO_ERROR_INVALID_ARGUMENT);
     meso_gdm_desc wide = {.heightfield = hf, .width = MESO_GDM_MAX_SIDE + 1};
-    assert_int_equal(meso_bake_gdm(ctx, &wide, &gdm), MESO_ERROR_LIMIT);
+    assert_int_equal(meso_gdm_bake(ctx, &wide, &gdm), MESO_ERROR_LIMIT);
     assert_non_null(strstr(meso_context_last_error(ctx), "width"));
     meso_gdm_desc huge = {
         .heightfield = hf, .width = 512, .layers = 256, .num_theta = 64, .num_phi = 128};
-    assert_int_equal(meso_bake_gdm(ctx, &huge, &gdm), MESO_ERROR_LIMIT);
+    assert_int_equal(meso_gdm_bake(ctx, &huge, &gdm), MESO_ERROR_LIMIT);
     assert_non_null(strstr(meso_context_last_error(ctx), "table"));
     meso_gdm_desc many = {.heightfield = hf,
                           .width = 4,
@@ -575,7 +576,7 @@ static void test_bad_descs_are_refused_before_allocating(void **state) {
                           .num_theta = 2,
                           .num_phi = 1,
                           .eigenmaps = 5}; /* rank 4 */
-    assert_int_equal(meso_bake_gdm(ctx, &many, &gdm), MESO_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(meso_gdm_bake(ctx, &many, &gdm), MESO_ERROR_INVALID_ARGUMENT);
     assert_non_null(strstr(meso_context_last_error(ctx), "eigenmaps"));
     /* the default bake within a budget of 64 MiB: refused by the estimate, not by malloc */
     meso_context *small = NULL;
@@ -585,7 +586,7 @@ static void test_bad_descs_are_refused_before_allocating(void **state) {
                                          &small),
                      MESO_OK);
     meso_gdm_desc defaults = {.heightfield = hf, .keep_raw = true};
-    assert_int_equal(meso_bake_gdm(small, &defaults, &gdm), MESO_ERROR_LIMIT);
+    assert_int_equal(meso_gdm_bake(small, &defaults, &gdm), MESO_ERROR_LIMIT);
     meso_context_destroy(small);
     meso_solid_destroy(solid);
     free_heightfield(hf);
@@ -613,7 +614,7 @@ static void test_a_cancelled_bake_returns_cancelled_and_no_map(void **state) {
     meso_gdm_desc desc = small_desc();
     desc.heightfield = hf;
     meso_gdm *gdm = NULL;
-    assert_int_equal(meso_bake_gdm(ctx, &desc, &gdm), MESO_ERROR_CANCELLED);
+    assert_int_equal(meso_gdm_bake(ctx, &desc, &gdm), MESO_ERROR_CANCELLED);
     assert_null(gdm);
     assert_true(calls > 0);
     free_heightfield(hf);

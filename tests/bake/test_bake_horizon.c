@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "test_util.h"
+#include "meso/bake_horizon.h"
 
 static meso_heightfield *make_field(meso_context *ctx, int w, int h, float value) {
     meso_heightfield *hf = NULL;
@@ -22,7 +23,7 @@ static void test_flat_field_has_horizon_zero_everywhere(void **state) {
     meso_context *ctx = test_context(2);
     meso_heightfield *hf = make_field(ctx, 40, 24, 0.7f);
     meso_horizon_map *map = NULL;
-    assert_int_equal(meso_bake_horizon(ctx, hf, NULL, &map), MESO_OK);
+    assert_int_equal(meso_horizon_map_bake(ctx, hf, NULL, &map), MESO_OK);
     assert_int_equal(map->num_azimuths, 8);
     assert_true(map->max_distance == 64.0f);
     for (size_t k = 0; k < (size_t)40 * 24 * 8; ++k) assert_true(map->slopes[k] == 0.0f);
@@ -41,16 +42,16 @@ static void test_pillar_gives_its_angle_at_its_distance(void **state) {
     meso_heightfield_update_hash(hf);
     meso_horizon_map *map = NULL;
     /* 12 azimuths: the general (bilinear) march; azimuth 3 is phi = 90 deg */
-    assert_int_equal(meso_bake_horizon(ctx, hf,
-                                       &(meso_horizon_desc){.num_azimuths = 12, .max_distance = 16},
-                                       &map),
-                     MESO_OK);
+    assert_int_equal(
+        meso_horizon_map_bake(ctx, hf, &(meso_horizon_desc){.num_azimuths = 12, .max_distance = 16},
+                              &map),
+        MESO_OK);
     assert_true(fabsf(slope_at(map, 27, 32, 0) - 12.8f) < 1e-4f);
     assert_true(fabsf(slope_at(map, 32, 37, 3) - 12.8f) < 1e-4f);
     assert_true(slope_at(map, 27, 32, 6) == 0.0f);
     meso_horizon_map_destroy(map);
     /* 8 azimuths: the texel-aligned march */
-    assert_int_equal(meso_bake_horizon(ctx, hf, &(meso_horizon_desc){.max_distance = 16}, &map),
+    assert_int_equal(meso_horizon_map_bake(ctx, hf, &(meso_horizon_desc){.max_distance = 16}, &map),
                      MESO_OK);
     assert_true(fabsf(slope_at(map, 27, 32, 0) - 12.8f) < 1e-4f);
     assert_true(slope_at(map, 27, 32, 4) == 0.0f);
@@ -72,14 +73,14 @@ static void test_bad_desc_fields_are_named(void **state) {
     meso_context *ctx = test_context(1);
     meso_heightfield *hf = make_field(ctx, 8, 8, 0.5f);
     meso_horizon_map *map = (meso_horizon_map *)1;
-    assert_int_equal(meso_bake_horizon(ctx, hf, &(meso_horizon_desc){.num_azimuths = 65}, &map),
+    assert_int_equal(meso_horizon_map_bake(ctx, hf, &(meso_horizon_desc){.num_azimuths = 65}, &map),
                      MESO_ERROR_INVALID_ARGUMENT);
     assert_null(map);
     assert_non_null(strstr(meso_context_last_error(ctx), "num_azimuths"));
-    assert_int_equal(meso_bake_horizon(ctx, hf, &(meso_horizon_desc){.max_distance = -3}, &map),
+    assert_int_equal(meso_horizon_map_bake(ctx, hf, &(meso_horizon_desc){.max_distance = -3}, &map),
                      MESO_ERROR_INVALID_ARGUMENT);
     assert_non_null(strstr(meso_context_last_error(ctx), "max_distance"));
-    assert_int_equal(meso_bake_horizon(ctx, NULL, NULL, &map), MESO_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(meso_horizon_map_bake(ctx, NULL, NULL, &map), MESO_ERROR_INVALID_ARGUMENT);
     meso_heightfield_destroy(hf);
     meso_context_destroy(ctx);
 }
@@ -91,8 +92,8 @@ static void test_one_and_two_threads_bake_the_same_bytes(void **state) {
     meso_heightfield_desc desc = {.kind = MESO_HEIGHTFIELD_BRICKS, .resolution = 96};
     assert_int_equal(meso_heightfield_create_procedural(one, &desc, &hf, NULL), MESO_OK);
     meso_horizon_map *a = NULL, *b = NULL;
-    assert_int_equal(meso_bake_horizon(one, hf, NULL, &a), MESO_OK);
-    assert_int_equal(meso_bake_horizon(two, hf, NULL, &b), MESO_OK);
+    assert_int_equal(meso_horizon_map_bake(one, hf, NULL, &a), MESO_OK);
+    assert_int_equal(meso_horizon_map_bake(two, hf, NULL, &b), MESO_OK);
     assert_memory_equal(a->slopes, b->slopes, meso_horizon_map_memory(a));
     bool any = false;
     for (size_t k = 0; k < meso_horizon_map_memory(a) / sizeof(float); ++k)
@@ -101,9 +102,9 @@ static void test_one_and_two_threads_bake_the_same_bytes(void **state) {
     meso_horizon_map_destroy(a);
     meso_horizon_map_destroy(b);
     /* the general march too */
-    assert_int_equal(meso_bake_horizon(one, hf, &(meso_horizon_desc){.num_azimuths = 6}, &a),
+    assert_int_equal(meso_horizon_map_bake(one, hf, &(meso_horizon_desc){.num_azimuths = 6}, &a),
                      MESO_OK);
-    assert_int_equal(meso_bake_horizon(two, hf, &(meso_horizon_desc){.num_azimuths = 6}, &b),
+    assert_int_equal(meso_horizon_map_bake(two, hf, &(meso_horizon_desc){.num_azimuths = 6}, &b),
                      MESO_OK);
     assert_memory_equal(a->slopes, b->slopes, meso_horizon_map_memory(a));
     meso_horizon_map_destroy(a);
@@ -122,7 +123,7 @@ static void test_bake_keeps_to_the_memory_budget(void **state) {
                      MESO_OK);
     meso_heightfield *hf = make_field(tiny, 40, 24, 0.7f);
     meso_horizon_map *map = NULL;
-    assert_int_equal(meso_bake_horizon(tiny, hf, NULL, &map), MESO_ERROR_LIMIT);
+    assert_int_equal(meso_horizon_map_bake(tiny, hf, NULL, &map), MESO_ERROR_LIMIT);
     assert_null(map);
     assert_non_null(strstr(meso_context_last_error(tiny), "horizon bake"));
     meso_heightfield_destroy(hf);
@@ -167,7 +168,7 @@ static void test_a_long_bake_is_announced_with_its_estimate(void **state) {
     assert_int_equal(meso_context_create(&desc, &ctx), MESO_OK);
     meso_heightfield *hf = make_field(ctx, 2048, 2048, 0.0f);
     meso_horizon_map *map = NULL;
-    assert_int_equal(meso_bake_horizon(ctx, hf, &long_bake, &map), MESO_ERROR_CANCELLED);
+    assert_int_equal(meso_horizon_map_bake(ctx, hf, &long_bake, &map), MESO_ERROR_CANCELLED);
     assert_null(map);
     if (!strstr(s.warning, "horizon map: 2048 x 2048 texels x 64 azimuths to 4096 texels: about") ||
         !strstr(s.warning, "s of baking on 1 thread (--progress shows it)"))

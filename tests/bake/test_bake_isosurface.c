@@ -94,7 +94,7 @@ static void test_isosurface_of_a_ball_is_closed_outward_and_the_right_size(void 
     meso_context *ctx = test_context(2);
     meso_isosurface *iso = NULL;
     meso_isosurface_desc desc = {.resolution_u = 40, .resolution_v = 40, .resolution_w = 40};
-    assert_int_equal(meso_bake_isosurface_function(ctx, ball, NULL, &desc, &iso), MESO_OK);
+    assert_int_equal(meso_isosurface_bake_function(ctx, ball, NULL, &desc, &iso), MESO_OK);
     assert_true(iso->num_triangles > 1000);
     assert_closed(iso);
     /* the signed volume of a closed outward mesh is the ball's */
@@ -126,7 +126,7 @@ static void test_isosurface_keeps_a_box_edges_and_corners(void **state) {
     meso_isosurface *iso = NULL;
     const int n = 32;
     meso_isosurface_desc desc = {.resolution_u = n, .resolution_v = n, .resolution_w = n};
-    assert_int_equal(meso_bake_isosurface_function(ctx, turned_box, NULL, &desc, &iso), MESO_OK);
+    assert_int_equal(meso_isosurface_bake_function(ctx, turned_box, NULL, &desc, &iso), MESO_OK);
     assert_closed(iso);
     float worst = 0.0f, highest = -1.0f;
     for (size_t i = 0; i < iso->num_vertices; i++) {
@@ -153,7 +153,7 @@ static void test_isosurface_tiles_join_at_the_borders(void **state) {
     meso_context *ctx = test_context(2);
     meso_isosurface *iso = NULL;
     meso_isosurface_desc desc = {.resolution_u = 16, .resolution_v = 24, .resolution_w = 12};
-    assert_int_equal(meso_bake_isosurface_function(ctx, bars, NULL, &desc, &iso), MESO_OK);
+    assert_int_equal(meso_isosurface_bake_function(ctx, bars, NULL, &desc, &iso), MESO_OK);
     assert_closed_or_open_at_borders(iso);
     size_t borrowed = 0, matched = 0;
     for (size_t i = 0; i < iso->num_vertices; i++) {
@@ -181,7 +181,7 @@ static void test_isosurface_caps_the_solid_at_the_slab_faces(void **state) {
     meso_context *ctx = test_context(1);
     meso_isosurface *iso = NULL;
     meso_isosurface_desc desc = {.resolution_u = 4, .resolution_v = 4, .resolution_w = 4};
-    assert_int_equal(meso_bake_isosurface_function(ctx, everything, NULL, &desc, &iso), MESO_OK);
+    assert_int_equal(meso_isosurface_bake_function(ctx, everything, NULL, &desc, &iso), MESO_OK);
     for (size_t i = 0; i < iso->num_vertices; i++)
         assert_true(iso->positions[i].z == 0.0f || iso->positions[i].z == 1.0f);
     assert_true(iso->num_triangles >= 2 * 2 * 4 * 4);
@@ -193,12 +193,12 @@ static void test_isosurface_resolution_limits_name_the_field(void **state) {
     meso_context *ctx = test_context(1);
     meso_isosurface *iso = (meso_isosurface *)(uintptr_t)1;
     meso_isosurface_desc desc = {.resolution_u = 4, .resolution_v = 5000, .resolution_w = 4};
-    assert_int_equal(meso_bake_isosurface_function(ctx, ball, NULL, &desc, &iso), MESO_ERROR_LIMIT);
+    assert_int_equal(meso_isosurface_bake_function(ctx, ball, NULL, &desc, &iso), MESO_ERROR_LIMIT);
     assert_null(iso);
     assert_non_null(strstr(meso_context_last_error(ctx), "resolution_v"));
     desc = (meso_isosurface_desc){.resolution_u = 1000, .resolution_v = 1000, .resolution_w = 1000};
-    assert_int_equal(meso_bake_isosurface_function(ctx, ball, NULL, &desc, &iso), MESO_ERROR_LIMIT);
-    assert_int_equal(meso_bake_isosurface(ctx, NULL, NULL, &iso), MESO_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(meso_isosurface_bake_function(ctx, ball, NULL, &desc, &iso), MESO_ERROR_LIMIT);
+    assert_int_equal(meso_isosurface_bake(ctx, NULL, NULL, &iso), MESO_ERROR_INVALID_ARGUMENT);
     meso_isosurface_desc d = meso_isosurface_desc_defaults(NULL);
     assert_int_equal(d.resolution_u, 128);
     assert_int_equal(d.resolution_w, 32);
@@ -209,8 +209,8 @@ static void test_isosurface_is_identical_for_any_thread_count(void **state) {
     meso_context *one = test_context(1), *two = test_context(2);
     meso_isosurface *a = NULL, *b = NULL;
     meso_isosurface_desc desc = {.resolution_u = 24, .resolution_v = 24, .resolution_w = 16};
-    assert_int_equal(meso_bake_isosurface_function(one, bars, NULL, &desc, &a), MESO_OK);
-    assert_int_equal(meso_bake_isosurface_function(two, bars, NULL, &desc, &b), MESO_OK);
+    assert_int_equal(meso_isosurface_bake_function(one, bars, NULL, &desc, &a), MESO_OK);
+    assert_int_equal(meso_isosurface_bake_function(two, bars, NULL, &desc, &b), MESO_OK);
     assert_int_equal(a->num_vertices, b->num_vertices);
     assert_int_equal(a->num_triangles, b->num_triangles);
     assert_memory_equal(a->positions, b->positions, a->num_vertices * sizeof *a->positions);
@@ -228,7 +228,7 @@ static void test_isosurface_of_the_weave_solid_is_closed(void **state) {
     assert_int_equal(meso_solid_create_procedural(ctx, &(meso_solid_desc){0}, &solid), MESO_OK);
     meso_isosurface *iso = NULL;
     meso_isosurface_desc desc = {.resolution_u = 32, .resolution_v = 32, .resolution_w = 8};
-    assert_int_equal(meso_bake_isosurface(ctx, solid, &desc, &iso), MESO_OK);
+    assert_int_equal(meso_isosurface_bake(ctx, solid, &desc, &iso), MESO_OK);
     assert_true(iso->num_triangles > 100);
     meso_isosurface_destroy(iso);
     meso_solid_destroy(solid);

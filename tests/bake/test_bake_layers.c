@@ -35,7 +35,7 @@ static meso_layers *bake(meso_context *ctx, meso_scalar_field_fn fn, int layers,
     meso_layers *map = NULL;
     meso_layers_desc desc = {
         .field = fn, .width = 32, .height = 32, .num_layers = layers, .format = format};
-    assert_int_equal(meso_bake_layers(ctx, &desc, &map), MESO_OK);
+    assert_int_equal(meso_layers_bake(ctx, &desc, &map), MESO_OK);
     return map;
 }
 
@@ -118,7 +118,7 @@ static void test_height_field_is_one_layer_of_one_minus_h(void **state) {
     meso_heightfield_update_hash(hf);
     meso_layers *m = NULL;
     meso_layers_desc desc = {.heightfield = hf, .format = MESO_LAYERS_FORMAT_F32};
-    assert_int_equal(meso_bake_layers(ctx, &desc, &m), MESO_OK);
+    assert_int_equal(meso_layers_bake(ctx, &desc, &m), MESO_OK);
     assert_int_equal(m->width, 16);
     assert_int_equal(m->height, 8);
     assert_true(m->from_heightfield);
@@ -141,8 +141,8 @@ static void test_bake_is_identical_for_any_thread_count(void **state) {
         MESO_OK);
     meso_layers_desc desc = {.solid = solid, .width = 48, .height = 48, .num_layers = 8};
     meso_layers *a = NULL, *b = NULL;
-    assert_int_equal(meso_bake_layers(one, &desc, &a), MESO_OK);
-    assert_int_equal(meso_bake_layers(two, &desc, &b), MESO_OK);
+    assert_int_equal(meso_layers_bake(one, &desc, &a), MESO_OK);
+    assert_int_equal(meso_layers_bake(two, &desc, &b), MESO_OK);
     size_t n = 48u * 48u * 8u;
     assert_memory_equal(a->depth, b->depth, n * sizeof(float));
     assert_memory_equal(a->normal_x, b->normal_x, n * sizeof(float));
@@ -265,12 +265,12 @@ static void test_bad_descs_name_the_field(void **state) {
     meso_context *ctx = test_context(1);
     meso_layers *m = NULL;
     meso_layers_desc desc = {.field = slab_field, .num_layers = 5};
-    assert_int_equal(meso_bake_layers(ctx, &desc, &m), MESO_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(meso_layers_bake(ctx, &desc, &m), MESO_ERROR_INVALID_ARGUMENT);
     assert_non_null(strstr(meso_context_last_error(ctx), "num_layers"));
     desc = (meso_layers_desc){0};
-    assert_int_equal(meso_bake_layers(ctx, &desc, &m), MESO_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(meso_layers_bake(ctx, &desc, &m), MESO_ERROR_INVALID_ARGUMENT);
     desc = (meso_layers_desc){.field = slab_field, .width = MESO_LAYERS_MAX_SIDE + 1};
-    assert_int_equal(meso_bake_layers(ctx, &desc, &m), MESO_ERROR_LIMIT);
+    assert_int_equal(meso_layers_bake(ctx, &desc, &m), MESO_ERROR_LIMIT);
     assert_null(m);
     meso_context_destroy(ctx);
     /* the memory budget: a 256^2 x 4 map needs 4 MiB, refused under 1 MiB */
@@ -279,7 +279,7 @@ static void test_bad_descs_name_the_field(void **state) {
                          &(meso_context_desc){.num_threads = 1, .memory_limit = 1u << 20}, &tiny),
                      MESO_OK);
     desc = (meso_layers_desc){.field = slab_field};
-    assert_int_equal(meso_bake_layers(tiny, &desc, &m), MESO_ERROR_LIMIT);
+    assert_int_equal(meso_layers_bake(tiny, &desc, &m), MESO_ERROR_LIMIT);
     assert_null(m);
     assert_non_null(strstr(meso_context_last_error(tiny), "relief_layers bake"));
     meso_context_destroy(tiny);

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "test_util.h"
+#include "meso/bake_minmax.h"
 
 static meso_heightfield *random_field(meso_context *ctx, int w, int h, meso_wrap wrap,
                                       unsigned seed) {
@@ -49,7 +50,7 @@ static void test_every_level_bounds_the_bilinear_surface(void **state) {
     for (int w = 0; w < 2; ++w) {
         meso_heightfield *hf = random_field(ctx, 37, 23, wraps[w], 7u + (unsigned)w);
         meso_minmax_pyramid *p = NULL;
-        assert_int_equal(meso_bake_minmax(ctx, hf, &p), MESO_OK);
+        assert_int_equal(meso_minmax_pyramid_bake(ctx, hf, &p), MESO_OK);
         assert_int_equal(p->num_levels, 7); /* 37 -> 19 -> 10 -> 5 -> 3 -> 2 -> 1 */
         assert_int_equal(p->levels[0].width, 37);
         assert_int_equal(p->levels[0].height, 23);
@@ -74,8 +75,8 @@ static void test_one_and_two_threads_bake_the_same_bytes(void **state) {
     meso_context *one = test_context(1), *two = test_context(2);
     meso_heightfield *hf = random_field(one, 200, 130, MESO_WRAP_REPEAT, 3u);
     meso_minmax_pyramid *a = NULL, *b = NULL;
-    assert_int_equal(meso_bake_minmax(one, hf, &a), MESO_OK);
-    assert_int_equal(meso_bake_minmax(two, hf, &b), MESO_OK);
+    assert_int_equal(meso_minmax_pyramid_bake(one, hf, &a), MESO_OK);
+    assert_int_equal(meso_minmax_pyramid_bake(two, hf, &b), MESO_OK);
     assert_int_equal(a->block_floats, b->block_floats);
     assert_memory_equal(a->block, b->block, a->block_floats * sizeof(float));
     meso_minmax_pyramid_destroy(a);
@@ -89,7 +90,7 @@ static void test_missing_field_is_an_invalid_argument(void **state) {
     (void)state;
     meso_context *ctx = test_context(1);
     meso_minmax_pyramid *p = (meso_minmax_pyramid *)1;
-    assert_int_equal(meso_bake_minmax(ctx, NULL, &p), MESO_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(meso_minmax_pyramid_bake(ctx, NULL, &p), MESO_ERROR_INVALID_ARGUMENT);
     assert_null(p);
     assert_non_null(strstr(meso_context_last_error(ctx), "heightfield"));
     meso_context_destroy(ctx);

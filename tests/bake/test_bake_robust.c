@@ -8,6 +8,8 @@
 #include <unistd.h>
 
 #include "test_util.h"
+#include "meso/bake_cache.h"
+#include "meso/runtime.h"
 
 static meso_heightfield *make_bumps(int side) {
     meso_heightfield *hf = calloc(1, sizeof(*hf));
@@ -231,7 +233,7 @@ static void test_every_truncation_and_bit_flip_of_a_layers_file_is_refused(void 
     meso_heightfield *hf = make_bumps(8);
     meso_layers_desc desc = {.heightfield = hf, .width = 8, .height = 8, .num_layers = 4};
     meso_layers *map = NULL;
-    assert_int_equal(meso_bake_layers(ctx, &desc, &map), MESO_OK);
+    assert_int_equal(meso_layers_bake(ctx, &desc, &map), MESO_OK);
     const char *path = test_path(test_temp_dir(), "layers.mesobake");
     assert_int_equal(meso_layers_save(ctx, map, path), MESO_OK);
     meso_layers_destroy(map);
@@ -252,7 +254,7 @@ static void test_every_truncation_and_bit_flip_of_a_gdm_file_is_refused(void **s
                           .eigenmaps = 2,
                           .keep_raw = true};
     meso_gdm *gdm = NULL;
-    assert_int_equal(meso_bake_gdm(ctx, &desc, &gdm), MESO_OK);
+    assert_int_equal(meso_gdm_bake(ctx, &desc, &gdm), MESO_OK);
     const char *path = test_path(test_temp_dir(), "gdm.mesobake");
     assert_int_equal(meso_gdm_save(ctx, gdm, path), MESO_OK);
     meso_gdm_destroy(gdm);

@@ -40,7 +40,7 @@ static void test_rtv_flat_surface_is_the_cosine_lobe(void **state) {
                           .height = 4,
                           .layers = 3,
                           .directions = 1024};
-    assert_int_equal(meso_bake_rtv(ctx, &desc, &rtv), MESO_OK);
+    assert_int_equal(meso_rtv_bake(ctx, &desc, &rtv), MESO_OK);
     /* nothing shadows: T_i = 1/pi integral over the upper hemisphere of cos Y_i:
      * T_0 = Y_0 = 0.2821, T_2 = 0.4886 * 2/3 = 0.3257, T_6 = 0.3154 / 2 = 0.1577, others 0;
      * the 1024 directions' quadrature is good to ~0.5 % */
@@ -77,9 +77,9 @@ static void test_rtv_groove_is_shadowed_and_filled_by_interreflection(void **sta
                           .directions = 512,
                           .albedo = -1.0f};
     meso_rtv *direct = NULL, *bounced = NULL;
-    assert_int_equal(meso_bake_rtv(ctx, &desc, &direct), MESO_OK);
+    assert_int_equal(meso_rtv_bake(ctx, &desc, &direct), MESO_OK);
     desc.albedo = 0.7f;
-    assert_int_equal(meso_bake_rtv(ctx, &desc, &bounced), MESO_OK);
+    assert_int_equal(meso_rtv_bake(ctx, &desc, &bounced), MESO_OK);
     /* the voxels at the groove's bottom (u = 0.5 +- 1/32, w = 1) hold points on its walls,
      * normals 45 degrees from up, which see the sky between their own wall's plane and the
      * opposite wall's top: the 2D form factor of that window, (sin 90 + sin(-3.4)) / 2 = 0.47,
@@ -98,7 +98,7 @@ static void test_rtv_groove_is_shadowed_and_filled_by_interreflection(void **sta
     /* the same bytes with one thread */
     meso_context *one = test_context(1);
     meso_rtv *again = NULL;
-    assert_int_equal(meso_bake_rtv(one, &desc, &again), MESO_OK);
+    assert_int_equal(meso_rtv_bake(one, &desc, &again), MESO_OK);
     assert_memory_equal(again->coefficients, bounced->coefficients,
                         16 * 2 * 3 * MESO_SH_COUNT * sizeof(float));
     assert_memory_equal(again->weights, bounced->weights,
@@ -155,7 +155,7 @@ static void test_rtv_thin_bar_top_sees_the_whole_sky(void **state) {
     meso_rtv *rtv = NULL;
     meso_rtv_desc desc = {
         .solid = solid, .aspect = 0.5f, .width = 16, .height = 16, .layers = 8, .directions = 256};
-    assert_int_equal(meso_bake_rtv(ctx, &desc, &rtv), MESO_OK);
+    assert_int_equal(meso_rtv_bake(ctx, &desc, &rtv), MESO_OK);
     /* measured: 1.01 to 1.03 (the quadrature and the SVD), 0.885 within 0.02 of the edges
      * (the voxels there answer for the sides as well); 0.67 to 0.89 when every corner voxel
      * counted */
@@ -181,7 +181,7 @@ static void test_rtv_file_round_trip_and_corruption(void **state) {
     meso_rtv *rtv = NULL, *loaded = NULL;
     meso_rtv_desc desc = {
         .heightfield = hf, .aspect = 0.5f, .width = 8, .height = 2, .layers = 3, .directions = 128};
-    assert_int_equal(meso_bake_rtv(ctx, &desc, &rtv), MESO_OK);
+    assert_int_equal(meso_rtv_bake(ctx, &desc, &rtv), MESO_OK);
     const char *path = test_path(test_temp_dir(), "groove.mesobake");
     assert_int_equal(meso_rtv_save(ctx, rtv, path), MESO_OK);
     assert_int_equal(meso_rtv_load(ctx, path, &loaded), MESO_OK);
@@ -303,14 +303,14 @@ static void test_rtv_bad_descs_are_refused(void **state) {
     meso_context *ctx = test_context(1);
     meso_heightfield *hf = field(ctx, 4, flat);
     meso_rtv *rtv = (meso_rtv *)1;
-    assert_int_equal(meso_bake_rtv(ctx, &(meso_rtv_desc){.heightfield = hf}, &rtv),
+    assert_int_equal(meso_rtv_bake(ctx, &(meso_rtv_desc){.heightfield = hf}, &rtv),
                      MESO_ERROR_INVALID_ARGUMENT);
     assert_string_equal(meso_context_last_error(ctx), "rtv: aspect: 0 is not in (0, 100]");
     assert_null(rtv);
-    assert_int_equal(meso_bake_rtv(ctx, &(meso_rtv_desc){.aspect = 1}, &rtv),
+    assert_int_equal(meso_rtv_bake(ctx, &(meso_rtv_desc){.aspect = 1}, &rtv),
                      MESO_ERROR_INVALID_ARGUMENT);
     assert_int_equal(
-        meso_bake_rtv(
+        meso_rtv_bake(
             ctx,
             &(meso_rtv_desc){
                 .heightfield = hf, .aspect = 1, .width = 4096, .height = 4096, .layers = 4},

@@ -38,7 +38,7 @@ static void check_random_boxes(meso_wrap wrap) {
     float storage[13 * 7];
     meso_heightfield hf = make_field(13, 7, wrap, storage);
     meso_sat *sat = NULL;
-    assert_int_equal(meso_bake_sat(ctx, &hf, &sat), MESO_OK);
+    assert_int_equal(meso_sat_bake(ctx, &hf, &sat), MESO_OK);
     assert_non_null(sat);
     assert_int_equal(sat->width, 13);
     assert_int_equal(sat->height, 7);
@@ -73,7 +73,7 @@ static void test_bake_sat_average_of_a_constant_field_is_the_constant(void **sta
     for (int i = 0; i < 256; i++) storage[i] = 0.375f;
     meso_heightfield hf = {.width = 16, .height = 16, .heights = storage, .wrap = MESO_WRAP_REPEAT};
     meso_sat *sat = NULL;
-    assert_int_equal(meso_bake_sat(ctx, &hf, &sat), MESO_OK);
+    assert_int_equal(meso_sat_bake(ctx, &hf, &sat), MESO_OK);
     const float radii[] = {0.0f, 0.3f, 1.0f, 2.5f, 7.0f, 40.0f};
     for (size_t r = 0; r < sizeof(radii) / sizeof(radii[0]); r++)
         for (int k = 0; k < 50; k++) {
@@ -91,7 +91,7 @@ static void test_bake_sat_average_takes_the_box_of_texel_centres_around_the_poin
     float storage[8 * 4];
     meso_heightfield hf = make_field(8, 4, MESO_WRAP_REPEAT, storage);
     meso_sat *sat = NULL;
-    assert_int_equal(meso_bake_sat(ctx, &hf, &sat), MESO_OK);
+    assert_int_equal(meso_sat_bake(ctx, &hf, &sat), MESO_OK);
     /* radius 0: the texel containing the point; (u, v) = centre of texel (5, 1) */
     float u = 5.5f / 8.0f, v = 1.0f - 1.5f / 4.0f;
     assert_float_equal(meso_sat_box_average(sat, u, v, 0.0f), storage[1 * 8 + 5], 1e-6f);
@@ -123,7 +123,7 @@ static void check_average_bits(meso_wrap wrap) {
     float storage[37 * 23];
     meso_heightfield hf = make_field(37, 23, wrap, storage);
     meso_sat *sat = NULL;
-    assert_int_equal(meso_bake_sat(ctx, &hf, &sat), MESO_OK);
+    assert_int_equal(meso_sat_bake(ctx, &hf, &sat), MESO_OK);
     int inside = 0, outside = 0;
     for (int k = 0; k < 4000; k++) {
         float u = (float)(next_random() % 20001) / 20000.0f * 1.2f - 0.1f;
@@ -164,15 +164,15 @@ static void test_bake_sat_rejects_empty_and_oversized_fields(void **state) {
     float one = 0.5f;
     meso_sat *sat = (meso_sat *)&one; /* must be reset to NULL on failure */
     meso_heightfield empty = {.width = 0, .height = 4, .heights = &one};
-    assert_int_equal(meso_bake_sat(ctx, &empty, &sat), MESO_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(meso_sat_bake(ctx, &empty, &sat), MESO_ERROR_INVALID_ARGUMENT);
     assert_null(sat);
     assert_non_null(strstr(meso_context_last_error(ctx), "summed-area table"));
     /* the size is checked before anything is read or allocated */
     meso_heightfield huge = {.width = 8192, .height = 8192, .heights = &one};
-    assert_int_equal(meso_bake_sat(ctx, &huge, &sat), MESO_ERROR_LIMIT);
+    assert_int_equal(meso_sat_bake(ctx, &huge, &sat), MESO_ERROR_LIMIT);
     assert_null(sat);
     assert_non_null(strstr(meso_context_last_error(ctx), "limit"));
-    assert_int_equal(meso_bake_sat(ctx, NULL, &sat), MESO_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(meso_sat_bake(ctx, NULL, &sat), MESO_ERROR_INVALID_ARGUMENT);
     meso_sat_destroy(NULL);
     meso_context_destroy(ctx);
 }

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "test_util.h"
+#include "meso/runtime.h"
 
 #define HALF_PI (0.5 * MESO_PI_D)
 
@@ -39,7 +40,7 @@ static meso_heightfield *make_bumps(int side) {
 static float theta_at(int t, int n) { return (float)((t + 0.5) * HALF_PI / n); }
 
 static void test_vdm_defaults_are_the_papers(void **state) {
-    meso_vdm_desc d = meso_query_vdm_defaults(NULL);
+    meso_vdm_desc d = meso_vdm_desc_defaults(NULL);
     assert_int_equal(d.width, 128);
     assert_int_equal(d.height, 128);
     assert_int_equal(d.num_theta, 32);
@@ -49,7 +50,7 @@ static void test_vdm_defaults_are_the_papers(void **state) {
     assert_int_equal(d.vdm_eigenfunctions, 8);
     assert_int_equal(d.mvm_eigenfunctions, 4);
     meso_vdm_desc some = {.width = 16, .num_theta = 8};
-    d = meso_query_vdm_defaults(&some);
+    d = meso_vdm_desc_defaults(&some);
     assert_int_equal(d.width, 16);
     assert_int_equal(d.height, 16);
     assert_int_equal(d.num_theta, 8);
@@ -69,7 +70,7 @@ static void test_vdm_constant_top_height_field_bakes_zero_everywhere(void **stat
                           .keep_raw = true,
                           .depth = 0.1f};
     meso_vdm *vdm = NULL;
-    assert_int_equal(meso_bake_vdm(ctx, &desc, &vdm), MESO_OK);
+    assert_int_equal(meso_vdm_bake(ctx, &desc, &vdm), MESO_OK);
     meso_vdm_view view = meso_vdm_get_view(vdm);
     assert_non_null(view.raw);
     size_t rows = 8 * 8 * 4;
@@ -102,7 +103,7 @@ static void test_vdm_flat_floor_gives_depth_over_cos_theta(void **state) {
                           .keep_raw = true,
                           .depth = 0.05f};
     meso_vdm *vdm = NULL;
-    assert_int_equal(meso_bake_vdm(ctx, &desc, &vdm), MESO_OK);
+    assert_int_equal(meso_vdm_bake(ctx, &desc, &vdm), MESO_OK);
     for (int t = 0; t < 8; t++) {
         float th = theta_at(t, 8);
         float d = meso_vdm_lookup(vdm, 0.3f, 0.6f, th, 1.0f, 0.0f, 0, true);
@@ -140,7 +141,7 @@ static void test_vdm_single_groove_matches_the_analytic_ray_length(void **state)
                           .depth = depth,
                           .step_texels = step};
     meso_vdm *vdm = NULL;
-    assert_int_equal(meso_bake_vdm(ctx, &desc, &vdm), MESO_OK);
+    assert_int_equal(meso_vdm_bake(ctx, &desc, &vdm), MESO_OK);
     meso_vdm_view view = meso_vdm_get_view(vdm);
     int checked_walls = 0;
     for (int i = 24; i < 40; i++)
@@ -177,7 +178,7 @@ static void test_vdm_all_eigenfunctions_reproduce_the_table(void **state) {
                           .mvm_eigenfunctions = 36,
                           .float_weights = true};
     meso_vdm *vdm = NULL;
-    assert_int_equal(meso_bake_vdm(ctx, &desc, &vdm), MESO_OK);
+    assert_int_equal(meso_vdm_bake(ctx, &desc, &vdm), MESO_OK);
     meso_vdm_view view = meso_vdm_get_view(vdm);
     assert_int_equal(view.raw_columns, 36);
     size_t rows = 16 * 16 * 4;
@@ -225,7 +226,7 @@ static void test_vdm_convex_curvature_lowers_the_maximal_view_angle(void **state
                           .keep_raw = true,
                           .depth = 0.1f};
     meso_vdm *vdm = NULL;
-    assert_int_equal(meso_bake_vdm(ctx, &desc, &vdm), MESO_OK);
+    assert_int_equal(meso_vdm_bake(ctx, &desc, &vdm), MESO_OK);
     float previous = 10.0f;
     for (int c = 0; c < 6; c++) {
         float curvature = -2.0f + c;
@@ -254,8 +255,8 @@ static void test_vdm_bake_is_identical_for_any_thread_count(void **state) {
                           .depth = 0.08f};
     meso_vdm *one = NULL, *two = NULL;
     meso_context *ctx1 = test_context(1), *ctx2 = test_context(2);
-    assert_int_equal(meso_bake_vdm(ctx1, &desc, &one), MESO_OK);
-    assert_int_equal(meso_bake_vdm(ctx2, &desc, &two), MESO_OK);
+    assert_int_equal(meso_vdm_bake(ctx1, &desc, &one), MESO_OK);
+    assert_int_equal(meso_vdm_bake(ctx2, &desc, &two), MESO_OK);
     meso_vdm_view a = meso_vdm_get_view(one), b = meso_vdm_get_view(two);
     assert_memory_equal(a.weights, b.weights, sizeof(float) * 16 * 16 * 4 * a.num_weights);
     assert_memory_equal(a.eigen_vdm, b.eigen_vdm, sizeof(float) * a.num_vdm * 32);
@@ -276,7 +277,7 @@ static void test_vdm_bake_file_round_trip_and_corruption_is_refused(void **state
                           .num_curvatures = 4,
                           .depth = 0.08f};
     meso_vdm *vdm = NULL, *loaded = NULL;
-    assert_int_equal(meso_bake_vdm(ctx, &desc, &vdm), MESO_OK);
+    assert_int_equal(meso_vdm_bake(ctx, &desc, &vdm), MESO_OK);
     const char *dir = test_temp_dir();
     const char *path = test_path(dir, "map.mesobake");
     assert_int_equal(meso_vdm_save(ctx, vdm, path), MESO_OK);
@@ -365,7 +366,7 @@ static void test_vdm_bake_keeps_to_the_memory_budget(void **state) {
                          &(meso_context_desc){.num_threads = 1, .memory_limit = 1u << 20}, &tiny),
                      MESO_OK);
     meso_vdm *vdm = (meso_vdm *)1;
-    assert_int_equal(meso_bake_vdm(tiny, &desc, &vdm), MESO_ERROR_LIMIT);
+    assert_int_equal(meso_vdm_bake(tiny, &desc, &vdm), MESO_ERROR_LIMIT);
     assert_null(vdm);
     assert_non_null(strstr(meso_context_last_error(tiny), "vdm bake"));
     meso_context_destroy(tiny);
@@ -375,8 +376,8 @@ static void test_vdm_bake_keeps_to_the_memory_budget(void **state) {
                          &(meso_context_desc){.num_threads = 1, .memory_limit = 3650000}, &tight),
                      MESO_OK);
     meso_vdm *streamed = NULL, *held = NULL;
-    assert_int_equal(meso_bake_vdm(tight, &desc, &streamed), MESO_OK);
-    assert_int_equal(meso_bake_vdm(roomy, &desc, &held), MESO_OK);
+    assert_int_equal(meso_vdm_bake(tight, &desc, &streamed), MESO_OK);
+    assert_int_equal(meso_vdm_bake(roomy, &desc, &held), MESO_OK);
     meso_vdm_view a = meso_vdm_get_view(streamed), b = meso_vdm_get_view(held);
     assert_memory_equal(a.weights, b.weights, sizeof(float) * 16 * 16 * 4 * (size_t)a.num_weights);
     meso_vdm_destroy(streamed);
@@ -391,11 +392,11 @@ static void test_vdm_rejects_bad_parameters_naming_the_field(void **state) {
     meso_heightfield *hf = make_bumps(8);
     meso_vdm *vdm = (meso_vdm *)1;
     meso_vdm_desc desc = {.heightfield = hf, .depth = -1.0f};
-    assert_int_equal(meso_bake_vdm(ctx, &desc, &vdm), MESO_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(meso_vdm_bake(ctx, &desc, &vdm), MESO_ERROR_INVALID_ARGUMENT);
     assert_null(vdm);
     assert_non_null(strstr(meso_context_last_error(ctx), "depth"));
     desc = (meso_vdm_desc){.heightfield = hf, .width = 100000};
-    assert_int_equal(meso_bake_vdm(ctx, &desc, &vdm), MESO_ERROR_LIMIT);
+    assert_int_equal(meso_vdm_bake(ctx, &desc, &vdm), MESO_ERROR_LIMIT);
     assert_non_null(strstr(meso_context_last_error(ctx), "width"));
     desc = (meso_vdm_desc){.heightfield = hf,
                            .width = 4,
@@ -403,10 +404,10 @@ static void test_vdm_rejects_bad_parameters_naming_the_field(void **state) {
                            .num_phi = 1,
                            .num_curvatures = 1,
                            .vdm_eigenfunctions = 9};
-    assert_int_equal(meso_bake_vdm(ctx, &desc, &vdm), MESO_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(meso_vdm_bake(ctx, &desc, &vdm), MESO_ERROR_INVALID_ARGUMENT);
     assert_non_null(strstr(meso_context_last_error(ctx), "vdm_eigenfunctions"));
     desc = (meso_vdm_desc){0};
-    assert_int_equal(meso_bake_vdm(ctx, &desc, &vdm), MESO_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(meso_vdm_bake(ctx, &desc, &vdm), MESO_ERROR_INVALID_ARGUMENT);
     assert_non_null(strstr(meso_context_last_error(ctx), "heightfield"));
     free_heightfield(hf);
     meso_context_destroy(ctx);
@@ -423,7 +424,7 @@ static void test_vdm_bake_can_be_cancelled(void **state) {
     meso_vdm_desc desc = {
         .heightfield = hf, .width = 16, .num_theta = 8, .num_phi = 4, .num_curvatures = 2};
     meso_vdm *vdm = (meso_vdm *)1;
-    assert_int_equal(meso_bake_vdm(ctx, &desc, &vdm), MESO_ERROR_CANCELLED);
+    assert_int_equal(meso_vdm_bake(ctx, &desc, &vdm), MESO_ERROR_CANCELLED);
     assert_null(vdm);
     free_heightfield(hf);
     meso_context_destroy(ctx);

@@ -1,4 +1,4 @@
-/* meso_image_compare, meso_image_diff, meso_sheet_create and the bitmap font. */
+/* meso_image_compare, meso_image_diff, meso_compare_sheet_create and the bitmap font. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -179,7 +179,7 @@ static void test_compare_sheet_lays_out_cells_with_labels(void **state) {
     const meso_image *images[3] = {a, b, a};
     const char *labels[3] = {"A", "B\ntwo lines", NULL};
     meso_image *sheet = NULL;
-    assert_int_equal(meso_sheet_create(ctx, images, labels, 3, 2, &sheet), MESO_OK);
+    assert_int_equal(meso_compare_sheet_create(ctx, images, labels, 3, 2, &sheet), MESO_OK);
     /* 2 columns of 30 + 8 px, 2 rows of 12 + 24 (two lines of 12) + 16 */
     assert_int_equal(sheet->width, 2 * (30 + 8) + 8);
     assert_int_equal(sheet->height, 2 * (12 + 24 + 16) + 8);

@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "test_util.h"
+#include "meso/runtime.h"
 
 static void test_result_strings_cover_every_result(void **state) {
     assert_string_equal(meso_result_string(MESO_OK), "ok");

@@ -8,6 +8,7 @@
 #include <time.h>
 
 #include "test_util.h"
+#include "meso/runtime.h"
 
 typedef struct counts {
     _Atomic int *runs; /* per job */

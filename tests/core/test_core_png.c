@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 
 #include "test_util.h"
+#include "meso/runtime.h"
 
 static meso_image *gradient_image(meso_context *ctx, int w, int h, int channels) {
     meso_image *image = NULL;

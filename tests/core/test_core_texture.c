@@ -1,5 +1,6 @@
 /* Texture sampling: texel centres, filters, wrapping, mip pyramid. */
 #include "test_util.h"
+#include "meso/texture.h"
 
 static meso_texture *checker_texture(meso_context *ctx, meso_wrap wrap, bool mips) {
     meso_image *image = NULL;

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "test_util.h"
+#include "meso/prism.h"
 
 static meso_mesh *make_shape(meso_context *ctx, meso_shape_kind kind, int segments) {
     meso_mesh *mesh = NULL;

@@ -94,6 +94,24 @@ static void test_every_option_is_a_uniform(void **state) {
     assert_true(techniques >= 2);
 }
 
+/* The GL's technique rows (gl_techniques.c) say it draws exactly the techniques that have a
+ * fragment shader in shaders/. */
+static void test_drawn_techniques_have_a_shader(void **state) {
+    (void)state;
+    int drawn = 0;
+    for (size_t t = 0; t < meso_technique_count(); t++) {
+        const char *name = meso_technique_get(t)->name;
+        char path[1024];
+        snprintf(path, sizeof path, "%s/%s.frag", SHADER_DIR, name);
+        bool has_shader = access(path, F_OK) == 0;
+        if (meso_gl_technique_supported(name) != has_shader)
+            fail_msg("%s: the GL row says drawn %d, shaders/%s.frag %s", name,
+                     meso_gl_technique_supported(name), name, has_shader ? "exists" : "is missing");
+        drawn += has_shader;
+    }
+    assert_true(drawn >= 2);
+}
+
 /* A broken copy of relief.frag: the message names that file and line. */
 static void test_compile_error_names_file_and_line(void **state) {
     (void)state;
@@ -173,6 +191,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_glslang_validates_every_shader),
         cmocka_unit_test(test_every_option_is_a_uniform),
+        cmocka_unit_test(test_drawn_techniques_have_a_shader),
         cmocka_unit_test(test_compile_error_names_file_and_line),
         cmocka_unit_test(test_missing_gl_is_one_line),
     };

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "test_util.h"
+#include "meso/runtime.h"
 
 static const meso_heightfield_kind all_kinds[] = {MESO_HEIGHTFIELD_BRICKS, MESO_HEIGHTFIELD_BUMPS,
                                                   MESO_HEIGHTFIELD_WEAVE, MESO_HEIGHTFIELD_TILES,

@@ -39,7 +39,7 @@ static void test_cube_has_signed_distances_and_two_layers(void **state) {
     meso_layers *m = NULL;
     meso_layers_desc desc = {
         .solid = s, .width = 16, .height = 16, .format = MESO_LAYERS_FORMAT_F32};
-    assert_int_equal(meso_bake_layers(ctx, &desc, &m), MESO_OK);
+    assert_int_equal(meso_layers_bake(ctx, &desc, &m), MESO_OK);
     /* texel (8, 8) is over the cube: entry at w = 1 - 0.8, exit at w = 1 - 0.3 */
     const float *d = m->depth + (8 * 16 + 8) * 4;
     assert_int_equal(m->count[8 * 16 + 8], 2);

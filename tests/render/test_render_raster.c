@@ -4,6 +4,7 @@
 
 #include "raster_internal.h"
 #include "render_test_scene.h"
+#include "meso/texture.h"
 
 /* ---- A counting technique: every covered sample reaches shade (discarded, so the depth
  * buffer never hides a second fragment). ---------------------------------------------------- */

@@ -5,6 +5,7 @@
 #include "render_internal.h"
 #include "render_shading.h"
 #include "render_test_scene.h"
+#include "meso/texture.h"
 
 static void render_threads(test_scene *ts, const char *technique, int threads,
                            meso_framebuffer **out) {

@@ -111,7 +111,7 @@ static void test_lookup8_equals_the_bakes_lookup(void **state) {
     meso_gdm_desc desc = {
         .heightfield = hf, .width = 16, .layers = 8, .num_theta = 8, .num_phi = 8, .eigenmaps = 12};
     meso_gdm *gdm = NULL;
-    assert_int_equal(meso_bake_gdm(ctx, &desc, &gdm), MESO_OK);
+    assert_int_equal(meso_gdm_bake(ctx, &desc, &gdm), MESO_OK);
     meso_gdm_view view = meso_gdm_get_view(gdm);
     int ks[] = {5, 12};
     for (int c = 0; c < 2; c++) {

@@ -11,6 +11,7 @@
 #include "gdm_shell_shadow.h"
 #include "render_internal.h"
 #include "render_test_scene.h"
+#include "meso/prism.h"
 
 enum { RESOLUTION = 32, LAYERS = 16 };
 

@@ -14,6 +14,7 @@
 #include "gdm_walk.h"
 #include "render_internal.h"
 #include "render_test_scene.h"
+#include "meso/prism.h"
 
 /* small bakes, and walk 0 (every prism drawn) or walk 1 (the walk) */
 static const meso_option small_bake_walk[2][5] = {

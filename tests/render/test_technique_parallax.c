@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "technique_fixture.h"
+#include "meso/texture.h"
 
 static float h_half(int i, int j) {
     (void)i;

@@ -12,6 +12,7 @@
 
 #include "relief_common.h"
 #include "test_util.h"
+#include "meso/bake_minmax.h"
 
 typedef struct bounds_case {
     meso_context *ctx;
@@ -43,7 +44,7 @@ static void case_init(bounds_case *c, int width, int height, meso_wrap wrap, boo
     c->object.mesostructure.depth = 0.1f;
     strcpy(c->object.name, "objects[0]");
     assert_int_equal(relief_heights_init(c->ctx, &c->object, &c->heights), MESO_OK);
-    assert_int_equal(meso_bake_minmax(c->ctx, c->hf, &c->pyramid), MESO_OK);
+    assert_int_equal(meso_minmax_pyramid_bake(c->ctx, c->hf, &c->pyramid), MESO_OK);
     relief_maxmip_init(c->pyramid, &c->maxmip);
 }
 
@@ -137,7 +138,7 @@ static void test_shadow_clear_only_lanes_the_search_finds_lit(void **state) {
         relief_heights_deinit(&c.heights);
         meso_minmax_pyramid_destroy(c.pyramid);
         assert_int_equal(relief_heights_init(c.ctx, &c.object, &c.heights), MESO_OK);
-        assert_int_equal(meso_bake_minmax(c.ctx, c.hf, &c.pyramid), MESO_OK);
+        assert_int_equal(meso_minmax_pyramid_bake(c.ctx, c.hf, &c.pyramid), MESO_OK);
         relief_maxmip_init(c.pyramid, &c.maxmip);
         uint32_t rng = 4242u;
         for (int trial = 0; trial < 2000; ++trial) {

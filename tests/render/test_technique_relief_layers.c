@@ -191,7 +191,7 @@ static layers_state *bar_state(meso_context *ctx, const meso_object *object) {
     meso_layers *map = NULL;
     meso_layers_desc desc = {
         .field = bar_field, .width = 256, .height = 256, .format = MESO_LAYERS_FORMAT_F32};
-    assert_int_equal(meso_bake_layers(ctx, &desc, &map), MESO_OK);
+    assert_int_equal(meso_layers_bake(ctx, &desc, &map), MESO_OK);
     layers_state *s = calloc(1, sizeof *s);
     assert_int_equal(fill_planes(ctx, object, map, s), MESO_OK);
     meso_layers_destroy(map);
@@ -262,7 +262,7 @@ static void test_missed_rays_are_discarded_or_drawn_on_the_floor(void **state) {
                  (meso_vec3){0, 0, 0}, (meso_vec3){0.0f, 1.0f, 0.0f});
     meso_layers *map = NULL;
     meso_layers_desc desc = {.field = lone_bar, .width = 64, .height = 64};
-    assert_int_equal(meso_bake_layers(fx.ctx, &desc, &map), MESO_OK);
+    assert_int_equal(meso_layers_bake(fx.ctx, &desc, &map), MESO_OK);
     layers_state *s = calloc(1, sizeof *s);
     assert_int_equal(fill_planes(fx.ctx, &fx.object, map, s), MESO_OK);
     meso_layers_destroy(map);

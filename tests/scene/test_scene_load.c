@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "test_util.h"
+#include "meso/texture.h"
 
 /* Write a small grey height map and an sRGB colour map beside a scene in the temp folder. */
 static void write_maps(meso_context *ctx, const char *dir) {

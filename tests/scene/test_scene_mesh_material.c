@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "test_util.h"
+#include "meso/texture.h"
 
 static const char *write_text(const char *dir, const char *name, const char *text) {
     const char *path = test_path(dir, name);

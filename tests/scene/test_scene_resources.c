@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "test_util.h"
+#include "meso/texture.h"
 
 /* A 12 x 8 grey map with no symmetry, saved as a PNG in `dir` and read back: the resource
  * holds the values the PNG loads as (the contract: a resource's image is what a file gives). */
