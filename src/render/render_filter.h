@@ -99,8 +99,11 @@ static inline bool meso_filter_plan(const meso_filter_levels *l, const meso_foot
     v8f major2 = v8_select(x_major, la, lb), minor2 = v8_select(x_major, lb, la);
     v8i wide = major2 > v8_splat(1.0f);
     if (!v8_any(wide)) return false;
-    /* taps = ceil(major / minor), from the squared ratio without a division by zero */
-    v8f ratio = v8_sqrt(major2 / v8_select(minor2 > v8_splat(1e-20f), minor2, v8_splat(1e-20f)));
+    /* taps = ceil(major / minor), from the squared ratio without a division by zero; a ratio
+     * within 1 % of a whole number counts as it, so a round footprint that rounding made a
+     * hair longer one way takes one tap, not two half a texel apart */
+    v8f ratio = v8_sqrt(major2 / v8_select(minor2 > v8_splat(1e-20f), minor2, v8_splat(1e-20f))) -
+                v8_splat(0.01f);
     v8f count = v8_floor(ratio);
     count = v8_select(count < ratio, count + v8_splat(1.0f), count);
     count = v8_select(count > v8_splat((float)MESO_FILTER_MAX_TAPS),
