@@ -78,7 +78,7 @@ static inline v8f meso_filter_log2(v8f x) {
 /* Where a footprint-filtered lookup reads: per lane, the number of taps, the step between taps
  * in uv (along the major axis), the two levels and the blend between them. */
 typedef struct meso_filter_taps {
-    v8f count;      /* taps, 1..MESO_FILTER_MAX_TAPS, as a float */
+    v8f count; /* taps, 1..MESO_FILTER_MAX_TAPS, as a float */
     v8f step_u, step_v;
     v8i level;      /* the finer level */
     v8f blend;      /* weight of level + 1 */
@@ -135,9 +135,10 @@ static inline bool meso_filter_plan(const meso_filter_levels *l, const meso_foot
 /* Bilinear between texel centres at each lane's own level of the chain, with the texture's wrap:
  * per lane the arithmetic of the shading's level-0 lookup (render_shading.c,
  * sample_color_map), so level 0 gives its bits; 0 for a non-finite uv. */
-static inline __attribute__((always_inline)) void
-meso_filter_bilinear8(const meso_filter_levels *l, bool clamp, v8i level, v8f u, v8f v, v8f *r,
-                      v8f *g, v8f *b) {
+static inline __attribute__((always_inline)) void meso_filter_bilinear8(const meso_filter_levels *l,
+                                                                        bool clamp, v8i level,
+                                                                        v8f u, v8f v, v8f *r,
+                                                                        v8f *g, v8f *b) {
     v8i finite = ((u - u) == v8_splat(0.0f)) & ((v - v) == v8_splat(0.0f));
     u = v8_select(finite, u, v8_splat(0.0f));
     v = v8_select(finite, v, v8_splat(0.0f));

@@ -133,6 +133,13 @@ void meso_fragment_block_get(const meso_fragment_block *block, size_t i, meso_fr
 void meso_fragment_block_set(meso_fragment_block *block, size_t i, const meso_fragment *f);
 /* Fill the lanes count..(count rounded up to 8) - 1 with copies of fragment count - 1. */
 void meso_fragment_block_pad(meso_fragment_block *block);
+/* Fragment i's footprint (duv_dx, duv_dy) from the block: for a technique that builds its own
+ * meso_fragments from a block's lanes and shades them with meso_shade_fragments. */
+static inline void meso_fragment_footprint_from_block(meso_fragment *f,
+                                                      const meso_fragment_block *block, size_t i) {
+    f->duv_dx = (meso_vec2){block->dudx[i], block->dvdx[i]};
+    f->duv_dy = (meso_vec2){block->dudy[i], block->dvdy[i]};
+}
 
 /* ---- Techniques --------------------------------------------------------------------------- */
 
