@@ -95,8 +95,8 @@ static void write_table(const orbit_run *runs, int num_runs, int count, app_text
         else
             printf("%-14s %10.2f %10.2f %12.2f", r->name, ms, psnr, covered);
         printf(" %12.6f %8.3f %12.6f %8.3f\n", change, change_ratio, flicker, flicker_ratio);
-        app_text_printf(csv, "%s,%d,%.3f,%.4f,%.4f,%.8f,%.5f,%.8f,%.5f\n", r->name, count, ms,
-                        psnr, covered, change, change_ratio, flicker, flicker_ratio);
+        app_text_printf(csv, "%s,%d,%.3f,%.4f,%.4f,%.8f,%.5f,%.8f,%.5f\n", r->name, count, ms, psnr,
+                        covered, change, change_ratio, flicker, flicker_ratio);
     }
 }
 

@@ -25,9 +25,9 @@ static meso_texture *texture_of(meso_context *ctx, int w, int h, const float *rg
         for (int i = 0; i < w; i++) {
             float *p = image->pixels + 3 * ((size_t)j * w + i);
             for (int c = 0; c < 3; c++)
-                p[c] = rgb_of_texel  ? rgb_of_texel[c]
-                       : checker     ? (float)((i + j) & 1)
-                                     : test_uniform(&seed);
+                p[c] = rgb_of_texel ? rgb_of_texel[c]
+                       : checker    ? (float)((i + j) & 1)
+                                    : test_uniform(&seed);
         }
     meso_texture *t = NULL;
     assert_int_equal(meso_texture_create(ctx, image, MESO_WRAP_REPEAT, true, &t), MESO_OK);
@@ -74,8 +74,8 @@ static void shade_scene_init(shade_scene *s, meso_texture *map) {
     s->scene.ambient = (meso_vec3){1.0f, 1.0f, 1.0f}; /* colour = map(uv) */
     s->object.material.albedo = (meso_vec3){1.0f, 1.0f, 1.0f};
     s->object.material.color_map = map;
-    s->scene.camera = (meso_camera){.eye = {0, 2, 0}, .target = {0, 0, 0}, .up = {0, 0, -1},
-                                    .fov_y_deg = 40};
+    s->scene.camera =
+        (meso_camera){.eye = {0, 2, 0}, .target = {0, 0, 0}, .up = {0, 0, -1}, .fov_y_deg = 40};
     meso_frame_init(&s->frame, &s->scene, 16, 16);
 }
 
@@ -148,7 +148,8 @@ static void test_a_two_texel_footprint_on_a_checkerboard_reads_its_grey(void **s
     s.frame.filter = true;
     for (int i = 0; i < 100; i++) {
         meso_vec2 uv = {test_uniform(&seed), test_uniform(&seed)};
-        meso_vec3 c = lookup(&s, uv, (meso_vec2){8.0f / side, 0.0f}, (meso_vec2){0.0f, 1.0f / side});
+        meso_vec3 c =
+            lookup(&s, uv, (meso_vec2){8.0f / side, 0.0f}, (meso_vec2){0.0f, 1.0f / side});
         assert_float_equal(c.x, 0.5f, 1e-5f);
     }
     meso_texture_destroy(t);
@@ -190,7 +191,6 @@ static meso_framebuffer *render(meso_context *ctx, const meso_scene *scene, cons
         fail_msg("%s: %s", technique, meso_context_last_error(ctx));
     return fb;
 }
-
 
 static void test_a_plane_seen_head_on_at_one_texel_a_pixel_is_unchanged(void **state) {
     (void)state;
