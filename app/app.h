@@ -62,6 +62,21 @@ typedef struct app_settings {
 /* -1 when bits is 0 (not given), 8 or 16, else the usage error's exit status. */
 int app_check_bits(const char *command, int bits);
 
+/* --filter 0|1 into an int that starts at -1 (not given: the library's default); the mode for a
+ * meso_render_desc is app_filter_mode's. */
+#define APP_FILTER_OPTION(filter)                                                                  \
+    {                                                                                              \
+        "--filter", NULL, APP_OPTION_INT, (filter), "0|1",                                         \
+            "texture filtering: 0 reads the maps at level 0 at each sample (the papers' images), " \
+            "1 mip-maps them by the pixel's footprint (docs/techniques.md#filtering)",             \
+            "0", 0, 1                                                                              \
+    }
+static inline meso_render_filter app_filter_mode(int filter) {
+    return filter < 0    ? MESO_RENDER_FILTER_DEFAULT
+           : filter == 0 ? MESO_RENDER_FILTER_POINT
+                         : MESO_RENDER_FILTER_FOOTPRINT;
+}
+
 #define APP_SET_OPTION(settings)                                                                   \
     {                                                                                              \
         "--set", NULL, APP_OPTION_SETTING, (settings), "T.NAME=V",                                 \
@@ -247,6 +262,7 @@ typedef struct app_compare_all_desc {
     double timing_budget_seconds; /* stop timing a technique after this long (0: 2 s) */
     meso_progress *progress;      /* advanced by 1 per technique run (may be NULL) */
     const app_settings *settings; /* --set: technique options for every run (may be NULL) */
+    meso_render_filter filter;    /* --filter: for every run, the reference's too */
 } app_compare_all_desc;
 
 typedef struct app_compare_all {

@@ -117,7 +117,8 @@ static void render_run(meso_context *ctx, const app_compare_all_desc *desc, cons
     meso_framebuffer *fb = NULL;
     /* Mixed scenes: the objects this technique cannot draw are drawn with
      * their own scene technique, and the note says which. */
-    meso_render_desc render_desc = {.technique = technique, .samples = samples, .fallback = true};
+    meso_render_desc render_desc = {
+        .technique = technique, .samples = samples, .fallback = true, .filter = desc->filter};
     if (desc->settings) {
         render_desc.options = desc->settings->items;
         render_desc.num_options = desc->settings->count;

@@ -79,8 +79,9 @@ typedef struct bench_options {
     app_settings settings; /* --set */
     const char *backends;  /* --backend: "cpu", "gl" or "cpu,gl" */
     const char *shader_dir;
-    int orbit; /* frames a turn of the camera about its target; 0: a still camera */
-    bool busy; /* a spinning thread on the last CPU beside the runs */
+    int orbit;  /* frames a turn of the camera about its target; 0: a still camera */
+    bool busy;  /* a spinning thread on the last CPU beside the runs */
+    int filter; /* --filter (-1: not given) */
 } bench_options;
 
 typedef struct bench_row {
@@ -246,8 +247,10 @@ static meso_result bench_one(meso_context *ctx, const bench_scene *s, const char
     int threads = meso_context_num_threads(ctx);
     app_renderer renderer = {0};
     meso_framebuffer *fb = NULL;
-    meso_render_desc desc = {
-        .technique = technique, .options = o->settings.items, .num_options = o->settings.count};
+    meso_render_desc desc = {.technique = technique,
+                             .options = o->settings.items,
+                             .num_options = o->settings.count,
+                             .filter = app_filter_mode(o->filter)};
     meso_result result = app_renderer_create(ctx, s->scene, &desc, backend, &renderer);
     if (result == MESO_OK)
         result = meso_framebuffer_create(ctx, o->size.width, o->size.height, &fb);
@@ -412,7 +415,7 @@ static meso_result load_scenes(meso_context *ctx, const char *const *paths, int 
 }
 
 int meso_cmd_bench(int argc, char **argv) {
-    bench_options o = {.techniques = "all", .size = {512, 512}, .backends = "cpu"};
+    bench_options o = {.techniques = "all", .size = {512, 512}, .backends = "cpu", .filter = -1};
     const app_option options[] = {
         {"--techniques", NULL, APP_OPTION_STRING, &o.techniques, "LIST",
          "'all' (every per-pixel and geometry technique) or comma-separated names", "all", 0, 0},
@@ -427,6 +430,7 @@ int meso_cmd_bench(int argc, char **argv) {
         {"--profile", NULL, APP_OPTION_FLAG, &o.profile, NULL,
          "also the cost per covered pixel and per search step (one thread)", NULL, 0, 0},
         APP_SET_OPTION(&o.settings),
+        APP_FILTER_OPTION(&o.filter),
         {"--backend", NULL, APP_OPTION_STRING, &o.backends, "cpu|gl|cpu,gl",
          "the back end(s) to time: meso's rasterizer, the GLSL shaders on OpenGL, or both", "cpu",
          0, 0},

@@ -20,12 +20,14 @@ typedef struct render_options {
     int samples;
     int reference_samples;
     int frames;
+    int filter; /* --filter (-1: not given) */
     bool wireframe;
     const char *coverage;
     bool linear;
     int bits;                   /* --bits: PNG bit depth (0: 8) */
     app_settings settings;      /* --set */
     int orbit;                  /* frames of a turntable into folder OUT (0: none) */
+    double orbit_step;          /* degrees a frame (-1: not given, a whole turn in `orbit`) */
     app_camera_override camera; /* --eye, --target, --up, --fov, --light */
     app_backend backend;        /* --backend, --shader-dir */
 } render_options;
@@ -73,6 +75,7 @@ static int render_one(meso_context *ctx, const meso_scene *scene, const render_o
     meso_render_desc desc = {.technique = o->technique,
                              .samples = o->samples,
                              .wireframe = o->wireframe,
+                             .filter = app_filter_mode(o->filter),
                              .options = o->settings.items,
                              .num_options = o->settings.count,
                              .progress = true};
@@ -179,6 +182,7 @@ static int render_all(meso_context *ctx, const meso_scene *scene, const render_o
         .reference_samples = o->reference_samples,
         .timing_frames = o->frames,
         .settings = &o->settings,
+        .filter = app_filter_mode(o->filter),
     };
     /* the sheet's size and the images kept for it are known before the work */
     result =
@@ -231,7 +235,7 @@ static int check_batch_names(const char *const *paths, int count) {
 }
 
 int meso_cmd_render(int argc, char **argv) {
-    render_options o = {.samples = 1, .frames = 5};
+    render_options o = {.samples = 1, .frames = 5, .filter = -1, .orbit_step = -1.0};
     const app_option options[] = {
         {"--output", "-o", APP_OPTION_STRING, &o.output, "OUT",
          "the image to write: OUT.png, or OUT.exr for OpenEXR (half floats, linear); a folder "
@@ -259,10 +263,16 @@ int meso_cmd_render(int argc, char **argv) {
          "at most 2 s each)",
          "5", 1, 1000},
         APP_SET_OPTION(&o.settings),
+        APP_FILTER_OPTION(&o.filter),
         {"--orbit", NULL, APP_OPTION_INT, &o.orbit, "N",
          "write N frames turning about the camera's up axis through its target into folder OUT "
-         "(OUT/frame-0000.png ...; with --techniques OUT/<technique>/frame-0000.png ...)",
+         "(OUT/frame-0000.png ...; with --techniques OUT/<technique>/frame-0000.png ... and "
+         "the reference's, each compared with it: error, change and flicker into "
+         "OUT/temporal.csv)",
          NULL, 1, 100000},
+        {"--orbit-step", NULL, APP_OPTION_DOUBLE, &o.orbit_step, "DEG",
+         "degrees the orbit turns a frame, 360 / DEG a whole number (0: a still camera)", "360 / N",
+         0, 360},
         APP_CAMERA_OVERRIDE_OPTIONS(o.camera),
         APP_BACKEND_OPTIONS(o.backend),
     };
@@ -282,6 +292,16 @@ int meso_cmd_render(int argc, char **argv) {
     if (app_backend_is_gl(&o.backend) && (o.techniques || o.orbit))
         return app_usage_error("render", "--backend gl draws one image: not with %s",
                                o.techniques ? "--techniques" : "--orbit");
+    app_orbit_path orbit = {.frames = o.orbit, .period = o.orbit};
+    if (o.orbit_step >= 0.0) {
+        if (!o.orbit) return app_usage_error("render", "--orbit-step needs --orbit");
+        double period = o.orbit_step > 0.0 ? 360.0 / o.orbit_step : 0.0;
+        /* the turntable turns by whole fractions of a turn (view_camera_turntable) */
+        if (fabs(period - round(period)) > 1e-6 * period || period > 1e9)
+            return app_usage_error("render", "--orbit-step: 360 / %g is not a whole number",
+                                   o.orbit_step);
+        orbit.period = (int)round(period);
+    }
     if (num_positionals > 1 && o.coverage)
         return app_usage_error("render", "--coverage takes one file: it needs one scene");
     if (num_positionals > 1 && (status = check_batch_names(positionals, num_positionals)) >= 0)
@@ -352,6 +372,7 @@ int meso_cmd_render(int argc, char **argv) {
         meso_render_desc orbit_desc = {.technique = o.technique,
                                        .samples = o.samples,
                                        .wireframe = o.wireframe,
+                                       .filter = app_filter_mode(o.filter),
                                        .options = o.settings.items,
                                        .num_options = o.settings.count};
         if (result != MESO_OK)
@@ -359,18 +380,18 @@ int meso_cmd_render(int argc, char **argv) {
         else if ((status = app_camera_override_apply("render", &o.camera, scene)) >= 0)
             ; /* the override's message is printed */
         else if (o.orbit)
-            status =
-                o.techniques
-                    ? app_render_orbit_techniques(ctx, scene, names, num_names, &orbit_desc,
-                                                  o.size.width ? o.size.width : scene->width,
-                                                  o.size.height ? o.size.height : scene->height,
-                                                  o.linear ? MESO_ENCODING_LINEAR : scene->encoding,
-                                                  o.orbit, scene_options.output, globals.quiet)
-                    : app_render_orbit(ctx, scene, &orbit_desc,
-                                       o.size.width ? o.size.width : scene->width,
-                                       o.size.height ? o.size.height : scene->height,
-                                       o.linear ? MESO_ENCODING_LINEAR : scene->encoding, o.orbit,
-                                       scene_options.output, globals.quiet);
+            status = o.techniques
+                         ? app_render_orbit_measured(
+                               ctx, scene, names, num_names, &orbit_desc, o.reference_samples,
+                               &orbit, o.size.width ? o.size.width : scene->width,
+                               o.size.height ? o.size.height : scene->height,
+                               o.linear ? MESO_ENCODING_LINEAR : scene->encoding,
+                               scene_options.output, globals.quiet)
+                         : app_render_orbit(ctx, scene, &orbit_desc,
+                                            o.size.width ? o.size.width : scene->width,
+                                            o.size.height ? o.size.height : scene->height,
+                                            o.linear ? MESO_ENCODING_LINEAR : scene->encoding,
+                                            &orbit, scene_options.output, globals.quiet);
         else if (o.techniques)
             status = render_all(ctx, scene, &scene_options, names, num_names, globals.quiet);
         else

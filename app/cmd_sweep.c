@@ -330,23 +330,6 @@ static meso_result render_references(meso_context *ctx, const sweep_spec *spec,
     return r;
 }
 
-/* Mean over pixels and channels of |(A_v - A_v-1) - (R_v - R_v-1)|: how much a technique's
- * change from one view to the next differs from the truth's, the error that shows as flicker
- * when the views play as an animation. */
-static double flicker_between(const meso_image *a0, const meso_image *a1, const meso_image *r0,
-                              const meso_image *r1) {
-    size_t n = (size_t)a0->width * (size_t)a0->height;
-    double sum = 0.0;
-    for (size_t i = 0; i < n; i++)
-        for (int c = 0; c < 3; c++) {
-            size_t k = i * (size_t)a0->channels + (size_t)c;
-            size_t q = i * (size_t)r0->channels + (size_t)c;
-            sum += fabs(((double)a1->pixels[k] - a0->pixels[k]) -
-                        ((double)r1->pixels[q] - r0->pixels[q]));
-        }
-    return sum / (3.0 * (double)n);
-}
-
 /* Metric sums over the views of a job. */
 static void add_metrics(sweep_row *row, const meso_compare_result *m) {
     row->psnr_db += m->psnr;
@@ -433,8 +416,8 @@ static meso_result run_job(meso_context *ctx, const sweep_spec *spec, const swee
             meso_image_destroy(diff);
         }
         if (v > 0 && run->has_metrics && previous.num_runs)
-            flicker_sum += flicker_between(previous.runs[0].color, run->color,
-                                           refs->views[v - 1].runs[0].color, ref->color);
+            flicker_sum += app_flicker_between(previous.runs[0].color, run->color,
+                                               refs->views[v - 1].runs[0].color, ref->color);
         app_compare_all_free(&previous);
         previous = now;
     }

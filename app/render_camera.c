@@ -90,7 +90,9 @@ int app_camera_override_apply(const char *command, const app_camera_override *o,
 }
 
 int app_render_orbit(meso_context *ctx, meso_scene *scene, const meso_render_desc *desc, int width,
-                     int height, meso_encoding encoding, int count, const char *dir, bool quiet) {
+                     int height, meso_encoding encoding, const app_orbit_path *orbit,
+                     const char *dir, bool quiet) {
+    int count = orbit->frames;
     const meso_camera home = scene->camera;
     const view_camera home_view = app_camera_to_view(&home);
     meso_renderer *renderer = NULL;
@@ -103,8 +105,8 @@ int app_render_orbit(meso_context *ctx, meso_scene *scene, const meso_render_des
     if (result == MESO_OK) result = meso_framebuffer_create(ctx, width, height, &fb);
     if (result == MESO_OK) progress = meso_progress_begin(ctx, "render orbit", (uint64_t)count);
     for (int frame = 0; frame < count && result == MESO_OK; frame++) {
-        view_camera camera = view_camera_turntable(&home_view, frame, count);
-        scene->camera = frame == 0 ? home : app_camera_from_view(&camera);
+        view_camera camera = view_camera_turntable(&home_view, frame, orbit->period);
+        scene->camera = frame == 0 || orbit->period == 0 ? home : app_camera_from_view(&camera);
         snprintf(name, sizeof(name), "frame-%04d.png", frame);
         if (!app_path_join(path, sizeof(path), dir, name)) {
             result = meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: path too long", dir);
@@ -127,31 +129,5 @@ int app_render_orbit(meso_context *ctx, meso_scene *scene, const meso_render_des
     int status = result == MESO_OK ? APP_EXIT_OK : app_fail(ctx, result);
     meso_framebuffer_destroy(fb);
     meso_renderer_destroy(renderer);
-    return status;
-}
-
-int app_render_orbit_techniques(meso_context *ctx, meso_scene *scene, const char *const *names,
-                                int num_names, const meso_render_desc *desc, int width, int height,
-                                meso_encoding encoding, int count, const char *dir, bool quiet) {
-    int status = APP_EXIT_OK;
-    for (int i = 0; i < num_names; i++) {
-        const meso_technique_info *info = meso_technique_find(names[i]);
-        if (info && !app_technique_applies(info, scene)) {
-            if (!quiet)
-                fprintf(stderr, "meso: note: %s: skipped: it cannot draw this scene's objects\n",
-                        names[i]);
-            continue;
-        }
-        char folder[4096];
-        if (!app_path_join(folder, sizeof(folder), dir, names[i])) {
-            fprintf(stderr, "meso: %s: path too long\n", dir);
-            return APP_EXIT_BAD_INPUT;
-        }
-        meso_render_desc technique_desc = *desc;
-        technique_desc.technique = names[i];
-        int one = app_render_orbit(ctx, scene, &technique_desc, width, height, encoding, count,
-                                   folder, quiet);
-        if (one != APP_EXIT_OK && status == APP_EXIT_OK) status = one;
-    }
     return status;
 }

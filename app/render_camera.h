@@ -52,18 +52,41 @@ meso_vec3 app_light_direction_stable(meso_vec3 direction);
 view_camera app_camera_to_view(const meso_camera *camera);
 meso_camera app_camera_from_view(const view_camera *camera);
 
-/* Render `count` frames of a turntable about the scene camera's up axis through its target
- * (frame k turned by 360 k / count degrees; frame 0 is the scene's view) with one renderer,
- * into dir/frame-0000.png, ... (numbered for ffmpeg). Prints a summary line unless quiet.
- * The scene's camera is changed during the call and restored. Returns an exit status. */
-int app_render_orbit(meso_context *ctx, meso_scene *scene, const meso_render_desc *desc, int width,
-                     int height, meso_encoding encoding, int count, const char *dir, bool quiet);
+/* A turntable about the scene camera's up axis through its target: `frames` frames, frame k
+ * turned by 360 k / period degrees (period 0: every frame the scene's view, a still camera;
+ * frame 0 is always the scene's view). */
+typedef struct app_orbit_path {
+    int frames;
+    int period;
+} app_orbit_path;
 
-/* app_render_orbit for each technique of `names` that can draw the scene, into
- * dir/<technique>/frame-0000.png ... (one strip of frames each; one that cannot draw the scene
- * is skipped with a note). Returns an exit status: the first failure's, or 0. */
-int app_render_orbit_techniques(meso_context *ctx, meso_scene *scene, const char *const *names,
-                                int num_names, const meso_render_desc *desc, int width, int height,
-                                meso_encoding encoding, int count, const char *dir, bool quiet);
+/* Render the frames of `path` with one renderer into dir/frame-0000.png, ... (numbered for
+ * ffmpeg). Prints a summary line unless quiet. The scene's camera is changed during the call
+ * and restored. Returns an exit status. */
+int app_render_orbit(meso_context *ctx, meso_scene *scene, const meso_render_desc *desc, int width,
+                     int height, meso_encoding encoding, const app_orbit_path *path,
+                     const char *dir, bool quiet);
+
+/* The reference (with reference_samples a pixel; 0: desc->samples) and each technique of
+ * `names` that can draw the scene along `path`, into dir/<name>/frame-0000.png ... (one that
+ * cannot draw the scene is skipped with a note), each frame compared with the reference's of
+ * the same view; prints per run the mean frame time, the mean PSNR (whole and covered) over
+ * the frames, the change (mean |A_k - A_k-1|) and the flicker
+ * (mean |(A_k - A_k-1) - (R_k - R_k-1)|), each also over the reference's change, and writes
+ * them to dir/temporal.csv (docs/compare.md, "Motion: change and flicker"). Returns an exit
+ * status. */
+int app_render_orbit_measured(meso_context *ctx, meso_scene *scene, const char *const *names,
+                              int num_names, const meso_render_desc *desc, int reference_samples,
+                              const app_orbit_path *path, int width, int height,
+                              meso_encoding encoding, const char *dir, bool quiet);
+
+/* Mean over pixels and channels of |a1 - a0|: how much an image sequence changes from one
+ * frame to the next. Same sizes. */
+double app_image_change(const meso_image *a0, const meso_image *a1);
+/* Mean over pixels and channels of |(a1 - a0) - (r1 - r0)|: how much a technique's change
+ * from one frame to the next differs from the truth's, the error that shows as flicker when
+ * the frames play as an animation. Same sizes. */
+double app_flicker_between(const meso_image *a0, const meso_image *a1, const meso_image *r0,
+                           const meso_image *r1);
 
 #endif

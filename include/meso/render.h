@@ -144,11 +144,19 @@ meso_result meso_technique_check_scene(meso_context *ctx, const meso_scene *scen
 
 /* ---- Renderers ---------------------------------------------------------------------------- */
 
+/* How the maps (colour, normal) are read per pixel (docs/techniques.md, "Filtering"). */
+typedef enum meso_render_filter {
+    MESO_RENDER_FILTER_DEFAULT = 0, /* MESO_RENDER_FILTER_POINT */
+    MESO_RENDER_FILTER_POINT,       /* level 0, bilinear at the sample's uv: the papers' images */
+    MESO_RENDER_FILTER_FOOTPRINT,   /* mip-mapped by the sample's footprint in texels */
+} meso_render_filter;
+
 typedef struct meso_render_desc {
-    const char *technique; /* NULL: each object's own; else overrides every object's */
-    int samples;           /* 0 or 1: one sample at each pixel centre; S: an n x n ordered grid
-                              with n = ceil(sqrt(S)) */
-    bool wireframe;        /* overlay the rasterized triangles' edges */
+    const char *technique;     /* NULL: each object's own; else overrides every object's */
+    int samples;               /* 0 or 1: one sample at each pixel centre; S: an n x n ordered grid
+                                  with n = ceil(sqrt(S)) */
+    bool wireframe;            /* overlay the rasterized triangles' edges */
+    meso_render_filter filter; /* texture filtering */
     /* Technique options for every object, each keyed by technique (meso_option.technique must
      * be set), over the scene's own: what `meso render --set relief.linear_steps=64` passes.
      * Read during meso_renderer_create only. */

@@ -93,6 +93,56 @@ static void downsample(const meso_image *src, meso_image *dst) {
         }
 }
 
+/* texture->mip_chain (meso_texture) from level 0's values, or from the decoded srgb8 codes
+ * when the texture has them, so the chain's level 0 is what the unfiltered lookup reads. */
+static meso_result build_mip_chain(meso_context *ctx, meso_texture *t) {
+    free(t->mip_chain);
+    t->mip_chain = NULL;
+    if (t->num_levels < 2) return MESO_OK;
+    size_t total = 0;
+    for (int k = 0; k < t->num_levels; k++) {
+        /* level sizes within MESO_IMAGE_MAX_PIXELS: the chain's 4/3 of level 0 in RGBA floats
+         * stays below 2^31 floats, the range of the lookups' 32-bit gather indices */
+        t->mip_offset[k] = (int32_t)total;
+        total += (size_t)t->levels[k]->width * (size_t)t->levels[k]->height * 4;
+    }
+    float *chain = malloc(total * sizeof *chain);
+    if (!chain) return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "texture: out of memory");
+    const meso_image *l0 = t->levels[0];
+    size_t n0 = (size_t)l0->width * (size_t)l0->height;
+    const float *table = meso_srgb8_table();
+    for (size_t i = 0; i < n0; i++) {
+        float *d = chain + 4 * i;
+        if (t->srgb8) {
+            uint32_t code = t->srgb8[i];
+            d[0] = table[code & 255u], d[1] = table[(code >> 8) & 255u];
+            d[2] = table[(code >> 16) & 255u];
+        } else {
+            d[0] = l0->pixels[4 * i], d[1] = l0->pixels[4 * i + 1], d[2] = l0->pixels[4 * i + 2];
+        }
+        d[3] = l0->pixels[4 * i + 3];
+    }
+    for (int k = 1; k < t->num_levels; k++) {
+        int sw = t->levels[k - 1]->width, sh = t->levels[k - 1]->height;
+        int w = t->levels[k]->width, h = t->levels[k]->height;
+        const float *src = chain + t->mip_offset[k - 1];
+        float *dst = chain + t->mip_offset[k];
+        for (int y = 0; y < h; y++)
+            for (int x = 0; x < w; x++) {
+                int x0 = 2 * x < sw ? 2 * x : sw - 1, y0 = 2 * y < sh ? 2 * y : sh - 1;
+                int x1 = x0 + 1 < sw ? x0 + 1 : x0, y1 = y0 + 1 < sh ? y0 + 1 : y0;
+                const float *a = src + 4 * ((size_t)y0 * sw + x0);
+                const float *b = src + 4 * ((size_t)y0 * sw + x1);
+                const float *c = src + 4 * ((size_t)y1 * sw + x0);
+                const float *e = src + 4 * ((size_t)y1 * sw + x1);
+                float *d = dst + 4 * ((size_t)y * w + x);
+                for (int ch = 0; ch < 4; ch++) d[ch] = 0.25f * ((a[ch] + b[ch]) + (c[ch] + e[ch]));
+            }
+    }
+    t->mip_chain = chain;
+    return MESO_OK;
+}
+
 meso_result meso_texture_create(meso_context *ctx, const meso_image *image, meso_wrap wrap,
                                 bool build_mips, meso_texture **out_texture) {
     *out_texture = NULL;
@@ -112,6 +162,7 @@ meso_result meso_texture_create(meso_context *ctx, const meso_image *image, meso
         downsample(prev, t->levels[t->num_levels]);
         t->num_levels++;
     }
+    if ((r = build_mip_chain(ctx, t)) != MESO_OK) goto fail;
     *out_texture = t;
     return MESO_OK;
 fail:
@@ -123,6 +174,7 @@ void meso_texture_destroy(meso_texture *t) {
     if (!t) return;
     for (int i = 0; i < MESO_TEXTURE_MAX_LEVELS; i++) meso_image_destroy(t->levels[i]);
     free(t->srgb8);
+    free(t->mip_chain);
     free(t);
 }
 
@@ -171,7 +223,8 @@ meso_result meso_texture_add_srgb8(meso_context *ctx, meso_texture *t) {
     }
     free(t->srgb8);
     t->srgb8 = codes;
-    return MESO_OK;
+    /* the chain's level 0 becomes the decoded codes the unfiltered lookup now reads */
+    return t->mip_chain ? build_mip_chain(ctx, t) : MESO_OK;
 }
 
 static inline int wrap_index(int i, int n, meso_wrap wrap) {

@@ -518,6 +518,45 @@ typedef struct render_job {
     atomic_bool cancelled;
 } render_job;
 
+/* The footprint of the primary hit of sample (i, j) (meso_fragment.duv_dx, duv_dy) by ray
+ * differentials (Igehy 1999, "Tracing ray differentials", §3): the camera rays through the next
+ * sample to the right and down meet the plane through the hit parallel to its base triangle at
+ * P + dP/dx and P + dP/dy, and duv solves dP = du dP/du + dv dP/dv in the least-squares sense,
+ * with the base triangle's own dP/du, dP/dv: what the rasterizer's derivatives of the base uv
+ * give for the same sample. Zero (a point) without uvs or on a degenerate or edge-on plane. */
+static void primary_footprint(const meso_frame *frame, const reference_hit *hit, int i, int j,
+                              meso_vec2 *duv_dx, meso_vec2 *duv_dy) {
+    *duv_dx = *duv_dy = (meso_vec2){0.0f, 0.0f};
+    const meso_mesh *mesh = hit->ref->object->mesh;
+    if (!mesh->uvs) return;
+    const uint32_t *tri = mesh->indices + 3 * hit->base.triangle;
+    meso_vec3 p[3];
+    meso_vec2 uv[3];
+    for (int k = 0; k < 3; k++) p[k] = mesh->positions[tri[k]], uv[k] = mesh->uvs[tri[k]];
+    meso_vec3 t, b;
+    reference_triangle_gradients(p, uv, &t, &b);
+    meso_vec3 n = meso_vec3_cross(t, b);
+    float tt = meso_vec3_dot(t, t), tb = meso_vec3_dot(t, b), bb = meso_vec3_dot(b, b);
+    float det = tt * bb - tb * tb;
+    if (!(det > 0.0f) || !isfinite(det)) return;
+    meso_vec3 dir = meso_frame_ray_direction(frame, (float)i + 0.5f, (float)j + 0.5f);
+    float height = meso_vec3_dot(meso_vec3_sub(hit->position, frame->eye), n);
+    meso_vec3 next[2] = {meso_vec3_add(dir, frame->pixel_right),
+                         meso_vec3_add(dir, frame->pixel_down)};
+    meso_vec2 out[2];
+    for (int k = 0; k < 2; k++) {
+        float along = meso_vec3_dot(next[k], n);
+        if (!(fabsf(along) > 0.0f)) return;
+        meso_vec3 q = meso_vec3_add(frame->eye, meso_vec3_scale(next[k], height / along));
+        meso_vec3 dp = meso_vec3_sub(q, hit->position);
+        float rt = meso_vec3_dot(t, dp), rb = meso_vec3_dot(b, dp);
+        meso_vec2 d = {(bb * rt - tb * rb) / det, (tt * rb - tb * rt) / det};
+        if (!isfinite(d.x) || !isfinite(d.y)) return;
+        out[k] = d;
+    }
+    *duv_dx = out[0], *duv_dy = out[1];
+}
+
 bool reference_direct_sample(const meso_reference *reference, const meso_frame *frame,
                              struct RTCIntersectContext *primary, int i, int j, float *color,
                              float *coverage, float *depth, reference_hit *out_hit) {
@@ -536,7 +575,9 @@ bool reference_direct_sample(const meso_reference *reference, const meso_frame *
     }
     float visibility[MESO_SCENE_MAX_LIGHTS];
     reference_light_visibility(reference, out_hit->origin, out_hit->position, visibility);
-    meso_vec3 shaded = reference_shade_hit(frame, out_hit, visibility);
+    meso_vec2 duv_dx = {0.0f, 0.0f}, duv_dy = {0.0f, 0.0f};
+    if (frame->filter) primary_footprint(frame, out_hit, i, j, &duv_dx, &duv_dy);
+    meso_vec3 shaded = reference_shade_hit_footprint(frame, out_hit, duv_dx, duv_dy, visibility);
     c[0] = shaded.x;
     c[1] = shaded.y;
     c[2] = shaded.z;

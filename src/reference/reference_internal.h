@@ -180,10 +180,12 @@ typedef struct reference_hit {
     reference_base base;        /* where it lies on the base mesh */
 } reference_hit;
 
-/* The shading model at a hit (meso_shade_point_tb): the base mesh's tangent and bitangent at
- * the hit's base point orient the object's normal map as the rasterizer's fragments do. */
-static inline meso_vec3 reference_shade_hit(const meso_frame *frame, const reference_hit *hit,
-                                            const float *visibility) {
+/* The shading model at a hit (meso_shade_point_footprint): the base mesh's tangent and bitangent
+ * at the hit's base point orient the object's normal map as the rasterizer's fragments do, and
+ * the maps are read by the footprint duv_dx, duv_dy (zero: a point) when frame->filter. */
+static inline meso_vec3 reference_shade_hit_footprint(const meso_frame *frame,
+                                                      const reference_hit *hit, meso_vec2 duv_dx,
+                                                      meso_vec2 duv_dy, const float *visibility) {
     const meso_mesh *mesh = hit->ref->object->mesh;
     meso_vec3 t = {0.0f, 0.0f, 0.0f}, b = {0.0f, 0.0f, 0.0f};
     if (hit->ref->object->material.normal_map && mesh->tangents && mesh->bitangents) {
@@ -194,8 +196,15 @@ static inline meso_vec3 reference_shade_hit(const meso_frame *frame, const refer
         b = meso_vec3_barycentric(mesh->bitangents[tri[0]], mesh->bitangents[tri[1]],
                                   mesh->bitangents[tri[2]], w[0], w[1], w[2]);
     }
-    return meso_shade_point_tb(frame, hit->ref->object, hit->position, hit->normal, t, b, hit->uv,
-                               visibility);
+    return meso_shade_point_footprint(frame, hit->ref->object, hit->position, hit->normal, t, b,
+                                      hit->uv, duv_dx, duv_dy, visibility);
+}
+
+/* reference_shade_hit_footprint of a point (secondary hits). */
+static inline meso_vec3 reference_shade_hit(const meso_frame *frame, const reference_hit *hit,
+                                            const float *visibility) {
+    meso_vec2 point = {0.0f, 0.0f};
+    return reference_shade_hit_footprint(frame, hit, point, point, visibility);
 }
 
 /* True when the ray origin + t dir, t in [0, tfar), hits nothing in `scene`. Thread-safe. */

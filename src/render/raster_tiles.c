@@ -57,6 +57,26 @@ static void load_attributes(const meso_mesh *mesh, uint32_t triangle, bool tange
 #define LANES V8_LANES
 #define splat v8_splat
 
+/* The footprint of a triangle's samples (meso_fragment.duv_dx, duv_dy). With g_i the planes of
+ * raster_triangle (b_i = g_i d, d = 1 / sum g the view depth), db_i/dx = d (ga_i - b_i sum ga),
+ * so du/dx = d (sum u_i ga_i - u sum ga), and likewise for v and y: exact for the
+ * perspective-correct interpolation, per sample. */
+typedef struct uv_footprint_planes {
+    float ua, ub, va, vb, sa, sb;
+} uv_footprint_planes;
+
+static inline uv_footprint_planes footprint_planes(const raster_triangle *tri,
+                                                   const vertex_attributes *va) {
+    uv_footprint_planes p;
+    p.ua = va->uv[0].x * tri->ga[0] + va->uv[1].x * tri->ga[1] + va->uv[2].x * tri->ga[2];
+    p.ub = va->uv[0].x * tri->gb[0] + va->uv[1].x * tri->gb[1] + va->uv[2].x * tri->gb[2];
+    p.va = va->uv[0].y * tri->ga[0] + va->uv[1].y * tri->ga[1] + va->uv[2].y * tri->ga[2];
+    p.vb = va->uv[0].y * tri->gb[0] + va->uv[1].y * tri->gb[1] + va->uv[2].y * tri->gb[2];
+    p.sa = tri->ga[0] + tri->ga[1] + tri->ga[2];
+    p.sb = tri->gb[0] + tri->gb[1] + tri->gb[2];
+    return p;
+}
+
 /* fill_fragments_skipping of one fragment, lane `at` of the block only, with the very
  * operations of a lane of the vector code in their order (so the same bits). The lanes after it
  * are written by the next triangle's fill or by flush_batch's padding. */
@@ -95,6 +115,12 @@ fill_one_skipping(const raster_triangle *tri, const meso_frame *frame, const ver
     block->u[at] = va->has_uvs ? INTERP(va->uv, x) : 0.0f;
     block->v[at] = va->has_uvs ? INTERP(va->uv, y) : 0.0f;
 #undef INTERP
+    if (frame->filter) {
+        uv_footprint_planes fp = va->has_uvs ? footprint_planes(tri, va) : (uv_footprint_planes){0};
+        float u = block->u[at], v = block->v[at];
+        block->dudx[at] = d * (fp.ua - u * fp.sa), block->dudy[at] = d * (fp.ub - u * fp.sb);
+        block->dvdx[at] = d * (fp.va - v * fp.sa), block->dvdy[at] = d * (fp.vb - v * fp.sb);
+    }
     block->depth[at] = d, block->out_depth[at] = d;
     if (!(skip & MESO_FRAGMENT_SKIP_COLOR_PRESET))
         block->r[at] = block->g[at] = block->b[at] = 0.0f;
@@ -122,6 +148,9 @@ fill_fragments_skipping(const raster_triangle *tri, const meso_frame *frame,
     const v8i triangle = v8i_splat((int32_t)tri->triangle);
     const v8f zero = splat(0.0f);
     const uint64_t no_discard = 0;
+    const bool footprint = frame->filter;
+    const uv_footprint_planes fp =
+        footprint && va->has_uvs ? footprint_planes(tri, va) : (uv_footprint_planes){0};
 #define STORE(array, value) memcpy(block->array + at, &(value), sizeof(v8f))
     for (size_t i = 0; i < n; i += LANES) {
         size_t at = first + i;
@@ -169,8 +198,17 @@ fill_fragments_skipping(const raster_triangle *tri, const meso_frame *frame,
         if (va->has_uvs) {
             v8f u = INTERP(va->uv, x), v = INTERP(va->uv, y);
             STORE(u, u), STORE(v, v);
+            if (footprint) {
+                v8f dudx = d * (splat(fp.ua) - u * splat(fp.sa));
+                v8f dudy = d * (splat(fp.ub) - u * splat(fp.sb));
+                v8f dvdx = d * (splat(fp.va) - v * splat(fp.sa));
+                v8f dvdy = d * (splat(fp.vb) - v * splat(fp.sb));
+                STORE(dudx, dudx), STORE(dudy, dudy), STORE(dvdx, dvdx), STORE(dvdy, dvdy);
+            }
         } else {
             STORE(u, zero), STORE(v, zero);
+            if (footprint)
+                STORE(dudx, zero), STORE(dudy, zero), STORE(dvdx, zero), STORE(dvdy, zero);
         }
 #undef INTERP
         STORE(depth, d), STORE(out_depth, d);
@@ -681,6 +719,8 @@ static meso_result reserve_threads(meso_context *ctx, raster_pass *pass) {
     pass->threads = t;
     for (int i = pass->num_threads; i < threads; i++) {
         t[i].block = aligned_alloc(32, sizeof(meso_fragment_block));
+        /* the footprint arrays stay 0 in frames without filtering, which never write them */
+        if (t[i].block) memset(t[i].block, 0, sizeof(meso_fragment_block));
         t[i].fragments = malloc(TILE_SAMPLES * sizeof(meso_fragment));
         /* a triangle's samples are tested before the check for repeats: up to a tile's
          * worth past a full batch, plus the compaction's writes of a whole group */

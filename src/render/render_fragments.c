@@ -15,6 +15,8 @@ void meso_fragment_block_get(const meso_fragment_block *b, size_t i, meso_fragme
     f->tangent = (meso_vec3){b->tx[i], b->ty[i], b->tz[i]};
     f->bitangent = (meso_vec3){b->bx[i], b->by[i], b->bz[i]};
     f->uv = (meso_vec2){b->u[i], b->v[i]};
+    f->duv_dx = (meso_vec2){b->dudx[i], b->dvdx[i]};
+    f->duv_dy = (meso_vec2){b->dudy[i], b->dvdy[i]};
     f->depth = b->depth[i];
     f->color = (meso_vec3){b->r[i], b->g[i], b->b[i]};
     f->out_depth = b->out_depth[i];
@@ -30,6 +32,8 @@ void meso_fragment_block_set(meso_fragment_block *b, size_t i, const meso_fragme
     b->tx[i] = f->tangent.x, b->ty[i] = f->tangent.y, b->tz[i] = f->tangent.z;
     b->bx[i] = f->bitangent.x, b->by[i] = f->bitangent.y, b->bz[i] = f->bitangent.z;
     b->u[i] = f->uv.x, b->v[i] = f->uv.y;
+    b->dudx[i] = f->duv_dx.x, b->dvdx[i] = f->duv_dx.y;
+    b->dudy[i] = f->duv_dy.x, b->dvdy[i] = f->duv_dy.y;
     b->depth[i] = f->depth;
     b->r[i] = f->color.x, b->g[i] = f->color.y, b->b[i] = f->color.z;
     b->out_depth[i] = f->out_depth;

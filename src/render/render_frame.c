@@ -12,6 +12,7 @@
 void meso_frame_init(meso_frame *frame, const meso_scene *scene, int width, int height) {
     frame->scene = scene;
     frame->progress = NULL;
+    frame->filter = false;
     frame->width = width > 0 ? width : 1;
     frame->height = height > 0 ? height : 1;
     const meso_camera *cam = &scene->camera;

@@ -27,6 +27,10 @@ typedef struct meso_frame {
     meso_vec3 corner;      /* eye-relative direction to the top-left corner (0,0) at depth 1 */
     meso_mat4 view, projection, view_projection;
     float z_near, z_far;
+    /* footprint filtering (meso_render_filter): the rasterizer fills the fragments' uv
+     * derivatives and the shading reads the maps' mip levels by them; false (the default of
+     * meso_frame_init): level 0 at the sample's uv, as if every footprint were a point */
+    bool filter;
     meso_progress *progress; /* NULL, or advanced by each tile's samples (width x height in all) */
 } meso_frame;
 
@@ -52,7 +56,10 @@ typedef struct meso_fragment {
     meso_vec3 normal;             /* interpolated vertex normal, unit */
     meso_vec3 tangent, bitangent; /* interpolated dP/du, dP/dv (zero without UVs) */
     meso_vec2 uv;                 /* interpolated, uv_scale applied */
-    float depth;                  /* view depth of `position` */
+    /* the footprint: duv/dx and duv/dy, the change of uv from this sample to the next one to
+     * the right and down on the base triangle's plane (filled when frame->filter; else 0) */
+    meso_vec2 duv_dx, duv_dy;
+    float depth; /* view depth of `position` */
     /* outputs, preset by the rasterizer */
     meso_vec3 color; /* linear RGB (preset 0) */
     float out_depth; /* preset to depth; a technique may replace it (depth
@@ -94,6 +101,11 @@ typedef struct meso_fragment_block {
     _Alignas(32) float bz[MESO_FRAGMENT_BLOCK_LANES];
     _Alignas(32) float u[MESO_FRAGMENT_BLOCK_LANES];
     _Alignas(32) float v[MESO_FRAGMENT_BLOCK_LANES];
+    /* the footprint (meso_fragment.duv_dx, duv_dy): filled only when frame->filter */
+    _Alignas(32) float dudx[MESO_FRAGMENT_BLOCK_LANES];
+    _Alignas(32) float dvdx[MESO_FRAGMENT_BLOCK_LANES];
+    _Alignas(32) float dudy[MESO_FRAGMENT_BLOCK_LANES];
+    _Alignas(32) float dvdy[MESO_FRAGMENT_BLOCK_LANES];
     _Alignas(32) float depth[MESO_FRAGMENT_BLOCK_LANES];
     /* outputs, preset by the rasterizer as meso_fragment's: colour 0, out_depth = depth,
      * discard 0 (1: nothing drawn) */
@@ -122,6 +134,13 @@ void meso_fragment_block_get(const meso_fragment_block *block, size_t i, meso_fr
 void meso_fragment_block_set(meso_fragment_block *block, size_t i, const meso_fragment *f);
 /* Fill the lanes count..(count rounded up to 8) - 1 with copies of fragment count - 1. */
 void meso_fragment_block_pad(meso_fragment_block *block);
+/* Fragment i's footprint (duv_dx, duv_dy) from the block: for a technique that builds its own
+ * meso_fragments from a block's lanes and shades them with meso_shade_fragments. */
+static inline void meso_fragment_footprint_from_block(meso_fragment *f,
+                                                      const meso_fragment_block *block, size_t i) {
+    f->duv_dx = (meso_vec2){block->dudx[i], block->dvdx[i]};
+    f->duv_dy = (meso_vec2){block->dudy[i], block->dvdy[i]};
+}
 
 /* ---- Techniques --------------------------------------------------------------------------- */
 
@@ -253,11 +272,20 @@ meso_vec3 meso_shade_point_tb(const meso_frame *frame, const meso_object *object
                               meso_vec3 position, meso_vec3 normal, meso_vec3 tangent,
                               meso_vec3 bitangent, meso_vec2 uv, const float *visibility);
 
+/* meso_shade_point_tb for a sample whose base uv changes by duv_dx, duv_dy from one sample to
+ * the next (its footprint, meso_fragment): the maps are read filtered by it when
+ * frame->filter (render_filter.h), else as meso_shade_point_tb reads them. */
+meso_vec3 meso_shade_point_footprint(const meso_frame *frame, const meso_object *object,
+                                     meso_vec3 position, meso_vec3 normal, meso_vec3 tangent,
+                                     meso_vec3 bitangent, meso_vec2 uv, meso_vec2 duv_dx,
+                                     meso_vec2 duv_dy, const float *visibility);
+
 /* meso_shade_point for every fragment of a batch, 8 at a time, with the same bits:
  * fragments[i].color = meso_shade_point(frame, object, fragments[i].position,
  * fragments[i].normal, fragments[i].uv, visibility ? visibility + i * num_lights : NULL)
  * (meso_shade_point_tb with fragments[i].tangent, .bitangent).
- * A technique that changes the normal or uv writes them into the fragment first. Pure. */
+ * A technique that changes the normal or uv writes them into the fragment first; with
+ * frame->filter the maps are read by each fragment's footprint (duv_dx, duv_dy). Pure. */
 void meso_shade_fragments(const meso_frame *frame, const meso_object *object,
                           meso_fragment *fragments, size_t count, const float *visibility);
 

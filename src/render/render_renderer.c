@@ -21,6 +21,7 @@ struct meso_renderer {
     const meso_scene *source; /* the caller's scene: the view's camera and lights each frame */
     int n;                    /* supersampling: n x n samples a pixel */
     bool wireframe;
+    bool filter;   /* footprint filtering (meso_frame.filter) */
     bool progress; /* report each frame's progress */
     bool use_reference;
     meso_reference *reference;
@@ -148,6 +149,9 @@ meso_result meso_renderer_create(meso_context *ctx, const meso_scene *scene,
     *out_renderer = NULL;
     if (!scene) return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "render: NULL scene");
     meso_render_desc d = desc ? *desc : (meso_render_desc){0};
+    if (d.filter < MESO_RENDER_FILTER_DEFAULT || d.filter > MESO_RENDER_FILTER_FOOTPRINT)
+        return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: filter: %d is not a mode",
+                              scene->path, (int)d.filter);
     if (d.samples < 0) {
         return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "%s: samples: %d must be >= 0",
                               scene->path, d.samples);
@@ -190,6 +194,7 @@ meso_result meso_renderer_create(meso_context *ctx, const meso_scene *scene,
     }
     rd->scene = scene;
     rd->wireframe = d.wireframe;
+    rd->filter = d.filter == MESO_RENDER_FILTER_FOOTPRINT;
     rd->progress = d.progress;
     rd->n = d.samples <= 1 ? 1 : (int)ceil(sqrt((double)d.samples) - 1e-9);
     rd->techniques = calloc(slots, sizeof(*rd->techniques));
@@ -358,6 +363,7 @@ meso_result meso_renderer_render(meso_renderer *renderer, meso_framebuffer *fb) 
     double start = meso_time_seconds();
     meso_frame frame;
     meso_frame_init(&frame, rd->scene, fb->width * n, fb->height * n);
+    frame.filter = rd->filter;
     size_t samples = (size_t)frame.width * (size_t)frame.height;
     if (rd->progress)
         frame.progress =

@@ -2,6 +2,7 @@
 #include <math.h>
 
 #include "render_environment.h"
+#include "render_filter.h"
 #include "render_shading.h"
 #include "meso/texture.h"
 
@@ -98,6 +99,22 @@ static inline __attribute__((always_inline)) void sample_color_map(const meso_te
     *out_b = v8_select(finite, top + (bottom - top) * ty, v8_splat(0.0f));
 }
 
+/* A map at eight uvs: with a footprint (fp not NULL, the frame filters) and a mip chain,
+ * filtered by it (render_filter.h); else, or where every lane's footprint lies within a texel,
+ * sample_color_map's level-0 lookup. The mean of a normal map's texels is renormalised after
+ * (apply_normal_map), the usual mip-mapped normal map. */
+static inline __attribute__((always_inline)) void sample_map(const meso_texture *t,
+                                                             const float *srgb8_table,
+                                                             const meso_footprint8 *fp, v8f u,
+                                                             v8f v, v8f *r, v8f *g, v8f *b) {
+    meso_filter_levels levels;
+    meso_filter_taps plan;
+    if (fp && meso_filter_levels_init(&levels, t) && meso_filter_plan(&levels, fp, &plan))
+        meso_filter_sample8(&levels, t->wrap == MESO_WRAP_CLAMP, &plan, u, v, r, g, b);
+    else
+        sample_color_map(t, srgb8_table, u, v, r, g, b);
+}
+
 /* ---- Eight points at a time ----------------------------------------------------------------
  * meso_shade_point, meso_shade_fragments and meso_shade_batch8 all run this one function (one
  * lane or eight), so a technique that shades a batch and the reference that shades single
@@ -118,10 +135,10 @@ static inline v8f rsqrt_safe(v8f len2, v8i *nonzero) {
  * bitangent dP/dv made orthogonal to N' and T' (Gram-Schmidt, so B' keeps the side of dP/dv:
  * mirrored uvs stay right). n = normalize(T' x + B' y + N' z); the normal stays N' where the
  * frame is degenerate (no uvs, T or B along N') or uv is not finite. */
-static void apply_normal_map(const meso_material *m, const meso_shade_batch *in, v8f *nx, v8f *ny,
-                             v8f *nz) {
+static void apply_normal_map(const meso_material *m, const meso_shade_batch *in,
+                             const meso_footprint8 *fp, v8f *nx, v8f *ny, v8f *nz) {
     v8f r, g, b;
-    sample_color_map(m->normal_map, meso_srgb8_table(), in->u, in->v, &r, &g, &b);
+    sample_map(m->normal_map, meso_srgb8_table(), fp, in->u, in->v, &r, &g, &b);
     v8f x = r * splat(2.0f) - splat(1.0f), y = g * splat(2.0f) - splat(1.0f);
     v8f z = b * splat(2.0f) - splat(1.0f);
     if (m->normal_map_directx) y = -y;
@@ -177,21 +194,24 @@ static void shade_constants_init(shade_constants *c, const meso_frame *frame,
  * (docs/design.md); with an environment, ambient + E(N) / pi (render_environment.h), specular only
  * where N.L_i > 0 and N.H_i > 0. */
 static inline __attribute__((always_inline)) void shade8(const shade_constants *c,
-                                                         const meso_shade_batch *in, int lanes,
+                                                         const meso_shade_batch *in,
+                                                         const meso_footprint8 *fp, int lanes,
                                                          v8f *out_r, v8f *out_g, v8f *out_b) {
     const meso_frame *frame = c->frame;
     const meso_scene *scene = frame->scene;
     const meso_material *m = &c->object->material;
     v8f br = splat(m->albedo.x), bg = splat(m->albedo.y), bb = splat(m->albedo.z);
     if (m->color_map) {
-        /* Level 0, bilinear, in every technique and the reference, so images compare pixel by
-         * pixel (no mip selection that would depend on screen derivatives). */
+        /* Without filtering: level 0, bilinear, in every technique and the reference, so
+         * images compare pixel by pixel with the papers' point-sampled ones. With it: by the
+         * base uv's footprint, the same in every technique (the rasterizer's) and the
+         * reference (its ray differentials). */
         v8f tr, tg, tb;
-        sample_color_map(m->color_map, c->srgb8_table, in->u, in->v, &tr, &tg, &tb);
+        sample_map(m->color_map, c->srgb8_table, fp, in->u, in->v, &tr, &tg, &tb);
         br *= tr, bg *= tg, bb *= tb;
     }
     v8f nx = in->nx, ny = in->ny, nz = in->nz;
-    if (m->normal_map) apply_normal_map(m, in, &nx, &ny, &nz);
+    if (m->normal_map) apply_normal_map(m, in, fp, &nx, &ny, &nz);
     bool has_specular = c->has_specular;
     v8f vx = splat(0.0f), vy = splat(0.0f), vz = splat(0.0f);
     v8i nonzero;
@@ -263,7 +283,22 @@ void meso_shade_batch8(const meso_frame *frame, const meso_object *object,
                        const meso_shade_batch *in, int lanes, v8f *out_r, v8f *out_g, v8f *out_b) {
     shade_constants c;
     shade_constants_init(&c, frame, object);
-    shade8(&c, in, lanes, out_r, out_g, out_b);
+    shade8(&c, in, NULL, lanes, out_r, out_g, out_b);
+}
+
+void meso_shade_batch8_fragments(const meso_frame *frame, const meso_object *object,
+                                 const meso_shade_batch *in, const meso_fragment *fragments,
+                                 int lanes, v8f *out_r, v8f *out_g, v8f *out_b) {
+    shade_constants c;
+    shade_constants_init(&c, frame, object);
+    meso_footprint8 fp;
+    if (frame->filter)
+        for (int i = 0; i < LANES; i++) {
+            const meso_fragment *f = &fragments[i < lanes ? i : lanes - 1];
+            fp.dudx[i] = f->duv_dx.x, fp.dvdx[i] = f->duv_dx.y;
+            fp.dudy[i] = f->duv_dy.x, fp.dvdy[i] = f->duv_dy.y;
+        }
+    shade8(&c, in, frame->filter ? &fp : NULL, lanes, out_r, out_g, out_b);
 }
 
 void meso_shade_batches_to_block(const meso_frame *frame, const meso_object *object,
@@ -271,10 +306,13 @@ void meso_shade_batches_to_block(const meso_frame *frame, const meso_object *obj
                                  meso_fragment_block *b, size_t first) {
     shade_constants c;
     shade_constants_init(&c, frame, object);
+    meso_footprint8 fp;
     for (size_t g = 0; g < num_groups; g++, first += LANES) {
         int lanes = b->count - first < LANES ? (int)(b->count - first) : LANES;
         v8f r, gr, bl;
-        shade8(&c, &in[g], lanes, &r, &gr, &bl);
+        /* the batches are the block's lanes, whose footprints the rasterizer filled */
+        if (frame->filter) meso_footprint8_from_block(&fp, b, first);
+        shade8(&c, &in[g], frame->filter ? &fp : NULL, lanes, &r, &gr, &bl);
         meso_block_store(b->r, first, r);
         meso_block_store(b->g, first, gr);
         meso_block_store(b->b, first, bl);
@@ -288,12 +326,14 @@ void meso_shade_block(const meso_frame *frame, const meso_object *object, meso_f
      * only for a normal map */
     bool tangents = object->material.normal_map != NULL;
     meso_shade_batch in;
+    meso_footprint8 fp;
     meso_shade_batch_all_visible(&in, frame); /* once, not once a group */
     for (size_t first = 0; first < b->count; first += LANES) {
         meso_shade_batch_from_block(&in, b, first, tangents);
+        if (frame->filter) meso_footprint8_from_block(&fp, b, first);
         int lanes = b->count - first < LANES ? (int)(b->count - first) : LANES;
         v8f r, g, bl;
-        shade8(&c, &in, lanes, &r, &g, &bl);
+        shade8(&c, &in, frame->filter ? &fp : NULL, lanes, &r, &g, &bl);
         meso_block_store(b->r, first, r);
         meso_block_store(b->g, first, g);
         meso_block_store(b->b, first, bl);
@@ -309,6 +349,15 @@ meso_vec3 meso_shade_point(const meso_frame *frame, const meso_object *object, m
 meso_vec3 meso_shade_point_tb(const meso_frame *frame, const meso_object *object,
                               meso_vec3 position, meso_vec3 normal, meso_vec3 tangent,
                               meso_vec3 bitangent, meso_vec2 uv, const float *visibility) {
+    meso_vec2 point = {0.0f, 0.0f};
+    return meso_shade_point_footprint(frame, object, position, normal, tangent, bitangent, uv,
+                                      point, point, visibility);
+}
+
+meso_vec3 meso_shade_point_footprint(const meso_frame *frame, const meso_object *object,
+                                     meso_vec3 position, meso_vec3 normal, meso_vec3 tangent,
+                                     meso_vec3 bitangent, meso_vec2 uv, meso_vec2 duv_dx,
+                                     meso_vec2 duv_dy, const float *visibility) {
     meso_shade_batch in;
     in.px = splat(position.x), in.py = splat(position.y), in.pz = splat(position.z);
     in.nx = splat(normal.x), in.ny = splat(normal.y), in.nz = splat(normal.z);
@@ -317,17 +366,23 @@ meso_vec3 meso_shade_point_tb(const meso_frame *frame, const meso_object *object
     in.bx = splat(bitangent.x), in.by = splat(bitangent.y), in.bz = splat(bitangent.z);
     for (int i = 0; i < frame->scene->num_lights; i++)
         in.visibility[i] = splat(visibility ? visibility[i] : 1.0f);
+    meso_footprint8 fp = {splat(duv_dx.x), splat(duv_dx.y), splat(duv_dy.x), splat(duv_dy.y)};
+    shade_constants c;
+    shade_constants_init(&c, frame, object);
     v8f r, g, b;
-    meso_shade_batch8(frame, object, &in, 1, &r, &g, &b);
+    shade8(&c, &in, frame->filter ? &fp : NULL, 1, &r, &g, &b);
     return (meso_vec3){r[0], g[0], b[0]};
 }
 
 void meso_shade_fragments(const meso_frame *frame, const meso_object *object,
                           meso_fragment *fragments, size_t count, const float *visibility) {
     int num_lights = frame->scene->num_lights;
+    shade_constants c;
+    shade_constants_init(&c, frame, object);
     for (size_t first = 0; first < count; first += LANES) {
         int lanes = count - first < LANES ? (int)(count - first) : LANES;
         meso_shade_batch in;
+        meso_footprint8 fp;
         if (!visibility) meso_shade_batch_all_visible(&in, frame);
         for (int i = 0; i < LANES; i++) {
             /* unused lanes repeat the last fragment: finite inputs, results ignored */
@@ -338,11 +393,13 @@ void meso_shade_fragments(const meso_frame *frame, const meso_object *object,
             in.u[i] = f->uv.x, in.v[i] = f->uv.y;
             in.tx[i] = f->tangent.x, in.ty[i] = f->tangent.y, in.tz[i] = f->tangent.z;
             in.bx[i] = f->bitangent.x, in.by[i] = f->bitangent.y, in.bz[i] = f->bitangent.z;
+            fp.dudx[i] = f->duv_dx.x, fp.dvdx[i] = f->duv_dx.y;
+            fp.dudy[i] = f->duv_dy.x, fp.dvdy[i] = f->duv_dy.y;
             for (int li = 0; visibility && li < num_lights; li++)
                 in.visibility[li][i] = visibility[k * (size_t)num_lights + li];
         }
         v8f r, g, b;
-        meso_shade_batch8(frame, object, &in, lanes, &r, &g, &b);
+        shade8(&c, &in, frame->filter ? &fp : NULL, lanes, &r, &g, &b);
         for (int i = 0; i < lanes; i++)
             fragments[first + (size_t)i].color = (meso_vec3){r[i], g[i], b[i]};
     }

@@ -28,6 +28,12 @@ typedef struct meso_shade_batch {
 void meso_shade_batch8(const meso_frame *frame, const meso_object *object,
                        const meso_shade_batch *in, int lanes, v8f *out_r, v8f *out_g, v8f *out_b);
 
+/* meso_shade_batch8 for lanes that are fragments[0..lanes-1]: with frame->filter the maps are
+ * read by the fragments' footprints (meso_fragment.duv_dx, duv_dy). */
+void meso_shade_batch8_fragments(const meso_frame *frame, const meso_object *object,
+                                 const meso_shade_batch *in, const meso_fragment *fragments,
+                                 int lanes, v8f *out_r, v8f *out_g, v8f *out_b);
+
 /* visibility[i] = 1 in every lane for the scene's lights. */
 static inline void meso_shade_batch_all_visible(meso_shade_batch *in, const meso_frame *frame) {
     for (int i = 0; i < frame->scene->num_lights; i++) in->visibility[i] = v8_splat(1.0f);
@@ -62,28 +68,24 @@ static inline void meso_shade_batch_from_block(meso_shade_batch *in, const meso_
     }
 }
 
+/* Shade the lanes of num_groups groups of eight into the block's colours: in[k] holds lanes
+ * first + 8k .. first + 8k + 7 (first a multiple of 8; lanes past count: padding), as
+ * meso_shade_batch8 does, the per-object constants worked out once a call. With
+ * frame->filter the maps are read by the block's footprints of those lanes. */
+void meso_shade_batches_to_block(const meso_frame *frame, const meso_object *object,
+                                 const meso_shade_batch *in, size_t num_groups,
+                                 meso_fragment_block *b, size_t first);
+
 /* Shade lanes first..first+7 of `in` into the block's colours (lanes past count: padding). */
 static inline void meso_shade_batch_to_block(const meso_frame *frame, const meso_object *object,
                                              const meso_shade_batch *in, meso_fragment_block *b,
                                              size_t first) {
-    int lanes = b->count - first < V8_LANES ? (int)(b->count - first) : V8_LANES;
-    v8f r, g, bl;
-    meso_shade_batch8(frame, object, in, lanes, &r, &g, &bl);
-    meso_block_store(b->r, first, r);
-    meso_block_store(b->g, first, g);
-    meso_block_store(b->b, first, bl);
+    meso_shade_batches_to_block(frame, object, in, 1, b, first);
 }
 
 /* meso_shade_fragments for a block, every light visible: the colour of each fragment from its
  * own position, normal, uv, tangent and bitangent, with the same bits. The per-object constants
  * are worked out once a block. */
 void meso_shade_block(const meso_frame *frame, const meso_object *object, meso_fragment_block *b);
-
-/* meso_shade_batch_to_block for num_groups groups of eight at once: in[k] holds lanes
- * first + 8k .. first + 8k + 7 (first a multiple of 8); the same bits, the per-object constants
- * worked out once a call instead of once a group. */
-void meso_shade_batches_to_block(const meso_frame *frame, const meso_object *object,
-                                 const meso_shade_batch *in, size_t num_groups,
-                                 meso_fragment_block *b, size_t first);
 
 #endif

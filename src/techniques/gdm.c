@@ -1341,6 +1341,7 @@ static void gdm_shade_block(const void *state, const meso_frame *frame, const me
             f->position = (meso_vec3){block->px[i], block->py[i], block->pz[i]};
             f->depth = block->depth[i];
             f->out_depth = block->out_depth[i];
+            meso_fragment_footprint_from_block(f, block, i);
             float *v = visibility + n * (size_t)num_lights;
             if (s->boundary ? shade_walk(s, frame, object, f, v, &hits[n])
                             : shade_one(s, frame, object, f, v, &hits[n]))

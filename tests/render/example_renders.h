@@ -29,12 +29,14 @@ static inline meso_scene *example_scene_load(meso_context *ctx, const char *name
 }
 
 /* The scene drawn with `technique` (an object it cannot draw falls back to its own), the small
- * bakes, on `threads` threads. */
-static inline meso_framebuffer *example_render(const meso_scene *scene, const char *technique,
-                                               int threads) {
+ * bakes, on `threads` threads, with texture filtering `filter`. */
+static inline meso_framebuffer *example_render_filtered(const meso_scene *scene,
+                                                        const char *technique, int threads,
+                                                        meso_render_filter filter) {
     meso_context *ctx = test_context(threads);
     meso_render_desc desc = {.technique = technique,
                              .fallback = true,
+                             .filter = filter,
                              .options = example_small_bakes,
                              .num_options =
                                  (int)(sizeof example_small_bakes / sizeof example_small_bakes[0])};
@@ -44,6 +46,12 @@ static inline meso_framebuffer *example_render(const meso_scene *scene, const ch
                  meso_technique_isa(), meso_context_last_error(ctx));
     meso_context_destroy(ctx);
     return fb;
+}
+
+/* example_render_filtered with the default filtering. */
+static inline meso_framebuffer *example_render(const meso_scene *scene, const char *technique,
+                                               int threads) {
+    return example_render_filtered(scene, technique, threads, MESO_RENDER_FILTER_DEFAULT);
 }
 
 #endif

@@ -46,9 +46,39 @@ static void test_every_example_and_technique_is_identical_for_1_2_and_7_threads(
     assert_true(compared >= 2 * 7 * 10);
 }
 
+/* Footprint filtering (docs/techniques.md, "Filtering") reads per-fragment derivatives and mip
+ * chains: the same bytes for 1 and 7 threads on the examples with colour maps, with every
+ * technique. */
+static void test_filtered_examples_are_identical_for_1_and_7_threads(void **state) {
+    (void)state;
+    static const char *const filtered[] = {"tiles-floor", "bricks-plane", "bricks-teapot"};
+    int compared = 0;
+    for (size_t e = 0; e < sizeof filtered / sizeof filtered[0]; e++) {
+        meso_context *ctx = test_context(1);
+        meso_scene *scene = example_scene_load(ctx, filtered[e], 40);
+        for (size_t t = 0; t < meso_technique_count(); t++) {
+            const char *name = meso_technique_get(t)->name;
+            meso_framebuffer *one =
+                example_render_filtered(scene, name, 1, MESO_RENDER_FILTER_FOOTPRINT);
+            meso_framebuffer *many =
+                example_render_filtered(scene, name, 7, MESO_RENDER_FILTER_FOOTPRINT);
+            size_t bytes = sizeof(float) * 3 * (size_t)one->width * (size_t)one->height;
+            if (memcmp(one->color, many->color, bytes) != 0)
+                fail_msg("%s with %s, filter 1: 1 and 7 threads differ", filtered[e], name);
+            meso_framebuffer_destroy(one);
+            meso_framebuffer_destroy(many);
+            compared++;
+        }
+        meso_scene_destroy(scene);
+        meso_context_destroy(ctx);
+    }
+    assert_true(compared >= 3 * 10);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_every_example_and_technique_is_identical_for_1_2_and_7_threads),
+        cmocka_unit_test(test_filtered_examples_are_identical_for_1_and_7_threads),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -19,6 +19,14 @@ struct meso_texture {
      * texel, row-major (meso_texture_add_srgb8): the colour lookup of the shading reads these,
      * decoded to linear by meso_srgb8_table, a quarter of the float level's bytes. */
     uint32_t *srgb8;
+    /* NULL without mips, else every level one after another as RGBA floats, level k at
+     * mip_chain + mip_offset[k] (row-major, its width levels[k]->width): what the shading's
+     * footprint-filtered lookups gather from (docs/techniques.md, "Filtering"). Level 0 holds
+     * the values the unfiltered lookup reads (srgb8's decoded codes when present), each next
+     * level the 2 x 2 box average of the one before, summed as (a + b) + (c + d) so a constant
+     * map stays exactly constant. */
+    float *mip_chain;
+    int32_t mip_offset[MESO_TEXTURE_MAX_LEVELS];
 };
 
 /* A texture of `image` converted to RGBA (grey spreads to RGB, missing alpha is 1), with a box

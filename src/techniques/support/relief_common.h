@@ -795,7 +795,7 @@ static inline void relief_bump_lanes(const relief_heights *m, const meso_frame *
 static inline void relief_shade_store(const meso_frame *frame, const meso_object *object,
                                       const meso_shade_batch *in, meso_fragment *f, int count) {
     v8f r, g, b;
-    meso_shade_batch8(frame, object, in, count, &r, &g, &b);
+    meso_shade_batch8_fragments(frame, object, in, f, count, &r, &g, &b);
     for (int k = 0; k < count; ++k) f[k].color = (meso_vec3){r[k], g[k], b[k]};
 }
 
@@ -1105,7 +1105,8 @@ relief_shade_core(const relief_heights *m, const relief_tracer *tracer, relief_p
                 continue;
             }
             v8f r, gr, b;
-            meso_shade_batch8(frame, object, &in[g], n[g], &r, &gr, &b);
+            meso_shade_batch8_fragments(frame, object, &in[g], fragments + first, n[g], &r, &gr,
+                                        &b);
             for (int k = 0; k < n[g]; ++k) {
                 bool discard = !(hit[g] >> k & 1); /* the ray left the curved shell */
                 meso_fragment *f = fragments + first + (size_t)k;
