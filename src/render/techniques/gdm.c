@@ -76,7 +76,7 @@ typedef struct gdm_state {
      * wrap by a mask); 0 otherwise */
     int wrap_mask_u, wrap_mask_v;
     /* height fields: w below which nothing is solid, in each prism's column (prism_clear)
-     * and anywhere (clear_w); -1 for solids */
+     * and anywhere (clear_w); for solids clear_w only (solid_clear_top), prism_clear NULL */
     float *prism_clear, clear_w, map_max;
     /* height fields: level L at texel (i, j) the highest texel of the window
      * [i, i + 2^L) x [j, j + 2^L), wrapped or clamped as the map samples (window_bound) */
@@ -381,6 +381,32 @@ static void solid_grid_layer(void *user, size_t job, int thread_index) {
                 s->solid, (meso_vec3){(float)i / GDM_GRID_SIDE, (float)j / GDM_GRID_SIDE, w});
 }
 
+/* The w above which a solid is empty in every tile: the top layers of the distance grid
+ * whose every node is farther from the solid than any point is from its nearest node. A point
+ * p with w < (L + 1/2) / (GDM_GRID_LAYERS - 1), layers 0..L all so, has its nearest node (as
+ * solid_probe rounds) in one of them, within half a cell each way: solid_probe's proof then
+ * holds at p and answers outside, so probes there are answered without the grid's read, as
+ * a height field's above its highest texel (clear_w): the same answers, the same image. Above
+ * the slab (w < 0) the solid is empty too (mesostructure_solid.c intersects it with the slab).
+ * A weave's threads leave the top of the slab empty, where the shadow probes start. -1 where
+ * the top layer is not clear. */
+static float solid_clear_top(const float *grid) {
+    const float cell = 0.5f / (float)GDM_GRID_SIDE, layer = 0.5f / (float)(GDM_GRID_LAYERS - 1);
+    /* solid_probe's bound with its margins, and 1 % for the distance's own rounding */
+    float farthest = 1.01f * sqrtf(2.0f * cell * cell + layer * layer);
+    int clear = 0; /* layers 0 .. clear - 1 clear */
+    for (; clear < GDM_GRID_LAYERS; clear++) {
+        const float *nodes = grid + (size_t)clear * GDM_GRID_SIDE * GDM_GRID_SIDE;
+        bool all = true;
+        for (size_t k = 0; k < (size_t)GDM_GRID_SIDE * GDM_GRID_SIDE && all; k++)
+            all = 0.999f * nodes[k] - 1e-6f > farthest; /* false for NaN */
+        if (!all) break;
+    }
+    if (!clear) return -1.0f;
+    /* 0.49: the rounding of w * (layers - 1) kept off the half-way point */
+    return ((float)(clear - 1) + 0.49f) / (float)(GDM_GRID_LAYERS - 1);
+}
+
 /* The solid's distance at a grid of nodes, evaluated once (about a million evaluations, on
  * every thread): a probe near a node whose |f| exceeds the distance between them is on the
  * node's side (ray_probe_inside). false: out of memory. */
@@ -388,6 +414,7 @@ static bool solid_grid(meso_context *ctx, gdm_state *s) {
     s->grid = malloc((size_t)GDM_GRID_LAYERS * GDM_GRID_SIDE * GDM_GRID_SIDE * sizeof(float));
     if (!s->grid) return false;
     meso_parallel_for(ctx, GDM_GRID_LAYERS, solid_grid_layer, s);
+    s->clear_w = solid_clear_top(s->grid);
     return true;
 }
 
@@ -766,7 +793,7 @@ typedef struct ray_probe {
     float length;
     float stretch; /* 1 / the bound of |dp/dx| on [0, length]: distances along x to (u, v, w) */
     float x[2], radius[2]; /* [0] the last outside sample, [1] the last inside: where, |f| */
-    float clear_w;         /* outside above this w (height fields; prism_clear, clear_w) */
+    float clear_w;         /* outside above this w (prism_clear, clear_w) */
     float scale, margin;   /* height fields: a sample proves scale |f| of x, less margin */
 } ray_probe;
 
@@ -805,7 +832,8 @@ __attribute__((noinline)) static float solid_probe(const gdm_state *s, meso_vec3
  * height field, else by the evaluation: the same answer for every point. */
 static bool state_inside(const void *state, meso_vec3 uvw) {
     const gdm_state *s = state;
-    if (s->heightfield) return !(uvw.z < s->clear_w) && inside_mesostructure(s, uvw);
+    if (uvw.z < s->clear_w) return false;
+    if (s->heightfield) return inside_mesostructure(s, uvw);
     float radius;
     return solid_probe(s, uvw, &radius) <= 0.0f;
 }
@@ -889,12 +917,12 @@ static inline bool ray_probe_inside(const gdm_state *s, ray_probe *r, float x) {
 
 /* gdm_shell_desc.probes_inside: the walk's probes of a prism's segment (segment_blocked) as a
  * ray_probe, so that a sample's |f| answers the probes near it; each answer is state_inside's
- * (above a height field's clear_w: outside; else the sample or a solid's grid), so the walk's
+ * (above clear_w: outside; else the sample or a solid's grid), so the walk's
  * answers are the same. */
 static bool state_probes_inside(const void *state, meso_vec3 t0, meso_vec3 dir, float first,
                                 float length, int steps) {
     const gdm_state *s = state;
-    ray_probe probe = ray_probe_start(s, t0, dir, s->heightfield ? s->clear_w : -1.0f);
+    ray_probe probe = ray_probe_start(s, t0, dir, s->clear_w);
     if (first >= 0.0f && ray_probe_inside(s, &probe, first)) return true;
     for (int k = 0; k < steps; k++)
         if (ray_probe_inside(s, &probe, length * ((float)k + 0.5f) / (float)steps)) return true;
@@ -945,7 +973,7 @@ static float refine_hit(const gdm_state *s, ray_probe probe, float d, float dt, 
          * evaluations the distance bounds already decide */
         float wanted = ceilf(8.0f * dt / window);
         int probes = wanted > 8.0f ? (wanted < (float)GDM_PROBES ? (int)wanted : GDM_PROBES) : 8;
-        int first = s->heightfield ? ray_probe_below(&probe, dt, probes) + 1 : 1;
+        int first = ray_probe_below(&probe, dt, probes) + 1;
         if (first > 1) lo = dt * (float)(first - 1) / (float)probes; /* as the loop leaves it */
         for (int k = first; k <= probes && hi < 0.0f; k++) {
             /* the last probe exactly at the exit: dt k / k rounds below dt for most k, and a
@@ -1101,7 +1129,7 @@ static bool segment_hit(const gdm_state *s, const meso_mesh *mesh, const gdm_wal
         layer, meso_prism_layer_face(layer, prism_index, exit_slot), c->p_out);
     out->t_out = t_out;
     /* height fields: outside above this w on the segment (the refinement's probes) */
-    float clear_w = s->prism_clear ? s->prism_clear[prism_index] : -1.0f;
+    float clear_w = s->prism_clear ? s->prism_clear[prism_index] : s->clear_w;
     if (s->window_max && s->refine_steps > 0) {
         /* Beyond the paper: every probe of refine_hit lies on the ray's path through the prism
          * (below), near the segment; when the segment stays above the highest texel its (u, v)
