@@ -90,7 +90,7 @@ typedef struct gdm_state {
     bool raw, shadows, baked_normals; /* baked_normals: the "normals" option resolved */
     bool skip_clear_tops;             /* the clear_top_walk option off */
     int refine_steps, shadow_steps;
-    bool refine_secant;  /* refine_hit ends with a secant step (height fields) */
+    bool refine_secant;  /* refine_hit ends with a secant step */
     float shadow_bias;   /* voxels off the surface */
     meso_vec3 voxel;     /* a voxel's sides in texture units */
     float refine_window; /* texture units: 3 layers */
@@ -146,7 +146,7 @@ static const meso_technique_option gdm_option_table[] = {
                     "bisect this many times; 0: the paper's d < |T_out - T_in| and d_L",
                     gdm_options, refine_steps),
     MESO_OPTION_ROW(MESO_OPTION_BOOL, refine_secant, 0, 1, 1,
-                    "with refine_steps >= 2, height fields: the last two bisections replaced by "
+                    "with refine_steps >= 2: the last two bisections replaced by "
                     "one secant step through the bracket's two samples; 0: bisections only",
                     gdm_options, refine_secant),
     MESO_OPTION_ROW(MESO_OPTION_BOOL, macro_shadows, 0, 1, 1,
@@ -793,6 +793,7 @@ typedef struct ray_probe {
     float length;
     float stretch; /* 1 / the bound of |dp/dx| on [0, length]: distances along x to (u, v, w) */
     float x[2], radius[2]; /* [0] the last outside sample, [1] the last inside: where, |f| */
+    bool sampled[2];       /* its radius is |f| there (scaled), not a solid grid's bound */
     float clear_w;         /* outside above this w (prism_clear, clear_w) */
     float scale, margin;   /* height fields: a sample proves scale |f| of x, less margin */
 } ray_probe;
@@ -804,7 +805,7 @@ typedef struct ray_probe {
  * ray_probe_inside small enough to be inlined for height fields (with the grid's code inline,
  * bumps-sphere ran more instructions). */
 __attribute__((noinline)) static float solid_probe(const gdm_state *s, meso_vec3 p,
-                                                   float *out_radius) {
+                                                   float *out_radius, bool *out_sampled) {
     meso_vec3 q = gdm_tile_point(p);
     float gx = q.x * (float)GDM_GRID_SIDE, gy = q.y * (float)GDM_GRID_SIDE;
     float gz = q.z * (float)(GDM_GRID_LAYERS - 1);
@@ -819,11 +820,13 @@ __attribute__((noinline)) static float solid_probe(const gdm_state *s, meso_vec3
         float bound = 0.999f * fabsf(f) - 1e-6f - sqrtf(dx * dx + dy * dy + dz * dz);
         if (bound > 0.0f) {
             *out_radius = bound;
+            *out_sampled = false;
             return f;
         }
     }
     float f = meso_solid_distance(s->solid, q);
     *out_radius = fabsf(f);
+    *out_sampled = true;
     return f;
 }
 
@@ -835,7 +838,8 @@ static bool state_inside(const void *state, meso_vec3 uvw) {
     if (uvw.z < s->clear_w) return false;
     if (s->heightfield) return inside_mesostructure(s, uvw);
     float radius;
-    return solid_probe(s, uvw, &radius) <= 0.0f;
+    bool sampled;
+    return solid_probe(s, uvw, &radius, &sampled) <= 0.0f;
 }
 
 /* gdm_shell_desc.segment_outside: a height field's window proof (shade_one's, on the segment
@@ -903,15 +907,17 @@ static inline bool ray_probe_inside(const gdm_state *s, ray_probe *r, float x) {
     if (p.z < r->clear_w) return false;
     gdm_thread_counts[GDM_COUNT_SAMPLES]++;
     float f, radius;
+    bool sampled = true;
     if (s->heightfield) { /* inside_mesostructure's test: w >= 1 - h is (1 - h) - w <= 0 */
         f = (1.0f - heightfield_sample(s, p.x, p.y)) - p.z;
         radius = fabsf(f) * r->scale;
     } else {
-        f = solid_probe(s, p, &radius);
+        f = solid_probe(s, p, &radius, &sampled);
     }
     int side = f <= 0.0f;
     r->x[side] = x;
     r->radius[side] = radius;
+    r->sampled[side] = sampled;
     return side == 1;
 }
 
@@ -946,6 +952,14 @@ static inline int ray_probe_below(const ray_probe *r, float length, int probes) 
     int k = estimate < (float)(probes - 1) ? (int)estimate : probes - 1;
     while (k > 0 && !(length * (float)k / (float)probes * r->dir.z < room)) k--;
     return k;
+}
+
+/* |f| of a solid at p where p is on the side `inside` says (refine_hit's secant step), else
+ * -1: the distance itself, not a bound. */
+static float solid_sample(const gdm_state *s, meso_vec3 p, bool inside) {
+    gdm_thread_counts[GDM_COUNT_SAMPLES]++;
+    float f = meso_solid_distance(s->solid, gdm_tile_point(p));
+    return (f <= 0.0f) == inside ? fabsf(f) : -1.0f;
 }
 
 /* Beyond the paper (docs/techniques/gdm.md): d interpolated across an occluding edge lands
@@ -986,8 +1000,8 @@ static float refine_hit(const gdm_state *s, ray_probe probe, float d, float dt, 
         }
         if (hi < 0.0f) return -1.0f;
     }
-    /* a height field's last two bisections replaced by one secant step (refine_secant) */
-    bool secant = s->refine_secant && s->heightfield && s->refine_steps >= 2;
+    /* the last two bisections replaced by one secant step (refine_secant) */
+    bool secant = s->refine_secant && s->refine_steps >= 2;
     int bisections = secant ? s->refine_steps - 2 : s->refine_steps;
     for (int pass = 0; pass < 2; pass++) {
         for (int k = 0; k < bisections; k++) {
@@ -998,14 +1012,24 @@ static float refine_hit(const gdm_state *s, ray_probe probe, float d, float dt, 
                 lo = mid;
         }
         if (!secant) break;
-        /* Both ends sampled (not proven by a bound): their |f| scale times (1 - h) - w, on a
-         * scale that is the same along the path, and f is nearly linear over a bracket a
-         * sixteenth of the window wide: the crossing where the line through them is zero,
-         * two dependent samples fewer than bisecting on (docs/techniques/gdm.md). */
-        if (probe.x[0] == lo && probe.x[1] == hi) {
-            float sum = probe.radius[0] + probe.radius[1];
-            if (sum > 0.0f && isfinite(sum)) return lo + (hi - lo) * (probe.radius[0] / sum);
+        /* Both ends sampled (not proven by a bound, neither a remembered sample's nor a
+         * solid grid's): their |f| -- a height field's (1 - h) - w times a scale that is the
+         * same along the path, a solid's distance -- and f is nearly linear over a bracket a
+         * sixteenth of the window wide (a solid's surface is smooth on that scale away from
+         * its edges: a thread's radius is a few voxels): the crossing where the line through
+         * them is zero, two dependent samples fewer than bisecting on
+         * (docs/techniques/gdm.md). */
+        float r_lo = probe.x[0] == lo && probe.sampled[0] ? probe.radius[0] : -1.0f;
+        float r_hi = probe.x[1] == hi && probe.sampled[1] ? probe.radius[1] : -1.0f;
+        if (s->solid && !(solid_floor && hi >= dt)) {
+            /* a solid's end proven by a bound (the grid's, or a remembered sample's) is
+             * sampled now, as the GL shader samples both: one distance, not two bisections */
+            if (r_lo < 0.0f) r_lo = solid_sample(s, ray_probe_point(&probe, lo), false);
+            if (r_hi < 0.0f) r_hi = solid_sample(s, ray_probe_point(&probe, hi), true);
         }
+        float sum = r_lo + r_hi;
+        if (r_lo >= 0.0f && r_hi >= 0.0f && sum > 0.0f && isfinite(sum))
+            return lo + (hi - lo) * (r_lo / sum);
         bisections = 2, secant = false; /* else the two bisections after all */
     }
 #undef INSIDE
