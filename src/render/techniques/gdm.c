@@ -793,7 +793,7 @@ typedef struct ray_probe {
     float length;
     float stretch; /* 1 / the bound of |dp/dx| on [0, length]: distances along x to (u, v, w) */
     float x[2], radius[2]; /* [0] the last outside sample, [1] the last inside: where, |f| */
-    bool sampled[2];       /* its radius is |f| there (scaled), not a solid grid's bound */
+    bool sampled[2];       /* solids: its radius is |f| there, not the distance grid's bound */
     float clear_w;         /* outside above this w (prism_clear, clear_w) */
     float scale, margin;   /* height fields: a sample proves scale |f| of x, less margin */
 } ray_probe;
@@ -907,7 +907,7 @@ static inline bool ray_probe_inside(const gdm_state *s, ray_probe *r, float x) {
     if (p.z < r->clear_w) return false;
     gdm_thread_counts[GDM_COUNT_SAMPLES]++;
     float f, radius;
-    bool sampled = true;
+    bool sampled;
     if (s->heightfield) { /* inside_mesostructure's test: w >= 1 - h is (1 - h) - w <= 0 */
         f = (1.0f - heightfield_sample(s, p.x, p.y)) - p.z;
         radius = fabsf(f) * r->scale;
@@ -917,7 +917,7 @@ static inline bool ray_probe_inside(const gdm_state *s, ray_probe *r, float x) {
     int side = f <= 0.0f;
     r->x[side] = x;
     r->radius[side] = radius;
-    r->sampled[side] = sampled;
+    if (!s->heightfield) r->sampled[side] = sampled;
     return side == 1;
 }
 
@@ -1019,8 +1019,10 @@ static float refine_hit(const gdm_state *s, ray_probe probe, float d, float dt, 
          * its edges: a thread's radius is a few voxels): the crossing where the line through
          * them is zero, two dependent samples fewer than bisecting on
          * (docs/techniques/gdm.md). */
-        float r_lo = probe.x[0] == lo && probe.sampled[0] ? probe.radius[0] : -1.0f;
-        float r_hi = probe.x[1] == hi && probe.sampled[1] ? probe.radius[1] : -1.0f;
+        float r_lo =
+            probe.x[0] == lo && (s->heightfield || probe.sampled[0]) ? probe.radius[0] : -1.0f;
+        float r_hi =
+            probe.x[1] == hi && (s->heightfield || probe.sampled[1]) ? probe.radius[1] : -1.0f;
         if (s->solid && !(solid_floor && hi >= dt)) {
             /* a solid's end proven by a bound (the grid's, or a remembered sample's) is
              * sampled now, as the GL shader samples both: one distance, not two bisections */
@@ -1139,6 +1141,14 @@ typedef struct prism_segment {
     float d;         /* a hit: at ray_probe_point(&path, d) */
 } prism_segment;
 
+/* Do the three vertices carry the same normal? The prism's map (meso_prism_map) is then
+ * affine in (u, v, w) -- the bottom the top moved by -depth N -- as on a plane. */
+static inline bool normals_equal(const meso_mesh *mesh, uint32_t a, uint32_t b, uint32_t c) {
+    meso_vec3 na = mesh->normals[a], nb = mesh->normals[b], nc = mesh->normals[c];
+    return na.x == nb.x && na.y == nb.y && na.z == nb.z && na.x == nc.x && na.y == nc.y &&
+           na.z == nc.z;
+}
+
 /* §3.2 in the crossing's prism (its exit made by gdm_walk_exit), entered at texture point t_in
  * along the unit view direction: true where the ray meets the mesostructure before it leaves
  * the prism (out->d, out->path), false where it passes through. */
@@ -1173,7 +1183,8 @@ static bool segment_hit(const gdm_state *s, const meso_mesh *mesh, const gdm_wal
     if (!(dt > 1e-7f)) return false;
     meso_vec3 vt = meso_vec3_scale(segment, 1.0f / dt);
     ray_probe path = ray_probe_start(s, t_in, vt, clear_w);
-    if (s->refine_steps > 0) {
+    const uint32_t *v = prism->vertices;
+    if (s->refine_steps > 0 && !normals_equal(mesh, v[0], v[1], v[2])) {
         /* Beyond the paper: the view ray's path through the prism is not straight in (u, v, w).
          * The prism's map is bilinear in the barycentrics and w, so where the vertex normals
          * turn a straight ray bows: its midpoint lies up to two voxels (0.13 on average) off
@@ -1307,16 +1318,21 @@ static void shade_hit(const gdm_state *s, const meso_frame *frame, const meso_ob
 /* The ray's entry (u, v, w) on the drawn face, perspective-correct, and the crossing of the
  * face's prism from the fragment's position: Fig. 5's exit (walk false, the per-prism
  * drawing), or the walk's (gdm_walk_exit); false: the prism bounds nothing. */
-static bool fragment_entry(const gdm_state *s, const meso_frame *frame, const meso_fragment *f,
-                           bool walk, gdm_walk_crossing *c, meso_vec3 *t_in, meso_vec3 *view) {
+static bool fragment_entry(const gdm_state *s, const meso_frame *frame, const meso_mesh *mesh,
+                           const meso_fragment *f, bool walk, gdm_walk_crossing *c, meso_vec3 *t_in,
+                           meso_vec3 *view) {
     const meso_prism_layer *layer = s->layer;
     size_t face = s->drawn_face[f->triangle];
     const uint32_t *idx = layer->faces->indices + 3 * face;
-    *t_in = meso_vec3_barycentric(layer->uvws[idx[0]], layer->uvws[idx[1]], layer->uvws[idx[2]],
-                                  f->b0, f->b1, f->b2);
     *view = meso_vec3_normalize(meso_vec3_sub(f->position, frame->eye));
     c->entry_face = face;
     c->prism = meso_prism_layer_face_prism(layer, face, &c->entry_slot);
+    const uint32_t *v = layer->prisms[c->prism].vertices;
+    if (normals_equal(mesh, v[0], v[1], v[2]))
+        *t_in = meso_prism_layer_face_uvw(layer, face, f->position);
+    else
+        *t_in = meso_vec3_barycentric(layer->uvws[idx[0]], layer->uvws[idx[1]], layer->uvws[idx[2]],
+                                      f->b0, f->b1, f->b2);
     c->p_in = f->position;
     return walk ? gdm_walk_exit(layer, c, *view) : gdm_walk_exit_planes(layer, c, *view);
 }
@@ -1329,7 +1345,7 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
     gdm_walk_crossing c;
     meso_vec3 t_in, view;
     prism_segment seg;
-    if (!fragment_entry(s, frame, f, false, &c, &t_in, &view) ||
+    if (!fragment_entry(s, frame, object->mesh, f, false, &c, &t_in, &view) ||
         !segment_hit(s, object->mesh, &c, t_in, view, &seg))
         return false;
     shade_hit(s, frame, object, f, &c, &seg, visibility, out_hit);
@@ -1345,7 +1361,7 @@ static bool shade_walk(const gdm_state *s, const meso_frame *frame, const meso_o
     gdm_walk_crossing c;
     meso_vec3 t_in, view;
     prism_segment seg;
-    if (!fragment_entry(s, frame, f, true, &c, &t_in, &view)) return false;
+    if (!fragment_entry(s, frame, object->mesh, f, true, &c, &t_in, &view)) return false;
     for (int n = 0; n < GDM_WALK_MAX_PRISMS; n++) {
         /* a stretch of no length holds nothing (a fold's planes crossed at the entry point,
          * whose (u, v, w) on two faces' planes differ) -- but a floor there is the floor */
