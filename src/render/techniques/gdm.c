@@ -907,7 +907,7 @@ static inline bool ray_probe_inside(const gdm_state *s, ray_probe *r, float x) {
     if (p.z < r->clear_w) return false;
     gdm_thread_counts[GDM_COUNT_SAMPLES]++;
     float f, radius;
-    bool sampled;
+    bool sampled = true;  /* a height field's radius is its |f| */
     if (s->heightfield) { /* inside_mesostructure's test: w >= 1 - h is (1 - h) - w <= 0 */
         f = (1.0f - heightfield_sample(s, p.x, p.y)) - p.z;
         radius = fabsf(f) * r->scale;
