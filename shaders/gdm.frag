@@ -46,7 +46,7 @@
 //   u_gi_inside_sky (the CPU's shadows through the whole shell, gdm_shell_shadow.c: not read
 //   here; the GL's shadows are the slab-local ones, the CPU's with macro_shadows 0), bool
 //   u_clear_top_walk (of that walk: not read; it changes no image), bool u_refine_secant
-//   (true: a height field's refinement ends with a secant step, as the CPU's) and bool u_walk
+//   (true: the refinement ends with a secant step, as the CPU's) and bool u_walk
 //   (the CPU's view-ray shell walk, gdm_walk.h: not read here; every prism's faces are drawn,
 //   the CPU's walk 0, docs/gpu.md).
 
@@ -414,9 +414,9 @@ float gdm_refine_hit(vec3 t_in, vec3 vt, vec3 bow, float d, float dt, bool solid
         }
         if (hi < 0.0) return -1.0;
     }
-    // gdm.c: a height field's last two bisections replaced by one secant step through the
-    // bracket's ends where both are samples (an end the solid floor decides is not)
-    bool secant = u_refine_secant && u_gdm_heightfield && u_refine_steps >= 2;
+    // gdm.c: the last two bisections replaced by one secant step through the bracket's ends
+    // where both are samples (an end the solid floor decides is not)
+    bool secant = u_refine_secant && u_refine_steps >= 2;
     gdm_bisect(t_in, vt, bow, dt, solid_floor, secant ? u_refine_steps - 2 : u_refine_steps, lo,
                hi);
     if (secant) {

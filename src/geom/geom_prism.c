@@ -287,11 +287,14 @@ meso_vec3 meso_prism_layer_face_uvw(const meso_prism_layer *layer, size_t face, 
     return meso_vec3_barycentric(f->uvw[0], f->uvw[1], f->uvw[2], 1.0f - b1 - b2, b1, b2);
 }
 
-/* Eight float lanes (GCC vector extensions: AVX with -march=native, SSE pairs otherwise). */
-typedef float prism_v8f __attribute__((vector_size(32)));
-typedef int32_t prism_v8i __attribute__((vector_size(32)));
+/* Four float lanes (GCC vector extensions): one SSE register, which every x86-64 build has.
+ * Eight-lane vectors, in a portable build (this file is not among the AVX2 copies), were split
+ * into SSE pairs whose comparisons and selects GCC lowered lane by lane: several hundred
+ * instructions a call, where gdm calls this for every prism its view and light rays cross. */
+typedef float prism_v4f __attribute__((vector_size(16)));
+typedef int32_t prism_v4i __attribute__((vector_size(16)));
 
-static inline prism_v8f prism_splat(float x) { return (prism_v8f){x, x, x, x, x, x, x, x}; }
+static inline prism_v4f prism_splat(float x) { return (prism_v4f){x, x, x, x}; }
 
 /* For every face plane of the prism at once, the ray parameter from which the ray stays
  * outside the plane's half-space for good: 0 when it starts outside (beyond `tolerance`) and
@@ -302,27 +305,35 @@ static inline prism_v8f prism_splat(float x) { return (prism_v8f){x, x, x, x, x,
  * origin is on that fin, so "outside" there is the fin's own rounding (a flat fin's two planes
  * differ in their last bits), not a concave fold the ray starts beyond. Each lane computes what
  * the scalar test did, operation for operation (dot products left to right, -s0 / dn), so the
- * times are the same bits. */
+ * times are the same bits. Slots first .. first + 3 of the eight. */
+static inline prism_v4f leave_times4(const float *lanes, int first, meso_vec3 o, meso_vec3 d,
+                                     float tolerance, int entry_slot) {
+    prism_v4f nx, ny, nz, offset;
+    memcpy(&nx, lanes + first, sizeof nx);
+    memcpy(&ny, lanes + MESO_PRISM_NUM_FACES + first, sizeof ny);
+    memcpy(&nz, lanes + 2 * MESO_PRISM_NUM_FACES + first, sizeof nz);
+    memcpy(&offset, lanes + 3 * MESO_PRISM_NUM_FACES + first, sizeof offset);
+    prism_v4f dn = nx * prism_splat(d.x) + ny * prism_splat(d.y) + nz * prism_splat(d.z);
+    prism_v4f s0 = (nx * prism_splat(o.x) + ny * prism_splat(o.y) + nz * prism_splat(o.z)) - offset;
+    const prism_v4i slot = (prism_v4i){0, 1, 2, 3} + first;
+    prism_v4i entry = (prism_v4i){0, 0, 0, 0} + entry_slot;
+    prism_v4i partner = (slot >= 2) & ((slot ^ 1) == entry);
+    const prism_v4f zero = prism_splat(0.0f), infinity = prism_splat(INFINITY);
+    prism_v4f leaving = -s0 / dn; /* only where dn > 0 */
+    prism_v4i forward = dn > zero, started = s0 >= zero;
+    prism_v4i away = (s0 > prism_splat(tolerance)) & ~partner;
+    prism_v4i t = (forward & ((started & (prism_v4i)zero) | (~started & (prism_v4i)leaving))) |
+                  (~forward & ((away & (prism_v4i)zero) | (~away & (prism_v4i)infinity)));
+    t = (t & ~(slot == entry)) | ((prism_v4i)infinity & (slot == entry));
+    return (prism_v4f)t;
+}
+
 static inline void leave_times(const float *lanes, meso_vec3 o, meso_vec3 d, float tolerance,
                                int entry_slot, float out[MESO_PRISM_NUM_FACES]) {
-    prism_v8f nx, ny, nz, offset;
-    memcpy(&nx, lanes, sizeof nx);
-    memcpy(&ny, lanes + MESO_PRISM_NUM_FACES, sizeof ny);
-    memcpy(&nz, lanes + 2 * MESO_PRISM_NUM_FACES, sizeof nz);
-    memcpy(&offset, lanes + 3 * MESO_PRISM_NUM_FACES, sizeof offset);
-    prism_v8f dn = nx * prism_splat(d.x) + ny * prism_splat(d.y) + nz * prism_splat(d.z);
-    prism_v8f s0 = (nx * prism_splat(o.x) + ny * prism_splat(o.y) + nz * prism_splat(o.z)) - offset;
-    const prism_v8i slot = {0, 1, 2, 3, 4, 5, 6, 7};
-    prism_v8i entry = (prism_v8i){0, 0, 0, 0, 0, 0, 0, 0} + entry_slot;
-    prism_v8i partner = (slot >= 2) & ((slot ^ 1) == entry);
-    const prism_v8f zero = prism_splat(0.0f), infinity = prism_splat(INFINITY);
-    prism_v8f leaving = -s0 / dn; /* only where dn > 0 */
-    prism_v8i forward = dn > zero, started = s0 >= zero;
-    prism_v8i away = (s0 > prism_splat(tolerance)) & ~partner;
-    prism_v8i t = (forward & ((started & (prism_v8i)zero) | (~started & (prism_v8i)leaving))) |
-                  (~forward & ((away & (prism_v8i)zero) | (~away & (prism_v8i)infinity)));
-    t = (t & ~(slot == entry)) | ((prism_v8i)infinity & (slot == entry));
-    memcpy(out, &t, sizeof t);
+    prism_v4f low = leave_times4(lanes, 0, o, d, tolerance, entry_slot);
+    prism_v4f high = leave_times4(lanes, 4, o, d, tolerance, entry_slot);
+    memcpy(out, &low, sizeof low);
+    memcpy(out + 4, &high, sizeof high);
 }
 
 bool meso_prism_layer_exit(const meso_prism_layer *layer, size_t prism, meso_vec3 origin,

@@ -77,7 +77,7 @@ typedef struct gdm_state {
      * wrap by a mask); 0 otherwise */
     int wrap_mask_u, wrap_mask_v;
     /* height fields: w below which nothing is solid, in each prism's column (prism_clear)
-     * and anywhere (clear_w); -1 for solids */
+     * and anywhere (clear_w); for solids clear_w only (solid_clear_top), prism_clear NULL */
     float *prism_clear, clear_w, map_max;
     /* height fields: level L at texel (i, j) the highest texel of the window
      * [i, i + 2^L) x [j, j + 2^L), wrapped or clamped as the map samples (window_bound) */
@@ -91,7 +91,7 @@ typedef struct gdm_state {
     bool raw, shadows, baked_normals; /* baked_normals: the "normals" option resolved */
     bool skip_clear_tops;             /* the clear_top_walk option off */
     int refine_steps, shadow_steps;
-    bool refine_secant;  /* refine_hit ends with a secant step (height fields) */
+    bool refine_secant;  /* refine_hit ends with a secant step */
     float shadow_bias;   /* voxels off the surface */
     meso_vec3 voxel;     /* a voxel's sides in texture units */
     float refine_window; /* texture units: 3 layers */
@@ -147,7 +147,7 @@ static const meso_technique_option gdm_option_table[] = {
                     "bisect this many times; 0: the paper's d < |T_out - T_in| and d_L",
                     gdm_options, refine_steps),
     MESO_OPTION_ROW(MESO_OPTION_BOOL, refine_secant, 0, 1, 1,
-                    "with refine_steps >= 2, height fields: the last two bisections replaced by "
+                    "with refine_steps >= 2: the last two bisections replaced by "
                     "one secant step through the bracket's two samples; 0: bisections only",
                     gdm_options, refine_secant),
     MESO_OPTION_ROW(MESO_OPTION_BOOL, macro_shadows, 0, 1, 1,
@@ -382,6 +382,32 @@ static void solid_grid_layer(void *user, size_t job, int thread_index) {
                 s->solid, (meso_vec3){(float)i / GDM_GRID_SIDE, (float)j / GDM_GRID_SIDE, w});
 }
 
+/* The w above which a solid is empty in every tile: the top layers of the distance grid
+ * whose every node is farther from the solid than any point is from its nearest node. A point
+ * p with w < (L + 1/2) / (GDM_GRID_LAYERS - 1), layers 0..L all so, has its nearest node (as
+ * solid_probe rounds) in one of them, within half a cell each way: solid_probe's proof then
+ * holds at p and answers outside, so probes there are answered without the grid's read, as
+ * a height field's above its highest texel (clear_w): the same answers, the same image. Above
+ * the slab (w < 0) the solid is empty too (mesostructure_solid.c intersects it with the slab).
+ * A weave's threads leave the top of the slab empty, where the shadow probes start. -1 where
+ * the top layer is not clear. */
+static float solid_clear_top(const float *grid) {
+    const float cell = 0.5f / (float)GDM_GRID_SIDE, layer = 0.5f / (float)(GDM_GRID_LAYERS - 1);
+    /* solid_probe's bound with its margins, and 1 % for the distance's own rounding */
+    float farthest = 1.01f * sqrtf(2.0f * cell * cell + layer * layer);
+    int clear = 0; /* layers 0 .. clear - 1 clear */
+    for (; clear < GDM_GRID_LAYERS; clear++) {
+        const float *nodes = grid + (size_t)clear * GDM_GRID_SIDE * GDM_GRID_SIDE;
+        bool all = true;
+        for (size_t k = 0; k < (size_t)GDM_GRID_SIDE * GDM_GRID_SIDE && all; k++)
+            all = 0.999f * nodes[k] - 1e-6f > farthest; /* false for NaN */
+        if (!all) break;
+    }
+    if (!clear) return -1.0f;
+    /* 0.49: the rounding of w * (layers - 1) kept off the half-way point */
+    return ((float)(clear - 1) + 0.49f) / (float)(GDM_GRID_LAYERS - 1);
+}
+
 /* The solid's distance at a grid of nodes, evaluated once (about a million evaluations, on
  * every thread): a probe near a node whose |f| exceeds the distance between them is on the
  * node's side (ray_probe_inside). false: out of memory. */
@@ -389,6 +415,7 @@ static bool solid_grid(meso_context *ctx, gdm_state *s) {
     s->grid = malloc((size_t)GDM_GRID_LAYERS * GDM_GRID_SIDE * GDM_GRID_SIDE * sizeof(float));
     if (!s->grid) return false;
     meso_parallel_for(ctx, GDM_GRID_LAYERS, solid_grid_layer, s);
+    s->clear_w = solid_clear_top(s->grid);
     return true;
 }
 
@@ -767,7 +794,8 @@ typedef struct ray_probe {
     float length;
     float stretch; /* 1 / the bound of |dp/dx| on [0, length]: distances along x to (u, v, w) */
     float x[2], radius[2]; /* [0] the last outside sample, [1] the last inside: where, |f| */
-    float clear_w;         /* outside above this w (height fields; prism_clear, clear_w) */
+    bool sampled[2];       /* solids: its radius is |f| there, not the distance grid's bound */
+    float clear_w;         /* outside above this w (prism_clear, clear_w) */
     float scale, margin;   /* height fields: a sample proves scale |f| of x, less margin */
 } ray_probe;
 
@@ -778,7 +806,7 @@ typedef struct ray_probe {
  * ray_probe_inside small enough to be inlined for height fields (with the grid's code inline,
  * bumps-sphere ran more instructions). */
 __attribute__((noinline)) static float solid_probe(const gdm_state *s, meso_vec3 p,
-                                                   float *out_radius) {
+                                                   float *out_radius, bool *out_sampled) {
     meso_vec3 q = gdm_tile_point(p);
     float gx = q.x * (float)GDM_GRID_SIDE, gy = q.y * (float)GDM_GRID_SIDE;
     float gz = q.z * (float)(GDM_GRID_LAYERS - 1);
@@ -793,11 +821,13 @@ __attribute__((noinline)) static float solid_probe(const gdm_state *s, meso_vec3
         float bound = 0.999f * fabsf(f) - 1e-6f - sqrtf(dx * dx + dy * dy + dz * dz);
         if (bound > 0.0f) {
             *out_radius = bound;
+            *out_sampled = false;
             return f;
         }
     }
     float f = meso_solid_distance(s->solid, q);
     *out_radius = fabsf(f);
+    *out_sampled = true;
     return f;
 }
 
@@ -806,9 +836,11 @@ __attribute__((noinline)) static float solid_probe(const gdm_state *s, meso_vec3
  * height field, else by the evaluation: the same answer for every point. */
 static bool state_inside(const void *state, meso_vec3 uvw) {
     const gdm_state *s = state;
-    if (s->heightfield) return !(uvw.z < s->clear_w) && inside_mesostructure(s, uvw);
+    if (uvw.z < s->clear_w) return false;
+    if (s->heightfield) return inside_mesostructure(s, uvw);
     float radius;
-    return solid_probe(s, uvw, &radius) <= 0.0f;
+    bool sampled;
+    return solid_probe(s, uvw, &radius, &sampled) <= 0.0f;
 }
 
 /* gdm_shell_desc.segment_outside: a height field's window proof (shade_one's, on the segment
@@ -876,26 +908,28 @@ static inline bool ray_probe_inside(const gdm_state *s, ray_probe *r, float x) {
     if (p.z < r->clear_w) return false;
     gdm_thread_counts[GDM_COUNT_SAMPLES]++;
     float f, radius;
+    bool sampled = true;  /* a height field's radius is its |f| */
     if (s->heightfield) { /* inside_mesostructure's test: w >= 1 - h is (1 - h) - w <= 0 */
         f = (1.0f - heightfield_sample(s, p.x, p.y)) - p.z;
         radius = fabsf(f) * r->scale;
     } else {
-        f = solid_probe(s, p, &radius);
+        f = solid_probe(s, p, &radius, &sampled);
     }
     int side = f <= 0.0f;
     r->x[side] = x;
     r->radius[side] = radius;
+    if (!s->heightfield) r->sampled[side] = sampled;
     return side == 1;
 }
 
 /* gdm_shell_desc.probes_inside: the walk's probes of a prism's segment (segment_blocked) as a
  * ray_probe, so that a sample's |f| answers the probes near it; each answer is state_inside's
- * (above a height field's clear_w: outside; else the sample or a solid's grid), so the walk's
+ * (above clear_w: outside; else the sample or a solid's grid), so the walk's
  * answers are the same. */
 static bool state_probes_inside(const void *state, meso_vec3 t0, meso_vec3 dir, float first,
                                 float length, int steps) {
     const gdm_state *s = state;
-    ray_probe probe = ray_probe_start(s, t0, dir, s->heightfield ? s->clear_w : -1.0f);
+    ray_probe probe = ray_probe_start(s, t0, dir, s->clear_w);
     if (first >= 0.0f && ray_probe_inside(s, &probe, first)) return true;
     for (int k = 0; k < steps; k++)
         if (ray_probe_inside(s, &probe, length * ((float)k + 0.5f) / (float)steps)) return true;
@@ -919,6 +953,14 @@ static inline int ray_probe_below(const ray_probe *r, float length, int probes) 
     int k = estimate < (float)(probes - 1) ? (int)estimate : probes - 1;
     while (k > 0 && !(length * (float)k / (float)probes * r->dir.z < room)) k--;
     return k;
+}
+
+/* |f| of a solid at p where p is on the side `inside` says (refine_hit's secant step), else
+ * -1: the distance itself, not a bound. */
+static float solid_sample(const gdm_state *s, meso_vec3 p, bool inside) {
+    gdm_thread_counts[GDM_COUNT_SAMPLES]++;
+    float f = meso_solid_distance(s->solid, gdm_tile_point(p));
+    return (f <= 0.0f) == inside ? fabsf(f) : -1.0f;
 }
 
 /* Beyond the paper (docs/techniques/gdm.md): d interpolated across an occluding edge lands
@@ -946,7 +988,7 @@ static float refine_hit(const gdm_state *s, ray_probe probe, float d, float dt, 
          * evaluations the distance bounds already decide */
         float wanted = ceilf(8.0f * dt / window);
         int probes = wanted > 8.0f ? (wanted < (float)GDM_PROBES ? (int)wanted : GDM_PROBES) : 8;
-        int first = s->heightfield ? ray_probe_below(&probe, dt, probes) + 1 : 1;
+        int first = ray_probe_below(&probe, dt, probes) + 1;
         if (first > 1) lo = dt * (float)(first - 1) / (float)probes; /* as the loop leaves it */
         for (int k = first; k <= probes && hi < 0.0f; k++) {
             /* the last probe exactly at the exit: dt k / k rounds below dt for most k, and a
@@ -959,8 +1001,8 @@ static float refine_hit(const gdm_state *s, ray_probe probe, float d, float dt, 
         }
         if (hi < 0.0f) return -1.0f;
     }
-    /* a height field's last two bisections replaced by one secant step (refine_secant) */
-    bool secant = s->refine_secant && s->heightfield && s->refine_steps >= 2;
+    /* the last two bisections replaced by one secant step (refine_secant) */
+    bool secant = s->refine_secant && s->refine_steps >= 2;
     int bisections = secant ? s->refine_steps - 2 : s->refine_steps;
     for (int pass = 0; pass < 2; pass++) {
         for (int k = 0; k < bisections; k++) {
@@ -971,14 +1013,26 @@ static float refine_hit(const gdm_state *s, ray_probe probe, float d, float dt, 
                 lo = mid;
         }
         if (!secant) break;
-        /* Both ends sampled (not proven by a bound): their |f| scale times (1 - h) - w, on a
-         * scale that is the same along the path, and f is nearly linear over a bracket a
-         * sixteenth of the window wide: the crossing where the line through them is zero,
-         * two dependent samples fewer than bisecting on (docs/techniques/gdm.md). */
-        if (probe.x[0] == lo && probe.x[1] == hi) {
-            float sum = probe.radius[0] + probe.radius[1];
-            if (sum > 0.0f && isfinite(sum)) return lo + (hi - lo) * (probe.radius[0] / sum);
+        /* Both ends sampled (not proven by a bound, neither a remembered sample's nor a
+         * solid grid's): their |f| -- a height field's (1 - h) - w times a scale that is the
+         * same along the path, a solid's distance -- and f is nearly linear over a bracket a
+         * sixteenth of the window wide (a solid's surface is smooth on that scale away from
+         * its edges: a thread's radius is a few voxels): the crossing where the line through
+         * them is zero, two dependent samples fewer than bisecting on
+         * (docs/techniques/gdm.md). */
+        float r_lo =
+            probe.x[0] == lo && (s->heightfield || probe.sampled[0]) ? probe.radius[0] : -1.0f;
+        float r_hi =
+            probe.x[1] == hi && (s->heightfield || probe.sampled[1]) ? probe.radius[1] : -1.0f;
+        if (s->solid && !(solid_floor && hi >= dt)) {
+            /* a solid's end proven by a bound (the grid's, or a remembered sample's) is
+             * sampled now, as the GL shader samples both: one distance, not two bisections */
+            if (r_lo < 0.0f) r_lo = solid_sample(s, ray_probe_point(&probe, lo), false);
+            if (r_hi < 0.0f) r_hi = solid_sample(s, ray_probe_point(&probe, hi), true);
         }
+        float sum = r_lo + r_hi;
+        if (r_lo >= 0.0f && r_hi >= 0.0f && sum > 0.0f && isfinite(sum))
+            return lo + (hi - lo) * (r_lo / sum);
         bisections = 2, secant = false; /* else the two bisections after all */
     }
 #undef INSIDE
@@ -1088,6 +1142,14 @@ typedef struct prism_segment {
     float d;         /* a hit: at ray_probe_point(&path, d) */
 } prism_segment;
 
+/* Do the three vertices carry the same normal? The prism's map (meso_prism_map) is then
+ * affine in (u, v, w) -- the bottom the top moved by -depth N -- as on a plane. */
+static inline bool normals_equal(const meso_mesh *mesh, uint32_t a, uint32_t b, uint32_t c) {
+    meso_vec3 na = mesh->normals[a], nb = mesh->normals[b], nc = mesh->normals[c];
+    return na.x == nb.x && na.y == nb.y && na.z == nb.z && na.x == nc.x && na.y == nc.y &&
+           na.z == nc.z;
+}
+
 /* §3.2 in the crossing's prism (its exit made by gdm_walk_exit), entered at texture point t_in
  * along the unit view direction: true where the ray meets the mesostructure before it leaves
  * the prism (out->d, out->path), false where it passes through. */
@@ -1102,7 +1164,7 @@ static bool segment_hit(const gdm_state *s, const meso_mesh *mesh, const gdm_wal
         layer, meso_prism_layer_face(layer, prism_index, exit_slot), c->p_out);
     out->t_out = t_out;
     /* height fields: outside above this w on the segment (the refinement's probes) */
-    float clear_w = s->prism_clear ? s->prism_clear[prism_index] : -1.0f;
+    float clear_w = s->prism_clear ? s->prism_clear[prism_index] : s->clear_w;
     if (s->window_max && s->refine_steps > 0) {
         /* Beyond the paper: every probe of refine_hit lies on the ray's path through the prism
          * (below), near the segment; when the segment stays above the highest texel its (u, v)
@@ -1122,7 +1184,8 @@ static bool segment_hit(const gdm_state *s, const meso_mesh *mesh, const gdm_wal
     if (!(dt > 1e-7f)) return false;
     meso_vec3 vt = meso_vec3_scale(segment, 1.0f / dt);
     ray_probe path = ray_probe_start(s, t_in, vt, clear_w);
-    if (s->refine_steps > 0) {
+    const uint32_t *v = prism->vertices;
+    if (s->refine_steps > 0 && !normals_equal(mesh, v[0], v[1], v[2])) {
         /* Beyond the paper: the view ray's path through the prism is not straight in (u, v, w).
          * The prism's map is bilinear in the barycentrics and w, so where the vertex normals
          * turn a straight ray bows: its midpoint lies up to two voxels (0.13 on average) off
@@ -1256,16 +1319,21 @@ static void shade_hit(const gdm_state *s, const meso_frame *frame, const meso_ob
 /* The ray's entry (u, v, w) on the drawn face, perspective-correct, and the crossing of the
  * face's prism from the fragment's position: Fig. 5's exit (walk false, the per-prism
  * drawing), or the walk's (gdm_walk_exit); false: the prism bounds nothing. */
-static bool fragment_entry(const gdm_state *s, const meso_frame *frame, const meso_fragment *f,
-                           bool walk, gdm_walk_crossing *c, meso_vec3 *t_in, meso_vec3 *view) {
+static bool fragment_entry(const gdm_state *s, const meso_frame *frame, const meso_mesh *mesh,
+                           const meso_fragment *f, bool walk, gdm_walk_crossing *c, meso_vec3 *t_in,
+                           meso_vec3 *view) {
     const meso_prism_layer *layer = s->layer;
     size_t face = s->drawn_face[f->triangle];
     const uint32_t *idx = layer->faces->indices + 3 * face;
-    *t_in = meso_vec3_barycentric(layer->uvws[idx[0]], layer->uvws[idx[1]], layer->uvws[idx[2]],
-                                  f->b0, f->b1, f->b2);
     *view = meso_vec3_normalize(meso_vec3_sub(f->position, frame->eye));
     c->entry_face = face;
     c->prism = meso_prism_layer_face_prism(layer, face, &c->entry_slot);
+    const uint32_t *v = layer->prisms[c->prism].vertices;
+    if (normals_equal(mesh, v[0], v[1], v[2]))
+        *t_in = meso_prism_layer_face_uvw(layer, face, f->position);
+    else
+        *t_in = meso_vec3_barycentric(layer->uvws[idx[0]], layer->uvws[idx[1]], layer->uvws[idx[2]],
+                                      f->b0, f->b1, f->b2);
     c->p_in = f->position;
     return walk ? gdm_walk_exit(layer, c, *view) : gdm_walk_exit_planes(layer, c, *view);
 }
@@ -1278,7 +1346,7 @@ static bool shade_one(const gdm_state *s, const meso_frame *frame, const meso_ob
     gdm_walk_crossing c;
     meso_vec3 t_in, view;
     prism_segment seg;
-    if (!fragment_entry(s, frame, f, false, &c, &t_in, &view) ||
+    if (!fragment_entry(s, frame, object->mesh, f, false, &c, &t_in, &view) ||
         !segment_hit(s, object->mesh, &c, t_in, view, &seg))
         return false;
     shade_hit(s, frame, object, f, &c, &seg, visibility, out_hit);
@@ -1294,7 +1362,7 @@ static bool shade_walk(const gdm_state *s, const meso_frame *frame, const meso_o
     gdm_walk_crossing c;
     meso_vec3 t_in, view;
     prism_segment seg;
-    if (!fragment_entry(s, frame, f, true, &c, &t_in, &view)) return false;
+    if (!fragment_entry(s, frame, object->mesh, f, true, &c, &t_in, &view)) return false;
     for (int n = 0; n < GDM_WALK_MAX_PRISMS; n++) {
         /* a stretch of no length holds nothing (a fold's planes crossed at the entry point,
          * whose (u, v, w) on two faces' planes differ) -- but a floor there is the floor */
