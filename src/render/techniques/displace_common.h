@@ -35,6 +35,13 @@ typedef struct displace_surface {
     const meso_heightfield *heightfield; /* NULL: no mesostructure (h = 1 everywhere) */
     float depth;                         /* world units */
     bool repeat;                         /* height field wraps: uv taken modulo 1 */
+    /* The displaced surface is not closed, so its back faces can show: the base mesh has an
+     * open border (a tube's rim, the teapot's lid), or vertices at one position displace
+     * differently (a sphere's pole: different uvs, different heights). The reference traces
+     * such a surface as it is, both faces, each shaded with its outward normal
+     * (reference_heightfield.c: no cap at the border, no weld at a pole); the geometry
+     * techniques then draw both faces too (displace_surface_init). */
+    bool both_faces;
 } displace_surface;
 
 /* Fill from an object; validates that the mesh has UVs when there is a height field. */
@@ -321,6 +328,19 @@ size_t displace_shadows_memory(const displace_shadows *shadows);
 void displace_shadows_release(displace_shadows *shadows);
 
 /* ---- Shading ------------------------------------------------------------------------------ */
+
+/* Whether a fragment at `position` on a triangle of unit face normal `face` (outward, by the
+ * winding) shows the triangle's back face, to be shaded in the surface's own shadow: on an
+ * open surface (both_faces) with shadows on. The reference shades such a hit with the outward
+ * normal and traces its shadow rays from the side the eye is on, through the surface itself
+ * toward any light outside; a light inside faces away from the outward normal and adds
+ * nothing either, so direct light never reaches it. */
+static inline bool displace_back_face(const displace_surface *surface,
+                                      const displace_shadows *shadows, const meso_frame *frame,
+                                      meso_vec3 position, meso_vec3 face) {
+    return surface->both_faces && shadows->num_lights > 0 &&
+           meso_vec3_dot(meso_vec3_sub(position, frame->eye), face) > 0.0f;
+}
 
 /* Shade fragments of `mesh` (the displaced mesh, whose normals/tangents/bitangents carry the
  * BASE frame): the normal is the height field's (meso_displaced_normal at the fragment's uv,

@@ -155,10 +155,12 @@ static bool view_says_long(const frame_tests *ft, const displace_vertex *a,
 
 /* Whether the base surface faces away from the eye at both end points by more than the
  * shell's own tilt can hide (cos < -0.2, ~12 degrees past the silhouette, tests_vertex): such an
- * edge lies on the far side of the object and is invisible. An edge-only test, so still
- * crack-free. */
-static bool view_says_hidden(const displace_vertex *a, const displace_vertex *b) {
-    return a->faces_away && b->faces_away;
+ * edge lies on the far side of a closed object and is invisible. Not on an open surface, whose
+ * back faces show through its border (displace_common.h, both_faces): the inside of a tube seen
+ * through its rim is refined as the outside is. An edge-only test, so still crack-free. */
+static bool view_says_hidden(const frame_tests *ft, const displace_vertex *a,
+                             const displace_vertex *b) {
+    return !ft->state->surface.both_faces && a->faces_away && b->faces_away;
 }
 
 /* The recursion limits, before the midpoint is displaced. */
@@ -181,7 +183,7 @@ static bool tests_veto(const void *user, const displace_vertex *a, const displac
             return true;
         }
     }
-    if (s->view_test && (!view_says_long(ft, a, b) || view_says_hidden(a, b))) {
+    if (s->view_test && (!view_says_long(ft, a, b) || view_says_hidden(ft, a, b))) {
         counters[COUNT_VIEW_VETO]++;
         return true;
     }
@@ -423,6 +425,12 @@ static void tessellation_shade_block(const void *state, const meso_frame *frame,
     displace_shade_block(&s->surface, &s->shadows, s->mesh, frame, block);
 }
 
+/* Both faces of an open displaced surface, as the reference traces it (displace_common.h). */
+static bool tessellation_both_faces(const void *state) {
+    const tessellation_state *s = state;
+    return s && s->surface.both_faces;
+}
+
 static size_t tessellation_memory(const void *state) {
     const tessellation_state *s = state;
     if (!s) return 0;
@@ -449,4 +457,5 @@ const meso_technique meso_technique_tessellation = {
     .skip_fields = MESO_FRAGMENT_SKIP_SAMPLE | MESO_FRAGMENT_SKIP_BARYCENTRICS |
                    MESO_FRAGMENT_SKIP_COLOR_PRESET,
     .memory = tessellation_memory,
+    .state_both_faces = tessellation_both_faces,
 };
