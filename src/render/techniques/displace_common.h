@@ -40,7 +40,8 @@ typedef struct displace_surface {
      * differently (a sphere's pole: different uvs, different heights). The reference traces
      * such a surface as it is, both faces, each shaded with its outward normal
      * (reference_heightfield.c: no cap at the border, no weld at a pole); the geometry
-     * techniques then draw both faces too (displace_surface_init). */
+     * techniques then draw both faces too (set by displace_surface_init, cleared by the
+     * techniques' option both_faces 0). */
     bool both_faces;
 } displace_surface;
 
@@ -265,6 +266,15 @@ typedef struct displace_shadow_options {
         MESO_OPTION_ROW(MESO_OPTION_BOOL, shadow_pcf, 0, 1, 1,                                     \
                         "2 x 2 bilinear percentage-closer filtering", struct_type, member.pcf)
 
+/* The option-table row of `both_faces` (displace_surface.both_faces), for a struct_type whose
+ * `member` is a bool: both geometry techniques list it. */
+#define DISPLACE_BOTH_FACES_OPTION_ROW(struct_type, member)                                        \
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, both_faces, 0, 1, 1,                                         \
+                    "draw the back faces of an open displaced surface, the inside seen through "   \
+                    "its border (a tube's rim, the teapot's lid gap), as the reference does; 0: "  \
+                    "cull them (faster, background there)",                                        \
+                    struct_type, member)
+
 typedef struct displace_light_map {
     bool active; /* false: the light casts no shadow (visibility 1) */
     meso_mat4 view_projection;
@@ -329,6 +339,12 @@ void displace_shadows_release(displace_shadows *shadows);
 
 /* ---- Shading ------------------------------------------------------------------------------ */
 
+/* A fragment counts as a back face when its triangle faces away from the eye by more than
+ * this (the sine of the angle past edge-on): twice the rasterizer's own margin
+ * (RASTER_BACK_FACE_MARGIN, 0.01), so a triangle seen edge-on, which the rasterizer drew as a
+ * front face with culling on, stays lit. */
+#define DISPLACE_BACK_FACE_MARGIN 0.02f
+
 /* Whether a fragment at `position` on a triangle of unit face normal `face` (outward, by the
  * winding) shows the triangle's back face, to be shaded in the surface's own shadow: on an
  * open surface (both_faces) with shadows on. The reference shades such a hit with the outward
@@ -338,8 +354,9 @@ void displace_shadows_release(displace_shadows *shadows);
 static inline bool displace_back_face(const displace_surface *surface,
                                       const displace_shadows *shadows, const meso_frame *frame,
                                       meso_vec3 position, meso_vec3 face) {
-    return surface->both_faces && shadows->num_lights > 0 &&
-           meso_vec3_dot(meso_vec3_sub(position, frame->eye), face) > 0.0f;
+    if (!surface->both_faces || shadows->num_lights <= 0) return false;
+    meso_vec3 to = meso_vec3_sub(position, frame->eye);
+    return meso_vec3_dot(to, face) > sqrtf(meso_vec3_dot(to, to)) * DISPLACE_BACK_FACE_MARGIN;
 }
 
 /* Shade fragments of `mesh` (the displaced mesh, whose normals/tangents/bitangents carry the

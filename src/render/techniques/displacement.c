@@ -52,6 +52,7 @@ typedef struct displacement_state {
 typedef struct displacement_options {
     int level;
     bool cluster_culling;
+    bool both_faces;
     displace_shadow_options shadows;
 } displacement_options;
 
@@ -64,6 +65,7 @@ static const meso_technique_option displacement_option_table[] = {
                     "hand the rasterizer only the 16-triangle clusters the camera may see "
                     "(the same image; 0: the whole mesh every frame)",
                     displacement_options, cluster_culling),
+    DISPLACE_BOTH_FACES_OPTION_ROW(displacement_options, both_faces),
     DISPLACE_SHADOW_OPTION_ROWS(displacement_options, shadows),
 };
 
@@ -231,6 +233,7 @@ static meso_result displacement_prepare(meso_context *ctx, const meso_scene *sce
     s->shadows.options = options.shadows;
     s->cluster_culling = options.cluster_culling;
     if ((r = displace_surface_init(ctx, object, &s->surface)) != MESO_OK) goto fail;
+    s->surface.both_faces = s->surface.both_faces && options.both_faces;
     s->level = options.level < 0 ? auto_level(&s->surface) : options.level;
     double triangles = (double)object->mesh->num_triangles * pow(4.0, s->level);
     if (triangles > (double)MESO_MESH_MAX_TRIANGLES) {

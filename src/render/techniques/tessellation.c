@@ -50,6 +50,7 @@ typedef struct tessellation_state {
     int max_level;
     bool normal_test, area_test, view_test, limit_test;
     float normal_threshold, area_threshold, view_threshold, span_texels;
+    bool both_faces; /* the option; surface.both_faces: and the surface is open */
     displace_tessellator *tessellator;
     const meso_mesh *mesh;
     displace_shadows shadows;
@@ -100,6 +101,7 @@ static const meso_technique_option tessellation_option_table[] = {
     MESO_OPTION_ROW(MESO_OPTION_FLOAT, span_texels, 0.0, 1e6, 32.0,
                     "texels an edge may span before it splits whatever the tests say",
                     tessellation_state, span_texels),
+    DISPLACE_BOTH_FACES_OPTION_ROW(tessellation_state, both_faces),
     DISPLACE_SHADOW_OPTION_ROWS(tessellation_state, shadows.options),
     MESO_OPTION_ROW(MESO_OPTION_BOOL, shadow_tessellation, 0, 1, 0,
                     "shadow maps from a tessellation seen from each light, kept while the "
@@ -254,6 +256,7 @@ static meso_result tessellation_prepare(meso_context *ctx, const meso_scene *sce
                                          s)) ||
         (r = displace_surface_init(ctx, object, &s->surface)))
         goto fail;
+    s->surface.both_faces = s->surface.both_faces && s->both_faces;
     if (s->max_level < 0) /* automatic: down to texel density (the limit test stops there) */
         s->max_level = displace_texel_level(&s->surface, DISPLACE_MAX_LEVEL);
     if (s->area_test && s->surface.heightfield &&
