@@ -770,7 +770,10 @@ meso_result raster_draw(meso_context *ctx, raster_pass *pass, const meso_frame *
         pass->both_faces_capacity = num_objects;
     }
     for (int i = 0; i < num_objects; i++)
-        pass->both_faces[i] = objects[i].technique && objects[i].technique->both_faces;
+        pass->both_faces[i] =
+            objects[i].technique && (objects[i].technique->both_faces ||
+                                     (objects[i].technique->state_both_faces &&
+                                      objects[i].technique->state_both_faces(objects[i].state)));
     meso_result r =
         raster_bins_build(ctx, &pass->bins, meshes, pass->both_faces, num_objects, &desc);
     if (r != MESO_OK) return r;

@@ -193,6 +193,9 @@ typedef struct meso_technique {
      * the mesh, toward the eye); early depth rejection stays valid since nothing else lies
      * inside the shell. */
     bool both_faces;
+    /* NULL, or whether one object's state draws both faces although the technique does not
+     * always (the geometry techniques on an open displaced surface, displace_common.h). */
+    bool (*state_both_faces)(const void *state);
     /* NULL, or the work counted in the last frame drawn (meso_render_stats: prisms, lookups,
      * samples), added to out[0..2]. Called once a frame after it is drawn, single-threaded. */
     void (*counters)(const void *state, uint64_t out[3]);

@@ -53,6 +53,7 @@ typedef struct displacement_state {
 typedef struct displacement_options {
     int level;
     bool cluster_culling;
+    bool both_faces;
     displace_shadow_options shadows;
 } displacement_options;
 
@@ -65,6 +66,7 @@ static const meso_technique_option displacement_option_table[] = {
                     "hand the rasterizer only the 16-triangle clusters the camera may see "
                     "(the same image; 0: the whole mesh every frame)",
                     displacement_options, cluster_culling),
+    DISPLACE_BOTH_FACES_OPTION_ROW(displacement_options, both_faces),
     DISPLACE_SHADOW_OPTION_ROWS(displacement_options, shadows),
 };
 
@@ -155,14 +157,15 @@ static void bounds_run(void *user, size_t job, int thread_index) {
  * to the centre, and every normal within `spread` of the axis, so each triangle faces away by
  * at least angle(axis, to eye) - 90 deg - spread - beta. */
 static bool cluster_hidden(const cluster_bounds *c, const meso_frame *frame,
-                           const float planes[5][4]) {
+                           const float planes[5][4], bool both_faces) {
     for (int i = 0; i < 5; i++) {
         const float *q = planes[i];
         float d = q[0] * c->center.x + q[1] * c->center.y + q[2] * c->center.z + q[3];
         float norm = sqrtf(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
         if (d < -c->radius * norm * 1.001f) return true;
     }
-    if (c->spread > 1.5f) return false;
+    /* an open surface's back faces show through its border (displace_common.h) */
+    if (both_faces || c->spread > 1.5f) return false;
     meso_vec3 to_eye = meso_vec3_sub(frame->eye, c->center);
     float distance = meso_vec3_length(to_eye);
     if (!(distance > c->radius * 1.01f)) return false;
@@ -202,7 +205,9 @@ static void clusters_select(displacement_state *s, const meso_frame *frame) {
     planes[4][3] -= frame->z_near;
     size_t triangles = s->mesh->num_triangles, kept = 0, drawn = 0;
     for (size_t c = 0; c < s->num_clusters; c++) {
-        if (s->cluster_culling && cluster_hidden(&s->clusters[c], frame, planes)) continue;
+        if (s->cluster_culling &&
+            cluster_hidden(&s->clusters[c], frame, planes, s->surface.both_faces))
+            continue;
         size_t first = c * CLUSTER_TRIANGLES;
         size_t count =
             triangles - first < CLUSTER_TRIANGLES ? triangles - first : CLUSTER_TRIANGLES;
@@ -229,6 +234,7 @@ static meso_result displacement_prepare(meso_context *ctx, const meso_scene *sce
     s->shadows.options = options.shadows;
     s->cluster_culling = options.cluster_culling;
     if ((r = displace_surface_init(ctx, object, &s->surface)) != MESO_OK) goto fail;
+    s->surface.both_faces = s->surface.both_faces && options.both_faces;
     s->level = options.level < 0 ? auto_level(&s->surface) : options.level;
     double triangles = (double)object->mesh->num_triangles * pow(4.0, s->level);
     if (triangles > (double)MESO_MESH_MAX_TRIANGLES) {
@@ -303,6 +309,12 @@ static void displacement_shade_block(const void *state, const meso_frame *frame,
     displace_shade_block(&s->surface, &s->shadows, &s->drawn, frame, block);
 }
 
+/* Both faces of an open displaced surface, as the reference traces it (displace_common.h). */
+static bool displacement_both_faces(const void *state) {
+    const displacement_state *s = state;
+    return s && s->surface.both_faces;
+}
+
 static size_t displacement_memory(const void *state) {
     const displacement_state *s = state;
     if (!s) return 0;
@@ -328,4 +340,5 @@ const meso_technique meso_technique_displacement = {
     .skip_fields = MESO_FRAGMENT_SKIP_SAMPLE | MESO_FRAGMENT_SKIP_BARYCENTRICS |
                    MESO_FRAGMENT_SKIP_COLOR_PRESET,
     .memory = displacement_memory,
+    .state_both_faces = displacement_both_faces,
 };

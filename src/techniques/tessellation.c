@@ -52,6 +52,7 @@ typedef struct tessellation_state {
     int max_level;
     bool normal_test, area_test, view_test, limit_test;
     float normal_threshold, area_threshold, view_threshold, span_texels;
+    bool both_faces; /* the option; surface.both_faces: and the surface is open */
     displace_tessellator *tessellator;
     const meso_mesh *mesh;
     displace_shadows shadows;
@@ -102,6 +103,7 @@ static const meso_technique_option tessellation_option_table[] = {
     MESO_OPTION_ROW(MESO_OPTION_FLOAT, span_texels, 0.0, 1e6, 32.0,
                     "texels an edge may span before it splits whatever the tests say",
                     tessellation_state, span_texels),
+    DISPLACE_BOTH_FACES_OPTION_ROW(tessellation_state, both_faces),
     DISPLACE_SHADOW_OPTION_ROWS(tessellation_state, shadows.options),
     MESO_OPTION_ROW(MESO_OPTION_BOOL, shadow_tessellation, 0, 1, 0,
                     "shadow maps from a tessellation seen from each light, kept while the "
@@ -157,10 +159,12 @@ static bool view_says_long(const frame_tests *ft, const displace_vertex *a,
 
 /* Whether the base surface faces away from the eye at both end points by more than the
  * shell's own tilt can hide (cos < -0.2, ~12 degrees past the silhouette, tests_vertex): such an
- * edge lies on the far side of the object and is invisible. An edge-only test, so still
- * crack-free. */
-static bool view_says_hidden(const displace_vertex *a, const displace_vertex *b) {
-    return a->faces_away && b->faces_away;
+ * edge lies on the far side of a closed object and is invisible. Not on an open surface, whose
+ * back faces show through its border (displace_common.h, both_faces): the inside of a tube seen
+ * through its rim is refined as the outside is. An edge-only test, so still crack-free. */
+static bool view_says_hidden(const frame_tests *ft, const displace_vertex *a,
+                             const displace_vertex *b) {
+    return !ft->state->surface.both_faces && a->faces_away && b->faces_away;
 }
 
 /* The recursion limits, before the midpoint is displaced. */
@@ -183,7 +187,7 @@ static bool tests_veto(const void *user, const displace_vertex *a, const displac
             return true;
         }
     }
-    if (s->view_test && (!view_says_long(ft, a, b) || view_says_hidden(a, b))) {
+    if (s->view_test && (!view_says_long(ft, a, b) || view_says_hidden(ft, a, b))) {
         counters[COUNT_VIEW_VETO]++;
         return true;
     }
@@ -254,6 +258,7 @@ static meso_result tessellation_prepare(meso_context *ctx, const meso_scene *sce
                                          s)) ||
         (r = displace_surface_init(ctx, object, &s->surface)))
         goto fail;
+    s->surface.both_faces = s->surface.both_faces && s->both_faces;
     if (s->max_level < 0) /* automatic: down to texel density (the limit test stops there) */
         s->max_level = displace_texel_level(&s->surface, DISPLACE_MAX_LEVEL);
     if (s->area_test && s->surface.heightfield &&
@@ -426,6 +431,12 @@ static void tessellation_shade_block(const void *state, const meso_frame *frame,
     displace_shade_block(&s->surface, &s->shadows, s->mesh, frame, block);
 }
 
+/* Both faces of an open displaced surface, as the reference traces it (displace_common.h). */
+static bool tessellation_both_faces(const void *state) {
+    const tessellation_state *s = state;
+    return s && s->surface.both_faces;
+}
+
 static size_t tessellation_memory(const void *state) {
     const tessellation_state *s = state;
     if (!s) return 0;
@@ -452,4 +463,5 @@ const meso_technique meso_technique_tessellation = {
     .skip_fields = MESO_FRAGMENT_SKIP_SAMPLE | MESO_FRAGMENT_SKIP_BARYCENTRICS |
                    MESO_FRAGMENT_SKIP_COLOR_PRESET,
     .memory = tessellation_memory,
+    .state_both_faces = tessellation_both_faces,
 };

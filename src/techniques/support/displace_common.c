@@ -12,6 +12,58 @@
 
 /* ---- The displaced surface ---------------------------------------------------------------- */
 
+typedef struct colocated_record {
+    uint32_t position[3]; /* the bits of the base position */
+    uint32_t vertex;
+} colocated_record;
+
+static int compare_colocated(const void *a, const void *b) {
+    const colocated_record *x = a, *y = b;
+    int c = memcmp(x->position, y->position, sizeof x->position);
+    if (c) return c;
+    return x->vertex < y->vertex ? -1 : x->vertex > y->vertex;
+}
+
+/* Whether two vertices at one position can displace to different points: they differ in the
+ * height they sample (the wrapped uv) or in the normal they move along. Both sides of a seam
+ * whose uvs differ by whole tiles wrap to the same uv and agree. */
+static bool displace_differently(const displace_surface *surface, uint32_t a, uint32_t b) {
+    const meso_mesh *m = surface->base;
+    meso_vec2 ta = displace_texture_uv(surface, m->uvs[a]);
+    meso_vec2 tb = displace_texture_uv(surface, m->uvs[b]);
+    meso_vec3 na = meso_vec3_normalize(m->normals[a]), nb = meso_vec3_normalize(m->normals[b]);
+    return memcmp(&ta, &tb, sizeof ta) != 0 || memcmp(&na, &nb, sizeof na) != 0;
+}
+
+/* Sets surface->both_faces (displace_common.h): an open border of the base mesh (edges paired
+ * by their end points' positions, meso_mesh_open_border_edges), or a displaced tear: two
+ * vertices at one position that displace differently (only with a height field and a depth:
+ * otherwise every vertex stays where it is). False when out of memory. */
+static bool find_open_surface(displace_surface *surface) {
+    const meso_mesh *mesh = surface->base;
+    uint8_t *border = meso_mesh_open_border_edges(mesh);
+    if (!border) return false;
+    bool open = false;
+    for (size_t t = 0; t < mesh->num_triangles && !open; t++) open = border[t] != 0;
+    free(border);
+    if (!open && surface->heightfield && surface->depth > 0.0f && mesh->num_vertices > 1) {
+        colocated_record *records = malloc(mesh->num_vertices * sizeof *records);
+        if (!records) return false;
+        for (size_t i = 0; i < mesh->num_vertices; i++) {
+            memcpy(records[i].position, &mesh->positions[i], sizeof records[i].position);
+            records[i].vertex = (uint32_t)i;
+        }
+        qsort(records, mesh->num_vertices, sizeof *records, compare_colocated);
+        for (size_t i = 1; i < mesh->num_vertices && !open; i++)
+            open =
+                !memcmp(records[i].position, records[i - 1].position, sizeof records[i].position) &&
+                displace_differently(surface, records[i].vertex, records[i - 1].vertex);
+        free(records);
+    }
+    surface->both_faces = open;
+    return true;
+}
+
 meso_result displace_surface_init(meso_context *ctx, const meso_object *object,
                                   displace_surface *out_surface) {
     memset(out_surface, 0, sizeof(*out_surface));
@@ -35,6 +87,9 @@ meso_result displace_surface_init(meso_context *ctx, const meso_object *object,
         out_surface->depth = object->mesostructure.depth;
         out_surface->repeat = hf->wrap != MESO_WRAP_CLAMP;
     }
+    if (!find_open_surface(out_surface))
+        return meso_log_error(ctx, MESO_ERROR_OUT_OF_MEMORY, "%s: mesh: open borders",
+                              object->name);
     return MESO_OK;
 }
 
@@ -1405,8 +1460,10 @@ void displace_shade(const displace_surface *surface, const displace_shadows *sha
                 }
             }
             meso_vec3 face = have_face ? face_normal : frag->normal;
-            displace_shadows_visibility(shadows, frame->scene, frag->position, normal, face,
-                                        visibility + f * (size_t)num_lights);
+            float *seen = visibility + f * (size_t)num_lights;
+            displace_shadows_visibility(shadows, frame->scene, frag->position, normal, face, seen);
+            if (displace_back_face(surface, shadows, frame, frag->position, face))
+                for (int l = 0; l < num_lights; l++) seen[l] = 0.0f;
             frag->normal = normal;
         }
         meso_shade_fragments(frame, surface->object, fragments + first, n, visibility);

@@ -35,6 +35,14 @@ typedef struct displace_surface {
     const meso_heightfield *heightfield; /* NULL: no mesostructure (h = 1 everywhere) */
     float depth;                         /* world units */
     bool repeat;                         /* height field wraps: uv taken modulo 1 */
+    /* The displaced surface is not closed, so its back faces can show: the base mesh has an
+     * open border (a tube's rim, the teapot's lid), or vertices at one position displace
+     * differently (a sphere's pole: different uvs, different heights). The reference traces
+     * such a surface as it is, both faces, each shaded with its outward normal
+     * (reference_heightfield.c: no cap at the border, no weld at a pole); the geometry
+     * techniques then draw both faces too (set by displace_surface_init, cleared by the
+     * techniques' option both_faces 0). */
+    bool both_faces;
 } displace_surface;
 
 /* Fill from an object; validates that the mesh has UVs when there is a height field. */
@@ -259,6 +267,15 @@ typedef struct displace_shadow_options {
         MESO_OPTION_ROW(MESO_OPTION_BOOL, shadow_pcf, 0, 1, 1,                                     \
                         "2 x 2 bilinear percentage-closer filtering", struct_type, member.pcf)
 
+/* The option-table row of `both_faces` (displace_surface.both_faces), for a struct_type whose
+ * `member` is a bool: both geometry techniques list it. */
+#define DISPLACE_BOTH_FACES_OPTION_ROW(struct_type, member)                                        \
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, both_faces, 0, 1, 1,                                         \
+                    "draw the back faces of an open displaced surface, the inside seen through "   \
+                    "its border (a tube's rim, the teapot's lid gap), as the reference does; 0: "  \
+                    "cull them (faster, background there)",                                        \
+                    struct_type, member)
+
 typedef struct displace_light_map {
     bool active; /* false: the light casts no shadow (visibility 1) */
     meso_mat4 view_projection;
@@ -322,6 +339,26 @@ size_t displace_shadows_memory(const displace_shadows *shadows);
 void displace_shadows_release(displace_shadows *shadows);
 
 /* ---- Shading ------------------------------------------------------------------------------ */
+
+/* A fragment counts as a back face when its triangle faces away from the eye by more than
+ * this (the sine of the angle past edge-on): twice the rasterizer's own margin
+ * (RASTER_BACK_FACE_MARGIN, 0.01), so a triangle seen edge-on, which the rasterizer drew as a
+ * front face with culling on, stays lit. */
+#define DISPLACE_BACK_FACE_MARGIN 0.02f
+
+/* Whether a fragment at `position` on a triangle of unit face normal `face` (outward, by the
+ * winding) shows the triangle's back face, to be shaded in the surface's own shadow: on an
+ * open surface (both_faces) with shadows on. The reference shades such a hit with the outward
+ * normal and traces its shadow rays from the side the eye is on, through the surface itself
+ * toward any light outside; a light inside faces away from the outward normal and adds
+ * nothing either, so direct light never reaches it. */
+static inline bool displace_back_face(const displace_surface *surface,
+                                      const displace_shadows *shadows, const meso_frame *frame,
+                                      meso_vec3 position, meso_vec3 face) {
+    if (!surface->both_faces || shadows->num_lights <= 0) return false;
+    meso_vec3 to = meso_vec3_sub(position, frame->eye);
+    return meso_vec3_dot(to, face) > sqrtf(meso_vec3_dot(to, to)) * DISPLACE_BACK_FACE_MARGIN;
+}
 
 /* Shade fragments of `mesh` (the displaced mesh, whose normals/tangents/bitangents carry the
  * BASE frame): the normal is the height field's (meso_displaced_normal at the fragment's uv,

@@ -246,6 +246,15 @@ static inline void displace_shade_block(const displace_surface *surface,
                 for (int l = 0; l < num_lights; l++)
                     b->visibility[l] =
                         displace_visibility8(shadows, frame->scene, l, position, normal, face);
+                if (surface->both_faces) { /* displace_back_face, per lane */
+                    v8vec3 eye = {v8_splat(frame->eye.x), v8_splat(frame->eye.y),
+                                  v8_splat(frame->eye.z)};
+                    v8vec3 to = {position.x - eye.x, position.y - eye.y, position.z - eye.z};
+                    v8i back =
+                        v8_dot(to, face) > v8_sqrt(v8_dot(to, to)) * DISPLACE_BACK_FACE_MARGIN;
+                    for (int l = 0; l < num_lights; l++)
+                        b->visibility[l] = v8_select(back, v8_splat(0.0f), b->visibility[l]);
+                }
             } else {
                 meso_shade_batch_all_visible(b, frame);
             }
