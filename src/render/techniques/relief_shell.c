@@ -37,8 +37,8 @@ void relief_shell_destroy(relief_shell *shell) {
     free(shell);
 }
 
-meso_result relief_shell_create(meso_context *ctx, const meso_object *object,
-                                const char *technique, relief_shell **out_shell) {
+meso_result relief_shell_create(meso_context *ctx, const meso_object *object, const char *technique,
+                                relief_shell **out_shell) {
     *out_shell = NULL;
     relief_shell *sh = calloc(1, sizeof *sh);
     if (!sh)
@@ -51,8 +51,8 @@ meso_result relief_shell_create(meso_context *ctx, const meso_object *object,
         relief_shell_destroy(sh);
         return r;
     }
-    bool ok = gdm_walk_boundary(sh->layer, &sh->fin_twin, &sh->boundary, &sh->same_uvw,
-                                sh->group_start);
+    bool ok =
+        gdm_walk_boundary(sh->layer, &sh->fin_twin, &sh->boundary, &sh->same_uvw, sh->group_start);
     size_t faces = ok && sh->group_start[3] ? sh->group_start[3] : 1;
     sh->drawn_face = malloc(faces * sizeof *sh->drawn_face);
     sh->drawn_indices = malloc(3 * faces * sizeof *sh->drawn_indices);
@@ -97,8 +97,8 @@ static relief_shell_stretch stretch_between(const relief_shell_search *q, meso_v
                                             meso_vec3 b) {
     float w = (float)q->width, h = (float)q->height;
     float x0 = a.x * w - 0.5f, y0 = (1.0f - a.y) * h - 0.5f;
-    return (relief_shell_stretch){x0,           y0, a.z, b.x * w - 0.5f - x0, (1.0f - b.y) * h - 0.5f - y0,
-                                  b.z - a.z};
+    return (relief_shell_stretch){
+        x0, y0, a.z, b.x * w - 0.5f - x0, (1.0f - b.y) * h - 0.5f - y0, b.z - a.z};
 }
 
 /* The view ray's first hit on a stretch (*out_s): relief mapping's linear search (Policarpo &
@@ -123,8 +123,8 @@ static bool search_stretch(const relief_shell_search *q, const relief_shell_stre
     float inv = 1.0f / (float)n, lo = 0.0f, hi = -1.0f;
     for (int k = 1; k <= n; k++) {
         float s = k == n ? 1.0f : (float)k * inv;
-        bool in = q->inside(q->user, st->x0 + st->xd * s, st->y0 + st->yd * s, st->d0 + st->dd * s,
-                            &f);
+        bool in =
+            q->inside(q->user, st->x0 + st->xd * s, st->y0 + st->yd * s, st->d0 + st->dd * s, &f);
         if (in || (k == n && at_floor)) {
             hi = s, f_hi = f > 0.0f ? f : 0.0f;
             break;
@@ -199,8 +199,8 @@ static bool walk_view(const relief_shell *sh, const relief_shell_search *q, cons
         if (c.t_exit > 0.0f || c.exit_slot == MESO_PRISM_BOTTOM) {
             relief_shell_stretch st = stretch_between(q, t_in, t_out);
             float s;
-            if (search_stretch(q, &st, c.exit_slot == MESO_PRISM_BOTTOM && q->floor_solid,
-                               &f_start, &s)) {
+            if (search_stretch(q, &st, c.exit_slot == MESO_PRISM_BOTTOM && q->floor_solid, &f_start,
+                               &s)) {
                 out->uvw = meso_vec3_add(t_in, meso_vec3_scale(meso_vec3_sub(t_out, t_in), s));
                 /* on the ray itself (its depth and the light rays' start), the (u, v, w) path's
                  * point at s mapped there */
@@ -260,8 +260,8 @@ static relief_shell_frame frame_at(const relief_shell *sh, const meso_prism *pri
     const uint32_t *vx = prism->vertices;
     relief_shell_frame f;
     f.depth = sh->depth;
-    f.normal = meso_vec3_normalize(meso_vec3_barycentric(
-        mesh->normals[vx[0]], mesh->normals[vx[1]], mesh->normals[vx[2]], b[0], b[1], b[2]));
+    f.normal = meso_vec3_normalize(meso_vec3_barycentric(mesh->normals[vx[0]], mesh->normals[vx[1]],
+                                                         mesh->normals[vx[2]], b[0], b[1], b[2]));
     if (mesh->tangents && mesh->bitangents) {
         f.tangent = meso_vec3_barycentric(mesh->tangents[vx[0]], mesh->tangents[vx[1]],
                                           mesh->tangents[vx[2]], b[0], b[1], b[2]);
@@ -274,11 +274,13 @@ static relief_shell_frame frame_at(const relief_shell *sh, const meso_prism *pri
         f.tangent = meso_vec3_add(meso_vec3_scale(e1, inv[0]), meso_vec3_scale(e2, inv[2]));
         f.bitangent = meso_vec3_add(meso_vec3_scale(e1, inv[1]), meso_vec3_scale(e2, inv[3]));
     }
-    meso_vec3 bn = meso_vec3_cross(f.bitangent, f.normal), nt = meso_vec3_cross(f.normal, f.tangent);
+    meso_vec3 bn = meso_vec3_cross(f.bitangent, f.normal),
+              nt = meso_vec3_cross(f.normal, f.tangent);
     meso_vec3 tb = meso_vec3_cross(f.tangent, f.bitangent);
     float det = meso_vec3_dot(f.tangent, bn);
     float inv = det > 1e-20f || det < -1e-20f ? 1.0f / det : 0.0f;
-    f.bn = meso_vec3_scale(bn, inv), f.nt = meso_vec3_scale(nt, inv), f.tb = meso_vec3_scale(tb, inv);
+    f.bn = meso_vec3_scale(bn, inv), f.nt = meso_vec3_scale(nt, inv),
+    f.tb = meso_vec3_scale(tb, inv);
     return f;
 }
 
@@ -362,8 +364,8 @@ void relief_shell_shade_block(const relief_shell *shell, const relief_shell_sear
                               meso_fragment_block *block) {
     meso_fragment fragments[RELIEF_SHELL_CHUNK];
     for (size_t start = 0; start < block->count; start += RELIEF_SHELL_CHUNK) {
-        size_t n = block->count - start < RELIEF_SHELL_CHUNK ? block->count - start
-                                                             : RELIEF_SHELL_CHUNK;
+        size_t n =
+            block->count - start < RELIEF_SHELL_CHUNK ? block->count - start : RELIEF_SHELL_CHUNK;
         for (size_t k = 0; k < n; k++) meso_fragment_block_get(block, start + k, &fragments[k]);
         shade_array(shell, search, frame, object, fragments, n);
         for (size_t k = 0; k < n; k++) {

@@ -53,8 +53,7 @@ typedef struct relief_shell_search {
     bool (*inside)(const void *user, float x, float y, float d, float *out_f);
     /* Optional: the technique's own exact trace of a stretch, the first s in [0, 1] where the
      * point lies `bias` or more inside; false: none. NULL: the linear + binary search below. */
-    bool (*trace)(const void *user, const relief_shell_stretch *stretch, float bias,
-                  float *out_s);
+    bool (*trace)(const void *user, const relief_shell_stretch *stretch, float bias, float *out_s);
     /* The unit world normal at the hit (x, y, d), given the base frame there. */
     meso_vec3 (*normal)(const void *user, float x, float y, float d, const relief_shell_frame *f);
     /* Relief mapping's steps, per unit of depth crossed: a stretch that goes down dd of the
@@ -70,8 +69,8 @@ typedef struct relief_shell_search {
 /* The shell of the object's mesh (its UVs and normals) at its mesostructure's depth: the prism
  * layer, the fin twins and the boundary faces. `technique` names the caller in messages.
  * MESO_ERROR_INVALID_ARGUMENT (no UVs), MESO_ERROR_LIMIT, MESO_ERROR_OUT_OF_MEMORY. */
-meso_result relief_shell_create(meso_context *ctx, const meso_object *object,
-                                const char *technique, relief_shell **out_shell);
+meso_result relief_shell_create(meso_context *ctx, const meso_object *object, const char *technique,
+                                relief_shell **out_shell);
 void relief_shell_destroy(relief_shell *shell);
 size_t relief_shell_memory(const relief_shell *shell);
 
