@@ -105,9 +105,9 @@ static bool shell_inside(const void *user, float x, float y, float d, float *out
     return relief_shell_heights_inside(&((const relief_state *)user)->heights, x, y, d, out_f);
 }
 
-static meso_vec3 shell_normal(const void *user, float x, float y, float d,
+static meso_vec3 shell_normal(const void *user, float x, float y, float d, bool upward,
                               const relief_shell_frame *f) {
-    (void)d;
+    (void)d, (void)upward;
     return relief_shell_heights_normal(&((const relief_state *)user)->heights, x, y, f);
 }
 

@@ -790,9 +790,9 @@ static bool shell_trace(const void *user, const relief_shell_stretch *st, float 
     return true;
 }
 
-static meso_vec3 shell_normal(const void *user, float x, float y, float d,
+static meso_vec3 shell_normal(const void *user, float x, float y, float d, bool upward,
                               const relief_shell_frame *f) {
-    (void)d;
+    (void)d, (void)upward;
     return relief_shell_heights_normal(&((const exact_state *)user)->heights, x, y, f);
 }
 

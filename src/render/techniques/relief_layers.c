@@ -634,29 +634,30 @@ static bool shell_inside(const void *user, float x, float y, float d, float *out
 }
 
 /* The hit's normal: a height field's gradient (as relief; normal() says why not the baked
- * normals); a solid's nearest texel's layer nearest in depth, (x, y, z) to world space as
- * normal() does, through the base frame at the hit. */
-static meso_vec3 shell_normal(const void *user, float x, float y, float d,
+ * normals); a solid's from the nearest texel's layer nearest in depth among those the ray can
+ * meet going its way -- entries (even layers, facing up) going down, exits (odd, facing down)
+ * going up, as the far wall of a closed mesh is seen from inside -- (x, y, +-z) to world space
+ * as normal() does, through the base frame at the hit. */
+static meso_vec3 shell_normal(const void *user, float x, float y, float d, bool upward,
                               const relief_shell_frame *f) {
     const layers_state *s = user;
     if (s->heightfield) return relief_shell_heights_normal(&s->size, x, y, f);
     layers_cell c = layers_locate8(s, v8_splat(x), v8_splat(y));
     int index = c.nearest[0];
     float nx = 0.0f, ny = 0.0f, best = 3.0f;
-    for (int k = 0; k < s->num_layers; k += 2) { /* entries: the even layers */
+    for (int k = upward ? 1 : 0; k < s->num_layers; k += 2) {
         float D = s->depth[k][index], gap = fabsf(d - D);
         if (gap < best && D < 1.0f) nx = s->nx[k][index], ny = s->ny[k][index], best = gap;
     }
-    if (!(best < 2.0f)) return f->normal;
+    if (!(best < 2.0f)) return upward ? meso_vec3_negate(f->normal) : f->normal;
     float nz = sqrtf(fmaxf(0.0f, 1.0f - (nx * nx + ny * ny)));
     float inv_depth = f->depth > 0.0f ? 1.0f / f->depth : 0.0f;
     meso_vec3 n =
         meso_vec3_add(meso_vec3_add(meso_vec3_scale(f->bn, nx), meso_vec3_scale(f->nt, ny)),
-                      meso_vec3_scale(f->tb, nz * inv_depth));
+                      meso_vec3_scale(f->tb, (upward ? -nz : nz) * inv_depth));
     float len2 = meso_vec3_dot(n, n);
-    if (!(len2 > 1e-30f && len2 < 1e30f)) return f->normal;
-    n = meso_vec3_scale(n, 1.0f / sqrtf(len2));
-    return meso_vec3_dot(n, f->normal) < 0.0f ? meso_vec3_negate(n) : n;
+    if (!(len2 > 1e-30f && len2 < 1e30f)) return upward ? meso_vec3_negate(f->normal) : f->normal;
+    return meso_vec3_scale(n, 1.0f / sqrtf(len2));
 }
 
 static meso_result geometry(meso_context *ctx, void *state, const meso_frame *frame,

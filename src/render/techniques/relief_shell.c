@@ -22,6 +22,7 @@ struct relief_shell {
     float *sort_keys;
     size_t group_start[4];
     meso_mesh drawn; /* the layer's vertex arrays, drawn_indices */
+    bool closed;     /* every fin has its twin: the base mesh has no open border */
 };
 
 void relief_shell_destroy(relief_shell *shell) {
@@ -66,6 +67,10 @@ meso_result relief_shell_create(meso_context *ctx, const meso_object *object, co
     sh->drawn = *sh->layer->faces;
     sh->drawn.indices = sh->drawn_indices;
     sh->drawn.num_triangles = sh->group_start[3];
+    size_t n = sh->layer->num_prisms;
+    sh->closed = true;
+    for (size_t f = n; f < 7 * n && sh->closed; f++)
+        sh->closed = sh->layer->prisms[(f - n) / 6].valid ? sh->fin_twin[f] != GDM_NO_TWIN : true;
     *out_shell = sh;
     return MESO_OK;
 }
@@ -151,15 +156,22 @@ static bool search_stretch(const relief_shell_search *q, const relief_shell_stre
 }
 
 /* Does a stretch of a light ray pass through the mesostructure (a sample more than the bias
- * inside: relief's second linear search, its share of the steps; or the exact trace)? The
- * stretch's start (the hit, or the last stretch's end) is not sampled. */
-static bool shadow_stretch(const relief_shell_search *q, const relief_shell_stretch *st) {
+ * inside: relief's second linear search with its share of the steps, or the exact trace)? The
+ * stretch's start (the hit, or the last stretch's end) is not sampled, nor are samples nearer
+ * the hit than `skip` (world units; `from`: the stretch's start's distance from the hit,
+ * `length`: its length). Off the shell the first sample lies 1 / shadow_steps of the way from
+ * the hit to the top; the search's hit lies on the inside end of its bracket, up to a
+ * bracket's width inside, and samples much nearer than that found the hit's own surface more
+ * than the bias inside (dark specks over weave-torus where a hit lay near a fin). */
+static bool shadow_stretch(const relief_shell_search *q, const relief_shell_stretch *st, float from,
+                           float length, float skip) {
     float s, f;
     if (q->trace) return q->trace(q->user, st, q->shadow_bias, &s);
     int n = stretch_steps(q->shadow_steps, st->dd);
     float inv = 1.0f / (float)n;
     for (int k = 1; k <= n; k++) {
         s = k == n ? 1.0f : (float)k * inv;
+        if (from + s * length < skip) continue;
         q->inside(q->user, st->x0 + st->xd * s, st->y0 + st->yd * s, st->d0 + st->dd * s, &f);
         if (f > q->shadow_bias) return true;
     }
@@ -171,6 +183,7 @@ static bool shadow_stretch(const relief_shell_search *q, const relief_shell_stre
 typedef struct shell_hit {
     meso_vec3 position, uvw;
     size_t prism;
+    bool upward; /* the view ray's w decreasing there */
 } shell_hit;
 
 /* The view ray of a fragment of boundary face `face` walked front to back through the prisms
@@ -206,6 +219,7 @@ static bool walk_view(const relief_shell *sh, const relief_shell_search *q, cons
                  * point at s mapped there */
                 out->position = meso_vec3_madd(c.p_in, view, s * c.t_exit);
                 out->prism = c.prism;
+                out->upward = st.dd < 0.0f;
                 return true;
             }
         }
@@ -222,27 +236,37 @@ static bool walk_view(const relief_shell *sh, const relief_shell_search *q, cons
 }
 
 /* The light ray from a hit toward unit direction l walked through the shell: blocked where a
- * stretch passes through the mesostructure, or where it leaves through a solid floor; lit
- * where it leaves through a top or an open border's fin (past them the shell holds nothing). */
+ * stretch passes through the mesostructure, or where it leaves through the bottom into a
+ * height field's body, a solid's filled floor (as gdm's walk takes it) or a closed mesh's
+ * inside (light reaches it only through the shell's other side, which the walk does not
+ * follow: taken as blocked, relief_layers' rule for a closed mesh's far wall); lit where it
+ * leaves through a top or an open border's fin. `skip`: see shadow_stretch. */
 static bool light_blocked(const relief_shell *sh, const relief_shell_search *q, const shell_hit *h,
-                          meso_vec3 l) {
+                          meso_vec3 l, float skip) {
     const meso_prism_layer *layer = sh->layer;
     gdm_walk_crossing c = {.prism = h->prism,
                            .entry_face = meso_prism_layer_face(layer, h->prism, MESO_PRISM_TOP),
                            .entry_slot = -1,
                            .p_in = h->position};
     meso_vec3 t_in = h->uvw;
+    float from = 0.0f;
     if (!gdm_walk_exit(layer, &c, l)) return false;
     for (int n = 0; n < RELIEF_SHELL_MAX_PRISMS; n++) {
         size_t exit_face = meso_prism_layer_face(layer, c.prism, c.exit_slot);
         meso_vec3 t_out = meso_prism_layer_face_uvw(layer, exit_face, c.p_out);
         if (c.t_exit > 0.0f) {
             relief_shell_stretch st = stretch_between(q, t_in, t_out);
-            if (shadow_stretch(q, &st)) return true;
+            if (shadow_stretch(q, &st, from, c.t_exit, skip)) return true;
+            from += c.t_exit;
         }
         int exit_slot = c.exit_slot;
-        if (!gdm_walk_next(layer, sh->fin_twin, &c))
-            return exit_slot == MESO_PRISM_BOTTOM && q->floor_solid;
+        if (!gdm_walk_next(layer, sh->fin_twin, &c)) {
+            if (exit_slot != MESO_PRISM_BOTTOM) return false;
+            if (q->floor_solid || sh->closed) return true;
+            float f, x = t_out.x * (float)q->width - 0.5f;
+            float y = (1.0f - t_out.y) * (float)q->height - 0.5f;
+            return q->inside(q->user, x, y, 1.0f - 1e-3f, &f);
+        }
         t_in = sh->same_uvw[exit_face] ? t_out
                                        : meso_prism_layer_face_uvw(layer, c.entry_face, c.p_in);
         if (!gdm_walk_exit(layer, &c, l)) return false;
@@ -306,7 +330,7 @@ static bool shade_fragment(const relief_shell *sh, const relief_shell_search *q,
     const meso_prism *prism = &sh->layer->prisms[h.prism];
     relief_shell_frame base = frame_at(sh, prism, h.uvw.x, h.uvw.y);
     float x = h.uvw.x * (float)q->width - 0.5f, y = (1.0f - h.uvw.y) * (float)q->height - 0.5f;
-    meso_vec3 normal = q->normal(q->user, x, y, h.uvw.z, &base);
+    meso_vec3 normal = q->normal(q->user, x, y, h.uvw.z, h.upward, &base);
     float depth = meso_vec3_dot(meso_vec3_sub(h.position, frame->eye), frame->forward);
     f->out_depth = depth > f->depth ? depth : f->depth; /* never nearer than the entry */
     f->position = h.position;
@@ -320,7 +344,10 @@ static bool shade_fragment(const relief_shell *sh, const relief_shell_search *q,
         if (!q->shadows) continue;
         meso_vec3 l = meso_light_direction(&scene->lights[li], h.position);
         if (meso_vec3_dot(l, normal) <= 0.0f) continue; /* unlit anyway */
-        if (light_blocked(sh, q, &h, l)) visibility[li] = 0.0f;
+        /* off the shell's first sample: 1 / shadow_steps of the way up to the top */
+        float up = fmaxf(meso_vec3_dot(l, base.normal), 0.05f);
+        float skip = h.uvw.z * sh->depth / (up * (float)q->shadow_steps);
+        if (light_blocked(sh, q, &h, l, skip)) visibility[li] = 0.0f;
     }
     return true;
 }

@@ -54,8 +54,10 @@ typedef struct relief_shell_search {
     /* Optional: the technique's own exact trace of a stretch, the first s in [0, 1] where the
      * point lies `bias` or more inside; false: none. NULL: the linear + binary search below. */
     bool (*trace)(const void *user, const relief_shell_stretch *stretch, float bias, float *out_s);
-    /* The unit world normal at the hit (x, y, d), given the base frame there. */
-    meso_vec3 (*normal)(const void *user, float x, float y, float d, const relief_shell_frame *f);
+    /* The unit world normal at the hit (x, y, d), given the base frame there; upward: the ray
+     * met it going up (w decreasing: from the shell's bottom, a solid's underside). */
+    meso_vec3 (*normal)(const void *user, float x, float y, float d, bool upward,
+                        const relief_shell_frame *f);
     /* Relief mapping's steps, per unit of depth crossed: a stretch that goes down dd of the
      * shell takes ceil(linear_steps |dd|) (at least 1) uniform steps, then binary_steps
      * halvings and a secant step -- a whole ray from the top to the floor as many as the
