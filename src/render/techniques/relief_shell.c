@@ -212,8 +212,16 @@ static bool walk_view(const relief_shell *sh, const relief_shell_search *q, cons
         if (c.t_exit > 0.0f || c.exit_slot == MESO_PRISM_BOTTOM) {
             relief_shell_stretch st = stretch_between(q, t_in, t_out);
             float s;
+            bool first = isnan(f_start);
             if (search_stretch(q, &st, c.exit_slot == MESO_PRISM_BOTTOM && q->floor_solid, &f_start,
                                &s)) {
+                /* A height field's ray that enters through an open border's fin below the
+                 * surface runs under it: the reference's surface is a sheet with no wall
+                 * down the shell's cut (docs/design.md, "Measuring against the truth"), and
+                 * neither is there one here (a solid's cut is capped, as the reference's). */
+                if (first && s == 0.0f && q->floor_solid && c.entry_slot >= MESO_PRISM_FIN &&
+                    n == 0)
+                    return false;
                 out->uvw = meso_vec3_add(t_in, meso_vec3_scale(meso_vec3_sub(t_out, t_in), s));
                 /* on the ray itself (its depth and the light rays' start), the (u, v, w) path's
                  * point at s mapped there */
