@@ -115,10 +115,10 @@ static void test_constant_field_on_a_plane_adds_exactly_the_side_band(void **sta
                 missing += covered(truth, x, y) && !covered_near(on, x, y);
             }
         if (verbose())
-            printf("%s: interior %ld (lost %ld, %ld differ, depth off by %.2g of the shell), side band %ld (%ld off the truth), "
+            printf("%s: interior %ld (lost %ld, %ld differ, depth off by %.2g of the shell), side "
+                   "band %ld (%ld off the truth), "
                    "truth pixels not drawn %ld\n",
-                   techniques[t], interior, lost, differ, (double)worst, band, band_stray,
-                   missing);
+                   techniques[t], interior, lost, differ, (double)worst, band, band_stray, missing);
         if (lost || differ)
             fail_msg("%s: shell 1 lost %ld of shell 0's %ld pixels, %ld differ", techniques[t],
                      lost, interior, differ);
