@@ -105,6 +105,10 @@ static bool shell_inside(const void *user, float x, float y, float d, float *out
     return relief_shell_heights_inside(&((const relief_state *)user)->heights, x, y, d, out_f);
 }
 
+static int shell_inside8(const void *user, const v8f *x, const v8f *y, const v8f *d, v8f *out_f) {
+    return relief_shell_heights_inside8(&((const relief_state *)user)->heights, *x, *y, *d, out_f);
+}
+
 static meso_vec3 shell_normal(const void *user, float x, float y, float d, bool upward,
                               const relief_shell_frame *f) {
     (void)d, (void)upward;
@@ -116,6 +120,7 @@ static relief_shell_search shell_search(const relief_state *s) {
                                  .width = s->heights.width,
                                  .height = s->heights.height,
                                  .inside = shell_inside,
+                                 .inside8 = shell_inside8,
                                  .normal = shell_normal,
                                  .linear_steps = s->options.linear_steps,
                                  .binary_steps = s->options.binary_steps,

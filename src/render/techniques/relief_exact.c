@@ -768,6 +768,10 @@ static bool shell_inside(const void *user, float x, float y, float d, float *out
     return relief_shell_heights_inside(&((const exact_state *)user)->heights, x, y, d, out_f);
 }
 
+static int shell_inside8(const void *user, const v8f *x, const v8f *y, const v8f *d, v8f *out_f) {
+    return relief_shell_heights_inside8(&((const exact_state *)user)->heights, *x, *y, *d, out_f);
+}
+
 /* Tevs et al.'s traversal (trace_any) of a stretch: depth d0 + s dd, s in [0, 1], the start
  * wrapped into the first tile as view_rays does. */
 static bool shell_trace(const void *user, const relief_shell_stretch *st, float bias,
@@ -802,6 +806,7 @@ static relief_shell_search shell_search(const exact_state *s) {
                                  .width = s->heights.width,
                                  .height = s->heights.height,
                                  .inside = shell_inside,
+                                 .inside8 = shell_inside8,
                                  .trace = s->heights.clamp ? NULL : shell_trace,
                                  .normal = shell_normal,
                                  .linear_steps = CLAMP_LINEAR_STEPS,

@@ -633,6 +633,10 @@ static bool shell_inside(const void *user, float x, float y, float d, float *out
     return in[0] != 0;
 }
 
+static int shell_inside8(const void *user, const v8f *x, const v8f *y, const v8f *d, v8f *out_f) {
+    return v8_mask_bits(layers_inside8(user, *x, *y, *d, out_f));
+}
+
 /* The hit's normal: a height field's gradient (as relief; normal() says why not the baked
  * normals); a solid's from the nearest texel's layer nearest in depth among those the ray can
  * meet going its way -- entries (even layers, facing up) going down, exits (odd, facing down)
@@ -679,6 +683,7 @@ static void shade(const void *state, const meso_frame *frame, const meso_object 
                                  .width = s->size.width,
                                  .height = s->size.height,
                                  .inside = shell_inside,
+                                 .inside8 = shell_inside8,
                                  .normal = shell_normal,
                                  .linear_steps = s->linear_steps,
                                  .binary_steps = s->binary_steps,

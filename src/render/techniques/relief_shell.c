@@ -126,15 +126,27 @@ static bool search_stretch(const relief_shell_search *q, const relief_shell_stre
     }
     int n = stretch_steps(q->linear_steps, st->dd);
     float inv = 1.0f / (float)n, lo = 0.0f, hi = -1.0f;
-    for (int k = 1; k <= n; k++) {
-        float s = k == n ? 1.0f : (float)k * inv;
-        bool in =
-            q->inside(q->user, st->x0 + st->xd * s, st->y0 + st->yd * s, st->d0 + st->dd * s, &f);
-        if (in || (k == n && at_floor)) {
-            hi = s, f_hi = f > 0.0f ? f : 0.0f;
-            break;
+    for (int first = 1; first <= n && hi < 0.0f; first += RELIEF_LANES) {
+        /* samples first .. first + 7 at once (past n: repeats of the end, not looked at) */
+        int count = n - first + 1 < RELIEF_LANES ? n - first + 1 : RELIEF_LANES;
+        v8f sv, fv;
+        for (int j = 0; j < RELIEF_LANES; j++) {
+            int k = first + j;
+            sv[j] = k >= n ? 1.0f : (float)k * inv;
         }
-        lo = s, f_lo = f;
+        v8f x = v8_splat(st->x0) + v8_splat(st->xd) * sv,
+            y = v8_splat(st->y0) + v8_splat(st->yd) * sv;
+        v8f d = v8_splat(st->d0) + v8_splat(st->dd) * sv;
+        int in = q->inside8(q->user, &x, &y, &d, &fv);
+        if (at_floor && first + count - 1 == n) in |= 1 << (count - 1);
+        in &= (1 << count) - 1;
+        if (!in) {
+            lo = sv[count - 1], f_lo = fv[count - 1];
+            continue;
+        }
+        int j = __builtin_ctz((unsigned)in);
+        if (j > 0) lo = sv[j - 1], f_lo = fv[j - 1];
+        hi = sv[j], f_hi = fv[j] > 0.0f ? fv[j] : 0.0f;
     }
     if (hi < 0.0f) {
         *f_start = f_lo;
@@ -165,15 +177,25 @@ static bool search_stretch(const relief_shell_search *q, const relief_shell_stre
  * than the bias inside (dark specks over weave-torus where a hit lay near a fin). */
 static bool shadow_stretch(const relief_shell_search *q, const relief_shell_stretch *st, float from,
                            float length, float skip) {
-    float s, f;
+    float s;
     if (q->trace) return q->trace(q->user, st, q->shadow_bias, &s);
     int n = stretch_steps(q->shadow_steps, st->dd);
     float inv = 1.0f / (float)n;
-    for (int k = 1; k <= n; k++) {
-        s = k == n ? 1.0f : (float)k * inv;
-        if (from + s * length < skip) continue;
-        q->inside(q->user, st->x0 + st->xd * s, st->y0 + st->yd * s, st->d0 + st->dd * s, &f);
-        if (f > q->shadow_bias) return true;
+    for (int first = 1; first <= n; first += RELIEF_LANES) {
+        int count = n - first + 1 < RELIEF_LANES ? n - first + 1 : RELIEF_LANES, near = 0;
+        int lanes = (1 << count) - 1;
+        v8f sv, fv;
+        for (int j = 0; j < RELIEF_LANES; j++) {
+            int k = first + j;
+            sv[j] = k >= n ? 1.0f : (float)k * inv;
+            near |= (from + sv[j] * length < skip) << j;
+        }
+        if ((near & lanes) == lanes) continue;
+        v8f x = v8_splat(st->x0) + v8_splat(st->xd) * sv,
+            y = v8_splat(st->y0) + v8_splat(st->yd) * sv;
+        v8f d = v8_splat(st->d0) + v8_splat(st->dd) * sv;
+        q->inside8(q->user, &x, &y, &d, &fv);
+        if (v8_mask_bits(fv > q->shadow_bias) & ~near & lanes) return true;
     }
     return false;
 }

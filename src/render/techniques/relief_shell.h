@@ -51,6 +51,11 @@ typedef struct relief_shell_search {
     /* Inside the mesostructure at (x, y, d)? *out_f: the secant step's signed distance in depth
      * (>= 0 inside; a height field's d + h - 1). */
     bool (*inside)(const void *user, float x, float y, float d, float *out_f);
+    /* The same test at eight points at once (the same bits lane by lane): the bits of the
+     * lanes inside, *out_f per lane. The linear searches' samples go through it. Vectors by
+     * pointer: the technique's copy is built for AVX2 and relief_shell.c is not, and the two
+     * pass a 32-byte vector by value differently. */
+    int (*inside8)(const void *user, const v8f *x, const v8f *y, const v8f *d, v8f *out_f);
     /* Optional: the technique's own exact trace of a stretch, the first s in [0, 1] where the
      * point lies `bias` or more inside; false: none. NULL: the linear + binary search below. */
     bool (*trace)(const void *user, const relief_shell_stretch *stretch, float bias, float *out_s);
@@ -115,6 +120,13 @@ static inline bool relief_shell_heights_inside(const relief_heights *m, float x,
                                                float *out_f) {
     *out_f = d + relief_shell_sample(m, x, y) - 1.0f;
     return *out_f >= 0.0f;
+}
+
+/* relief_shell_heights_inside at eight points (relief_sample8: the same bits). */
+static inline int relief_shell_heights_inside8(const relief_heights *m, v8f x, v8f y, v8f d,
+                                               v8f *out_f) {
+    *out_f = d + relief_sample8(m, x, y) - 1.0f;
+    return v8_mask_bits(*out_f >= 0.0f);
 }
 
 /* The height field's normal at (x, y) (relief_gradient8's central differences, the gradient's
