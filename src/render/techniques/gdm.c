@@ -580,24 +580,8 @@ typedef struct texture_frame {
 
 static texture_frame frame_at(const meso_mesh *mesh, const meso_prism *prism, meso_vec2 uv,
                               float depth) {
-    float b[3];
-    meso_prism_weights(prism, uv, b);
-    const uint32_t *v = prism->vertices;
     texture_frame f;
-    f.normal = meso_vec3_normalize(meso_vec3_barycentric(mesh->normals[v[0]], mesh->normals[v[1]],
-                                                         mesh->normals[v[2]], b[0], b[1], b[2]));
-    if (mesh->tangents && mesh->bitangents) {
-        f.tangent = meso_vec3_barycentric(mesh->tangents[v[0]], mesh->tangents[v[1]],
-                                          mesh->tangents[v[2]], b[0], b[1], b[2]);
-        f.bitangent = meso_vec3_barycentric(mesh->bitangents[v[0]], mesh->bitangents[v[1]],
-                                            mesh->bitangents[v[2]], b[0], b[1], b[2]);
-    } else { /* the flat triangle's dP/du, dP/dv from the UV inverse */
-        const float *inv = prism->uv_inverse;
-        meso_vec3 e1 = meso_vec3_sub(mesh->positions[v[1]], mesh->positions[v[0]]);
-        meso_vec3 e2 = meso_vec3_sub(mesh->positions[v[2]], mesh->positions[v[0]]);
-        f.tangent = meso_vec3_add(meso_vec3_scale(e1, inv[0]), meso_vec3_scale(e2, inv[2]));
-        f.bitangent = meso_vec3_add(meso_vec3_scale(e1, inv[1]), meso_vec3_scale(e2, inv[3]));
-    }
+    gdm_walk_base_frame(mesh, prism, uv, &f.normal, &f.tangent, &f.bitangent);
     meso_vec3 jw = meso_vec3_scale(f.normal, -depth);
     f.cu = meso_vec3_cross(f.bitangent, jw);
     f.cv = meso_vec3_cross(jw, f.tangent);

@@ -186,6 +186,32 @@ void gdm_walk_sort_faces(const meso_mesh *faces, const uint32_t *boundary,
                          const size_t group_start[4], meso_vec3 eye, meso_vec3 forward, float *keys,
                          uint32_t *count, uint32_t *drawn_face, uint32_t *drawn_indices);
 
+/* The base surface's frame at (u, v) of a prism: the mesh's unit normal, dP/du and dP/dv
+ * interpolated by the point's barycentrics, or the flat triangle's dP/du, dP/dv (from the UV
+ * inverse) where the mesh has no tangents. gdm's and the relief family's shell (relief_shell.h)
+ * shade a hit in it. */
+static inline void gdm_walk_base_frame(const meso_mesh *mesh, const meso_prism *prism, meso_vec2 uv,
+                                       meso_vec3 *normal, meso_vec3 *tangent,
+                                       meso_vec3 *bitangent) {
+    float b[3];
+    meso_prism_weights(prism, uv, b);
+    const uint32_t *v = prism->vertices;
+    *normal = meso_vec3_normalize(meso_vec3_barycentric(mesh->normals[v[0]], mesh->normals[v[1]],
+                                                        mesh->normals[v[2]], b[0], b[1], b[2]));
+    if (mesh->tangents && mesh->bitangents) {
+        *tangent = meso_vec3_barycentric(mesh->tangents[v[0]], mesh->tangents[v[1]],
+                                         mesh->tangents[v[2]], b[0], b[1], b[2]);
+        *bitangent = meso_vec3_barycentric(mesh->bitangents[v[0]], mesh->bitangents[v[1]],
+                                           mesh->bitangents[v[2]], b[0], b[1], b[2]);
+    } else {
+        const float *inv = prism->uv_inverse;
+        meso_vec3 e1 = meso_vec3_sub(mesh->positions[v[1]], mesh->positions[v[0]]);
+        meso_vec3 e2 = meso_vec3_sub(mesh->positions[v[2]], mesh->positions[v[0]]);
+        *tangent = meso_vec3_add(meso_vec3_scale(e1, inv[0]), meso_vec3_scale(e2, inv[2]));
+        *bitangent = meso_vec3_add(meso_vec3_scale(e1, inv[1]), meso_vec3_scale(e2, inv[3]));
+    }
+}
+
 /* A fragment of drawn face `face` (barycentrics b0..b2, position on the face): the ray's entry
  * (u, v, w) on the face, perspective-correct, its unit direction from the eye, and the
  * crossing of the face's prism: Fig. 5's exit (walk false, the per-prism drawing) or the

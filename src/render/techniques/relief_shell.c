@@ -304,30 +304,13 @@ static bool light_blocked(const relief_shell *sh, const relief_shell_search *q, 
     return false;
 }
 
-/* The base frame at (u, v) of a prism (relief_shell_frame): the mesh's normals and tangents
- * interpolated, or the flat triangle's dP/du, dP/dv where it has none. */
+/* The base frame at (u, v) of a prism (relief_shell_frame, gdm_walk_base_frame) with its dual
+ * basis. */
 static relief_shell_frame frame_at(const relief_shell *sh, const meso_prism *prism, float u,
                                    float v) {
-    const meso_mesh *mesh = sh->mesh;
-    float b[3];
-    meso_prism_weights(prism, (meso_vec2){u, v}, b);
-    const uint32_t *vx = prism->vertices;
     relief_shell_frame f;
     f.depth = sh->depth;
-    f.normal = meso_vec3_normalize(meso_vec3_barycentric(mesh->normals[vx[0]], mesh->normals[vx[1]],
-                                                         mesh->normals[vx[2]], b[0], b[1], b[2]));
-    if (mesh->tangents && mesh->bitangents) {
-        f.tangent = meso_vec3_barycentric(mesh->tangents[vx[0]], mesh->tangents[vx[1]],
-                                          mesh->tangents[vx[2]], b[0], b[1], b[2]);
-        f.bitangent = meso_vec3_barycentric(mesh->bitangents[vx[0]], mesh->bitangents[vx[1]],
-                                            mesh->bitangents[vx[2]], b[0], b[1], b[2]);
-    } else {
-        const float *inv = prism->uv_inverse;
-        meso_vec3 e1 = meso_vec3_sub(mesh->positions[vx[1]], mesh->positions[vx[0]]);
-        meso_vec3 e2 = meso_vec3_sub(mesh->positions[vx[2]], mesh->positions[vx[0]]);
-        f.tangent = meso_vec3_add(meso_vec3_scale(e1, inv[0]), meso_vec3_scale(e2, inv[2]));
-        f.bitangent = meso_vec3_add(meso_vec3_scale(e1, inv[1]), meso_vec3_scale(e2, inv[3]));
-    }
+    gdm_walk_base_frame(sh->mesh, prism, (meso_vec2){u, v}, &f.normal, &f.tangent, &f.bitangent);
     meso_vec3 bn = meso_vec3_cross(f.bitangent, f.normal),
               nt = meso_vec3_cross(f.normal, f.tangent);
     meso_vec3 tb = meso_vec3_cross(f.tangent, f.bitangent);
