@@ -55,6 +55,10 @@ typedef struct views_limit {
     "or bar seen through a gap of the near wall (a thin part the linear search steps over, or "    \
     "a ray that leaves through the bottom and meets the far wall; "                                \
     "docs/techniques/relief_layers.md)"
+#define SHELL_RIM                                                                                  \
+    "a height field's shell at a tube's open rim: a ray that enters the rim's fin under the "      \
+    "surface is a miss (the truth's surface has no wall there), where the truth meets the "        \
+    "sheet's other side farther on (docs/techniques/relief.md, On the shell)"
 #define HORIZON_AZIMUTHS                                                                           \
     "horizon maps keep the horizon in a few azimuths: a texel lit where the truth's is shadowed "  \
     "(Max 1988; Sloan & Cohen 2000)"
@@ -94,6 +98,9 @@ static const views_limit views_limits[] = {
     {"chainmail-plane", "gdm", GDM_SOLIDS},
     {"cones-sphere-deep", "displacement", OPEN_BORDER},
     {"cones-sphere-deep", "tessellation", OPEN_BORDER},
+    {"bark-cylinder", "relief:shell=1", SHELL_RIM},
+    {"bark-cylinder", "relief_exact:shell=1", SHELL_RIM},
+    {"bark-cylinder", "relief_layers:shell=1", SHELL_RIM},
     {"chainmail-plane", "relief_layers:shell=1", SHELL_SOLIDS},
     {"grid-vase", "relief_layers:shell=1", SHELL_SOLIDS},
     {"weave-teapot", "relief_layers:shell=1", SHELL_SOLIDS},
