@@ -106,22 +106,71 @@ static relief_shell_stretch stretch_between(const relief_shell_search *q, meso_v
         x0, y0, a.z, b.x * w - 0.5f - x0, (1.0f - b.y) * h - 0.5f - y0, b.z - a.z};
 }
 
+/* Under a height field's surface (a ray that entered an open border's fin below it, `under`
+ * in search_stretch): the first sample of the stretch that is outside, *out_s, its f in
+ * *out_f; false: none (still under at the stretch's end). */
+static bool leave_under(const relief_shell_search *q, const relief_shell_stretch *st, float *out_s,
+                        float *out_f) {
+    int n = stretch_steps(q->linear_steps, st->dd);
+    float inv = 1.0f / (float)n;
+    for (int first = 1; first <= n; first += RELIEF_LANES) {
+        int count = n - first + 1 < RELIEF_LANES ? n - first + 1 : RELIEF_LANES;
+        v8f sv, fv;
+        for (int j = 0; j < RELIEF_LANES; j++) {
+            int k = first + j;
+            sv[j] = k >= n ? 1.0f : (float)k * inv;
+        }
+        v8f x = v8_splat(st->x0) + v8_splat(st->xd) * sv,
+            y = v8_splat(st->y0) + v8_splat(st->yd) * sv;
+        v8f d = v8_splat(st->d0) + v8_splat(st->dd) * sv;
+        int out = ~q->inside8(q->user, &x, &y, &d, &fv) & ((1 << count) - 1);
+        if (!out) continue;
+        int j = __builtin_ctz((unsigned)out);
+        *out_s = sv[j], *out_f = fv[j];
+        return true;
+    }
+    return false;
+}
+
 /* The view ray's first hit on a stretch (*out_s): relief mapping's linear search (Policarpo &
  * Oliveira 2006 §2.1, App. A; §3.1's Algorithm 1 for multilayer maps) with the stretch's share
  * of the steps, the binary search and a secant step in the bracket (relief_common.h), or the
  * technique's exact trace. *f_start: the inside test's f at the stretch's start, NAN when not
  * known (the first stretch: the start is tested too); the end's on a miss, the next stretch's
- * start. at_floor: the stretch ends on a solid floor, a hit there whatever rounding says. */
+ * start. at_floor: the stretch ends on a solid floor, a hit there whatever rounding says.
+ * *under: 1 the ray entered a height field's open border (a fin) and may start under its
+ * surface, 2 it is under it -- the reference's surface is a sheet with no wall down the
+ * shell's cut (docs/design.md, "Measuring against the truth"), so a ray under it meets nothing
+ * until it comes out above it (into a groove, a tube's inside) and is searched on from there
+ * -- 0 neither. */
 static bool search_stretch(const relief_shell_search *q, const relief_shell_stretch *st,
-                           bool at_floor, float *f_start, float *out_s) {
+                           bool at_floor, float *f_start, int *under, float *out_s) {
+    float from = 0.0f, f_lo = *f_start, f_hi = 0.0f, f;
+    if (*under == 1) {
+        *under = q->inside(q->user, st->x0, st->y0, st->d0, &f_lo) ? 2 : 0;
+        if (!*under) *f_start = f_lo;
+    }
+    if (*under == 2) {
+        if (!leave_under(q, st, &from, &f_lo)) return false;
+        *under = 0;
+        *f_start = f_lo;
+    }
+    /* the stretch from `from` on (all of it unless the ray came out from under the surface) */
+    relief_shell_stretch rest = {st->x0 + st->xd * from, st->y0 + st->yd * from,
+                                 st->d0 + st->dd * from, st->xd * (1.0f - from),
+                                 st->yd * (1.0f - from), st->dd * (1.0f - from)};
+    if (from > 0.0f) st = &rest;
     if (q->trace) {
-        if (q->trace(q->user, st, 0.0f, out_s)) return true;
+        if (q->trace(q->user, st, 0.0f, out_s)) {
+            *out_s = from + (1.0f - from) * *out_s;
+            return true;
+        }
         *out_s = 1.0f;
         return at_floor;
     }
-    float f_lo = *f_start, f_hi = 0.0f, f;
+    f_lo = *f_start;
     if (isnan(f_lo) && q->inside(q->user, st->x0, st->y0, st->d0, &f_lo)) {
-        *out_s = 0.0f;
+        *out_s = from;
         return true;
     }
     int n = stretch_steps(q->linear_steps, st->dd);
@@ -164,6 +213,7 @@ static bool search_stretch(const relief_shell_search *q, const relief_shell_stre
     float w = span > 1e-12f ? -f_lo / span : 1.0f;
     w = fminf(fmaxf(w, 0.0f), 1.0f);
     *out_s = lo + (hi - lo) * w;
+    if (from > 0.0f) *out_s = from + (1.0f - from) * *out_s;
     return true;
 }
 
@@ -226,6 +276,9 @@ static bool walk_view(const relief_shell *sh, const relief_shell_search *q, cons
                         &view))
         return false;
     float f_start = NAN;
+    /* a height field's ray entering an open border may run under the surface (search_stretch;
+     * a solid's cut is capped, as the reference's) */
+    int under = q->floor_solid && c.entry_slot >= MESO_PRISM_FIN ? 1 : 0;
     for (int n = 0; n < RELIEF_SHELL_MAX_PRISMS; n++) {
         size_t exit_face = meso_prism_layer_face(layer, c.prism, c.exit_slot);
         meso_vec3 t_out = meso_prism_layer_face_uvw(layer, exit_face, c.p_out);
@@ -234,16 +287,8 @@ static bool walk_view(const relief_shell *sh, const relief_shell_search *q, cons
         if (c.t_exit > 0.0f || c.exit_slot == MESO_PRISM_BOTTOM) {
             relief_shell_stretch st = stretch_between(q, t_in, t_out);
             float s;
-            bool first = isnan(f_start);
             if (search_stretch(q, &st, c.exit_slot == MESO_PRISM_BOTTOM && q->floor_solid, &f_start,
-                               &s)) {
-                /* A height field's ray that enters through an open border's fin below the
-                 * surface runs under it: the reference's surface is a sheet with no wall
-                 * down the shell's cut (docs/design.md, "Measuring against the truth"), and
-                 * neither is there one here (a solid's cut is capped, as the reference's). */
-                if (first && s == 0.0f && q->floor_solid && c.entry_slot >= MESO_PRISM_FIN &&
-                    n == 0)
-                    return false;
+                               &under, &s)) {
                 out->uvw = meso_vec3_add(t_in, meso_vec3_scale(meso_vec3_sub(t_out, t_in), s));
                 /* on the ray itself (its depth and the light rays' start), the (u, v, w) path's
                  * point at s mapped there */
