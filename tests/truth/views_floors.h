@@ -56,9 +56,9 @@ typedef struct views_limit {
     "a ray that leaves through the bottom and meets the far wall; "                                \
     "docs/techniques/relief_layers.md)"
 #define SHELL_RIM                                                                                  \
-    "a height field's shell at a tube's open rim: a ray that enters the rim's fin under the "      \
-    "surface is a miss (the truth's surface has no wall there), where the truth meets the "        \
-    "sheet's other side farther on (docs/techniques/relief.md, On the shell)"
+    "a height field's shell at a tube's open rim: single background pixels where a ray that "      \
+    "entered the rim's fin under the surface meets the truth's sheet from its other side (not "    \
+    "yet explained; docs/techniques/relief.md, On the shell)"
 #define HORIZON_AZIMUTHS                                                                           \
     "horizon maps keep the horizon in a few azimuths: a texel lit where the truth's is shadowed "  \
     "(Max 1988; Sloan & Cohen 2000)"
