@@ -21,9 +21,12 @@
 // Uniforms (besides meso_common.glsl's):
 //   bool u_shadows       self-shadows: a second search toward each light
 //   bool u_silhouettes   silhouettes from the per-vertex quadrics (a_quadric)
+//   bool u_shell         the CPU's search along the prism shell (relief_shell.h); the GL back
+//                        end refuses 1 (gl_renderer.c), so it is always false here
 
 uniform bool u_shadows;
 uniform bool u_silhouettes;
+uniform bool u_shell;
 // The texture domain's open sides (meso_mesh_uv_domain): bits 1 u_min, 2 u_max, 4 v_min,
 // 8 v_max of u_domain = (u_min, u_max, v_min, v_max); a hit past one is a miss.
 uniform int u_domain_sides;

@@ -203,6 +203,12 @@ static meso_result prepare_object(meso_gl_renderer *r, int index, const meso_gl_
                                                 o->info->name, o->options)) != MESO_OK ||
         (result = program_for(r, o, desc->shader_dir, &o->program)) != MESO_OK)
         return result;
+    /* the relief family's shell walk (relief_shell.h) has no shader (docs/gpu.md) */
+    if (gl_option_value(o->info, o->options, "shell") != 0.0)
+        return meso_log_error(r->ctx, MESO_ERROR_INVALID_ARGUMENT,
+                              "%s: %s: shell 1 (the search along the prism shell) is drawn on the "
+                              "CPU only; set %s.shell=0 for the GL",
+                              object->name, o->info->name, o->info->name);
     if (o->gl->create && (result = o->gl->create(r->ctx, r->scene, object, o->info, o->options,
                                                  &o->data, &r->stats.memory_bytes)) != MESO_OK)
         return result;

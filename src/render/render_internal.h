@@ -153,9 +153,11 @@ typedef struct meso_technique {
                            void **out_state);
     /* Free the state; called with NULL too. */
     void (*release)(void *state);
-    /* Geometry techniques only (NULL otherwise): the triangles to rasterize for this frame,
+    /* Geometry techniques (NULL otherwise): the triangles to rasterize for this frame,
      * owned by the state and valid until the next call. Called once a frame, single-threaded,
-     * before rasterization. Per-pixel techniques draw object->mesh. */
+     * before rasterization. Per-pixel techniques draw object->mesh, unless they have this
+     * function and it gives other triangles (the relief family's `shell` option draws the
+     * prism shell's boundary; *out_mesh NULL: object->mesh). */
     meso_result (*geometry)(meso_context *ctx, void *state, const meso_frame *frame,
                             const meso_mesh **out_mesh);
     /* Shade `count` fragments of one object in one screen tile. A batch may span triangles:

@@ -310,10 +310,10 @@ static meso_result draw_frame(meso_renderer *rd, meso_framebuffer *fb, const mes
         for (int i = 0; i < count; i++) {
             const meso_technique *t = rd->techniques[i];
             rd->meshes[i] = rd->scene->objects[i].mesh;
-            if (t->info.kind == MESO_TECHNIQUE_GEOMETRY) {
+            if (t->geometry) { /* a per-pixel technique's NULL: the object's mesh */
                 const meso_mesh *mesh = NULL;
                 if ((r = t->geometry(ctx, rd->states[i], &frame, &mesh)) != MESO_OK) return r;
-                rd->meshes[i] = mesh;
+                if (mesh || t->info.kind == MESO_TECHNIQUE_GEOMETRY) rd->meshes[i] = mesh;
             }
         }
         r = (rd->avx2 ? raster_draw_avx2 : raster_draw)(ctx, &rd->pass, &frame, rd->objects,

@@ -19,9 +19,8 @@
 #include "meso/prism.h"
 #include "render_internal.h"
 
-#define GDM_DEPTH_BUCKETS 1024 /* gdm_geometry's sort */
-#define GDM_WINDOW_LEVELS 7    /* height fields' window maxima: up to 64 texels a side */
-#define GDM_WINDOW_FIRST 2     /* the least level window_bound reads (its boxes: 4 texels) */
+#define GDM_WINDOW_LEVELS 7 /* height fields' window maxima: up to 64 texels a side */
+#define GDM_WINDOW_FIRST 2  /* the least level window_bound reads (its boxes: 4 texels) */
 /* solids' distance grid (solid_grid): nodes a side in u and v, and in w (both slab faces), so
  * that a probe is at most ~0.009 (u, v, w) units from a node */
 #define GDM_GRID_SIDE 128
@@ -419,63 +418,10 @@ static bool solid_grid(meso_context *ctx, gdm_state *s) {
     return true;
 }
 
-/* A prism that folds (geom_prism.c, unbind_folded_faces: the shell deeper than the surface's
- * radius of curvature there): some of its planes are unbound. */
-static bool prism_folded(const meso_prism_layer *layer, size_t prism) {
-    const meso_prism_plane *planes = layer->planes + prism * MESO_PRISM_NUM_FACES;
-    for (int slot = MESO_PRISM_BOTTOM; slot < MESO_PRISM_NUM_FACES; slot++)
-        if (planes[slot].normal.x == 0.0f && planes[slot].normal.y == 0.0f &&
-            planes[slot].normal.z == 0.0f)
-            return layer->prisms[prism].valid;
-    return false;
-}
-
-/* The walk's adjacency and the faces it draws (gdm_state.boundary): every top, the fins
- * without a twin (open borders, non-manifold edges), every bottom (a ray from inside the base
- * mesh, or below an open one, enters there), and both copies of every fin of a folded prism.
- * Where prisms fold the shell overlaps itself (the teapot's lid rim and knob): a ray inside
- * one prism is inside another too, whose fins it crosses without leaving the first, so the walk
- * alone would miss it; there each fin's own fragment starts a walk, as every face's does in the
- * per-prism drawing (weave-teapot: 17 % of the fins, the coverage IoU of the per-prism drawing;
- * without them 0.4 % of the outline lost). false: out of memory. */
+/* The walk's adjacency and the faces it draws (gdm_walk_boundary). false: out of memory. */
 static bool walk_boundary(gdm_state *s) {
-    const meso_prism_layer *layer = s->layer;
-    size_t n = layer->num_prisms;
-    s->fin_twin = gdm_fin_twins(layer);
-    s->boundary = malloc((n ? 8 * n : 1) * sizeof *s->boundary);
-    s->twin_same_uvw = calloc(n ? 8 * n : 1, 1);
-    if (!s->fin_twin || !s->boundary || !s->twin_same_uvw) return false;
-    for (size_t f = n; f < 7 * n; f++) {
-        uint32_t twin = s->fin_twin[f];
-        if (twin == GDM_NO_TWIN) continue;
-        const meso_vec3 *a = layer->face_frames[f].uvw, *b = layer->face_frames[twin].uvw;
-        bool same = true;
-        for (int i = 0; i < 3 && same; i++) {
-            bool found = false;
-            for (int j = 0; j < 3 && !found; j++)
-                found = a[i].x == b[j].x && a[i].y == b[j].y && a[i].z == b[j].z;
-            same = found;
-        }
-        s->twin_same_uvw[f] = same;
-    }
-    size_t count = 0;
-    for (size_t f = 0; f < n; f++) s->boundary[count++] = (uint32_t)f;
-    for (size_t f = n; f < 7 * n; f++) {
-        int slot;
-        size_t prism = meso_prism_layer_face_prism(layer, f, &slot);
-        uint32_t twin = s->fin_twin[f];
-        size_t other =
-            twin == GDM_NO_TWIN ? prism : meso_prism_layer_face_prism(layer, twin, &slot);
-        if (gdm_walk_face_is_boundary(s->fin_twin, f) || prism_folded(layer, prism) ||
-            prism_folded(layer, other))
-            s->boundary[count++] = (uint32_t)f;
-    }
-    s->group_start[2] = count;
-    for (size_t f = 7 * n; f < 8 * n; f++) s->boundary[count++] = (uint32_t)f;
-    s->group_start[3] = count;
-    uint32_t *fit = realloc(s->boundary, (count ? count : 1) * sizeof *s->boundary);
-    if (fit) s->boundary = fit;
-    return true;
+    return gdm_walk_boundary(s->layer, &s->fin_twin, &s->boundary, &s->twin_same_uvw,
+                             s->group_start);
 }
 
 static bool state_inside(const void *state, meso_vec3 uvw);
@@ -636,37 +582,8 @@ static meso_result gdm_geometry(meso_context *ctx, void *state, const meso_frame
     if (s->gi) gdm_gi_begin_frame(s->gi, frame);
     for (int k = 0; k < GDM_NUM_COUNTS; k++)
         atomic_store_explicit(&s->counted[k], 0, memory_order_relaxed);
-    const meso_mesh *faces = s->layer->faces;
-    size_t total = s->group_start[3];
-    float *keys = s->sort_keys;
-    float lo = INFINITY, hi = -INFINITY;
-    for (size_t k = 0; k < total; k++) { /* k: a place in the list of faces drawn */
-        size_t f = s->boundary ? s->boundary[k] : k;
-        const uint32_t *idx = faces->indices + 3 * f;
-        meso_vec3 c =
-            meso_vec3_add(meso_vec3_add(faces->positions[idx[0]], faces->positions[idx[1]]),
-                          faces->positions[idx[2]]);
-        float key = meso_vec3_dot(meso_vec3_sub(meso_vec3_scale(c, 1.0f / 3.0f), frame->eye),
-                                  frame->forward);
-        keys[k] = isfinite(key) ? key : 0.0f;
-        lo = fminf(lo, keys[k]);
-        hi = fmaxf(hi, keys[k]);
-    }
-    float scale = hi > lo ? (float)(GDM_DEPTH_BUCKETS - 1) / (hi - lo) : 0.0f;
-    const size_t *group_start = s->group_start; /* tops, fins, bottoms */
-    for (int g = 0; g < 3; g++) {
-        uint32_t *count = s->sort_counts;
-        memset(count, 0, sizeof(uint32_t) * (GDM_DEPTH_BUCKETS + 1));
-        for (size_t k = group_start[g]; k < group_start[g + 1]; k++)
-            count[1 + (int)((keys[k] - lo) * scale)]++;
-        for (int b = 0; b < GDM_DEPTH_BUCKETS; b++) count[b + 1] += count[b];
-        for (size_t k = group_start[g]; k < group_start[g + 1]; k++) {
-            size_t f = s->boundary ? s->boundary[k] : k;
-            size_t slot = group_start[g] + count[(int)((keys[k] - lo) * scale)]++;
-            s->drawn_face[slot] = (uint32_t)f;
-            memcpy(s->drawn_indices + 3 * slot, faces->indices + 3 * f, 3 * sizeof(uint32_t));
-        }
-    }
+    gdm_walk_sort_faces(s->layer->faces, s->boundary, s->group_start, frame->eye, frame->forward,
+                        s->sort_keys, s->sort_counts, s->drawn_face, s->drawn_indices);
     *out_mesh = &s->drawn;
     return MESO_OK;
 }
@@ -691,24 +608,8 @@ typedef struct texture_frame {
 
 static texture_frame frame_at(const meso_mesh *mesh, const meso_prism *prism, meso_vec2 uv,
                               float depth) {
-    float b[3];
-    meso_prism_weights(prism, uv, b);
-    const uint32_t *v = prism->vertices;
     texture_frame f;
-    f.normal = meso_vec3_normalize(meso_vec3_barycentric(mesh->normals[v[0]], mesh->normals[v[1]],
-                                                         mesh->normals[v[2]], b[0], b[1], b[2]));
-    if (mesh->tangents && mesh->bitangents) {
-        f.tangent = meso_vec3_barycentric(mesh->tangents[v[0]], mesh->tangents[v[1]],
-                                          mesh->tangents[v[2]], b[0], b[1], b[2]);
-        f.bitangent = meso_vec3_barycentric(mesh->bitangents[v[0]], mesh->bitangents[v[1]],
-                                            mesh->bitangents[v[2]], b[0], b[1], b[2]);
-    } else { /* the flat triangle's dP/du, dP/dv from the UV inverse */
-        const float *inv = prism->uv_inverse;
-        meso_vec3 e1 = meso_vec3_sub(mesh->positions[v[1]], mesh->positions[v[0]]);
-        meso_vec3 e2 = meso_vec3_sub(mesh->positions[v[2]], mesh->positions[v[0]]);
-        f.tangent = meso_vec3_add(meso_vec3_scale(e1, inv[0]), meso_vec3_scale(e2, inv[2]));
-        f.bitangent = meso_vec3_add(meso_vec3_scale(e1, inv[1]), meso_vec3_scale(e2, inv[3]));
-    }
+    gdm_walk_base_frame(mesh, prism, uv, &f.normal, &f.tangent, &f.bitangent);
     meso_vec3 jw = meso_vec3_scale(f.normal, -depth);
     f.cu = meso_vec3_cross(f.bitangent, jw);
     f.cv = meso_vec3_cross(jw, f.tangent);
@@ -1142,14 +1043,6 @@ typedef struct prism_segment {
     float d;         /* a hit: at ray_probe_point(&path, d) */
 } prism_segment;
 
-/* Do the three vertices carry the same normal? The prism's map (meso_prism_map) is then
- * affine in (u, v, w) -- the bottom the top moved by -depth N -- as on a plane. */
-static inline bool normals_equal(const meso_mesh *mesh, uint32_t a, uint32_t b, uint32_t c) {
-    meso_vec3 na = mesh->normals[a], nb = mesh->normals[b], nc = mesh->normals[c];
-    return na.x == nb.x && na.y == nb.y && na.z == nb.z && na.x == nc.x && na.y == nc.y &&
-           na.z == nc.z;
-}
-
 /* §3.2 in the crossing's prism (its exit made by gdm_walk_exit), entered at texture point t_in
  * along the unit view direction: true where the ray meets the mesostructure before it leaves
  * the prism (out->d, out->path), false where it passes through. */
@@ -1185,7 +1078,7 @@ static bool segment_hit(const gdm_state *s, const meso_mesh *mesh, const gdm_wal
     meso_vec3 vt = meso_vec3_scale(segment, 1.0f / dt);
     ray_probe path = ray_probe_start(s, t_in, vt, clear_w);
     const uint32_t *v = prism->vertices;
-    if (s->refine_steps > 0 && !normals_equal(mesh, v[0], v[1], v[2])) {
+    if (s->refine_steps > 0 && !gdm_normals_equal(mesh, v[0], v[1], v[2])) {
         /* Beyond the paper: the view ray's path through the prism is not straight in (u, v, w).
          * The prism's map is bilinear in the barycentrics and w, so where the vertex normals
          * turn a straight ray bows: its midpoint lies up to two voxels (0.13 on average) off
@@ -1316,26 +1209,12 @@ static void shade_hit(const gdm_state *s, const meso_frame *frame, const meso_ob
     }
 }
 
-/* The ray's entry (u, v, w) on the drawn face, perspective-correct, and the crossing of the
- * face's prism from the fragment's position: Fig. 5's exit (walk false, the per-prism
- * drawing), or the walk's (gdm_walk_exit); false: the prism bounds nothing. */
+/* The ray's entry on the drawn face and its crossing of the face's prism (gdm_walk_enter). */
 static bool fragment_entry(const gdm_state *s, const meso_frame *frame, const meso_mesh *mesh,
                            const meso_fragment *f, bool walk, gdm_walk_crossing *c, meso_vec3 *t_in,
                            meso_vec3 *view) {
-    const meso_prism_layer *layer = s->layer;
-    size_t face = s->drawn_face[f->triangle];
-    const uint32_t *idx = layer->faces->indices + 3 * face;
-    *view = meso_vec3_normalize(meso_vec3_sub(f->position, frame->eye));
-    c->entry_face = face;
-    c->prism = meso_prism_layer_face_prism(layer, face, &c->entry_slot);
-    const uint32_t *v = layer->prisms[c->prism].vertices;
-    if (normals_equal(mesh, v[0], v[1], v[2]))
-        *t_in = meso_prism_layer_face_uvw(layer, face, f->position);
-    else
-        *t_in = meso_vec3_barycentric(layer->uvws[idx[0]], layer->uvws[idx[1]], layer->uvws[idx[2]],
-                                      f->b0, f->b1, f->b2);
-    c->p_in = f->position;
-    return walk ? gdm_walk_exit(layer, c, *view) : gdm_walk_exit_planes(layer, c, *view);
+    return gdm_walk_enter(s->layer, mesh, s->drawn_face[f->triangle], f->b0, f->b1, f->b2,
+                          f->position, frame->eye, walk, c, t_in, view);
 }
 
 /* One fragment of a prism's face (§3.2, every face drawn): false when the ray leaves its

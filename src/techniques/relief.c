@@ -3,14 +3,15 @@
  * binary search over the bilinear depth, shading with the normal at the hit, self-shadows by a
  * second linear search toward each light, depth correction, and silhouettes with per-vertex
  * quadrics (Oliveira & Policarpo 2005). The shared code is in relief_common.h; this file holds
- * the options and the linear + binary search. docs/techniques/relief.md. */
-#include "relief_common.h"
+ * the options and the linear + binary search; with `shell` 1 the search runs along the ray's
+ * path through the prism shell (relief_shell.h). docs/techniques/relief.md. */
+#include "relief_shell.h"
 #include "meso/bake_minmax.h"
 #include "meso/runtime.h"
 
 typedef struct relief_options {
     int linear_steps, binary_steps, shadow_steps;
-    bool shadows, silhouettes;
+    bool shadows, silhouettes, shell;
 } relief_options;
 
 static const meso_technique_option relief_option_table[] = {
@@ -28,6 +29,11 @@ static const meso_technique_option relief_option_table[] = {
     MESO_OPTION_ROW(MESO_OPTION_BOOL, silhouettes, 0, 1, 1,
                     "silhouettes from per-vertex quadrics (Oliveira & Policarpo 2005)",
                     relief_options, silhouettes),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, shell, 0, 1, 0,
+                    "1: the searches run along the ray's path through the prism shell, prism by "
+                    "prism (exact on curved surfaces, side bands at open borders, silhouettes "
+                    "from the shell; CPU only); 0: a straight ray in the pixel's tangent space",
+                    relief_options, shell),
 };
 
 typedef struct relief_state {
@@ -37,6 +43,7 @@ typedef struct relief_state {
     relief_maxmip maxmip;
     relief_options options;
     relief_params params;
+    relief_shell *shell; /* the shell option; NULL: off */
 } relief_state;
 
 static void release(void *state) {
@@ -44,6 +51,7 @@ static void release(void *state) {
     if (!s) return;
     relief_heights_deinit(&s->heights);
     meso_minmax_pyramid_destroy(s->pyramid);
+    relief_shell_destroy(s->shell);
     free(s);
 }
 
@@ -63,7 +71,10 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
     if (s->pyramid) relief_maxmip_init(s->pyramid, &s->maxmip);
     s->params.shadows = s->options.shadows;
     s->params.silhouettes = s->options.silhouettes;
-    if ((r = relief_domain_init(ctx, object, &s->params.domain)) != MESO_OK) goto fail;
+    if ((r = relief_domain_init(ctx, object, &s->params.domain)) != MESO_OK ||
+        (s->options.shell &&
+         (r = relief_shell_create(ctx, object, "relief", &s->shell)) != MESO_OK))
+        goto fail;
     *out_state = s;
     return MESO_OK;
 fail:
@@ -90,9 +101,53 @@ static void shadow(const void *user, const relief_shadow_batch *batches, int cou
     }
 }
 
+/* ---- On the shell (relief_shell.h): the same search along each prism's stretch ---------- */
+
+static bool shell_inside(const void *user, float x, float y, float d, float *out_f) {
+    return relief_shell_heights_inside(&((const relief_state *)user)->heights, x, y, d, out_f);
+}
+
+static int shell_inside8(const void *user, const v8f *x, const v8f *y, const v8f *d, v8f *out_f) {
+    return relief_shell_heights_inside8(&((const relief_state *)user)->heights, *x, *y, *d, out_f);
+}
+
+static meso_vec3 shell_normal(const void *user, float x, float y, float d, bool upward,
+                              const relief_shell_frame *f) {
+    (void)d, (void)upward;
+    return relief_shell_heights_normal(&((const relief_state *)user)->heights, x, y, f);
+}
+
+static relief_shell_search shell_search(const relief_state *s) {
+    return (relief_shell_search){.user = s,
+                                 .width = s->heights.width,
+                                 .height = s->heights.height,
+                                 .inside = shell_inside,
+                                 .inside8 = shell_inside8,
+                                 .normal = shell_normal,
+                                 .linear_steps = s->options.linear_steps,
+                                 .binary_steps = s->options.binary_steps,
+                                 .shadow_steps = s->options.shadow_steps,
+                                 .shadows = s->options.shadows,
+                                 .floor_solid = true,
+                                 .shadow_bias = RELIEF_SHADOW_BIAS};
+}
+
+static meso_result geometry(meso_context *ctx, void *state, const meso_frame *frame,
+                            const meso_mesh **out_mesh) {
+    (void)ctx;
+    relief_state *s = state;
+    *out_mesh = s->shell ? relief_shell_geometry(s->shell, frame) : NULL;
+    return MESO_OK;
+}
+
 static void shade(const void *state, const meso_frame *frame, const meso_object *object,
                   meso_fragment *fragments, size_t count) {
     const relief_state *s = state;
+    if (s->shell) {
+        relief_shell_search q = shell_search(s);
+        relief_shell_shade(s->shell, &q, frame, object, fragments, count);
+        return;
+    }
     relief_tracer tracer = {s, search, shadow, NULL};
     relief_shade_fragments(&s->heights, &tracer, s->params, frame, object, fragments, count);
 }
@@ -102,13 +157,20 @@ static void shade(const void *state, const meso_frame *frame, const meso_object 
 static void shade_block(const void *state, const meso_frame *frame, const meso_object *object,
                         meso_fragment_block *block) {
     const relief_state *s = state;
+    if (s->shell) {
+        relief_shell_search q = shell_search(s);
+        relief_shell_shade_block(s->shell, &q, frame, object, block);
+        return;
+    }
     relief_tracer tracer = {s, search, shadow, NULL};
     relief_shade_block(&s->heights, &tracer, s->params, frame, object, block);
 }
 
 static size_t memory(const void *state) {
     const relief_state *s = state;
-    return s ? relief_heights_memory(&s->heights) + meso_minmax_pyramid_memory(s->pyramid) : 0;
+    return s ? relief_heights_memory(&s->heights) + meso_minmax_pyramid_memory(s->pyramid) +
+                   relief_shell_memory(s->shell)
+             : 0;
 }
 
 const meso_technique meso_technique_relief = {
@@ -121,6 +183,7 @@ const meso_technique meso_technique_relief = {
              .num_options = MESO_OPTION_COUNT(relief_option_table)},
     .prepare = prepare,
     .release = release,
+    .geometry = geometry,
     .shade = shade,
     .shade_block = shade_block,
     .memory = memory,

@@ -7,13 +7,15 @@
  * bilinear height are quadratics in the ray parameter). On power-of-two repeating fields the view
  * rays first take conservative cone steps (Dummer 2006; bake_cone.h) through the space the cone
  * map proves empty, then the traversal takes over. Silhouettes, depth correction, shading
- * and the shadow rays' set-up are relief's (relief_common.h). docs/techniques/relief_exact.md. */
+ * and the shadow rays' set-up are relief's (relief_common.h); with `shell` 1 the traversal runs
+ * on each prism's stretch of the ray's path through the prism shell (relief_shell.h).
+ * docs/techniques/relief_exact.md. */
 #include <float.h>
 
 #include "meso/bake_cone.h"
 #include "meso/bake_minmax.h"
 #include "meso/runtime.h"
-#include "relief_common.h"
+#include "relief_shell.h"
 
 /* Clamp-to-edge fields are not periodic, so the pyramid's wrapped cells do not bound them; they
  * use relief's search with these many steps instead (documented). */
@@ -50,10 +52,12 @@ typedef struct exact_state {
     bool power_of_two; /* both sides: the 8-wide traversal applies */
     /* per level: the offset of its max array in pyramid->block (gathered per lane) */
     int32_t level_offset[MESO_MINMAX_MAX_LEVELS];
+    bool shadows;
+    relief_shell *shell; /* the shell option; NULL: off */
 } exact_state;
 
 typedef struct exact_options {
-    bool shadows, silhouettes;
+    bool shadows, silhouettes, shell;
 } exact_options;
 
 static const meso_technique_option exact_option_table[] = {
@@ -61,6 +65,11 @@ static const meso_technique_option exact_option_table[] = {
                     "self-shadows: the exact trace toward each light", exact_options, shadows),
     MESO_OPTION_ROW(MESO_OPTION_BOOL, silhouettes, 0, 1, 1, "silhouettes from per-vertex quadrics",
                     exact_options, silhouettes),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, shell, 0, 1, 0,
+                    "1: the traversal runs along the ray's path through the prism shell, prism "
+                    "by prism (exact on curved surfaces, side bands at open borders, silhouettes "
+                    "from the shell; CPU only); 0: a straight ray in the pixel's tangent space",
+                    exact_options, shell),
 };
 
 /* A ray in texel-centre coordinates with depth d(t) = c0 + c1 t + c2 t^2 over [t0, t1]; it hits
@@ -683,6 +692,7 @@ static void release(void *state) {
     relief_heights_deinit(&s->heights);
     free(s->cone_codes);
     meso_minmax_pyramid_destroy(s->pyramid);
+    relief_shell_destroy(s->shell);
     free(s);
 }
 
@@ -742,7 +752,11 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
     relief_maxmip_init(s->pyramid, &s->maxmip);
     s->params.shadows = options.shadows;
     s->params.silhouettes = options.silhouettes;
-    if ((r = relief_domain_init(ctx, object, &s->params.domain)) != MESO_OK) goto fail;
+    s->shadows = options.shadows;
+    if ((r = relief_domain_init(ctx, object, &s->params.domain)) != MESO_OK ||
+        (options.shell &&
+         (r = relief_shell_create(ctx, object, "relief_exact", &s->shell)) != MESO_OK))
+        goto fail;
     *out_state = s;
     return MESO_OK;
 fail:
@@ -750,9 +764,77 @@ fail:
     return r;
 }
 
+/* ---- On the shell (relief_shell.h): the traversal on each prism's stretch ----------------- */
+
+static bool shell_inside(const void *user, float x, float y, float d, float *out_f) {
+    return relief_shell_heights_inside(&((const exact_state *)user)->heights, x, y, d, out_f);
+}
+
+static int shell_inside8(const void *user, const v8f *x, const v8f *y, const v8f *d, v8f *out_f) {
+    return relief_shell_heights_inside8(&((const exact_state *)user)->heights, *x, *y, *d, out_f);
+}
+
+/* Tevs et al.'s traversal (trace_any) of a stretch: depth d0 + s dd, s in [0, 1], the start
+ * wrapped into the first tile as view_rays does. */
+static bool shell_trace(const void *user, const relief_shell_stretch *st, float bias,
+                        float *out_s) {
+    const exact_state *s = user;
+    double w = s->heights.width, h = s->heights.height;
+    exact_ray r = {st->x0 - w * floor(st->x0 / w),
+                   st->y0 - h * floor(st->y0 / h),
+                   st->xd,
+                   st->yd,
+                   st->d0,
+                   st->dd,
+                   0.0,
+                   0.0,
+                   1.0,
+                   bias};
+    double t;
+    if (!trace_any(s, &r, &t)) return false;
+    *out_s = (float)t;
+    return true;
+}
+
+static meso_vec3 shell_normal(const void *user, float x, float y, float d, bool upward,
+                              const relief_shell_frame *f) {
+    (void)d, (void)upward;
+    return relief_shell_heights_normal(&((const exact_state *)user)->heights, x, y, f);
+}
+
+/* Clamp-to-edge fields: relief's search with CLAMP_* steps, as off the shell. */
+static relief_shell_search shell_search(const exact_state *s) {
+    return (relief_shell_search){.user = s,
+                                 .width = s->heights.width,
+                                 .height = s->heights.height,
+                                 .inside = shell_inside,
+                                 .inside8 = shell_inside8,
+                                 .trace = s->heights.clamp ? NULL : shell_trace,
+                                 .normal = shell_normal,
+                                 .linear_steps = CLAMP_LINEAR_STEPS,
+                                 .binary_steps = CLAMP_BINARY_STEPS,
+                                 .shadow_steps = CLAMP_SHADOW_STEPS,
+                                 .shadows = s->shadows,
+                                 .floor_solid = true,
+                                 .shadow_bias = RELIEF_SHADOW_BIAS};
+}
+
+static meso_result geometry(meso_context *ctx, void *state, const meso_frame *frame,
+                            const meso_mesh **out_mesh) {
+    (void)ctx;
+    exact_state *s = state;
+    *out_mesh = s->shell ? relief_shell_geometry(s->shell, frame) : NULL;
+    return MESO_OK;
+}
+
 static void shade(const void *state, const meso_frame *frame, const meso_object *object,
                   meso_fragment *fragments, size_t count) {
     const exact_state *s = state;
+    if (s->shell) {
+        relief_shell_search q = shell_search(s);
+        relief_shell_shade(s->shell, &q, frame, object, fragments, count);
+        return;
+    }
     relief_tracer tracer = {s, search, shadow, NULL};
     relief_shade_fragments(&s->heights, &tracer, s->params, frame, object, fragments, count);
 }
@@ -762,6 +844,11 @@ static void shade(const void *state, const meso_frame *frame, const meso_object 
 static void shade_block(const void *state, const meso_frame *frame, const meso_object *object,
                         meso_fragment_block *block) {
     const exact_state *s = state;
+    if (s->shell) {
+        relief_shell_search q = shell_search(s);
+        relief_shell_shade_block(s->shell, &q, frame, object, block);
+        return;
+    }
     relief_tracer tracer = {s, search, shadow, NULL};
     relief_shade_block(&s->heights, &tracer, s->params, frame, object, block);
 }
@@ -770,7 +857,8 @@ static size_t memory(const void *state) {
     const exact_state *s = state;
     if (!s) return 0;
     size_t codes = s->cone_codes ? (size_t)s->heights.width * (size_t)s->heights.height + 3 : 0;
-    return relief_heights_memory(&s->heights) + meso_minmax_pyramid_memory(s->pyramid) + codes;
+    return relief_heights_memory(&s->heights) + meso_minmax_pyramid_memory(s->pyramid) + codes +
+           relief_shell_memory(s->shell);
 }
 
 const meso_technique meso_technique_relief_exact = {
@@ -783,6 +871,7 @@ const meso_technique meso_technique_relief_exact = {
              .num_options = MESO_OPTION_COUNT(exact_option_table)},
     .prepare = prepare,
     .release = release,
+    .geometry = geometry,
     .shade = shade,
     .shade_block = shade_block,
     .memory = memory,

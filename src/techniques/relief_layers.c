@@ -7,11 +7,13 @@
  * with `relief` (relief_common.h). Height fields are one layer (§3, Fig. 10) and shade with
  * the field's own gradient, as relief (docs/design.md; why not the baked normals: normal()). Missed
  * rays are discarded (§3.1, "the fragment can be discarded") or, with "missed": 1, drawn on the
- * shell's floor with the mesh's normal (§3.1's base texture). docs/techniques/relief_layers.md.
+ * shell's floor with the mesh's normal (§3.1's base texture). With `shell` 1 the searches run
+ * on each prism's stretch of the ray's path through the prism shell (relief_shell.h).
+ * docs/techniques/relief_layers.md.
  */
 #include "meso/bake_layers.h"
 #include "meso/runtime.h"
-#include "relief_common.h"
+#include "relief_shell.h"
 
 /* The map as padded planes: plane k of a quantity is (W + 1) x (H + 1) floats whose last row
  * and column repeat the wrapped first ones (or the clamped last ones), as relief_heights. */
@@ -37,11 +39,12 @@ typedef struct layers_state {
     struct layers_state *below; /* solids: the map seen from the shell's bottom (back faces) */
     bool enclosed;              /* the `below` state: hits lie inside a closed mesh, unlit */
     bool impostor;              /* §4: the mesh lies at the middle of the shell */
+    relief_shell *shell;        /* the shell option; NULL: off */
 } layers_state;
 
 typedef struct layers_options {
     int linear_steps, binary_steps, shadow_steps, layers, size, as_float;
-    bool shadows, silhouettes, missed, filter, curved;
+    bool shadows, silhouettes, missed, filter, curved, shell;
 } layers_options;
 
 /* 0 (and -1 for `float`) are "automatic": the defaults depend on the mesostructure, which the
@@ -71,6 +74,12 @@ static const meso_technique_option layers_option_table[] = {
                     layers_options, layers),
     MESO_OPTION_ROW(MESO_OPTION_INT, size, 0, 4096, 0,
                     "bake: texels a side; 0: 256, or 512 for an impostor", layers_options, size),
+    MESO_OPTION_ROW(MESO_OPTION_BOOL, shell, 0, 1, 0,
+                    "1: the searches run along the ray's path through the prism shell, prism by "
+                    "prism (exact on curved surfaces, side bands at open borders, silhouettes "
+                    "from the shell; CPU only; not for impostors); 0: a straight ray in the "
+                    "pixel's tangent space",
+                    layers_options, shell),
     MESO_OPTION_ROW(MESO_OPTION_INT, float, -1, 1, -1,
                     "bake in float (1) or 8 bits like the paper (0); -1: float on height fields",
                     layers_options, as_float),
@@ -80,6 +89,7 @@ static void release(void *state) {
     layers_state *s = state;
     if (!s) return;
     release(s->below);
+    relief_shell_destroy(s->shell);
     relief_heights_deinit(&s->size);
     free(s->quads);
     free(s->planes);
@@ -237,6 +247,15 @@ static meso_result prepare(meso_context *ctx, const meso_scene *scene, const mes
         s->impostor = b->impostor = !meso_solid_is_periodic(m->solid);
         s->bytes += b->bytes;
     }
+    if (options.shell && s->impostor) {
+        r = meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT,
+                           "%s: technique_options.shell: an impostor's quad has no shell (%s)",
+                           object->name, name);
+        goto fail;
+    }
+    if (options.shell && (r = relief_shell_create(ctx, object, name, &s->shell)) != MESO_OK)
+        goto fail;
+    s->bytes += relief_shell_memory(s->shell);
     meso_layers_destroy(map);
     meso_layers_destroy(mirrored);
     *out_state = s;
@@ -600,12 +619,76 @@ static void shade_back(const layers_state *s, const meso_frame *frame, const mes
     }
 }
 
+/* ---- On the shell (relief_shell.h): §3.1's test on each prism's stretch ------------------- */
+
+static bool shell_inside(const void *user, float x, float y, float d, float *out_f) {
+    v8f f;
+    v8i in = layers_inside(user, v8_splat(x), v8_splat(y), v8_splat(d), &f);
+    *out_f = f[0];
+    return in[0] != 0;
+}
+
+static int shell_inside8(const void *user, const v8f *x, const v8f *y, const v8f *d, v8f *out_f) {
+    return v8_mask_bits(layers_inside(user, *x, *y, *d, out_f));
+}
+
+/* The hit's normal: a height field's gradient (as relief; normal() says why not the baked
+ * normals); a solid's from the nearest texel's layer nearest in depth among those the ray can
+ * meet going its way -- entries (even layers, facing up) going down, exits (odd, facing down)
+ * going up, as the far wall of a closed mesh is seen from inside -- (x, y, +-z) to world space
+ * as normal() does, through the base frame at the hit. */
+static meso_vec3 shell_normal(const void *user, float x, float y, float d, bool upward,
+                              const relief_shell_frame *f) {
+    const layers_state *s = user;
+    if (s->heightfield) return relief_shell_heights_normal(&s->size, x, y, f);
+    layers_cell c = layers_locate8(s, v8_splat(x), v8_splat(y));
+    int index = c.nearest[0];
+    float nx = 0.0f, ny = 0.0f, best = 3.0f;
+    for (int k = upward ? 1 : 0; k < s->num_layers; k += 2) {
+        float D = s->depth[k][index], gap = fabsf(d - D);
+        if (gap < best && D < 1.0f) nx = s->nx[k][index], ny = s->ny[k][index], best = gap;
+    }
+    if (!(best < 2.0f)) return upward ? meso_vec3_negate(f->normal) : f->normal;
+    float nz = sqrtf(fmaxf(0.0f, 1.0f - (nx * nx + ny * ny)));
+    float inv_depth = f->depth > 0.0f ? 1.0f / f->depth : 0.0f;
+    meso_vec3 n =
+        meso_vec3_add(meso_vec3_add(meso_vec3_scale(f->bn, nx), meso_vec3_scale(f->nt, ny)),
+                      meso_vec3_scale(f->tb, (upward ? -nz : nz) * inv_depth));
+    float len2 = meso_vec3_dot(n, n);
+    if (!(len2 > 1e-30f && len2 < 1e30f)) return upward ? meso_vec3_negate(f->normal) : f->normal;
+    return meso_vec3_scale(n, 1.0f / sqrtf(len2));
+}
+
+static meso_result geometry(meso_context *ctx, void *state, const meso_frame *frame,
+                            const meso_mesh **out_mesh) {
+    (void)ctx;
+    layers_state *s = state;
+    *out_mesh = s->shell ? relief_shell_geometry(s->shell, frame) : NULL;
+    return MESO_OK;
+}
+
 /* A batch may span triangles (render_internal.h): runs of fragments whose triangles face the
  * same way go to the front or the back search. A triangle's fragments are consecutive, so the
  * facing is computed once a triangle. */
 static void shade(const void *state, const meso_frame *frame, const meso_object *object,
                   meso_fragment *fragments, size_t count) {
     const layers_state *s = state;
+    if (s->shell) { /* a light leaving through the shell's bottom: lit (the walk's rule) */
+        relief_shell_search q = {.user = s,
+                                 .width = s->size.width,
+                                 .height = s->size.height,
+                                 .inside = shell_inside,
+                                 .inside8 = shell_inside8,
+                                 .normal = shell_normal,
+                                 .linear_steps = s->linear_steps,
+                                 .binary_steps = s->binary_steps,
+                                 .shadow_steps = s->shadow_steps,
+                                 .shadows = s->params.shadows,
+                                 .floor_solid = s->heightfield,
+                                 .shadow_bias = RELIEF_SHADOW_BIAS};
+        relief_shell_shade(s->shell, &q, frame, object, fragments, count);
+        return;
+    }
     size_t start = 0;
     bool back = false;
     uint32_t triangle = UINT32_MAX;
@@ -644,6 +727,7 @@ const meso_technique meso_technique_relief_layers = {
              .num_options = MESO_OPTION_COUNT(layers_option_table)},
     .prepare = prepare,
     .release = release,
+    .geometry = geometry,
     .shade = shade,
     .memory = memory,
     .both_faces = true,

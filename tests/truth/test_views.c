@@ -14,7 +14,9 @@
  *   test_views [--views K] [--size N] [--seed S] [--examples a,b] [--techniques a,b]
  *              [--small-bakes] [--report FILE.md] [--csv FILE] [--images DIR] [--no-floors]
  *
- * The techniques run at their default settings; --small-bakes bakes small instead
+ * The techniques run at their default settings, and the variants of technique_variants (a
+ * technique with one option set, named "technique:option=value" in --techniques, the report
+ * and the floors); --small-bakes bakes small instead
  * (example_renders.h, as the determinism test does), for a quick look on a cold cache, with
  * no floors of its own.
  *
@@ -62,6 +64,27 @@ typedef struct tally {
     double worst_psnr, worst_iou;
     char worst_command[768];
 } tally;
+
+/* Techniques drawn again with one option set: the relief family on the prism shell, which
+ * draws the shell's boundary like a geometry technique (its pinholes are looked for over the
+ * whole drawing, not only the base mesh's footprint). */
+static const char *const technique_variants[] = {"relief:shell=1", "relief_exact:shell=1",
+                                                 "relief_layers:shell=1"};
+#define NUM_VARIANTS (sizeof technique_variants / sizeof technique_variants[0])
+
+/* "name:option=value" into its parts; false when it is not of that form. */
+static bool parse_variant(const char *spec, char *name, size_t name_size, meso_option *option) {
+    const char *colon = strchr(spec, ':'), *equals = colon ? strchr(colon, '=') : NULL;
+    if (!equals || (size_t)(colon - spec) >= name_size ||
+        (size_t)(equals - colon - 1) >= sizeof option->name)
+        return false;
+    snprintf(name, name_size, "%.*s", (int)(colon - spec), spec);
+    *option = (meso_option){0};
+    snprintf(option->technique, sizeof option->technique, "%s", name);
+    snprintf(option->name, sizeof option->name, "%.*s", (int)(equals - colon - 1), colon + 1);
+    option->value = atof(equals + 1);
+    return true;
+}
 
 /* ---- Seeded numbers: the same views on every machine ------------------------------------- */
 
@@ -139,13 +162,22 @@ static void apply_view(meso_scene *scene, const view *v) {
 static void view_command(char *out, size_t size, const char *path, const char *technique,
                          const view *v, int image_size) {
     const meso_camera *c = &v->camera;
+    char name[64], set[160] = "", file[96];
+    meso_option option;
+    snprintf(file, sizeof file, "%s", technique);
+    if (parse_variant(technique, name, sizeof name, &option)) {
+        snprintf(set, sizeof set, " --set %s.%s=%g", name, option.name, option.value);
+        technique = name;
+        for (char *p = file; *p; p++)
+            if (*p == ':' || *p == '=') *p = '-';
+    }
     snprintf(out, size,
-             "meso render %s --technique %s --size %dx%d --eye %.6g,%.6g,%.6g "
+             "meso render %s --technique %s%s --size %dx%d --eye %.6g,%.6g,%.6g "
              "--target %.6g,%.6g,%.6g --up %.6g,%.6g,%.6g --light %.6g,%.6g,%.6g -o %s.png",
-             path, technique, image_size, image_size, (double)c->eye.x, (double)c->eye.y,
+             path, technique, set, image_size, image_size, (double)c->eye.x, (double)c->eye.y,
              (double)c->eye.z, (double)c->target.x, (double)c->target.y, (double)c->target.z,
              (double)c->up.x, (double)c->up.y, (double)c->up.z, (double)v->light.x,
-             (double)v->light.y, (double)v->light.z, technique);
+             (double)v->light.y, (double)v->light.z, file);
 }
 
 /* ---- Checks ------------------------------------------------------------------------------- */
@@ -323,6 +355,31 @@ static meso_render_desc render_desc(const options *o, const char *technique) {
     return desc;
 }
 
+#define NUM_SMALL_BAKES (sizeof example_small_bakes / sizeof example_small_bakes[0])
+
+/* render_desc of a variant's technique with its option after the small bakes' (`storage`:
+ * NUM_SMALL_BAKES + 1 options, alive while the renderer is made). */
+static meso_render_desc variant_desc(const options *o, const char *technique,
+                                     const meso_option *option, meso_option *storage) {
+    meso_render_desc desc = render_desc(o, technique);
+    int n = desc.num_options;
+    if (n) memcpy(storage, desc.options, (size_t)n * sizeof *storage);
+    storage[n] = *option;
+    desc.options = storage;
+    desc.num_options = n + 1;
+    return desc;
+}
+
+/* An impostor (a model's solid on a quad): no shell to walk. */
+static bool scene_has_impostor(const meso_scene *scene) {
+    for (int i = 0; i < scene->num_objects; i++) {
+        const meso_mesostructure *m = &scene->objects[i].mesostructure;
+        if (m->kind == MESO_MESOSTRUCTURE_SOLID && m->solid && !meso_solid_is_periodic(m->solid))
+            return true;
+    }
+    return false;
+}
+
 /* ---- One example -------------------------------------------------------------------------- */
 
 typedef struct example_run {
@@ -358,18 +415,37 @@ static void run_example(example_run *run, const char *file, const char *path, in
     const meso_camera home = scene->camera;
     meso_renderer *renderers[MAX_TECHNIQUES] = {0};
     const meso_technique_info *infos[MAX_TECHNIQUES] = {0};
+    const char *names[MAX_TECHNIQUES] = {0}; /* the technique's or the variant's name */
+    bool shells[MAX_TECHNIQUES] = {0};       /* a variant drawing the whole shell */
     size_t count = 0;
-    for (size_t i = 0; i < meso_technique_count() && count < MAX_TECHNIQUES; i++) {
-        const meso_technique_info *info = meso_technique_get(i);
+    for (size_t i = 0; i < meso_technique_count() + NUM_VARIANTS && count < MAX_TECHNIQUES; i++) {
+        const meso_technique_info *info = NULL;
+        const char *name;
+        meso_option option, storage[NUM_SMALL_BAKES + 1];
+        char technique[64];
+        bool variant = i >= meso_technique_count();
+        if (!variant) {
+            info = meso_technique_get(i);
+            name = info->name;
+        } else {
+            name = technique_variants[i - meso_technique_count()];
+            if (!parse_variant(name, technique, sizeof technique, &option)) continue;
+            for (size_t k = 0; k < meso_technique_count() && !info; k++)
+                if (!strcmp(meso_technique_get(k)->name, technique)) info = meso_technique_get(k);
+            if (!info || scene_has_impostor(scene)) continue;
+        }
         if (info->kind == MESO_TECHNIQUE_REFERENCE || !technique_draws(info, scene) ||
-            !in_list(o->techniques, info->name))
+            !in_list(o->techniques, name))
             continue;
-        meso_render_desc desc = render_desc(o, info->name);
+        meso_render_desc desc =
+            variant ? variant_desc(o, info->name, &option, storage) : render_desc(o, info->name);
         if (meso_renderer_create(ctx, scene, &desc, &renderers[count]) != MESO_OK) {
-            fprintf(stderr, "FAIL %s %s: %s\n", path, info->name, meso_context_last_error(ctx));
+            fprintf(stderr, "FAIL %s %s: %s\n", path, name, meso_context_last_error(ctx));
             run->failures++;
             continue;
         }
+        shells[count] = variant && !strcmp(option.name, "shell");
+        names[count] = name;
         infos[count++] = info;
     }
     /* The reference's geometry depends on the view only through the height fields' subdivision
@@ -420,20 +496,20 @@ static void run_example(example_run *run, const char *file, const char *path, in
         for (size_t i = 0; i < count; i++) {
             frame_images image;
             char command[768];
-            view_command(command, sizeof command, path, infos[i]->name, &v, o->size);
-            tally *t = tally_of(run, infos[i]->name);
+            view_command(command, sizeof command, path, names[i], &v, o->size);
+            tally *t = tally_of(run, names[i]);
             t->views++;
             if (!render(ctx, renderers[i], o->size, &image)) {
-                fprintf(stderr, "FAIL %s %s view %d: %s\n  %s\n", path, infos[i]->name, k,
+                fprintf(stderr, "FAIL %s %s view %d: %s\n  %s\n", path, names[i], k,
                         meso_context_last_error(ctx), command);
                 t->failed++;
                 run->failures++;
                 frame_images_free(&image);
                 continue;
             }
-            const meso_image *fp =
-                infos[i]->kind == MESO_TECHNIQUE_PER_PIXEL ? footprint.coverage : NULL;
-            if (infos[i]->kind == MESO_TECHNIQUE_PER_PIXEL && !fp) fp = image.coverage;
+            bool per_pixel = infos[i]->kind == MESO_TECHNIQUE_PER_PIXEL && !shells[i];
+            const meso_image *fp = per_pixel ? footprint.coverage : NULL;
+            if (per_pixel && !fp) fp = image.coverage;
             memset(marks, 0, (size_t)o->size * (size_t)o->size);
             long pinholes = count_pinholes(&image, &truth, fp, o->size, o->size, marks);
             long specks = count_specks(&image, &truth, o->size, o->size, marks);
@@ -442,13 +518,13 @@ static void run_example(example_run *run, const char *file, const char *path, in
             if (meso_image_compare(ctx, image.color, truth.color, &cd, &m) != MESO_OK)
                 m = (meso_compare_result){0};
             double psnr = isnan(m.psnr_covered) ? INFINITY : m.psnr_covered;
-            views_floor floor = views_floor_of(example_name, infos[i]->name);
+            views_floor floor = views_floor_of(example_name, names[i]);
             bool below = o->floors && !o->small_bakes && o->size == VIEWS_FLOORS_SIZE &&
                          (psnr < floor.psnr_covered || m.coverage_iou < floor.iou);
-            const char *known = views_known(example_name, infos[i]->name);
+            const char *known = views_known(example_name, names[i]);
             if (run->csv)
-                fprintf(run->csv, "%s,%s,%d,%s,%ld,%ld,%.3f,%.5f\n", path, infos[i]->name, k,
-                        v.kind, pinholes, specks, psnr, m.coverage_iou);
+                fprintf(run->csv, "%s,%s,%d,%s,%ld,%ld,%.3f,%.5f\n", path, names[i], k, v.kind,
+                        pinholes, specks, psnr, m.coverage_iou);
             t->pinholes += pinholes;
             t->specks += specks;
             if (psnr < t->worst_psnr) {
@@ -467,16 +543,15 @@ static void run_example(example_run *run, const char *file, const char *path, in
                 fprintf(stderr,
                         "%s %s %s view %d (%s): %ld pinholes, %ld specks, covered %.2f dB "
                         "(floor %.1f), IoU %.4f (floor %.3f)\n  %s\n",
-                        bad ? "FAIL" : "KNOWN", path, infos[i]->name, k, v.kind, pinholes, specks,
-                        psnr, (double)floor.psnr_covered, m.coverage_iou, (double)floor.iou,
-                        command);
+                        bad ? "FAIL" : "KNOWN", path, names[i], k, v.kind, pinholes, specks, psnr,
+                        (double)floor.psnr_covered, m.coverage_iou, (double)floor.iou, command);
             if (o->images && (bad || k < 2)) {
                 snprintf(base, sizeof base, "%.*s-%03d-%s", (int)(strlen(name) - 5), name, k,
-                         infos[i]->name);
+                         names[i]);
                 save_png(ctx, image.color, o->images, base);
                 if (pinholes || specks) {
                     snprintf(base, sizeof base, "%.*s-%03d-%s-marks", (int)(strlen(name) - 5), name,
-                             k, infos[i]->name);
+                             k, names[i]);
                     save_marks(ctx, image.color, marks, o->images, base);
                 }
             }

@@ -82,10 +82,24 @@ static void render_images(const meso_scene *scene, const char *technique, meso_i
 /* Set every object's options to the technique's of truth_options[], keyed by the technique (the
  * scene files set none). Setting, not appending, so a row that failed half-way leaves nothing
  * behind for the next. */
-static void set_options(meso_scene *scene, const char *technique) {
+static void set_options(meso_scene *scene, const char *spec) {
+    char technique[64], variant[64] = "";
+    double variant_value = 0.0;
+    const char *colon = strchr(spec, ':'), *equals = colon ? strchr(colon, '=') : NULL;
+    snprintf(technique, sizeof technique, "%.*s", (int)(colon ? colon - spec : 63), spec);
+    if (equals) {
+        snprintf(variant, sizeof variant, "%.*s", (int)(equals - colon - 1), colon + 1);
+        variant_value = atof(equals + 1);
+    }
     for (int o = 0; o < scene->num_objects; o++) {
         meso_object *object = &scene->objects[o];
         object->num_options = 0;
+        if (variant[0]) { /* the row's "technique:option=value" */
+            meso_option *option = &object->options[object->num_options++];
+            snprintf(option->technique, sizeof(option->technique), "%s", technique);
+            snprintf(option->name, sizeof(option->name), "%s", variant);
+            option->value = variant_value;
+        }
         for (size_t i = 0; i < sizeof(truth_options) / sizeof(truth_options[0]); i++) {
             if (strcmp(truth_options[i].technique, technique) != 0) continue;
             assert_true(object->num_options < MESO_OPTIONS_MAX);
@@ -156,7 +170,10 @@ static void test_truth_row(void **state) {
     truth_scene *ts = get_scene(row->scene);
     meso_image *color = NULL, *coverage = NULL;
     set_options(ts->scene, row->technique);
-    render_images(ts->scene, row->technique, &color, &coverage);
+    char technique[64]; /* a variant's technique: the name before its ':' */
+    snprintf(technique, sizeof technique, "%.*s", (int)strcspn(row->technique, ":"),
+             row->technique);
+    render_images(ts->scene, technique, &color, &coverage);
 
     meso_compare_desc desc = {.coverage_a = coverage, .coverage_b = ts->coverage};
     meso_compare_result m;

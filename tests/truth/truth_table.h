@@ -19,16 +19,16 @@
 #define TRUTH_IOU_MARGIN 0.005
 
 typedef struct truth_row {
-    const char *scene; /* tests/data/truth/<scene>.json */
-    const char *technique;
+    const char *scene;       /* tests/data/truth/<scene>.json */
+    const char *technique;   /* a name, or "name:option=value" (that option set too) */
     double min_psnr_covered; /* dB */
     double min_iou;
 } truth_row;
 
 /* Every scene; every technique that accepts a height field must have a row for each. */
 static const char *const truth_scenes[] = {
-    "cones-plane",   "cones-clamp",    "cones-mirrored",
-    "cones-rotated", "cones-uv-scale", "cones-sphere",
+    "cones-plane",    "cones-clamp",  "cones-mirrored",    "cones-rotated",
+    "cones-uv-scale", "cones-sphere", "cones-sphere-deep",
 };
 #define TRUTH_NUM_SCENES (sizeof(truth_scenes) / sizeof(truth_scenes[0]))
 
@@ -113,17 +113,31 @@ static const truth_row truth_rows[] = {
     {"cones-uv-scale", "tessellation", 26.7, 0.995},  /* measured 28.24 dB, IoU 1.0000 */
     {"cones-uv-scale", "displacement", 26.8, 0.995},  /* measured 28.36 dB, IoU 1.0000 */
 
-    {"cones-sphere", "flat", 19.9, 0.900},          /* measured 21.48 dB, IoU 0.9057 */
-    {"cones-sphere", "bump", 21.3, 0.900},          /* measured 22.86 dB, IoU 0.9057 */
-    {"cones-sphere", "horizon", 21.2, 0.900},       /* measured 22.79 dB, IoU 0.9057 */
-    {"cones-sphere", "parallax", 22.9, 0.900},      /* measured 24.49 dB, IoU 0.9057 */
-    {"cones-sphere", "relief", 26.2, 0.980},        /* measured 27.76 dB, IoU 0.9853 */
-    {"cones-sphere", "relief_exact", 26.5, 0.980},  /* measured 28.07 dB, IoU 0.9852 */
-    {"cones-sphere", "relief_layers", 26.5, 0.980}, /* measured 28.04 dB, IoU 0.9853 */
-    {"cones-sphere", "vdm", 26.7, 0.975},           /* measured 28.29 dB, IoU 0.9801 */
-    {"cones-sphere", "gdm", 30.6, 0.994},           /* measured 32.18 dB, IoU 0.9997 */
-    {"cones-sphere", "tessellation", 34.3, 0.993},  /* measured 35.88 dB, IoU 0.9988 */
-    {"cones-sphere", "displacement", 40.3, 0.994},  /* measured 41.87 dB, IoU 0.9996 */
+    {"cones-sphere", "flat", 19.9, 0.900},                       /* measured 21.48 dB, IoU 0.9057 */
+    {"cones-sphere", "bump", 21.3, 0.900},                       /* measured 22.86 dB, IoU 0.9057 */
+    {"cones-sphere", "horizon", 21.2, 0.900},                    /* measured 22.79 dB, IoU 0.9057 */
+    {"cones-sphere", "parallax", 22.9, 0.900},                   /* measured 24.49 dB, IoU 0.9057 */
+    {"cones-sphere", "relief", 26.2, 0.980},                     /* measured 27.76 dB, IoU 0.9853 */
+    {"cones-sphere", "relief_exact", 26.5, 0.980},               /* measured 28.07 dB, IoU 0.9852 */
+    {"cones-sphere", "relief_layers", 26.5, 0.980},              /* measured 28.04 dB, IoU 0.9853 */
+    {"cones-sphere", "vdm", 26.7, 0.975},                        /* measured 28.29 dB, IoU 0.9801 */
+    {"cones-sphere", "gdm", 30.6, 0.994},                        /* measured 32.18 dB, IoU 0.9997 */
+    {"cones-sphere", "tessellation", 34.3, 0.993},               /* measured 35.88 dB, IoU 0.9988 */
+    {"cones-sphere", "displacement", 40.3, 0.994},               /* measured 41.87 dB, IoU 0.9996 */
+    {"cones-sphere-deep", "flat", 20.2, 0.906},                  /* measured 21.78 dB, IoU 0.9115 */
+    {"cones-sphere-deep", "bump", 23.0, 0.906},                  /* measured 24.59 dB, IoU 0.9115 */
+    {"cones-sphere-deep", "horizon", 22.6, 0.906},               /* measured 24.17 dB, IoU 0.9115 */
+    {"cones-sphere-deep", "parallax", 25.6, 0.906},              /* measured 27.10 dB, IoU 0.9115 */
+    {"cones-sphere-deep", "relief", 29.7, 0.979},                /* measured 31.25 dB, IoU 0.9847 */
+    {"cones-sphere-deep", "relief_exact", 29.2, 0.979},          /* measured 30.74 dB, IoU 0.9845 */
+    {"cones-sphere-deep", "relief_layers", 29.1, 0.980},         /* measured 30.64 dB, IoU 0.9850 */
+    {"cones-sphere-deep", "vdm", 28.0, 0.972},                   /* measured 29.51 dB, IoU 0.9775 */
+    {"cones-sphere-deep", "gdm", 41.8, 0.993},                   /* measured 43.40 dB, IoU 0.9989 */
+    {"cones-sphere-deep", "tessellation", 41.3, 0.993},          /* measured 42.87 dB, IoU 0.9982 */
+    {"cones-sphere-deep", "displacement", 42.8, 0.994},          /* measured 44.33 dB, IoU 0.9994 */
+    {"cones-sphere-deep", "relief:shell=1", 45.7, 0.993},        /* measured 47.25 dB, IoU 0.9983 */
+    {"cones-sphere-deep", "relief_exact:shell=1", 41.3, 0.993},  /* measured 42.81 dB, IoU 0.9989 */
+    {"cones-sphere-deep", "relief_layers:shell=1", 45.7, 0.993}, /* measured 47.23 dB, IoU 0.9985 */
 };
 
 #endif

@@ -50,6 +50,15 @@ typedef struct views_limit {
 #define POLE                                                                                       \
     "a sphere's pole, where the map's texels shrink below a pixel: a lone lit bump top where "     \
     "the truth's pixel is in shadow (point sampling)"
+#define SHELL_SOLIDS                                                                               \
+    "the shell's walk through a solid: single background pixels where the truth shows a thread "   \
+    "or bar seen through a gap of the near wall (a thin part the linear search steps over, or "    \
+    "a ray that leaves through the bottom and meets the far wall; "                                \
+    "docs/techniques/relief_layers.md)"
+#define SHELL_RIM                                                                                  \
+    "a height field's shell at a tube's open rim: single background pixels where a ray that "      \
+    "entered the rim's fin under the surface meets the truth's sheet from its other side (not "    \
+    "yet explained; docs/techniques/relief.md, On the shell)"
 #define HORIZON_AZIMUTHS                                                                           \
     "horizon maps keep the horizon in a few azimuths: a texel lit where the truth's is shadowed "  \
     "(Max 1988; Sloan & Cohen 2000)"
@@ -84,6 +93,13 @@ static const views_limit views_limits[] = {
     {"bumps-sphere", "relief_layers", POLE},
     {"bumps-sphere", "vdm", POLE},
     {"chainmail-plane", "gdm", GDM_SOLIDS},
+    {"bark-cylinder", "relief:shell=1", SHELL_RIM},
+    {"bark-cylinder", "relief_exact:shell=1", SHELL_RIM},
+    {"bark-cylinder", "relief_layers:shell=1", SHELL_RIM},
+    {"chainmail-plane", "relief_layers:shell=1", SHELL_SOLIDS},
+    {"grid-vase", "relief_layers:shell=1", SHELL_SOLIDS},
+    {"weave-teapot", "relief_layers:shell=1", SHELL_SOLIDS},
+    {"weave-torus", "relief_layers:shell=1", SHELL_SOLIDS},
 };
 
 static inline views_floor views_floor_of(const char *example, const char *technique) {

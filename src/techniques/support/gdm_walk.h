@@ -162,4 +162,86 @@ static inline bool gdm_walk_next(const meso_prism_layer *layer, const uint32_t *
     return true;
 }
 
+/* ---- Drawing the shell's outer boundary and starting the walk (gdm, and the relief family's
+ * `shell` option, relief_shell.h) ---- */
+
+#define GDM_DEPTH_BUCKETS 1024 /* gdm_walk_sort_faces' counting sort */
+
+/* The walk's adjacency and the faces a walk draws: *out_twin the fin twin table
+ * (gdm_fin_twins); *out_boundary the faces drawn -- every top, the fins without a twin (open
+ * borders, non-manifold edges), every bottom (a ray from inside the base mesh, or below an
+ * open one, enters there) and both copies of every fin of a folded prism -- as the groups
+ * [group_start[g], group_start[g + 1]): tops, fins, bottoms; *out_same_uvw per face, 1 where a
+ * fin's twin carries the same (u, v, w) (not a UV seam: the exit's (u, v, w) is the
+ * neighbour's entry). The three arrays malloc'd (free() them, also on failure). false: out of
+ * memory. */
+bool gdm_walk_boundary(const meso_prism_layer *layer, uint32_t **out_twin, uint32_t **out_boundary,
+                       uint8_t **out_same_uvw, size_t group_start[4]);
+
+/* A frame's drawing order of the faces: the groups (tops, fins, bottoms) each front to back by
+ * the view depth of the faces' centroids, drawn triangle i being face drawn_face[i] with its
+ * indices at drawn_indices + 3 i. boundary NULL: every face of the layer (group_start then
+ * the layer's own groups). keys: group_start[3] floats; count: GDM_DEPTH_BUCKETS + 1. */
+void gdm_walk_sort_faces(const meso_mesh *faces, const uint32_t *boundary,
+                         const size_t group_start[4], meso_vec3 eye, meso_vec3 forward, float *keys,
+                         uint32_t *count, uint32_t *drawn_face, uint32_t *drawn_indices);
+
+/* The base surface's frame at (u, v) of a prism: the mesh's unit normal, dP/du and dP/dv
+ * interpolated by the point's barycentrics, or the flat triangle's dP/du, dP/dv (from the UV
+ * inverse) where the mesh has no tangents. gdm's and the relief family's shell (relief_shell.h)
+ * shade a hit in it. */
+static inline void gdm_walk_base_frame(const meso_mesh *mesh, const meso_prism *prism, meso_vec2 uv,
+                                       meso_vec3 *normal, meso_vec3 *tangent,
+                                       meso_vec3 *bitangent) {
+    float b[3];
+    meso_prism_weights(prism, uv, b);
+    const uint32_t *v = prism->vertices;
+    *normal = meso_vec3_normalize(meso_vec3_barycentric(mesh->normals[v[0]], mesh->normals[v[1]],
+                                                        mesh->normals[v[2]], b[0], b[1], b[2]));
+    if (mesh->tangents && mesh->bitangents) {
+        *tangent = meso_vec3_barycentric(mesh->tangents[v[0]], mesh->tangents[v[1]],
+                                         mesh->tangents[v[2]], b[0], b[1], b[2]);
+        *bitangent = meso_vec3_barycentric(mesh->bitangents[v[0]], mesh->bitangents[v[1]],
+                                           mesh->bitangents[v[2]], b[0], b[1], b[2]);
+    } else {
+        const float *inv = prism->uv_inverse;
+        meso_vec3 e1 = meso_vec3_sub(mesh->positions[v[1]], mesh->positions[v[0]]);
+        meso_vec3 e2 = meso_vec3_sub(mesh->positions[v[2]], mesh->positions[v[0]]);
+        *tangent = meso_vec3_add(meso_vec3_scale(e1, inv[0]), meso_vec3_scale(e2, inv[2]));
+        *bitangent = meso_vec3_add(meso_vec3_scale(e1, inv[1]), meso_vec3_scale(e2, inv[3]));
+    }
+}
+
+/* Do the three vertices share one normal (a prism of a flat stretch of the mesh, whose map is
+ * affine: a straight ray stays straight in (u, v, w))? */
+static inline bool gdm_normals_equal(const meso_mesh *mesh, uint32_t a, uint32_t b, uint32_t c) {
+    meso_vec3 na = mesh->normals[a], nb = mesh->normals[b], nc = mesh->normals[c];
+    return na.x == nb.x && na.y == nb.y && na.z == nb.z && na.x == nc.x && na.y == nc.y &&
+           na.z == nc.z;
+}
+
+/* A fragment of drawn face `face` (barycentrics b0..b2, position on the face): the ray's entry
+ * (u, v, w) on the face, perspective-correct, its unit direction from the eye, and the
+ * crossing of the face's prism: Fig. 5's exit (walk false, the per-prism drawing) or the
+ * walk's (gdm_walk_exit). With flat_mesh (the base mesh) and a prism whose vertex normals are
+ * one, the entry is the face's own (u, v, w) at the position instead, consistent with the
+ * straight path gdm then follows. false: the prism bounds nothing. */
+static inline bool gdm_walk_enter(const meso_prism_layer *layer, const meso_mesh *flat_mesh,
+                                  size_t face, float b0, float b1, float b2, meso_vec3 position,
+                                  meso_vec3 eye, bool walk, gdm_walk_crossing *c, meso_vec3 *t_in,
+                                  meso_vec3 *view) {
+    const uint32_t *idx = layer->faces->indices + 3 * face;
+    *view = meso_vec3_normalize(meso_vec3_sub(position, eye));
+    c->entry_face = face;
+    c->prism = meso_prism_layer_face_prism(layer, face, &c->entry_slot);
+    const uint32_t *v = layer->prisms[c->prism].vertices;
+    if (flat_mesh && gdm_normals_equal(flat_mesh, v[0], v[1], v[2]))
+        *t_in = meso_prism_layer_face_uvw(layer, face, position);
+    else
+        *t_in = meso_vec3_barycentric(layer->uvws[idx[0]], layer->uvws[idx[1]], layer->uvws[idx[2]],
+                                      b0, b1, b2);
+    c->p_in = position;
+    return walk ? gdm_walk_exit(layer, c, *view) : gdm_walk_exit_planes(layer, c, *view);
+}
+
 #endif
