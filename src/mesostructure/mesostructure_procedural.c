@@ -84,14 +84,23 @@ static void eval_bricks(const pattern *p, float u, float v, texel_value *out) {
     }
 }
 
+/* The grid cell (column, row) at (u, v), wrapped, and the point's place (fx, fy) in it. */
+static void grid_cell_at(const meso_heightfield_desc *d, float u, float v, int *column, int *row,
+                         float *fx, float *fy) {
+    float x = u * (float)d->columns, y = v * (float)d->rows;
+    float fc = floorf(x), fr = floorf(y);
+    *column = wrap_index((int)fc, d->columns), *row = wrap_index((int)fr, d->rows);
+    *fx = x - fc, *fy = y - fr;
+}
+
 /* A grid of smooth round bumps: a raised cosine of the distance to the cell centre, flat
  * ground (height 0) in the gap between bumps. */
 static void eval_bumps(const pattern *p, float u, float v, texel_value *out) {
     const meso_heightfield_desc *d = &p->desc;
-    float x = u * (float)d->columns, y = v * (float)d->rows;
-    float fc = floorf(x), fr = floorf(y);
-    int column = wrap_index((int)fc, d->columns), row = wrap_index((int)fr, d->rows);
-    float dx = (x - fc - 0.5f) * p->cell_u, dy = (y - fr - 0.5f) * p->cell_v;
+    int column, row;
+    float fx, fy;
+    grid_cell_at(d, u, v, &column, &row, &fx, &fy);
+    float dx = (fx - 0.5f) * p->cell_u, dy = (fy - 0.5f) * p->cell_v;
     float radius = 0.5f * (1.0f - d->gap) * p->cell_min;
     float r = sqrtf(dx * dx + dy * dy) / radius;
     uint32_t h = hash_cell(column, row, d->seed);
@@ -148,10 +157,9 @@ static void eval_weave(const pattern *p, float u, float v, texel_value *out) {
  * at 0.15 with a rounded edge between. */
 static void eval_tiles(const pattern *p, float u, float v, texel_value *out) {
     const meso_heightfield_desc *d = &p->desc;
-    float x = u * (float)d->columns, y = v * (float)d->rows;
-    float fc = floorf(x), fr = floorf(y);
-    int column = wrap_index((int)fc, d->columns), row = wrap_index((int)fr, d->rows);
-    float fx = x - fc, fy = y - fr;
+    int column, row;
+    float fx, fy;
+    grid_cell_at(d, u, v, &column, &row, &fx, &fy);
     uint32_t h = hash_cell(column, row, d->seed);
     float tilt_x = 0.03f * (hash_unit(mix32(h + 1u)) - 0.5f);
     float tilt_y = 0.03f * (hash_unit(mix32(h + 2u)) - 0.5f);
