@@ -467,6 +467,13 @@ static void append_note(char *text, size_t size, const char *note) {
     snprintf(text + used, size - used, "%s%s", used ? ", " : "", note);
 }
 
+/* "<kind> texture not used: <why>" */
+static void append_unused_note(char *text, size_t size, const char *kind, const char *why) {
+    char note[160];
+    snprintf(note, sizeof note, "%s texture not used: %s", kind, why);
+    append_note(text, size, note);
+}
+
 /* The mesh file's own material (shape {"file"}: glTF baseColorFactor / baseColorTexture, MTL
  * Kd / map_Kd), used when the scene's material sets no colour (neither "albedo" nor
  * "color_map"). The texture must lie beside the mesh file or below it (no absolute path, no
@@ -491,9 +498,7 @@ static meso_result apply_mesh_material(const scene_parser *p, const cJSON *obj,
         const char *texture = from_file->color_map;
         const char *unused = meso_mesh_material_unused_reason(texture);
         if (texture[0] && unused) {
-            char text[160];
-            snprintf(text, sizeof text, "colour texture not used: %s", unused);
-            append_note(note, note_size, text);
+            append_unused_note(note, note_size, "colour", unused);
         } else if (texture[0]) {
             meso_result r = load_mesh_texture(p, key, mesh_path, texture, MAP_COLOR, object,
                                               &object->material.color_map);
@@ -506,9 +511,7 @@ static meso_result apply_mesh_material(const scene_parser *p, const cJSON *obj,
     if (normal[0] && cJSON_GetObjectItemCaseSensitive(material, "normal_map")) {
         append_note(note, note_size, "normal texture not used: the scene's material sets one");
     } else if (normal[0] && unused) {
-        char text[160];
-        snprintf(text, sizeof text, "normal texture not used: %s", unused);
-        append_note(note, note_size, text);
+        append_unused_note(note, note_size, "normal", unused);
     } else if (normal[0]) {
         meso_result r = load_mesh_texture(p, key, mesh_path, normal, MAP_NORMAL, object,
                                           &object->material.normal_map);
