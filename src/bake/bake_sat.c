@@ -82,14 +82,19 @@ static double periodic_prefix(const meso_sat *sat, int i, int j) {
 
 static int clampi(int x, int lo, int hi) { return x < lo ? lo : (x > hi ? hi : x); }
 
+/* A clamp-to-edge table's box cut to the table; false: nothing of it is left. */
+static bool clamp_box(const meso_sat *sat, int *i0, int *j0, int *i1, int *j1) {
+    *i0 = clampi(*i0, 0, sat->width);
+    *i1 = clampi(*i1, 0, sat->width);
+    *j0 = clampi(*j0, 0, sat->height);
+    *j1 = clampi(*j1, 0, sat->height);
+    return *i1 > *i0 && *j1 > *j0;
+}
+
 double meso_sat_box_sum(const meso_sat *sat, int i0, int j0, int i1, int j1) {
     if (i1 <= i0 || j1 <= j0) return 0.0;
     if (sat->wrap == MESO_WRAP_CLAMP) {
-        i0 = clampi(i0, 0, sat->width);
-        i1 = clampi(i1, 0, sat->width);
-        j0 = clampi(j0, 0, sat->height);
-        j1 = clampi(j1, 0, sat->height);
-        if (i1 <= i0 || j1 <= j0) return 0.0;
+        if (!clamp_box(sat, &i0, &j0, &i1, &j1)) return 0.0;
         return table(sat, i1, j1) - table(sat, i0, j1) - table(sat, i1, j0) + table(sat, i0, j0);
     }
     if (i0 >= 0 && j0 >= 0 && i1 <= sat->width && j1 <= sat->height) /* inside: no wrapping */
@@ -101,11 +106,7 @@ double meso_sat_box_sum(const meso_sat *sat, int i0, int j0, int i1, int j1) {
 double meso_sat_box_count(const meso_sat *sat, int i0, int j0, int i1, int j1) {
     if (i1 <= i0 || j1 <= j0) return 0.0;
     if (sat->wrap == MESO_WRAP_CLAMP) {
-        i0 = clampi(i0, 0, sat->width);
-        i1 = clampi(i1, 0, sat->width);
-        j0 = clampi(j0, 0, sat->height);
-        j1 = clampi(j1, 0, sat->height);
-        if (i1 <= i0 || j1 <= j0) return 0.0;
+        if (!clamp_box(sat, &i0, &j0, &i1, &j1)) return 0.0;
     }
     return (double)(i1 - i0) * (double)(j1 - j0);
 }

@@ -564,35 +564,39 @@ static lookup_axes axes_of(const meso_vdm *vdm, float u, float v, float theta, f
     return a;
 }
 
+/* Corner `corner` (bit 0: x, 1: y, 2: phi) of the trilinear cell: its weight, and in *cell its
+ * (x, y, phi) row of the tables. */
+static float corner_of(const meso_vdm *vdm, const lookup_axes *a, int corner, size_t *cell) {
+    const meso_vdm_desc *d = &vdm->desc;
+    int ix = corner & 1 ? a->x.i1 : a->x.i0, iy = corner & 2 ? a->y.i1 : a->y.i0;
+    int ip = corner & 4 ? a->phi.i1 : a->phi.i0;
+    *cell = ((size_t)iy * d->width + ix) * d->num_phi + ip;
+    return (corner & 1 ? a->x.w : 1.0f - a->x.w) * (corner & 2 ? a->y.w : 1.0f - a->y.w) *
+           (corner & 4 ? a->phi.w : 1.0f - a->phi.w);
+}
+
 /* Value of column `col` at row corners, trilinear over (x, y, phi), from the raw table or the
  * interpolated weights. */
 static void interpolate_weights(const meso_vdm *vdm, const lookup_axes *a, int kw, float *out) {
-    const meso_vdm_desc *d = &vdm->desc;
     for (int i = 0; i < kw; i++) out[i] = 0.0f;
     for (int corner = 0; corner < 8; corner++) {
-        int ix = corner & 1 ? a->x.i1 : a->x.i0, iy = corner & 2 ? a->y.i1 : a->y.i0;
-        int ip = corner & 4 ? a->phi.i1 : a->phi.i0;
-        float w = (corner & 1 ? a->x.w : 1.0f - a->x.w) * (corner & 2 ? a->y.w : 1.0f - a->y.w) *
-                  (corner & 4 ? a->phi.w : 1.0f - a->phi.w);
+        size_t cell;
+        float w = corner_of(vdm, a, corner, &cell);
         if (w == 0.0f) continue;
-        const float *row =
-            vdm->weights + (((size_t)iy * d->width + ix) * d->num_phi + ip) * vdm->num_weights;
+        const float *row = vdm->weights + cell * vdm->num_weights;
         for (int i = 0; i < kw; i++) out[i] += w * row[i];
     }
 }
 
 static float raw_value(const meso_vdm *vdm, const lookup_axes *a, int column_of_corner[4],
                        const float column_weight[4]) {
-    const meso_vdm_desc *d = &vdm->desc;
-    int columns = columns_of(d);
+    int columns = columns_of(&vdm->desc);
     float sum = 0.0f;
     for (int corner = 0; corner < 8; corner++) {
-        int ix = corner & 1 ? a->x.i1 : a->x.i0, iy = corner & 2 ? a->y.i1 : a->y.i0;
-        int ip = corner & 4 ? a->phi.i1 : a->phi.i0;
-        float w = (corner & 1 ? a->x.w : 1.0f - a->x.w) * (corner & 2 ? a->y.w : 1.0f - a->y.w) *
-                  (corner & 4 ? a->phi.w : 1.0f - a->phi.w);
+        size_t cell;
+        float w = corner_of(vdm, a, corner, &cell);
         if (w == 0.0f) continue;
-        const float *row = vdm->raw + (((size_t)iy * d->width + ix) * d->num_phi + ip) * columns;
+        const float *row = vdm->raw + cell * columns;
         for (int q = 0; q < 4; q++) sum += w * column_weight[q] * row[column_of_corner[q]];
     }
     return sum;

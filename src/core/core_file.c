@@ -139,17 +139,28 @@ static meso_result check_name_lengths(meso_context *ctx, const char *path, const
     return MESO_OK;
 }
 
+/* resolve_output and the folder the output goes in (PATH_MAX bytes); on an error nothing is
+ * left to free. */
+static meso_result resolve_output_folder(meso_context *ctx, const char *path, char **out_target,
+                                         bool *out_exists, mode_t *out_mode, char *folder) {
+    meso_result r = resolve_output(ctx, path, out_target, out_exists, out_mode);
+    if (r != MESO_OK) return r;
+    if (!folder_of(*out_target, folder, PATH_MAX)) {
+        free(*out_target);
+        *out_target = NULL;
+        return meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot write: path too long", path);
+    }
+    return MESO_OK;
+}
+
 meso_result meso_file_check_output(meso_context *ctx, const char *path) {
-    char *target = NULL;
+    char *target = NULL, folder[PATH_MAX];
     bool exists = false;
     mode_t mode = 0;
-    meso_result r = resolve_output(ctx, path, &target, &exists, &mode);
+    meso_result r = resolve_output_folder(ctx, path, &target, &exists, &mode, folder);
     if (r != MESO_OK) return r;
-    char folder[PATH_MAX];
     struct stat st;
-    if (!folder_of(target, folder, sizeof(folder)))
-        r = meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot write: path too long", path);
-    else if (stat(folder, &st) != 0)
+    if (stat(folder, &st) != 0)
         r = meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot write: folder %s: %s", path, folder,
                            strerror(errno));
     else if (!S_ISDIR(st.st_mode))
@@ -209,17 +220,12 @@ static char *temporary_name(const char *folder, unsigned seed) {
 
 meso_result meso_atomic_file_open(meso_context *ctx, const char *path, meso_atomic_file *out_file) {
     *out_file = (meso_atomic_file){0};
-    char *dest = NULL;
+    /* Same folder as the destination, so the rename cannot cross file systems. */
+    char *dest = NULL, folder[PATH_MAX];
     bool exists = false;
     mode_t mode = 0;
-    meso_result r = resolve_output(ctx, path, &dest, &exists, &mode);
+    meso_result r = resolve_output_folder(ctx, path, &dest, &exists, &mode, folder);
     if (r != MESO_OK) return r;
-    /* Same folder as the destination, so the rename cannot cross file systems. */
-    char folder[PATH_MAX];
-    if (!folder_of(dest, folder, sizeof(folder))) {
-        free(dest);
-        return meso_log_error(ctx, MESO_ERROR_IO, "%s: cannot write: path too long", path);
-    }
     if ((r = check_name_lengths(ctx, path, dest, folder)) != MESO_OK) {
         free(dest);
         return r;

@@ -44,6 +44,19 @@ static float distance_to_cell_border(const pattern *p, float fx, float fy) {
     return fminf(dx, dy);
 }
 
+/* A brick's or tile's top lowered by the roughness noise (*top), and the rounded edge's profile
+ * at (fx, fy) in its cell: 1 on the top, 0 in the gap; *out_t > 0 on the top past the bevel's
+ * start. */
+static float rough_bevel(const pattern *p, float u, float v, float fx, float fy, float *top,
+                         float *out_t) {
+    const meso_heightfield_desc *d = &p->desc;
+    float noise = d->roughness > 0.0f ? periodic_fbm(u, v, 8 * d->columns, d->seed + 7u) : 0.0f;
+    *top -= d->roughness * (0.5f - 0.5f * noise);
+    float half_gap = 0.5f * d->gap * p->cell_min;
+    *out_t = (distance_to_cell_border(p, fx, fy) - half_gap) / (d->bevel * p->cell_min);
+    return rounded_edge(*out_t);
+}
+
 /* Running-bond bricks: odd rows shifted by half a brick; mortar grooves near height 0, brick
  * tops near 1 with rounded edges, each brick slightly lower/tilted by its own hash. */
 static void eval_bricks(const pattern *p, float u, float v, texel_value *out) {
@@ -61,12 +74,7 @@ static void eval_bricks(const pattern *p, float u, float v, texel_value *out) {
     float tilt = 0.04f * (hash_unit(mix32(h + 1u)) - 0.5f);
     top -= 0.02f;
     top += tilt * (2.0f * fx - 1.0f);
-    float noise = d->roughness > 0.0f ? periodic_fbm(u, v, 8 * d->columns, d->seed + 7u) : 0.0f;
-    top -= d->roughness * (0.5f - 0.5f * noise);
-    float border = distance_to_cell_border(p, fx, fy);
-    float half_gap = 0.5f * d->gap * p->cell_min;
-    float t = (border - half_gap) / (d->bevel * p->cell_min);
-    float profile = rounded_edge(t);
+    float t, profile = rough_bevel(p, u, v, fx, fy, &top, &t);
     /* The mortar's noise only shows in the groove and on the bevel. */
     float mortar =
         profile < 1.0f ? 0.03f + 0.02f * periodic_fbm(u, v, 16 * d->columns, d->seed + 13u) : 0.0f;
@@ -84,14 +92,23 @@ static void eval_bricks(const pattern *p, float u, float v, texel_value *out) {
     }
 }
 
+/* The grid cell (column, row) at (u, v), wrapped, and the point's place (fx, fy) in it. */
+static void grid_cell_at(const meso_heightfield_desc *d, float u, float v, int *column, int *row,
+                         float *fx, float *fy) {
+    float x = u * (float)d->columns, y = v * (float)d->rows;
+    float fc = floorf(x), fr = floorf(y);
+    *column = wrap_index((int)fc, d->columns), *row = wrap_index((int)fr, d->rows);
+    *fx = x - fc, *fy = y - fr;
+}
+
 /* A grid of smooth round bumps: a raised cosine of the distance to the cell centre, flat
  * ground (height 0) in the gap between bumps. */
 static void eval_bumps(const pattern *p, float u, float v, texel_value *out) {
     const meso_heightfield_desc *d = &p->desc;
-    float x = u * (float)d->columns, y = v * (float)d->rows;
-    float fc = floorf(x), fr = floorf(y);
-    int column = wrap_index((int)fc, d->columns), row = wrap_index((int)fr, d->rows);
-    float dx = (x - fc - 0.5f) * p->cell_u, dy = (y - fr - 0.5f) * p->cell_v;
+    int column, row;
+    float fx, fy;
+    grid_cell_at(d, u, v, &column, &row, &fx, &fy);
+    float dx = (fx - 0.5f) * p->cell_u, dy = (fy - 0.5f) * p->cell_v;
     float radius = 0.5f * (1.0f - d->gap) * p->cell_min;
     float r = sqrtf(dx * dx + dy * dy) / radius;
     uint32_t h = hash_cell(column, row, d->seed);
@@ -148,20 +165,15 @@ static void eval_weave(const pattern *p, float u, float v, texel_value *out) {
  * at 0.15 with a rounded edge between. */
 static void eval_tiles(const pattern *p, float u, float v, texel_value *out) {
     const meso_heightfield_desc *d = &p->desc;
-    float x = u * (float)d->columns, y = v * (float)d->rows;
-    float fc = floorf(x), fr = floorf(y);
-    int column = wrap_index((int)fc, d->columns), row = wrap_index((int)fr, d->rows);
-    float fx = x - fc, fy = y - fr;
+    int column, row;
+    float fx, fy;
+    grid_cell_at(d, u, v, &column, &row, &fx, &fy);
     uint32_t h = hash_cell(column, row, d->seed);
     float tilt_x = 0.03f * (hash_unit(mix32(h + 1u)) - 0.5f);
     float tilt_y = 0.03f * (hash_unit(mix32(h + 2u)) - 0.5f);
     float top =
         0.96f - 0.05f * hash_unit(h) + tilt_x * (2.0f * fx - 1.0f) + tilt_y * (2.0f * fy - 1.0f);
-    float noise = d->roughness > 0.0f ? periodic_fbm(u, v, 8 * d->columns, d->seed + 7u) : 0.0f;
-    top -= d->roughness * (0.5f - 0.5f * noise);
-    float t = (distance_to_cell_border(p, fx, fy) - 0.5f * d->gap * p->cell_min) /
-              (d->bevel * p->cell_min);
-    float profile = rounded_edge(t);
+    float t, profile = rough_bevel(p, u, v, fx, fy, &top, &t);
     float grout =
         profile < 1.0f ? 0.15f + 0.02f * periodic_fbm(u, v, 32 * d->columns, d->seed + 11u) : 0.0f;
     out->height = grout + (top - grout) * profile;

@@ -122,6 +122,14 @@ static bool monitor_memory(void *user, ssize_t bytes, bool post) {
     return true;
 }
 
+meso_result reference_too_many_triangles(meso_context *ctx, const meso_object *object,
+                                         const char *what, uint64_t count, const char *hint) {
+    return meso_log_error(ctx, MESO_ERROR_LIMIT,
+                          "%s: reference: %s makes %llu triangles, above the limit %llu (%s)",
+                          object->name, what, (unsigned long long)count,
+                          (unsigned long long)MESO_REFERENCE_MAX_TRIANGLES, hint);
+}
+
 static meso_result build_plain(meso_context *ctx, RTCGeometry geometry, reference_object *ref,
                                uint64_t *total) {
     const meso_mesh *mesh = ref->object->mesh;

@@ -306,11 +306,8 @@ meso_result reference_build_heightfield(meso_context *ctx, const meso_scene *sce
     }
     grid_offsets[num_grids] = vertices;
     if (*total + triangles > MESO_REFERENCE_MAX_TRIANGLES || vertices >= UINT32_MAX) {
-        result = meso_log_error(ctx, MESO_ERROR_LIMIT,
-                                "%s: reference: the height field makes %llu triangles, above the "
-                                "limit %llu (fewer texels, a smaller uv_scale or subdivision)",
-                                object->name, (unsigned long long)(*total + triangles),
-                                (unsigned long long)MESO_REFERENCE_MAX_TRIANGLES);
+        result = reference_too_many_triangles(ctx, object, "the height field", *total + triangles,
+                                              "fewer texels, a smaller uv_scale or subdivision");
         goto fail;
     }
 

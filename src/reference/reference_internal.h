@@ -144,6 +144,12 @@ meso_result reference_build_solid(meso_context *ctx, const meso_reference_desc *
                                   const reference_options *options, RTCGeometry geometry,
                                   reference_object *ref, uint64_t *total);
 
+/* The MESO_ERROR_LIMIT error for `what` (the height field, the solid) of an object that would
+ * take the scene to `count` triangles, above MESO_REFERENCE_MAX_TRIANGLES; `hint`: how to stay
+ * below it. */
+meso_result reference_too_many_triangles(meso_context *ctx, const meso_object *object,
+                                         const char *what, uint64_t count, const char *hint);
+
 /* The base triangle of a traced solid quad (binary search in base_offsets). */
 size_t reference_base_triangle(const reference_object *ref, uint64_t triangle);
 

@@ -475,11 +475,8 @@ meso_result reference_build_solid(meso_context *ctx, const meso_reference_desc *
     triangle_offsets[nt] = primitives;
     vertex_offsets[nt] = vertices;
     if (*total + triangles > MESO_REFERENCE_MAX_TRIANGLES || vertices >= UINT32_MAX) {
-        result = meso_log_error(ctx, MESO_ERROR_LIMIT,
-                                "%s: reference: the solid makes %llu triangles, above the limit "
-                                "%llu (a smaller uv_scale or technique_options.resolution)",
-                                object->name, (unsigned long long)(*total + triangles),
-                                (unsigned long long)MESO_REFERENCE_MAX_TRIANGLES);
+        result = reference_too_many_triangles(ctx, object, "the solid", *total + triangles,
+                                              "a smaller uv_scale or technique_options.resolution");
         goto fail;
     }
     size_t alloc_v = vertices ? (size_t)vertices : 1;

@@ -69,28 +69,28 @@ void meso_framebuffer_destroy(meso_framebuffer *framebuffer) {
     free(framebuffer);
 }
 
-meso_result meso_framebuffer_color_image(meso_context *ctx, const meso_framebuffer *fb,
-                                         meso_image **out_image) {
+/* A copy of one of the framebuffer's planes (`channels` floats a pixel) as an image. */
+static meso_result plane_image(meso_context *ctx, const meso_framebuffer *fb, int channels,
+                               bool coverage, meso_image **out_image) {
     *out_image = NULL;
     if (!fb) return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "framebuffer: NULL");
     meso_image *image = NULL;
-    meso_result r = meso_image_create(ctx, fb->width, fb->height, 3, &image);
+    meso_result r = meso_image_create(ctx, fb->width, fb->height, channels, &image);
     if (r != MESO_OK) return r;
-    memcpy(image->pixels, fb->color, 3 * (size_t)fb->width * (size_t)fb->height * sizeof(float));
+    memcpy(image->pixels, coverage ? fb->coverage : fb->color,
+           (size_t)channels * (size_t)fb->width * (size_t)fb->height * sizeof(float));
     *out_image = image;
     return MESO_OK;
 }
 
+meso_result meso_framebuffer_color_image(meso_context *ctx, const meso_framebuffer *fb,
+                                         meso_image **out_image) {
+    return plane_image(ctx, fb, 3, false, out_image);
+}
+
 meso_result meso_framebuffer_coverage_image(meso_context *ctx, const meso_framebuffer *fb,
                                             meso_image **out_image) {
-    *out_image = NULL;
-    if (!fb) return meso_log_error(ctx, MESO_ERROR_INVALID_ARGUMENT, "framebuffer: NULL");
-    meso_image *image = NULL;
-    meso_result r = meso_image_create(ctx, fb->width, fb->height, 1, &image);
-    if (r != MESO_OK) return r;
-    memcpy(image->pixels, fb->coverage, (size_t)fb->width * (size_t)fb->height * sizeof(float));
-    *out_image = image;
-    return MESO_OK;
+    return plane_image(ctx, fb, 1, true, out_image);
 }
 
 /* save_png and save: PNG always, or each file's format from its extension. */

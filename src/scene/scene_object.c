@@ -445,9 +445,33 @@ static meso_result load_named_map(const scene_parser *p, const scene_key *key, c
     return r == MESO_OK ? make_map_texture(p, key, image, kind, encoding, wrap, out_texture) : r;
 }
 
+/* A texture the mesh file names, beside the mesh file (`texture` relative to its folder), with
+ * the object's mesostructure's wrap (repeat when it has none). */
+static meso_result load_mesh_texture(const scene_parser *p, const scene_key *key,
+                                     const char *mesh_path, const char *texture, map_kind kind,
+                                     const meso_object *object, meso_texture **out_texture) {
+    char path[SCENE_PATH_MAX];
+    const char *slash = strrchr(mesh_path, '/');
+    int folder = slash ? (int)(slash - mesh_path) : 1;
+    int n = snprintf(path, sizeof path, "%.*s/%s", folder, slash ? mesh_path : ".", texture);
+    scene_key k = scene_key_child(key, "shape");
+    if (n < 0 || n >= (int)sizeof path)
+        return scene_error(p, MESO_ERROR_LIMIT, &k, "texture path too long");
+    const meso_mesostructure *m = &object->mesostructure;
+    meso_wrap wrap = m->kind != MESO_MESOSTRUCTURE_NONE ? m->wrap : MESO_WRAP_REPEAT;
+    return load_map_file(p, &k, path, kind, wrap, out_texture);
+}
+
 static void append_note(char *text, size_t size, const char *note) {
     size_t used = strlen(text);
     snprintf(text + used, size - used, "%s%s", used ? ", " : "", note);
+}
+
+/* "<kind> texture not used: <why>" */
+static void append_unused_note(char *text, size_t size, const char *kind, const char *why) {
+    char note[160];
+    snprintf(note, sizeof note, "%s texture not used: %s", kind, why);
+    append_note(text, size, note);
 }
 
 /* The mesh file's own material (shape {"file"}: glTF baseColorFactor / baseColorTexture, MTL
@@ -474,22 +498,10 @@ static meso_result apply_mesh_material(const scene_parser *p, const cJSON *obj,
         const char *texture = from_file->color_map;
         const char *unused = meso_mesh_material_unused_reason(texture);
         if (texture[0] && unused) {
-            char text[160];
-            snprintf(text, sizeof text, "colour texture not used: %s", unused);
-            append_note(note, note_size, text);
+            append_unused_note(note, note_size, "colour", unused);
         } else if (texture[0]) {
-            char path[SCENE_PATH_MAX];
-            const char *slash = strrchr(mesh_path, '/');
-            int folder = slash ? (int)(slash - mesh_path) : 1;
-            int n =
-                snprintf(path, sizeof path, "%.*s/%s", folder, slash ? mesh_path : ".", texture);
-            scene_key k = scene_key_child(key, "shape");
-            if (n < 0 || n >= (int)sizeof path)
-                return scene_error(p, MESO_ERROR_LIMIT, &k, "texture path too long");
-            const meso_mesostructure *m = &object->mesostructure;
-            meso_wrap wrap = m->kind != MESO_MESOSTRUCTURE_NONE ? m->wrap : MESO_WRAP_REPEAT;
-            meso_result r =
-                load_map_file(p, &k, path, MAP_COLOR, wrap, &object->material.color_map);
+            meso_result r = load_mesh_texture(p, key, mesh_path, texture, MAP_COLOR, object,
+                                              &object->material.color_map);
             if (r != MESO_OK) return r;
             append_note(note, note_size, "colour texture used");
         }
@@ -499,20 +511,10 @@ static meso_result apply_mesh_material(const scene_parser *p, const cJSON *obj,
     if (normal[0] && cJSON_GetObjectItemCaseSensitive(material, "normal_map")) {
         append_note(note, note_size, "normal texture not used: the scene's material sets one");
     } else if (normal[0] && unused) {
-        char text[160];
-        snprintf(text, sizeof text, "normal texture not used: %s", unused);
-        append_note(note, note_size, text);
+        append_unused_note(note, note_size, "normal", unused);
     } else if (normal[0]) {
-        char path[SCENE_PATH_MAX];
-        const char *slash = strrchr(mesh_path, '/');
-        int folder = slash ? (int)(slash - mesh_path) : 1;
-        int n = snprintf(path, sizeof path, "%.*s/%s", folder, slash ? mesh_path : ".", normal);
-        scene_key k = scene_key_child(key, "shape");
-        if (n < 0 || n >= (int)sizeof path)
-            return scene_error(p, MESO_ERROR_LIMIT, &k, "texture path too long");
-        const meso_mesostructure *m = &object->mesostructure;
-        meso_wrap wrap = m->kind != MESO_MESOSTRUCTURE_NONE ? m->wrap : MESO_WRAP_REPEAT;
-        meso_result r = load_map_file(p, &k, path, MAP_NORMAL, wrap, &object->material.normal_map);
+        meso_result r = load_mesh_texture(p, key, mesh_path, normal, MAP_NORMAL, object,
+                                          &object->material.normal_map);
         if (r != MESO_OK) return r;
         append_note(note, note_size,
                     object->material.normal_map_directx

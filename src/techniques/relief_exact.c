@@ -827,30 +827,25 @@ static meso_result geometry(meso_context *ctx, void *state, const meso_frame *fr
     return MESO_OK;
 }
 
+__attribute__((always_inline)) static inline void
+shade_either(const exact_state *s, const meso_frame *frame, const meso_object *object,
+             meso_fragment *fragments, meso_fragment_block *block, size_t count) {
+    relief_shell_search q = shell_search(s);
+    relief_tracer tracer = {s, search, shadow, NULL};
+    relief_shade_shell_or_ray(s->shell, &q, &s->heights, &tracer, s->params, frame, object,
+                              fragments, block, count);
+}
+
 static void shade(const void *state, const meso_frame *frame, const meso_object *object,
                   meso_fragment *fragments, size_t count) {
-    const exact_state *s = state;
-    if (s->shell) {
-        relief_shell_search q = shell_search(s);
-        relief_shell_shade(s->shell, &q, frame, object, fragments, count);
-        return;
-    }
-    relief_tracer tracer = {s, search, shadow, NULL};
-    relief_shade_fragments(&s->heights, &tracer, s->params, frame, object, fragments, count);
+    shade_either(state, frame, object, fragments, NULL, count);
 }
 
 /* The rasterizer's blocks straight to the shared loop (no adapter copies); the same images
  * as shade. */
 static void shade_block(const void *state, const meso_frame *frame, const meso_object *object,
                         meso_fragment_block *block) {
-    const exact_state *s = state;
-    if (s->shell) {
-        relief_shell_search q = shell_search(s);
-        relief_shell_shade_block(s->shell, &q, frame, object, block);
-        return;
-    }
-    relief_tracer tracer = {s, search, shadow, NULL};
-    relief_shade_block(&s->heights, &tracer, s->params, frame, object, block);
+    shade_either(state, frame, object, NULL, block, block->count);
 }
 
 static size_t memory(const void *state) {

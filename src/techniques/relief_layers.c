@@ -276,22 +276,9 @@ typedef struct layers_cell {
 } layers_cell;
 
 static inline layers_cell layers_locate8(const layers_state *s, v8f x, v8f y) {
-    int W = s->size.width, H = s->size.height;
-    float fw = (float)W, fh = (float)H;
-    if (s->size.clamp) {
-        x = v8_min(v8_max(x, v8_splat(0.0f)), v8_splat(fw - 1.0f));
-        y = v8_min(v8_max(y, v8_splat(0.0f)), v8_splat(fh - 1.0f));
-    } else {
-        x -= fw * v8_floor(x * (1.0f / fw));
-        y -= fh * v8_floor(y * (1.0f / fh));
-    }
-    v8i i = __builtin_convertvector(x, v8i), j = __builtin_convertvector(y, v8i);
-    v8i wmax = v8i_splat(W - 1), hmax = v8i_splat(H - 1);
-    i = (v8i)v8_select(i > wmax, (v8f)wmax, (v8f)i);
-    j = (v8i)v8_select(j > hmax, (v8f)hmax, (v8f)j);
+    v8i i, j;
     layers_cell c;
-    c.tx = x - __builtin_convertvector(i, v8f);
-    c.ty = y - __builtin_convertvector(j, v8f);
+    relief_texel8(&s->size, x, y, &i, &j, &c.tx, &c.ty);
     c.index = j * s->stride + i;
     c.nearest = c.index + ((c.tx >= 0.5f) & 1) + ((c.ty >= 0.5f) & s->stride);
     return c;

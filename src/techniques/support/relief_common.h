@@ -122,6 +122,14 @@ static inline void relief_texel8(const relief_heights *m, v8f x, v8f y, v8i *out
     *out_i = i, *out_j = j;
 }
 
+/* relief_texel8's texel as an index into the padded rows (its top-left of the four). */
+static inline v8i relief_texel_index8(const relief_heights *m, v8f x, v8f y, v8f *out_tx,
+                                      v8f *out_ty) {
+    v8i i, j;
+    relief_texel8(m, x, y, &i, &j, out_tx, out_ty);
+    return j * m->stride + i;
+}
+
 /* The bilinear blend of relief_sample8: h00, h10 on row j, h01, h11 on row j + 1. */
 static inline v8f relief_bilinear8(v8f h00, v8f h10, v8f h01, v8f h11, v8f tx, v8f ty) {
     v8f top = h00 + (h10 - h00) * tx, bottom = h01 + (h11 - h01) * tx;
@@ -131,10 +139,8 @@ static inline v8f relief_bilinear8(v8f h00, v8f h10, v8f h01, v8f h11, v8f tx, v
 /* h at texel-centre coordinates (x, y), the bilinear surface of meso_heightfield_sample, eight
  * lookups at once; the hot loop of every search (4 gathers of 8 texels). */
 static inline v8f relief_sample8(const relief_heights *m, v8f x, v8f y) {
-    v8i i, j;
     v8f tx, ty;
-    relief_texel8(m, x, y, &i, &j, &tx, &ty);
-    v8i index = j * m->stride + i;
+    v8i index = relief_texel_index8(m, x, y, &tx, &ty);
     v8f h00, h10, h01, h11;
     relief_gather_pairs8(m->padded, index, &h00, &h10);
     relief_gather_pairs8(m->padded + m->stride, index, &h01, &h11);
@@ -165,10 +171,8 @@ static inline void relief_load_quads8(const float *base, v8i index, v8f out[4]) 
  * cost less time than the gathers (parallax's unshifted depth); inside a chain the
  * index extraction would lengthen it (not measured). */
 static inline v8f relief_sample8_loads(const relief_heights *m, v8f x, v8f y) {
-    v8i i, j;
     v8f tx, ty;
-    relief_texel8(m, x, y, &i, &j, &tx, &ty);
-    v8i index = j * m->stride + i;
+    v8i index = relief_texel_index8(m, x, y, &tx, &ty);
     v8f h00, h10, h01, h11;
     v8_load_pairs(m->padded, index, &h00, &h10);
     v8_load_pairs(m->padded + m->stride, index, &h01, &h11);

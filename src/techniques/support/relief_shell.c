@@ -98,6 +98,20 @@ static inline int stretch_steps(int steps, float dd) {
     return n > 1.0f ? (n < (float)steps ? (int)n : steps) : 1;
 }
 
+/* The search's samples first .. first + 7 of a stretch cut into n steps: their share of the
+ * stretch in *sv (past n: repeats of the end, not looked at) and their points (x, y, d). */
+static inline void stretch_samples8(const relief_shell_stretch *st, int first, int n, v8f *sv,
+                                    v8f *x, v8f *y, v8f *d) {
+    float inv = 1.0f / (float)n;
+    for (int j = 0; j < RELIEF_LANES; j++) {
+        int k = first + j;
+        (*sv)[j] = k >= n ? 1.0f : (float)k * inv;
+    }
+    *x = v8_splat(st->x0) + v8_splat(st->xd) * *sv;
+    *y = v8_splat(st->y0) + v8_splat(st->yd) * *sv;
+    *d = v8_splat(st->d0) + v8_splat(st->dd) * *sv;
+}
+
 /* The stretch from texture point a to b ((u, v, w)) in the search's coordinates. */
 static relief_shell_stretch stretch_between(const relief_shell_search *q, meso_vec3 a,
                                             meso_vec3 b) {
@@ -113,17 +127,10 @@ static relief_shell_stretch stretch_between(const relief_shell_search *q, meso_v
 static bool leave_under(const relief_shell_search *q, const relief_shell_stretch *st, float *out_s,
                         float *out_f) {
     int n = stretch_steps(q->linear_steps, st->dd);
-    float inv = 1.0f / (float)n;
     for (int first = 1; first <= n; first += RELIEF_LANES) {
         int count = n - first + 1 < RELIEF_LANES ? n - first + 1 : RELIEF_LANES;
-        v8f sv, fv;
-        for (int j = 0; j < RELIEF_LANES; j++) {
-            int k = first + j;
-            sv[j] = k >= n ? 1.0f : (float)k * inv;
-        }
-        v8f x = v8_splat(st->x0) + v8_splat(st->xd) * sv,
-            y = v8_splat(st->y0) + v8_splat(st->yd) * sv;
-        v8f d = v8_splat(st->d0) + v8_splat(st->dd) * sv;
+        v8f sv, fv, x, y, d;
+        stretch_samples8(st, first, n, &sv, &x, &y, &d);
         int out = ~q->inside8(q->user, &x, &y, &d, &fv) & ((1 << count) - 1);
         if (!out) continue;
         int j = __builtin_ctz((unsigned)out);
@@ -175,18 +182,11 @@ static bool search_stretch(const relief_shell_search *q, const relief_shell_stre
         return true;
     }
     int n = stretch_steps(q->linear_steps, st->dd);
-    float inv = 1.0f / (float)n, lo = 0.0f, hi = -1.0f;
+    float lo = 0.0f, hi = -1.0f;
     for (int first = 1; first <= n && hi < 0.0f; first += RELIEF_LANES) {
-        /* samples first .. first + 7 at once (past n: repeats of the end, not looked at) */
         int count = n - first + 1 < RELIEF_LANES ? n - first + 1 : RELIEF_LANES;
-        v8f sv, fv;
-        for (int j = 0; j < RELIEF_LANES; j++) {
-            int k = first + j;
-            sv[j] = k >= n ? 1.0f : (float)k * inv;
-        }
-        v8f x = v8_splat(st->x0) + v8_splat(st->xd) * sv,
-            y = v8_splat(st->y0) + v8_splat(st->yd) * sv;
-        v8f d = v8_splat(st->d0) + v8_splat(st->dd) * sv;
+        v8f sv, fv, x, y, d;
+        stretch_samples8(st, first, n, &sv, &x, &y, &d);
         int in = q->inside8(q->user, &x, &y, &d, &fv);
         if (at_floor && first + count - 1 == n) in |= 1 << (count - 1);
         in &= (1 << count) - 1;
@@ -231,20 +231,13 @@ static bool shadow_stretch(const relief_shell_search *q, const relief_shell_stre
     float s;
     if (q->trace) return q->trace(q->user, st, q->shadow_bias, &s);
     int n = stretch_steps(q->shadow_steps, st->dd);
-    float inv = 1.0f / (float)n;
     for (int first = 1; first <= n; first += RELIEF_LANES) {
         int count = n - first + 1 < RELIEF_LANES ? n - first + 1 : RELIEF_LANES, near = 0;
         int lanes = (1 << count) - 1;
-        v8f sv, fv;
-        for (int j = 0; j < RELIEF_LANES; j++) {
-            int k = first + j;
-            sv[j] = k >= n ? 1.0f : (float)k * inv;
-            near |= (from + sv[j] * length < skip) << j;
-        }
+        v8f sv, fv, x, y, d;
+        stretch_samples8(st, first, n, &sv, &x, &y, &d);
+        for (int j = 0; j < RELIEF_LANES; j++) near |= (from + sv[j] * length < skip) << j;
         if ((near & lanes) == lanes) continue;
-        v8f x = v8_splat(st->x0) + v8_splat(st->xd) * sv,
-            y = v8_splat(st->y0) + v8_splat(st->yd) * sv;
-        v8f d = v8_splat(st->d0) + v8_splat(st->dd) * sv;
         q->inside8(q->user, &x, &y, &d, &fv);
         if (v8_mask_bits(fv > q->shadow_bias) & ~near & lanes) return true;
     }

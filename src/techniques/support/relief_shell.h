@@ -95,6 +95,22 @@ void relief_shell_shade_block(const relief_shell *shell, const relief_shell_sear
                               const meso_frame *frame, const meso_object *object,
                               meso_fragment_block *block);
 
+/* shade (block NULL) and shade_block (fragments NULL) of relief and relief_exact: on the shell
+ * when the object has one (q: the technique's search on it), else relief_common.h's
+ * straight-ray loop with `tracer`. Inline, so that the tracer's hooks stay direct calls. */
+__attribute__((always_inline)) static inline void
+relief_shade_shell_or_ray(const relief_shell *shell, const relief_shell_search *q,
+                          const relief_heights *m, const relief_tracer *tracer,
+                          relief_params params, const meso_frame *frame, const meso_object *object,
+                          meso_fragment *fragments, meso_fragment_block *block, size_t count) {
+    if (shell && block)
+        relief_shell_shade_block(shell, q, frame, object, block);
+    else if (shell)
+        relief_shell_shade(shell, q, frame, object, fragments, count);
+    else
+        relief_shade_core(m, tracer, params, frame, object, fragments, block, count);
+}
+
 /* h at texel-centre coordinates (x, y): relief_sample8's bilinear surface, one lookup, the same
  * operations. */
 static inline float relief_shell_sample(const relief_heights *m, float x, float y) {
