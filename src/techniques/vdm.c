@@ -487,7 +487,7 @@ static inline bool sorted_corners(const float in[8], float out[8]) {
     /* each stage: lane i meets lane i ^ j and keeps the larger where its mask is set */
 #define SORT_STAGE(p0, p1, p2, p3, p4, p5, p6, p7, m0, m1, m2, m3, m4, m5, m6, m7)                 \
     do {                                                                                           \
-        v8f other = __builtin_shuffle(x, (v8i){p0, p1, p2, p3, p4, p5, p6, p7});                   \
+        v8f other = __builtin_shufflevector(x, x, p0, p1, p2, p3, p4, p5, p6, p7);                 \
         x = v8_select((v8i){m0, m1, m2, m3, m4, m5, m6, m7}, v8_max(x, other), v8_min(x, other));  \
     } while (0)
     SORT_STAGE(1, 0, 3, 2, 5, 4, 7, 6, 0, -1, -1, 0, 0, -1, -1, 0);
